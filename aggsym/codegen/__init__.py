@@ -1,0 +1,1 @@
+"""Straight-line programs, CSE, operation counts, rendering through templates/, compiling."""

@@ -1,0 +1,336 @@
+"""Straight-line programs: the symbolic scalar the book's recursions run on.
+
+Every recursion of aggsym (kinematics (1.28)-(1.43), composite bodies (2.32)-(2.34), the O(n) bias
+(2.36)-(2.37), the sweeps (2.39)-(2.46), the transvective factors (3.7)-(3.20)) is written once against plain
+Python arithmetic.  Run on floats (or NumPy arrays) it is the numeric twin; run on :class:`Node` objects of a
+:class:`Program` it records a straight-line program: every operation becomes one node ``t = a op b``.
+
+A node is created through :meth:`Program.op`, which
+
+* folds constants (``2*3 -> 6``) and structural zeros and ones (``0*x -> 0``, ``1*x -> x``, ``x+0 -> x``),
+  so the structurally zero blocks of L, Phi and M never reach the output;
+* moves negations outwards and into subtractions (``(-a)*b -> -(a*b)``, ``a + -b -> a - b``);
+* hash-conses (value numbering): the same operation on the same operands is the same node, so common
+  subexpressions, and in particular ``sin``/``cos`` of each angle, exist once per program.
+
+Constants are plain Python numbers; integral floats are stored as ``int`` so that the zero and one tests
+(``type(x) is int``) are exact.  Node ids grow in creation order, which is a topological order.
+"""
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+__all__ = ["Program", "Node", "is_zero", "is_one", "is_const", "normalize_const"]
+
+# operation codes
+INPUT, ADD, SUB, MUL, DIV, NEG, SIN, COS, SQRT = "in", "+", "-", "*", "/", "neg", "sin", "cos", "sqrt"
+FUNCTIONS = (SIN, COS, SQRT)
+_COMMUTATIVE = (ADD, MUL)
+
+
+def normalize_const(x):
+    """An exact ``int`` for integral floats (so 0.0 and 1.0 fold), the float otherwise."""
+    if type(x) is int:
+        return x
+    if isinstance(x, Fraction):
+        return int(x) if x.denominator == 1 else x
+    x = float(x)
+    if x.is_integer() and abs(x) < 2.0 ** 53:
+        return int(x)
+    return x
+
+
+def is_const(x) -> bool:
+    return not isinstance(x, Node)
+
+
+def is_zero(x) -> bool:
+    """True only for an exact structural zero (a Python int 0), never for a runtime value."""
+    return type(x) is int and x == 0
+
+
+def is_one(x) -> bool:
+    return type(x) is int and x == 1
+
+
+class Node:
+    """One value of a straight-line program; arithmetic on it records new nodes."""
+
+    __slots__ = ("prog", "id")
+
+    def __init__(self, prog: "Program", ident: int):
+        self.prog = prog
+        self.id = ident
+
+    # arithmetic -----------------------------------------------------------------------------------
+    def __add__(self, other):
+        return self.prog.op(ADD, self, other)
+
+    def __radd__(self, other):
+        return self.prog.op(ADD, other, self)
+
+    def __sub__(self, other):
+        return self.prog.op(SUB, self, other)
+
+    def __rsub__(self, other):
+        return self.prog.op(SUB, other, self)
+
+    def __mul__(self, other):
+        return self.prog.op(MUL, self, other)
+
+    def __rmul__(self, other):
+        return self.prog.op(MUL, other, self)
+
+    def __truediv__(self, other):
+        return self.prog.op(DIV, self, other)
+
+    def __rtruediv__(self, other):
+        return self.prog.op(DIV, other, self)
+
+    def __neg__(self):
+        return self.prog.op(NEG, self)
+
+    def __pos__(self):
+        return self
+
+    # identity -------------------------------------------------------------------------------------
+    def __hash__(self):
+        return self.id
+
+    def __eq__(self, other):  # structural identity; never used for numeric comparison
+        return isinstance(other, Node) and other.id == self.id and other.prog is self.prog
+
+    def __bool__(self):
+        raise TypeError("a symbolic value has no truth value")
+
+    def __repr__(self):
+        return f"<t{self.id} {self.prog.ops[self.id][0]}>"
+
+
+def _key(x):
+    """Hash key and sort key of an operand: constants first, then nodes by id."""
+    if isinstance(x, Node):
+        return (1, x.id)
+    return (0, repr(x))
+
+
+class Program:
+    """A growing straight-line program: ``ops[i] = (opcode, operand, ...)`` defines node ``i``."""
+
+    def __init__(self):
+        self.ops: list[tuple] = []
+        self.nodes: list[Node] = []
+        self._table: dict = {}
+        self.inputs: dict = {}  # (kind, index) -> Node
+
+    # construction ---------------------------------------------------------------------------------
+    def input(self, kind: str, index: int) -> Node:
+        """The runtime input ``kind[index]`` (q, qd, qdd, tau, p, ...), created once."""
+        key = (kind, index)
+        node = self.inputs.get(key)
+        if node is None:
+            node = self._new((INPUT, kind, index))
+            self.inputs[key] = node
+        return node
+
+    def vector(self, kind: str, n: int) -> list:
+        return [self.input(kind, i) for i in range(n)]
+
+    def sin(self, x):
+        return self.op(SIN, x)
+
+    def cos(self, x):
+        return self.op(COS, x)
+
+    def sqrt(self, x):
+        return self.op(SQRT, x)
+
+    def _new(self, entry: tuple) -> Node:
+        node = Node(self, len(self.ops))
+        self.ops.append(entry)
+        self.nodes.append(node)
+        return node
+
+    def _make(self, opcode, *args):
+        if opcode in _COMMUTATIVE and _key(args[0]) > _key(args[1]):
+            args = (args[1], args[0])
+        key = (opcode,) + tuple(_key(a) for a in args)
+        node = self._table.get(key)
+        if node is None:
+            node = self._new((opcode,) + args)
+            self._table[key] = node
+        return node
+
+    def _neg_arg(self, x):
+        """``y`` when ``x`` is the node ``-y``, else None."""
+        if isinstance(x, Node):
+            entry = self.ops[x.id]
+            if entry[0] == NEG:
+                return entry[1]
+        return None
+
+    def op(self, opcode, a, b=None):
+        """Record ``a opcode b`` with folding; the result is a constant or a node."""
+        if opcode == NEG:
+            return self._neg(a)
+        if opcode in FUNCTIONS:
+            if is_const(a):
+                return normalize_const({SIN: math.sin, COS: math.cos, SQRT: math.sqrt}[opcode](a))
+            return self._make(opcode, a)
+        if is_const(a) and is_const(b):
+            if opcode == ADD:
+                return normalize_const(a + b)
+            if opcode == SUB:
+                return normalize_const(a - b)
+            if opcode == MUL:
+                return normalize_const(a * b)
+            if opcode == DIV:
+                return normalize_const(a / b)
+        if opcode == ADD:
+            return self._add(a, b)
+        if opcode == SUB:
+            return self._sub(a, b)
+        if opcode == MUL:
+            return self._mul(a, b)
+        if opcode == DIV:
+            return self._div(a, b)
+        raise ValueError(f"unknown operation {opcode!r}")
+
+    def _neg(self, a):
+        if is_const(a):
+            return normalize_const(-a)
+        inner = self._neg_arg(a)
+        if inner is not None:
+            return inner
+        entry = self.ops[a.id]
+        if entry[0] == SUB:  # -(x - y) = y - x, free
+            return self._sub(entry[2], entry[1])
+        return self._make(NEG, a)
+
+    def _add(self, a, b):
+        if is_zero(a):
+            return b
+        if is_zero(b):
+            return a
+        nb = self._neg_arg(b)
+        if nb is not None:
+            return self._sub(a, nb)
+        na = self._neg_arg(a)
+        if na is not None:
+            return self._sub(b, na)
+        if is_const(b) and b < 0:
+            return self._sub(a, normalize_const(-b))
+        if is_const(a) and a < 0:
+            return self._sub(b, normalize_const(-a))
+        return self._make(ADD, a, b)
+
+    def _sub(self, a, b):
+        if is_zero(b):
+            return a
+        if is_zero(a):
+            return self._neg(b)
+        if isinstance(a, Node) and isinstance(b, Node) and a.id == b.id:
+            return 0
+        nb = self._neg_arg(b)
+        if nb is not None:
+            return self._add(a, nb)
+        na = self._neg_arg(a)
+        if na is not None:  # -x - b = -(x + b)
+            return self._neg(self._add(na, b))
+        if is_const(b) and b < 0:
+            return self._add(a, normalize_const(-b))
+        return self._make(SUB, a, b)
+
+    def _mul(self, a, b):
+        if is_zero(a) or is_zero(b):
+            return 0
+        if is_one(a):
+            return b
+        if is_one(b):
+            return a
+        if type(a) is int and a == -1:
+            return self._neg(b)
+        if type(b) is int and b == -1:
+            return self._neg(a)
+        na, nb = self._neg_arg(a), self._neg_arg(b)
+        if na is not None and nb is not None:
+            return self._mul(na, nb)
+        if na is not None:
+            return self._neg(self._mul(na, b))
+        if nb is not None:
+            return self._neg(self._mul(a, nb))
+        if is_const(a) and a < 0:
+            return self._neg(self._mul(normalize_const(-a), b))
+        if is_const(b) and b < 0:
+            return self._neg(self._mul(a, normalize_const(-b)))
+        # c1 * (c2 * x) -> (c1*c2) * x
+        if is_const(a) and isinstance(b, Node):
+            entry = self.ops[b.id]
+            if entry[0] == MUL and is_const(entry[1]):
+                return self._mul(normalize_const(a * entry[1]), entry[2])
+        if is_const(b) and isinstance(a, Node):
+            entry = self.ops[a.id]
+            if entry[0] == MUL and is_const(entry[1]):
+                return self._mul(normalize_const(b * entry[1]), entry[2])
+        return self._make(MUL, a, b)
+
+    def _div(self, a, b):
+        if is_zero(a):
+            return 0
+        if is_one(b):
+            return a
+        if is_zero(b):
+            raise ZeroDivisionError("structural division by zero")
+        if type(b) is int and b == -1:
+            return self._neg(a)
+        na, nb = self._neg_arg(a), self._neg_arg(b)
+        if na is not None and nb is not None:
+            return self._div(na, nb)
+        if na is not None:
+            return self._neg(self._div(na, b))
+        if nb is not None:
+            return self._neg(self._div(a, nb))
+        return self._make(DIV, a, b)
+
+    # inspection -----------------------------------------------------------------------------------
+    def operands(self, ident: int) -> tuple:
+        entry = self.ops[ident]
+        return () if entry[0] == INPUT else entry[1:]
+
+    def reachable(self, outputs) -> list[int]:
+        """Ids of the nodes the outputs depend on, in topological (creation) order."""
+        seen = set()
+        stack = [o.id for o in outputs if isinstance(o, Node)]
+        while stack:
+            i = stack.pop()
+            if i in seen:
+                continue
+            seen.add(i)
+            for a in self.operands(i):
+                if isinstance(a, Node) and a.id not in seen:
+                    stack.append(a.id)
+        return sorted(seen)
+
+    def evaluate(self, outputs, values: dict, lib=math):
+        """Evaluate outputs numerically; ``values[(kind, index)]`` gives the inputs (floats or arrays)."""
+        ids = self.reachable(outputs)
+        val: dict[int, object] = {}
+        fun = {SIN: lib.sin, COS: lib.cos, SQRT: lib.sqrt}
+
+        def get(x):
+            return val[x.id] if isinstance(x, Node) else x
+
+        for i in ids:
+            entry = self.ops[i]
+            code = entry[0]
+            if code == INPUT:
+                val[i] = values[(entry[1], entry[2])]
+            elif code == NEG:
+                val[i] = -get(entry[1])
+            elif code in fun:
+                val[i] = fun[code](get(entry[1]))
+            else:
+                a, b = get(entry[1]), get(entry[2])
+                val[i] = a + b if code == ADD else a - b if code == SUB else a * b if code == MUL else a / b
+        return [get(o) for o in outputs]

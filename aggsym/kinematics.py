@@ -1,0 +1,187 @@
+"""Kinematics of pairs and of the tree: L, M F, quasi-velocities, S, and X = dS^T/dt q' .
+
+Per pair (mu,k-1; lk) (Prop. 1.17, 1.18):
+
+* ``L^{mu,k-1}_{lk} = L_constructive L_functional`` with ``L_functional = T(o) C(c1(theta4) c2(theta5) c3(theta6))``
+  (absent coordinates are zero);
+* the columns of ``M F`` (1.30), (1.31), called ``Psi`` here: for a translation ``o_i`` the column
+  ``(c^T e_i, 0)``, for a rotation ``theta_j`` the column ``(0, eps_j)`` with ``eps = [c3^T c2^T e1 | c3^T e2 | e3]``;
+  a pair with one coordinate (variant 1 of the book) has ``M F = f_i``;
+* ``(M F)' q'`` (2.19), computed by running the forward sweep (2.40) through the pair's own elementary frames.
+
+For the tree (1.34)-(1.43): ``V_lk = L^T V_parent + M F q'`` (2.39), the rows of the parastrophic matrix
+``s^{st}_{lk} = s^{st}_{parent} L^{parent}_{lk}`` (1.43), and the column ``X = S'^T q'`` by (2.37):
+``X_lk = L^T X_parent + L'^T V_parent + (M F)' q'`` where ``L'^T V_parent = Phi-action(L^T V_parent, V_pair)``.
+
+All 6-vectors are in the body's own frame, (v, w) order.
+"""
+from __future__ import annotations
+
+from .group import Motion, phi_motion, rotation
+from .linalg import EYE3, ZERO3, add, dot, mm, mtv, scale
+from .model.types import code_index
+
+ZERO6 = (0, 0, 0, 0, 0, 0)
+
+
+def pair_functional(codes, qv, backend):
+    """The functional motion of a pair and its Psi = M F columns (1.30)-(1.31).
+
+    Returns ``(motion, psi, rotations)``: ``motion = T(o) C(c)`` with ``c = c1(theta4) c2(theta5) c3(theta6)``,
+    ``psi`` one 6-vector per coordinate (child frame), and the elementary rotations in order as
+    ``(axis, matrix)`` for :func:`pair_velocity_product`.
+    """
+    o = [0, 0, 0]
+    rots = []
+    for code, x in zip(codes, qv):
+        i = code_index(code)
+        if i < 3:
+            o[i] = x
+        else:
+            rots.append((i - 2, rotation(i - 2, backend.cos(x), backend.sin(x))))
+    c = EYE3
+    for _, m in rots:
+        c = mm(c, m)
+    psi = []
+    r = 0
+    for code in codes:
+        i = code_index(code)
+        if i < 3:
+            psi.append(tuple(c[i]) + ZERO3)  # c^T e_i is the i-th row of c
+        else:
+            axis, _ = rots[r]
+            e = tuple(1 if j == axis - 1 else 0 for j in range(3))
+            for _, m in rots[r + 1:]:
+                e = mtv(m, e)
+            psi.append(ZERO3 + e)
+            r += 1
+    return Motion(c, tuple(o)), psi, rots
+
+
+def pair_velocity_product(codes, qdv, rots):
+    """(M F)' q' of (2.19): the pair's relative quasi-acceleration at zero q'' .
+
+    The pair is run as a chain of its elementary frames (translations o1..o3, then rotations theta4..theta6)
+    through the forward sweep (2.40) with zero acceleration; for a single coordinate the result is zero.
+    """
+    v = [0, 0, 0]
+    rates = []
+    for code, x in zip(codes, qdv):
+        i = code_index(code)
+        if i < 3:
+            v[i] = x
+        else:
+            rates.append(x)
+    V = tuple(v) + ZERO3
+    A = ZERO6
+    for (axis, m), rate in zip(rots, rates):
+        Vr = mtv(m, V[:3]) + mtv(m, V[3:])
+        Ar = mtv(m, A[:3]) + mtv(m, A[3:])
+        U = ZERO3 + tuple(rate if j == axis - 1 else 0 for j in range(3))
+        A = add(Ar, phi_motion(Vr, U))
+        V = add(Vr, U)
+    return A
+
+
+def combine(psi, rates):
+    """Psi rates: the 6-vector sum of columns times scalars (M F q' of (1.31))."""
+    out = ZERO6
+    for col, x in zip(psi, rates):
+        out = add(out, scale(x, col))
+    return out
+
+
+def project(psi, F):
+    """F^T M^T F_body: the generalized components of a wrench along the pair's axes (2.15), (2.46)."""
+    return [dot(col, F) for col in psi]
+
+
+class TreeKinematics:
+    """Configuration-dependent kinematics of every pair: L^{parent}_{k}, Psi_k = M_k F_k."""
+
+    def __init__(self, bound, q):
+        self.bound = bound
+        self.tree = bound.tree
+        self.q = q
+        self.L = []
+        self.psi = []
+        self._rots = []
+        for k, body in enumerate(bound.bodies):
+            qv = [q[i] for i in self.tree.coords[k]]
+            functional, psi, rots = pair_functional(body.codes, qv, bound.backend)
+            self.L.append(body.L0.compose(functional))
+            self.psi.append(psi)
+            self._rots.append(rots)
+
+    def pair_rates(self, k, qd):
+        return [qd[i] for i in self.tree.coords[k]]
+
+    def velocities(self, qd):
+        """Quasi-velocities V_lk of every body (2.39)."""
+        V = []
+        for k, p in enumerate(self.tree.parent):
+            own = combine(self.psi[k], self.pair_rates(k, qd))
+            V.append(own if p < 0 else add(self.L[k].twist(V[p]), own))
+        return V
+
+    def velocity_products(self, qd, V):
+        """X = S'^T q' by the recurrence (2.37), including each pair's own (M F)' q' term (2.19)."""
+        X = []
+        for k, p in enumerate(self.tree.parent):
+            rates = self.pair_rates(k, qd)
+            x = pair_velocity_product(self.bound.bodies[k].codes, rates, self._rots[k])
+            if p >= 0:
+                Vp = self.L[k].twist(V[p])
+                x = add(x, add(self.L[k].twist(X[p]), phi_motion(Vp, combine(self.psi[k], rates))))
+            X.append(x)
+        return X
+
+    def accelerations(self, qd, qdd, V, base):
+        """Quasi-accelerations V'_lk of the forward sweep (2.40); ``base`` is the world frame's (e.g. -gravity)."""
+        A = []
+        for k, p in enumerate(self.tree.parent):
+            rates = self.pair_rates(k, qd)
+            own = combine(self.psi[k], [qdd[i] for i in self.tree.coords[k]])
+            a = add(pair_velocity_product(self.bound.bodies[k].codes, rates, self._rots[k]), own)
+            parent_V = ZERO6 if p < 0 else V[p]
+            parent_A = base if p < 0 else A[p]
+            Vp = self.L[k].twist(parent_V)
+            a = add(a, add(self.L[k].twist(parent_A), phi_motion(Vp, combine(self.psi[k], rates))))
+            A.append(a)
+        return A
+
+    def backward(self, Y):
+        """Z = L Y by the bud-to-root recurrence of Prop. 2.19: Z_k = Y_k + sum over children L Z_child."""
+        Z = list(Y)
+        for k in range(len(Z) - 1, -1, -1):
+            p = self.tree.parent[k]
+            if p >= 0:
+                Z[p] = add(Z[p], self.L[k].wrench(Z[k]))
+        return Z
+
+    def parastrophic(self):
+        """The rows of S (1.42), (1.43): ``S[i][k]`` is s^{st-alpha}_{lk} for coordinate i and body k (None
+        where k is not in the subtree of i's pair)."""
+        tree = self.tree
+        rows = []
+        for st in range(len(tree)):
+            for col in self.psi[st]:
+                row = [None] * len(tree)
+                row[st] = col
+                for lk in tree.subtrees[st][1:]:
+                    row[lk] = self.L[lk].twist(row[tree.parent[lk]])
+                rows.append(row)
+        return rows
+
+
+def world_frame_vectors(kin, vec_world):
+    """A free vector given in the world frame, in every body's axes: c_k^T x (used for gravity)."""
+    out = []
+    for k, p in enumerate(kin.tree.parent):
+        parent = vec_world if p < 0 else out[p]
+        out.append(kin.L[k].unrotate_free(parent))
+    return out
+
+
+__all__ = ["TreeKinematics", "pair_functional", "pair_velocity_product", "combine", "project",
+           "world_frame_vectors", "ZERO6"]

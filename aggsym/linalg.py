@@ -1,0 +1,118 @@
+"""Zero-aware 3-vector and 3x3 arithmetic shared by the symbolic and the numeric runs.
+
+Vectors are tuples of three scalars, matrices tuples of three row tuples.  A scalar is a Python number, a
+float or NumPy array (numeric twin) or a :class:`~aggsym.codegen.program.Node` (straight-line program).
+Products with an exact structural zero (the int 0) are skipped, which is where the economy of the book's
+section 5 rules (P, sec. 5) comes from: an elementary rotation touches two rows, a translation along one
+axis one column.
+"""
+from __future__ import annotations
+
+from .codegen.program import is_zero
+
+ZERO3 = (0, 0, 0)
+EYE3 = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
+
+
+def dot(a, b):
+    """Sum of products over two equal-length sequences, skipping structural zeros."""
+    acc = 0
+    for x, y in zip(a, b):
+        if is_zero(x) or is_zero(y):
+            continue
+        acc = acc + x * y
+    return acc
+
+
+def add(a, b):
+    return tuple(x + y for x, y in zip(a, b))
+
+
+def sub(a, b):
+    return tuple(x - y for x, y in zip(a, b))
+
+
+def neg(a):
+    return tuple(-x for x in a)
+
+
+def scale(s, a):
+    return tuple(s * x for x in a)
+
+
+def cross(a, b):
+    """a x b."""
+    return (
+        _d2(a[1], b[2], a[2], b[1]),
+        _d2(a[2], b[0], a[0], b[2]),
+        _d2(a[0], b[1], a[1], b[0]),
+    )
+
+
+def _d2(a, b, c, d):
+    """a*b - c*d with structural zeros skipped."""
+    left = 0 if is_zero(a) or is_zero(b) else a * b
+    right = 0 if is_zero(c) or is_zero(d) else c * d
+    return left - right
+
+
+def hat(x):
+    """The skew-symmetric matrix of x (1.9): hat(x) y = x cross y."""
+    return ((0, -x[2], x[1]), (x[2], 0, -x[0]), (-x[1], x[0], 0))
+
+
+def mv(m, v):
+    """m v."""
+    return tuple(dot(row, v) for row in m)
+
+
+def mtv(m, v):
+    """m^T v."""
+    return tuple(dot((m[0][j], m[1][j], m[2][j]), v) for j in range(3))
+
+
+def transpose(m):
+    return tuple(tuple(m[i][j] for i in range(3)) for j in range(3))
+
+
+def mm(a, b):
+    """a b."""
+    bt = transpose(b)
+    return tuple(tuple(dot(row, col) for col in bt) for row in a)
+
+
+def mmt(a, b):
+    """a b^T."""
+    return tuple(tuple(dot(row, col) for col in b) for row in a)
+
+
+def madd(a, b):
+    return tuple(add(r, s) for r, s in zip(a, b))
+
+
+def msub(a, b):
+    return tuple(sub(r, s) for r, s in zip(a, b))
+
+
+def mscale(s, a):
+    return tuple(scale(s, r) for r in a)
+
+
+def congruence3(c, m):
+    """c m c^T for a symmetric m, computing the upper triangle once."""
+    cm = mm(c, m)
+    out = [[0] * 3 for _ in range(3)]
+    for i in range(3):
+        for j in range(i, 3):
+            out[i][j] = dot(cm[i], c[j])
+            out[j][i] = out[i][j]
+    return tuple(tuple(r) for r in out)
+
+
+def outer(a, b):
+    return tuple(tuple(0 if is_zero(x) or is_zero(y) else x * y for y in b) for x in a)
+
+
+def sym_from_upper(m):
+    """Symmetrize by copying the upper triangle down (for values known to be symmetric)."""
+    return tuple(tuple(m[min(i, j)][max(i, j)] for j in range(3)) for i in range(3))

@@ -1,0 +1,24 @@
+"""Model readers (YAML, URDF), validation, the immutable Model and its tree indexing."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import ModelError
+from .tree import Tree
+from .types import COORDINATE_CODES, WORLD, Body, Coordinate, Inertial, Model, Pair, Parameter
+from .yaml_reader import load_yaml
+
+
+def load(path, **options) -> Model:
+    """Read a model from a ``.yaml``/``.yml`` file (URDF support: ``.urdf``)."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix in (".yaml", ".yml"):
+        if options:
+            raise TypeError(f"YAML models take no options, got {sorted(options)}")
+        return load_yaml(path)
+    raise ModelError(path, "", f"unknown model type {suffix!r}: expected .yaml or .yml")
+
+
+__all__ = ["load", "Model", "Body", "Pair", "Coordinate", "Inertial", "Parameter", "Tree", "COORDINATE_CODES",
+           "WORLD", "ModelError"]

@@ -1,0 +1,69 @@
+"""Tree indexing of a model: parents before children, the sets (lk)+ and (lk)- of Def. 1.7.
+
+Bodies are numbered 0..N-1 in the model's order (parents first); ``parent[k] == -1`` means the inertial frame
+E_10.  Coordinates are numbered in the same order, pair by pair, each pair's in the order of its mobility axes
+f_1..f_6 (1.40).
+"""
+from __future__ import annotations
+
+from functools import cached_property
+
+from .types import Model
+
+
+class Tree:
+    """The flat, parent-before-child form of a model's graph."""
+
+    def __init__(self, model: Model):
+        self.model = model
+        self.names = [b.name for b in model.bodies]
+        index = {name: k for k, name in enumerate(self.names)}
+        self.parent = [index.get(b.parent, -1) for b in model.bodies]
+        for k, p in enumerate(self.parent):
+            if p >= k:
+                raise ValueError(f"body {self.names[k]!r} is listed before its parent")
+        self.children = [[] for _ in self.names]
+        for k, p in enumerate(self.parent):
+            if p >= 0:
+                self.children[p].append(k)
+        self.coords = []  # per body: list of coordinate indices of its pair
+        i = 0
+        for b in model.bodies:
+            n = len(b.pair.coordinates)
+            self.coords.append(list(range(i, i + n)))
+            i += n
+        self.nq = i
+        self.body_of = [k for k, cs in enumerate(self.coords) for _ in cs]  # coordinate -> body
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def ancestors(self, k: int) -> list[int]:
+        """The chain (lk)- of counter accessibility from the root to k, k included."""
+        chain = []
+        while k >= 0:
+            chain.append(k)
+            k = self.parent[k]
+        return chain[::-1]
+
+    @cached_property
+    def subtrees(self) -> list[list[int]]:
+        """(lk)+ for every body: k and all its descendants, in body order."""
+        sub = [[k] for k in range(len(self))]
+        for k in range(len(self) - 1, -1, -1):
+            p = self.parent[k]
+            if p >= 0:
+                sub[p].extend(sub[k])
+        return [sorted(s) for s in sub]
+
+    @cached_property
+    def depth(self) -> list[int]:
+        """Number of bodies on the path from the root to k, k included."""
+        d = []
+        for k, p in enumerate(self.parent):
+            d.append(1 if p < 0 else d[p] + 1)
+        return d
+
+    def coordinate_ancestors(self, i: int) -> list[int]:
+        """Coordinates whose pairs lie on the path from the root to coordinate i's pair, i's own pair included."""
+        return [j for k in self.ancestors(self.body_of[i]) for j in self.coords[k]]

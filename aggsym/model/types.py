@@ -1,0 +1,162 @@
+"""The immutable model: bodies, their kinematic pairs, parameters, gravity (1.2, Def. 1.7, 1.8).
+
+Every numeric field is a SymPy expression: a number (exact where the file was exact, e.g. ``pi/2``) or an
+expression in the model's parameters.  Numbers are folded into generated code; parameters are read at run time
+from the parameter vector ``p``.
+
+A pair follows the book's configuration (1.24)-(1.27): a constructive part (constant translation ``p`` in the
+parent's axes, then constant rotations about the axes ``alpha, beta, gamma`` in the stated order, so that
+``c = c_alpha(phi_alpha) c_beta(phi_beta) c_gamma(phi_gamma)``), followed by the functional part: translations
+``o1, o2, o3`` along the constructive frame's axes, then the rotation ``c1(theta4) c2(theta5) c3(theta6)``.
+Coordinates absent from the pair are zero.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+COORDINATE_CODES = ("o1", "o2", "o3", "theta4", "theta5", "theta6")
+WORLD = "world"
+
+_SNAP = 1e-14
+
+
+def code_index(code: str) -> int:
+    """0-based position of a coordinate code in the 6-vector of mobility axes (f_1 .. f_6 of (1.29))."""
+    return COORDINATE_CODES.index(code)
+
+
+def _snap(x: sp.Expr) -> sp.Expr:
+    """Round float entries within 1e-14 of 0 or +-1 to exact values (e.g. cos(1.5707963267948966))."""
+    if isinstance(x, sp.Float):
+        v = float(x)
+        for target in (0, 1, -1):
+            if abs(v - target) < _SNAP:
+                return sp.Integer(target)
+    return x
+
+
+def elementary_rotation(axis: int, angle: sp.Expr) -> sp.Matrix:
+    """c_axis(angle) of Prop. 1.17 as an exact SymPy matrix."""
+    c, s = _snap(sp.cos(angle)), _snap(sp.sin(angle))
+    if axis == 1:
+        return sp.Matrix([[1, 0, 0], [0, c, -s], [0, s, c]])
+    if axis == 2:
+        return sp.Matrix([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    return sp.Matrix([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A runtime parameter: entry of ``p`` with a default value."""
+
+    name: str
+    value: float
+
+    @property
+    def symbol(self) -> sp.Symbol:
+        return sp.Symbol(self.name, real=True)
+
+
+@dataclass(frozen=True)
+class Coordinate:
+    """One generalized coordinate: a functional motion of a pair (1.26), (1.27)."""
+
+    name: str
+    code: str  # one of COORDINATE_CODES
+    joint: str  # the pair's name
+
+    @property
+    def axis(self) -> int:
+        """0-based index of the mobility axis f (0..2 translations, 3..5 rotations)."""
+        return code_index(self.code)
+
+    @property
+    def kind(self) -> str:
+        return "translation" if self.axis < 3 else "rotation"
+
+
+@dataclass(frozen=True)
+class Pair:
+    """The kinematic pair (parent, body): constructive then functional configuration (1.24)-(1.27)."""
+
+    name: str
+    translation: tuple  # 3 expressions, parent axes
+    rotation: tuple  # ((axis 1..3, angle expression), ...) in order of application
+    coordinates: tuple  # Coordinate, ordered by code
+    stiffness: tuple | None = None  # k x k expressions over the pair's coordinates (Hooke, (1.32), (2.27))
+
+    @property
+    def codes(self) -> tuple:
+        return tuple(c.code for c in self.coordinates)
+
+    def constructive_rotation(self) -> sp.Matrix:
+        """c^{mu,k-1}_{lkk} = c_alpha c_beta c_gamma (Prop. 1.17), exact where the angles are."""
+        c = sp.eye(3)
+        for axis, angle in self.rotation:
+            c = c * elementary_rotation(axis, angle)
+        return c.applyfunc(_snap)
+
+
+@dataclass(frozen=True)
+class Inertial:
+    """Mass, centre of mass (body axes) and inertia tensor about the centre of mass (body axes)."""
+
+    mass: sp.Expr
+    com: tuple
+    inertia: tuple  # 3x3 symmetric, about the centre of mass
+
+    def mises(self):
+        """(m, h, theta_O): the Mises matrix (2.3) at the body origin, h = m r_c, theta_O = theta_c + m(r.r E - r r^T)."""
+        m = self.mass
+        r = sp.Matrix(self.com)
+        theta = sp.Matrix(self.inertia) + m * (r.dot(r) * sp.eye(3) - r * r.T)
+        h = tuple(sp.expand(m * x) for x in r)
+        return m, h, tuple(tuple(sp.expand(theta[i, j]) for j in range(3)) for i in range(3))
+
+
+@dataclass(frozen=True)
+class Body:
+    """A rigid body (or a massless frame when ``inertial`` is None) and the pair joining it to its parent."""
+
+    name: str
+    parent: str  # WORLD for the root
+    pair: Pair
+    inertial: Inertial | None = None
+    where: str = ""  # the place in the source file, for messages
+
+
+@dataclass(frozen=True)
+class Model:
+    """A tree of bodies, parents listed before children."""
+
+    name: str
+    bodies: tuple
+    gravity: tuple  # 3 expressions in the root (world) frame
+    parameters: tuple = ()
+    source: str = ""
+    description: str = ""
+    meta: dict = field(default_factory=dict, compare=False, hash=False)
+
+    @property
+    def coordinates(self) -> tuple:
+        return tuple(c for b in self.bodies for c in b.pair.coordinates)
+
+    @property
+    def nq(self) -> int:
+        return len(self.coordinates)
+
+    @property
+    def parameter_symbols(self) -> tuple:
+        return tuple(p.symbol for p in self.parameters)
+
+    @property
+    def parameter_values(self) -> tuple:
+        return tuple(float(p.value) for p in self.parameters)
+
+    def body(self, name: str) -> Body:
+        for b in self.bodies:
+            if b.name == name:
+                return b
+        raise KeyError(name)

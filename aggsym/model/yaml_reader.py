@@ -1,0 +1,379 @@
+"""The YAML model reader: every mistake is reported with the file, the YAML path, the line and the reason.
+
+The format is documented in README.md ("The model format").  Summary::
+
+    name: NAME                       # C identifier, prefix of the generated functions (default: file stem)
+    description: text                # optional
+    gravity: [gx, gy, gz]            # in the world frame; default [0, 0, 0]
+    parameters: {NAME: default, ...} # runtime parameters, the entries of p in this order
+    bodies:                          # a tree: exactly one body has parent 'world'
+      - name: NAME
+        parent: world | BODY
+        pair:                        # the pair (parent, this body), (1.24)-(1.27); omitted = welded
+          name: NAME                 # joint name (default: the body's name)
+          translation: [p1, p2, p3]  # constructive translation, parent axes
+          rotation: [[axis, angle], ...]   # constructive rotations in order, axis 1|2|3|x|y|z
+          functional: {o1|o2|o3|theta4|theta5|theta6: COORDINATE, ...}
+          stiffness: [[...]] | [k1, ...]   # Hooke stiffness over the pair's coordinates (2.27)
+        mass: m                      # omit mass (and inertia) for a massless frame
+        com: [x, y, z]               # centre of mass, body axes (default 0)
+        inertia: {xx:, yy:, zz:, xy:, xz:, yz:} | [[3x3]]   # about the centre of mass, body axes
+        mises: [[6x6]]               # alternatively: the Mises matrix (2.3) at the body origin
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import sympy as sp
+import yaml
+
+from ..errors import ModelError
+from .expressions import ExpressionError, check_identifier, evaluate, parse_value
+from .types import COORDINATE_CODES, WORLD, Body, Coordinate, Inertial, Model, Parameter, Pair
+from .validate import inertia_problem, mass_problem, order_tree
+
+TOP_KEYS = {"name", "description", "source", "notes", "gravity", "parameters", "bodies", "contacts", "loops"}
+BODY_KEYS = {"name", "parent", "pair", "mass", "com", "inertia", "mises", "rotors", "added_mass", "description",
+             "notes"}
+PAIR_KEYS = {"name", "translation", "rotation", "functional", "stiffness", "description"}
+INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
+AXES = {1: 1, 2: 2, 3: 3, "x": 1, "y": 2, "z": 3, "1": 1, "2": 2, "3": 3}
+CODE_ALIASES = {"θ4": "theta4", "θ5": "theta5", "θ6": "theta6"}
+LATER = {
+    "contacts": "contacts with external bodies are not supported yet",
+    "loops": "kinematic loops are not supported yet",
+}
+
+
+def _path(parts) -> str:
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out
+
+
+class _Doc:
+    """The YAML document as plain Python values, with the line of every path."""
+
+    def __init__(self, file: Path, text: str):
+        self.file = file
+        self.lines: dict[tuple, int] = {}
+        try:
+            node = yaml.compose(text, Loader=yaml.SafeLoader)
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+            problem = getattr(exc, "problem", None) or str(exc)
+            raise ModelError(file, "", f"not valid YAML: {problem}", mark.line + 1 if mark else None) from None
+        if node is None:
+            raise ModelError(file, "", "the file is empty")
+        self._constructor = yaml.SafeLoader("")
+        self.root = self._build(node, ())
+
+    def _build(self, node, path):
+        self.lines[path] = node.start_mark.line + 1
+        if isinstance(node, yaml.MappingNode):
+            out = {}
+            for key_node, value_node in node.value:
+                key = self._constructor.construct_object(key_node, deep=True)
+                if not isinstance(key, (str, int)):
+                    raise ModelError(self.file, _path(path), f"a key must be a name, got {key!r}",
+                                     key_node.start_mark.line + 1)
+                if key in out:
+                    raise ModelError(self.file, _path(path + (key,)), f"duplicate key {key!r}",
+                                     key_node.start_mark.line + 1)
+                out[key] = self._build(value_node, path + (key,))
+            return out
+        if isinstance(node, yaml.SequenceNode):
+            return [self._build(v, path + (i,)) for i, v in enumerate(node.value)]
+        return self._constructor.construct_object(node, deep=True)
+
+    def line(self, path) -> int | None:
+        path = tuple(path)
+        while path not in self.lines and path:
+            path = path[:-1]
+        return self.lines.get(path)
+
+    def error(self, path, message):
+        return ModelError(self.file, _path(path), message, self.line(path))
+
+
+class _Reader:
+    def __init__(self, file: Path, text: str):
+        self.doc = _Doc(file, text)
+        self.file = file
+        self.symbols: dict[str, sp.Symbol] = {}
+        self.defaults: dict[sp.Symbol, float] = {}
+
+    def fail(self, path, message):
+        raise self.doc.error(path, message)
+
+    # generic shapes ------------------------------------------------------------------------------
+    def mapping(self, value, path, allowed, required=()):
+        if not isinstance(value, dict):
+            self.fail(path, f"expected a mapping, got {_kind(value)}")
+        for key in value:
+            if key not in allowed:
+                self.fail(path + (key,), f"unknown key {key!r} (allowed: {', '.join(sorted(map(str, allowed)))})")
+        for key in required:
+            if key not in value:
+                self.fail(path, f"missing field {key!r}")
+        return value
+
+    def sequence(self, value, path, length=None):
+        if not isinstance(value, list):
+            self.fail(path, f"expected a list, got {_kind(value)}")
+        if length is not None and len(value) != length:
+            self.fail(path, f"expected {length} entries, got {len(value)}")
+        return value
+
+    def expr(self, value, path):
+        try:
+            return parse_value(value, self.symbols)
+        except ExpressionError as exc:
+            self.fail(path, str(exc))
+
+    def number(self, expr, path) -> float:
+        """The value of an expression with parameters at their defaults (for validation)."""
+        try:
+            value = evaluate(expr, self.defaults)
+        except (TypeError, ValueError):
+            self.fail(path, f"{expr} has no real value")
+        if not np.isfinite(value):
+            self.fail(path, f"{expr} is not finite")
+        return value
+
+    def vector(self, value, path, length=3):
+        self.sequence(value, path, length)
+        return tuple(self.expr(v, path + (i,)) for i, v in enumerate(value))
+
+    def matrix(self, value, path, rows, cols):
+        self.sequence(value, path, rows)
+        return tuple(self.vector(r, path + (i,), cols) for i, r in enumerate(value))
+
+    def name(self, value, path, what):
+        problem = check_identifier(value)
+        if problem:
+            self.fail(path, f"{what}: {problem}")
+        return value
+
+    # the document ----------------------------------------------------------------------------------
+    def read(self) -> Model:
+        top = self.mapping(self.doc.root, (), TOP_KEYS, required=("bodies",))
+        for key, why in LATER.items():
+            if top.get(key):
+                self.fail((key,), why)
+        name = top.get("name", self.file.stem)
+        if not isinstance(name, str) or check_identifier(name) is not None:
+            self.fail(("name",), f"model name {name!r} must be a C identifier (letters, digits, _)")
+        description = top.get("description", "")
+        if not isinstance(description, str):
+            self.fail(("description",), f"expected text, got {_kind(description)}")
+        parameters = self.parameters(top.get("parameters", {}))
+        gravity = self.vector(top["gravity"], ("gravity",)) if "gravity" in top else (sp.Integer(0),) * 3
+        for i, g in enumerate(gravity):
+            self.number(g, ("gravity", i))
+        bodies = self.bodies(top["bodies"])
+        return Model(name=name, bodies=bodies, gravity=gravity, parameters=parameters, source=str(self.file),
+                     description=description.strip())
+
+    def parameters(self, value):
+        path = ("parameters",)
+        if not isinstance(value, dict):
+            self.fail(path, f"expected a mapping of names to default values, got {_kind(value)}")
+        out = []
+        for key, default in value.items():
+            self.name(key, path + (key,), "parameter name")
+            if isinstance(default, dict):
+                self.mapping(default, path + (key,), {"value", "description", "unit"}, required=("value",))
+                default = default["value"]
+            if isinstance(default, bool) or not isinstance(default, (int, float)):
+                self.fail(path + (key,), f"the default of parameter {key!r} must be a number, got {_kind(default)}")
+            if not np.isfinite(default):
+                self.fail(path + (key,), f"the default of parameter {key!r} is not finite")
+            param = Parameter(key, float(default))
+            self.symbols[key] = param.symbol
+            self.defaults[param.symbol] = float(default)
+            out.append(param)
+        return tuple(out)
+
+    def bodies(self, value):
+        path = ("bodies",)
+        self.sequence(value, path)
+        if not value:
+            self.fail(path, "the model has no bodies")
+        raw = []
+        names: dict[str, int] = {}
+        for i, entry in enumerate(value):
+            p = path + (i,)
+            self.mapping(entry, p, BODY_KEYS, required=("name",))
+            name = self.name(entry["name"], p + ("name",), "body name")
+            if name == WORLD:
+                self.fail(p + ("name",), f"{WORLD!r} names the inertial frame; choose another body name")
+            if name in names:
+                self.fail(p + ("name",), f"duplicate body name {name!r} (also bodies[{names[name]}])")
+            names[name] = i
+            parent = entry.get("parent", WORLD)
+            if not isinstance(parent, str):
+                self.fail(p + ("parent",), f"expected a body name, got {_kind(parent)}")
+            raw.append((name, parent))
+        order, problem, where = order_tree([n for n, _ in raw], [q for _, q in raw], WORLD)
+        if problem:
+            self.fail(path + (where, "parent"), problem)
+        joints: dict[str, tuple] = {}
+        coordinates: dict[str, tuple] = {}
+        bodies = []
+        for i in order:
+            bodies.append(self.body(value[i], path + (i,), joints, coordinates))
+        return tuple(bodies)
+
+    def body(self, entry, path, joints, coordinates) -> Body:
+        name = entry["name"]
+        pair = self.pair(entry.get("pair", {}), path + ("pair",), name, joints, coordinates)
+        inertial = self.inertial(entry, path)
+        for key in ("rotors", "added_mass"):
+            if key in entry:
+                self.fail(path + (key,), f"{key} are not supported yet")
+        return Body(name=name, parent=entry.get("parent", WORLD), pair=pair, inertial=inertial, where=_path(path))
+
+    def pair(self, value, path, body, joints, coordinates) -> Pair:
+        self.mapping(value, path, PAIR_KEYS)
+        jname = self.name(value.get("name", body), path + ("name",), "joint name")
+        if jname in joints:
+            self.fail(path + ("name",), f"duplicate joint name {jname!r} (also {_path(joints[jname])})")
+        joints[jname] = path
+        translation = self.vector(value["translation"], path + ("translation",)) if "translation" in value \
+            else (sp.Integer(0),) * 3
+        rotation = []
+        for i, step in enumerate(self.sequence(value.get("rotation", []), path + ("rotation",))):
+            p = path + ("rotation", i)
+            self.sequence(step, p, 2)
+            axis = AXES.get(step[0]) if not isinstance(step[0], bool) else None
+            if axis is None:
+                self.fail(p + (0,), f"rotation axis must be 1, 2, 3 (or x, y, z), got {step[0]!r}")
+            rotation.append((axis, self.expr(step[1], p + (1,))))
+        functional = value.get("functional", {})
+        fpath = path + ("functional",)
+        if not isinstance(functional, dict):
+            self.fail(fpath, f"expected a mapping from o1..o3/theta4..theta6 to coordinate names, got "
+                             f"{_kind(functional)}")
+        coords = []
+        for code, cname in functional.items():
+            code = CODE_ALIASES.get(code, code)
+            if code not in COORDINATE_CODES:
+                self.fail(fpath + (code,), f"{code!r} is not a coordinate of a pair; use one of "
+                                           f"{', '.join(COORDINATE_CODES)}")
+            self.name(cname, fpath + (code,), "coordinate name")
+            if cname in coordinates:
+                self.fail(fpath + (code,), f"duplicate coordinate name {cname!r} (also {_path(coordinates[cname])})")
+            if cname in self.symbols:
+                self.fail(fpath + (code,), f"coordinate name {cname!r} is also a parameter")
+            coordinates[cname] = fpath + (code,)
+            coords.append(Coordinate(cname, code, jname))
+        coords.sort(key=lambda c: COORDINATE_CODES.index(c.code))
+        stiffness = None
+        if "stiffness" in value:
+            stiffness = self.stiffness(value["stiffness"], path + ("stiffness",), len(coords))
+        return Pair(jname, translation, tuple(rotation), tuple(coords), stiffness)
+
+    def stiffness(self, value, path, n):
+        if n == 0:
+            self.fail(path, "a pair without coordinates has no stiffness")
+        if isinstance(value, list) and value and not isinstance(value[0], list):
+            diag = self.vector(value, path, n)
+            K = tuple(tuple(diag[i] if i == j else sp.Integer(0) for j in range(n)) for i in range(n))
+        else:
+            K = self.matrix(value, path, n, n)
+        num = np.array([[self.number(K[i][j], path + (i, j)) for j in range(n)] for i in range(n)])
+        if np.max(np.abs(num - num.T)) > 1e-9 * max(1.0, np.max(np.abs(num))):
+            self.fail(path, "stiffness matrix is not symmetric")
+        if np.linalg.eigvalsh(num)[0] < -1e-9 * max(1.0, np.max(np.abs(num))):
+            self.fail(path, "stiffness matrix is not positive semi-definite")
+        return K
+
+    def inertial(self, entry, path):
+        has = [k for k in ("mass", "com", "inertia", "mises") if k in entry]
+        if not has:
+            return None
+        if "mises" in entry:
+            others = [k for k in ("mass", "com", "inertia") if k in entry]
+            if others:
+                self.fail(path + (others[0],), "give either mises or mass/com/inertia, not both")
+            return self.from_mises(entry["mises"], path + ("mises",))
+        if "mass" not in entry:
+            self.fail(path, f"{has[0]} given without mass (a massless frame has neither)")
+        mass = self.expr(entry["mass"], path + ("mass",))
+        problem = mass_problem(self.number(mass, path + ("mass",)))
+        if problem:
+            self.fail(path + ("mass",), problem)
+        com = self.vector(entry["com"], path + ("com",)) if "com" in entry else (sp.Integer(0),) * 3
+        inertia = self.inertia(entry.get("inertia", {}), path + ("inertia",))
+        return Inertial(mass, com, inertia)
+
+    def inertia(self, value, path):
+        if isinstance(value, dict):
+            self.mapping(value, path, set(INERTIA_KEYS))
+            e = {k: self.expr(value[k], path + (k,)) if k in value else sp.Integer(0) for k in INERTIA_KEYS}
+            J = ((e["xx"], e["xy"], e["xz"]), (e["xy"], e["yy"], e["yz"]), (e["xz"], e["yz"], e["zz"]))
+        else:
+            J = self.matrix(value, path, 3, 3)
+        self.check_inertia(J, path)
+        return J
+
+    def check_inertia(self, J, path):
+        num = [[self.number(J[i][j], path) for j in range(3)] for i in range(3)]
+        problem = inertia_problem(num)
+        if problem:
+            self.fail(path, problem)
+
+    def from_mises(self, value, path):
+        """Read a Mises matrix (2.3) and check its form [[m E, -hat(h)], [hat(h), theta_O]]."""
+        X = self.matrix(value, path, 6, 6)
+        num = np.array([[self.number(X[i][j], path + (i, j)) for j in range(6)] for i in range(6)])
+        scale = max(1.0, float(np.max(np.abs(num))))
+        if np.max(np.abs(num - num.T)) > 1e-9 * scale:
+            self.fail(path, "Mises matrix is not symmetric")
+        m = X[0][0]
+        top = num[:3, :3]
+        if np.max(np.abs(top - top[0, 0] * np.eye(3))) > 1e-9 * scale:
+            self.fail(path, "the upper-left 3x3 block of a Mises matrix must be m E (2.3)")
+        problem = mass_problem(num[0, 0])
+        if problem:
+            self.fail(path + (0, 0), problem)
+        lower = num[3:, :3]
+        if np.max(np.abs(lower + lower.T)) > 1e-9 * scale:
+            self.fail(path, "the lower-left 3x3 block of a Mises matrix must be skew-symmetric, hat(m r_c) (2.3)")
+        h = (X[5][1], X[3][2], X[4][0])  # hat(h) = [[0,-h3,h2],[h3,0,-h1],[-h2,h1,0]]
+        com = tuple(sp.simplify(x / m) for x in h)
+        r = sp.Matrix(com)
+        theta_o = sp.Matrix(3, 3, lambda i, j: X[3 + i][3 + j])
+        theta_c = theta_o - m * (r.dot(r) * sp.eye(3) - r * r.T)
+        J = tuple(tuple(sp.simplify(theta_c[i, j]) for j in range(3)) for i in range(3))
+        self.check_inertia(J, path)
+        return Inertial(m, com, J)
+
+
+def _kind(value) -> str:
+    if value is None:
+        return "nothing"
+    if isinstance(value, bool):
+        return f"the boolean {value}"
+    if isinstance(value, dict):
+        return "a mapping"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, str):
+        return f"the text {value!r}"
+    return f"{type(value).__name__} {value!r}"
+
+
+def load_yaml(path) -> Model:
+    """Read and validate a YAML model; raises :class:`ModelError` naming the place of the first problem."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelError(path, "", f"cannot read the file: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise ModelError(path, "", "not a text file (UTF-8)") from None
+    return _Reader(path, text).read()

@@ -1,0 +1,82 @@
+"""Rung 1 on every model: identities, and agreement with the independent Newton-Euler of reference.py."""
+import numpy as np
+import pytest
+
+import aggsym
+from aggsym.backend import Numeric, bind
+from aggsym.inertia import inertia_matrix, inertia_matrix_sas
+from aggsym.kinematics import TreeKinematics
+from conftest import MODELS
+from reference import NumericModel, mass_matrix, newton_euler
+
+TRIALS = 5
+
+
+@pytest.fixture(params=MODELS, ids=lambda p: p.stem)
+def model(request):
+    return aggsym.load(request.param)
+
+
+def states(model, rng, n=TRIALS):
+    for _ in range(n):
+        yield (rng.uniform(-np.pi, np.pi, model.nq), rng.normal(size=model.nq), rng.normal(size=model.nq))
+
+
+def test_composite_bodies_equal_s_a_st(model, rng):
+    """A by composite bodies (2.32)-(2.34) equals S diag(Theta) S^T (2.30)."""
+    bound = bind(model, Numeric())
+    for q, _, _ in states(model, rng):
+        kin = TreeKinematics(bound, list(q))
+        A1 = np.array(inertia_matrix(bound, kin), dtype=float)
+        A2 = np.array(inertia_matrix_sas(bound, kin), dtype=float)
+        assert np.allclose(A1, A2, rtol=1e-12, atol=1e-12 * np.abs(A1).max())
+
+
+def test_inertia_symmetric_positive_definite(model, rng):
+    twin = aggsym.NumericTwin(model)
+    for q, _, _ in states(model, rng):
+        A = twin.inertia(q)
+        assert np.array_equal(A, A.T)
+        assert np.linalg.eigvalsh(A)[0] > 0
+
+
+def test_equations_equal_independent_newton_euler(model, rng):
+    """A q'' + b + g equals a world-frame Newton-Euler written independently (tests/reference.py)."""
+    twin = aggsym.NumericTwin(model)
+    nm = NumericModel(model)
+    for q, qd, qdd in states(model, rng):
+        tau, T, U = newton_euler(nm, q, qd, qdd)
+        lhs = twin.inertia(q) @ qdd + twin.bias(q, qd) + twin.gravity(q)
+        scale = max(1.0, np.abs(tau).max())
+        assert np.abs(lhs - tau).max() <= 1e-11 * scale
+        assert np.abs(twin.inverse_dynamics(q, qd, qdd) - tau).max() <= 1e-11 * scale
+        assert np.allclose(mass_matrix(nm, q), twin.inertia(q), rtol=1e-11, atol=1e-11 * scale)
+        assert twin.kinetic_energy(q, qd)[0] == pytest.approx(T, rel=1e-11, abs=1e-12)
+        assert twin.potential_energy(q)[0] == pytest.approx(U, rel=1e-11, abs=1e-9)
+
+
+def test_kinetic_energy_is_quadratic_form(model, rng):
+    twin = aggsym.NumericTwin(model)
+    for q, qd, _ in states(model, rng):
+        assert twin.kinetic_energy(q, qd)[0] == pytest.approx(0.5 * qd @ twin.inertia(q) @ qd, rel=1e-12)
+
+
+def test_gravity_is_gradient_of_potential(model, rng):
+    twin = aggsym.NumericTwin(model)
+    for q, _, _ in states(model, rng, 2):
+        h = 1e-6
+        grad = np.array([(twin.potential_energy(q + h * e)[0] - twin.potential_energy(q - h * e)[0]) / (2 * h)
+                         for e in np.eye(model.nq)])
+        assert np.allclose(twin.gravity(q), grad, rtol=1e-6, atol=1e-6 * max(1.0, np.abs(grad).max()))
+
+
+def test_bias_is_coriolis_of_inertia(model, rng):
+    """b = A' q' - 1/2 d/dq (q'^T A q'), differentiating A(q) numerically along q'."""
+    twin = aggsym.NumericTwin(model)
+    for q, qd, _ in states(model, rng, 2):
+        h = 1e-6
+        Adot = (twin.inertia(q + h * qd) - twin.inertia(q - h * qd)) / (2 * h)
+        dT = np.array([(qd @ twin.inertia(q + h * e) @ qd - qd @ twin.inertia(q - h * e) @ qd) / (2 * h)
+                       for e in np.eye(model.nq)])
+        expected = Adot @ qd - 0.5 * dT
+        assert np.allclose(twin.bias(q, qd), expected, rtol=1e-6, atol=1e-6 * max(1.0, np.abs(expected).max()))
