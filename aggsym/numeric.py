@@ -27,7 +27,9 @@ class NumericTwin:
         return self._bound[key]
 
     def call(self, role: str, *args, p=None):
-        """Evaluate routine ``role`` with its inputs (q, qd, ...) in order, as a NumPy array of its shape."""
+        """Evaluate routine ``role`` with its inputs (q, qd, ...) in order.
+
+        Returns a NumPy array of the output's shape, or a tuple of arrays for a routine with several outputs."""
         routine = ROUTINES[role]
         names = [n for n in routine.inputs if n != "p"]
         if len(args) != len(names):
@@ -38,8 +40,10 @@ class NumericTwin:
             if arr.size != self.model.nq:
                 raise ValueError(f"{role}: {name} has {arr.size} entries, the model has {self.model.nq} coordinates")
             inputs[name] = [float(x) for x in arr]
-        out = run(routine, self.bound(p), inputs)
-        return np.array([float(x) for x in out]).reshape(routine.shape(self.model))
+        outs = run(routine, self.bound(p), inputs)
+        arrays = tuple(np.array([float(x) for x in flat]).reshape(o.shape(self.model))
+                       for o, flat in zip(routine.outputs, outs))
+        return arrays[0] if len(arrays) == 1 else arrays
 
     def __getattr__(self, role):
         if role in ROUTINES:

@@ -18,25 +18,37 @@ from .linalg import dot
 
 
 @dataclass(frozen=True)
-class Routine:
-    role: str  # the contract's name, e.g. "inertia" -> NAME_inertia
-    inputs: tuple  # input vectors in argument order, "p" included where the C signature has it
-    output: str  # the output argument's name in C
-    shape: Callable  # model -> output shape
-    build: Callable  # (bound, kinematics, inputs) -> flat list of scalars
-    doc: str
+class Output:
+    """One output array of a routine: its C argument name and shape (as a function of the model)."""
+
+    name: str
+    shape: Callable  # model -> tuple
     symmetric: bool = False  # an n x n output known to be symmetric
 
 
-def _nq(model):
+@dataclass(frozen=True)
+class Routine:
+    role: str  # the contract's name, e.g. "inertia" -> NAME_inertia
+    inputs: tuple  # input vectors in argument order, "p" included where the C signature has it
+    outputs: tuple  # Output, in argument order after the inputs
+    build: Callable  # (bound, kinematics, inputs) -> tuple of flat lists, one per output
+    doc: str
+    layout: Callable | None = None  # model -> JSON-able description of the outputs' layout (manifest)
+    applies: Callable | None = None  # model -> bool; None means every model has this routine
+
+    def exists_for(self, model) -> bool:
+        return self.applies is None or bool(self.applies(model))
+
+
+def nq_vector(model):
     return (model.nq,)
 
 
-def _nn(model):
+def nq_square(model):
     return (model.nq, model.nq)
 
 
-def _scalar(model):
+def scalar(model):
     return (1,)
 
 
@@ -48,35 +60,41 @@ def _inverse_dynamics(bound, kin, x):
     A = inertia_matrix(bound, kin)
     b = bias_vector(bound, kin, x["qd"])
     g = gravity_vector(bound, kin)
-    return [dot(A[i], x["qdd"]) + b[i] + g[i] for i in range(len(b))]
+    return ([dot(A[i], x["qdd"]) + b[i] + g[i] for i in range(len(b))],)
 
 
 ROUTINES: dict[str, Routine] = {}
 
 
 def register(routine: Routine) -> Routine:
+    """Add a routine to the contract's list (order of registration is the order of emission)."""
     ROUTINES[routine.role] = routine
     return routine
 
 
-register(Routine("inertia", ("q", "p"), "A", _nn, lambda bound, kin, x: _flat(inertia_matrix(bound, kin)),
-                 "A(q), the inertia matrix, n*n row-major (2.32)-(2.34)", symmetric=True))
-register(Routine("bias", ("q", "qd", "p"), "b", _nq, lambda bound, kin, x: bias_vector(bound, kin, x["qd"]),
+register(Routine("inertia", ("q", "p"), (Output("A", nq_square, symmetric=True),),
+                 lambda bound, kin, x: (_flat(inertia_matrix(bound, kin)),),
+                 "A(q), the inertia matrix, n*n row-major (2.32)-(2.34)"))
+register(Routine("bias", ("q", "qd", "p"), (Output("b", nq_vector),),
+                 lambda bound, kin, x: (bias_vector(bound, kin, x["qd"]),),
                  "b(q, qd), the velocity terms (2.36)-(2.37), Prop. 2.19"))
-register(Routine("gravity", ("q", "p"), "g", _nq, lambda bound, kin, x: gravity_vector(bound, kin),
+register(Routine("gravity", ("q", "p"), (Output("g", nq_vector),),
+                 lambda bound, kin, x: (gravity_vector(bound, kin),),
                  "g(q) = -S G, the generalized gravity force on the left side"))
-register(Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), "tau", _nq, _inverse_dynamics,
+register(Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), (Output("tau", nq_vector),), _inverse_dynamics,
                  "tau = A(q) qdd + b(q, qd) + g(q)"))
-register(Routine("kinetic_energy", ("q", "qd", "p"), "T", _scalar,
-                 lambda bound, kin, x: [kinetic_energy(bound, kin, x["qd"])],
+register(Routine("kinetic_energy", ("q", "qd", "p"), (Output("T", scalar),),
+                 lambda bound, kin, x: ([kinetic_energy(bound, kin, x["qd"])],),
                  "T = 1/2 qd^T A(q) qd (Def. 2.4)"))
-register(Routine("potential_energy", ("q", "p"), "U", _scalar,
-                 lambda bound, kin, x: [potential_energy(bound, kin)],
+register(Routine("potential_energy", ("q", "p"), (Output("U", scalar),),
+                 lambda bound, kin, x: ([potential_energy(bound, kin)],),
                  "U(q), the potential energy of gravity"))
 
 
-def run(routine: Routine, bound, inputs: dict) -> list:
-    """Evaluate a routine on a bound model; ``inputs`` maps vector names (without p) to lists of scalars."""
+def run(routine: Routine, bound, inputs: dict) -> tuple:
+    """Evaluate a routine on a bound model; ``inputs`` maps vector names (without p) to lists of scalars.
+
+    Returns one flat list of scalars per output."""
     kin = TreeKinematics(bound, inputs["q"])
     return routine.build(bound, kin, inputs)
 

@@ -125,6 +125,7 @@ class Body:
     pair: Pair
     inertial: Inertial | None = None
     where: str = ""  # the place in the source file, for messages
+    link_rotation: tuple | None = None  # 3x3: axes of the source file's link frame in the body frame (URDF)
 
 
 @dataclass(frozen=True)
