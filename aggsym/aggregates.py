@@ -14,6 +14,7 @@ and addition.
 from __future__ import annotations
 
 from .codegen.program import is_zero
+from .group import phi_force
 from .linalg import (
     add, congruence3, cross, dot, hat, madd, mm, mmt, msub, mscale, mtv, mv, outer, scale, transpose,
 )
@@ -33,6 +34,20 @@ class Rigid:
         """Theta V = (m v + w x h, h x v + theta w) (2.5)."""
         v, w = V[:3], V[3:]
         return add(scale(self.m, v), cross(w, self.h)) + add(cross(self.h, v), mv(self.theta, w))
+
+    def dynamic_wrench(self, A, V):
+        """Theta A + Phi(V) Theta V: the left side of (2.10) for quasi-acceleration A and quasi-velocity V.
+
+        With the classical acceleration a = A_v + w x v of the origin, and v x (m v) = 0 and the Jacobi
+        identity v x (w x h) + w x (h x v) = h x (w x v):
+        ``(m a + A_w x h + w x (w x h),  h x a + theta A_w + w x (theta w))``.
+        """
+        v, w = V[:3], V[3:]
+        a = add(A[:3], cross(w, v))
+        aw = A[3:]
+        f = add(add(scale(self.m, a), cross(aw, self.h)), cross(w, cross(w, self.h)))
+        mu = add(add(cross(self.h, a), mv(self.theta, aw)), cross(w, mv(self.theta, w)))
+        return f + mu
 
     def moved(self, L) -> "Rigid":
         """L Theta L^T (2.7) for L = T(o) C(c): the same body seen from the parent frame."""
@@ -84,6 +99,10 @@ class General:
     def apply(self, V):
         v, w = V[:3], V[3:]
         return add(mv(self.x11, v), mv(self.x12, w)) + add(mtv(self.x12, v), mv(self.x22, w))
+
+    def dynamic_wrench(self, A, V):
+        """Theta A + Phi(V) Theta V (2.10), (2.13)."""
+        return add(self.apply(A), phi_force(V, self.apply(V)))
 
     def moved(self, L) -> "General":
         """L X L^T (2.7) for any symmetric X: rotate the blocks, then translate by T(o)."""

@@ -9,9 +9,8 @@ body's axes, ``g = F^T M^T L Y_g`` with ``Y_g = Theta (-g_lk, 0)``: the same bac
 """
 from __future__ import annotations
 
-from .group import phi_force
 from .kinematics import ZERO6, project, world_frame_vectors
-from .linalg import add, neg
+from .linalg import neg
 
 
 def bias_vector(bound, kin, qd, V=None):
@@ -21,7 +20,7 @@ def bias_vector(bound, kin, qd, V=None):
     Y = []
     for k, body in enumerate(bound.bodies):
         th = body.mises
-        Y.append(ZERO6 if th is None else add(th.apply(X[k]), phi_force(V[k], th.apply(V[k]))))
+        Y.append(ZERO6 if th is None else th.dynamic_wrench(X[k], V[k]))
     return generalized(kin, kin.backward(Y))
 
 

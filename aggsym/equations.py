@@ -9,6 +9,7 @@ from __future__ import annotations
 from functools import cached_property
 
 import sympy as sp
+from sympy.simplify.fu import TR10i
 
 from .backend import Symbolic, bind
 from .bias import bias_vector, gravity_vector
@@ -82,7 +83,16 @@ class Equations:
     def _matrix(self, values, rows, cols):
         exprs = to_sympy(self._backend.program, values, self._symbols)
         M = sp.Matrix(rows, cols, exprs)
-        return M.applyfunc(_simplify) if self.simplify else M
+        return M.applyfunc(self.closed_form) if self.simplify else M
+
+    def closed_form(self, expr):
+        """A readable closed form: expanded, sin^2 -> 1 - cos^2, products of cos and sin of different angles
+        gathered into cos/sin of sums (TR10i), then collected by velocities and parameters.  Every step is an
+        identity; this is much faster than ``sympy.simplify`` and gives the seeds' forms (e.g. Tokad's C23)."""
+        e = sp.expand(expr)
+        e = sp.expand(e.subs({sp.sin(s) ** 2: 1 - sp.cos(s) ** 2 for s in self.q}))
+        e = TR10i(e)
+        return sp.collect(e, list(self.qd) + list(self.parameters), evaluate=True)
 
     @cached_property
     def S(self) -> sp.Matrix:
@@ -107,10 +117,6 @@ class Equations:
     def lhs(self) -> sp.Matrix:
         """A q'' + b + g."""
         return self.A * self.qdd + self.b + self.g
-
-
-def _simplify(expr):
-    return sp.simplify(sp.trigsimp(sp.expand(expr)))
 
 
 def equations(model, simplify: bool = False) -> Equations:

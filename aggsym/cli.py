@@ -1,0 +1,154 @@
+"""The command line: ``aggsym generate | latex | check | ops MODEL``.
+
+Exit codes: 0 success, 1 generated code disagrees with the numeric twin, 2 bad input (with a message naming
+the file, the place in it and the problem; never a traceback).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+from .errors import AggsymError
+
+EXAMPLES = {
+    "generate": "example:\n  aggsym generate models/double_pendulum.yaml             # writes generated/double_pendulum/\n"
+                "  aggsym generate robot.urdf --floating-base -o build/robot",
+    "latex": "example:\n  aggsym latex models/double_pendulum.yaml > double_pendulum.tex",
+    "check": "example:\n  aggsym check models/manipulator6.yaml --trials 50",
+    "ops": "example:\n  aggsym ops models/manipulator6.yaml",
+}
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="aggsym",
+        description="Equations of motion of rigid-body trees (Konoplev's aggregative method) as C, NumPy and LaTeX.",
+        epilog="example:\n  aggsym generate models/double_pendulum.yaml\n\nexit codes: 0 ok, 1 mismatch, 2 bad input",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    from . import __version__
+
+    parser.add_argument("--version", action="version", version=f"aggsym {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+
+    def command(name, help_text):
+        p = sub.add_parser(name, help=help_text, description=help_text, epilog=EXAMPLES[name],
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
+        p.add_argument("model", metavar="MODEL", help="a .yaml model or a .urdf robot")
+        p.add_argument("--floating-base", action="store_true",
+                       help="URDF only: give the root a free 6-coordinate pair (o1 o2 o3 theta4 theta5 theta6)")
+        return p
+
+    g = command("generate", "write NAME.h, NAME.c, NAME.py, NAME.tex and NAME.json")
+    g.add_argument("-o", "--output", metavar="OUTDIR", help="output folder (default: generated/NAME/)")
+    g.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    command("latex", "print the LaTeX document of the equations of motion")
+    c = command("check", "compile the C, run it and the NumPy module on random states, compare with the numeric twin")
+    c.add_argument("--trials", type=int, default=20, help="random states per routine (default 20)")
+    c.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    c.add_argument("--tol", type=float, default=1e-12, help="largest relative error accepted (default 1e-12)")
+    command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
+    return parser
+
+
+def _load(args):
+    from .model import load
+
+    path = Path(args.model)
+    options = {"floating_base": True} if args.floating_base else {}
+    if options and path.suffix.lower() != ".urdf":
+        raise AggsymError(f"{path}: --floating-base applies to URDF models only")
+    return load(path, **options)
+
+
+def _progress(quiet: bool, name: str):
+    if quiet:
+        return None
+    return lambda msg: print(f"aggsym: {name}: {msg}", file=sys.stderr, flush=True)
+
+
+def cmd_generate(args) -> int:
+    from .codegen.generate import generate, write
+
+    t0 = time.perf_counter()
+    model = _load(args)
+    gen = generate(model, progress=_progress(args.quiet, model.name))
+    outdir = Path(args.output) if args.output else Path("generated") / model.name
+    paths = write(gen, outdir)
+    if not args.quiet:
+        print(f"aggsym: {model.name}: wrote {len(paths)} files to {outdir} in {time.perf_counter() - t0:.2f} s",
+              file=sys.stderr)
+    for p in paths:
+        print(p)
+    return 0
+
+
+def cmd_latex(args) -> int:
+    from .codegen.generate import generate
+
+    model = _load(args)
+    gen = generate(model)
+    sys.stdout.write(gen.files[f"{model.name}.tex"])
+    return 0
+
+
+def cmd_check(args) -> int:
+    from .codegen.compile import check_generated
+    from .codegen.generate import generate
+
+    model = _load(args)
+    gen = generate(model, latex=False)
+    results = check_generated(model, gen.files, trials=args.trials, seed=args.seed)
+    width = max(len(r.role) for r in results)
+    print(f"{model.name}: {args.trials} random states per routine; worst relative error against the numeric twin")
+    print(f"{'routine'.ljust(width)}  {'C':>9}  {'NumPy':>9}")
+    bad = []
+    for r in results:
+        flag = "" if max(r.c_error, r.py_error) <= args.tol else "  MISMATCH"
+        print(f"{r.role.ljust(width)}  {r.c_error:9.2e}  {r.py_error:9.2e}{flag}")
+        if flag:
+            bad.append(r.role)
+    if bad:
+        print(f"mismatch (> {args.tol:g}) in: {', '.join(bad)}", file=sys.stderr)
+        return 1
+    print(f"ok: every routine within {args.tol:g}")
+    return 0
+
+
+def cmd_ops(args) -> int:
+    from .codegen.generate import generate
+    from .codegen.ops import ops_table
+
+    model = _load(args)
+    gen = generate(model, latex=False)
+    print(ops_table(model.name, model.nq, {r.routine.role: r.ops for r in gen.routines}))
+    return 0
+
+
+COMMANDS = {"generate": cmd_generate, "latex": cmd_latex, "check": cmd_check, "ops": cmd_ops}
+
+
+def main(argv=None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        return COMMANDS[args.command](args)
+    except AggsymError as exc:
+        print(f"aggsym: error: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:
+        print("aggsym: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # an internal error: short message, traceback on request
+        if os.environ.get("AGGSYM_DEBUG"):
+            raise
+        print(f"aggsym: internal error: {exc.__class__.__name__}: {exc} (set AGGSYM_DEBUG=1 for a traceback)",
+              file=sys.stderr)
+        return 3
+
+
+if __name__ == "__main__":
+    sys.exit(main())
