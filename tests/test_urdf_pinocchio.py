@@ -1,4 +1,4 @@
-"""Rung 4: URDF models against Pinocchio: example-robot-data's robots.
+"""Rung 4: URDF models against Pinocchio: example-robot-data's robots and random branching trees.
 
 For each file: the coordinates in Pinocchio's order, then on random states A vs ``crba``, b + g vs
 ``nonLinearEffects``, g vs ``computeGeneralizedGravity`` and inverse dynamics vs ``rnea``, to 1e-9 relative to
@@ -6,6 +6,7 @@ the largest entry; fixed base (``pin.buildModelFromUrdf(path)``) and free base (
 against Pinocchio's root PX, PY, PZ, RX, RY, RZ).  Also the URDF link frames (``Body.link_rotation``) against
 Pinocchio's frame placements.
 """
+import re
 import warnings
 
 import numpy as np
@@ -16,6 +17,10 @@ import aggsym
 from aggsym.errors import ModelWarning
 from aggsym.model.types import elementary_rotation
 from pinocchio_reference import ROBOTS, compare, joint_names, pinocchio_model, pinocchio_q, robot_path
+from random_trees import random_urdf
+
+RANDOM_SEEDS = range(25)
+FLOATING_SEEDS = range(0, 25, 3)
 
 
 def load(path, **options):
@@ -27,6 +32,12 @@ def load(path, **options):
 
 def coordinate_joints(model) -> list:
     return [c.joint for c in model.coordinates]
+
+
+def write_tree(tmp_path, seed):
+    path = tmp_path / f"tree_{seed}.urdf"
+    path.write_text(random_urdf(seed))
+    return path
 
 
 def link_poses(model, q) -> dict:
@@ -123,3 +134,49 @@ def test_floating_base_robot(robot, rng):
 def test_robot_link_frames(robot, rng):
     path = robot_path(robot)
     check_link_frames(load(path), pinocchio_model(path), rng)
+
+
+@pytest.mark.parametrize("seed", RANDOM_SEEDS)
+def test_random_tree_against_pinocchio(seed, tmp_path, rng):
+    path = write_tree(tmp_path, seed)
+    model = aggsym.load(path)
+    pm = pinocchio_model(path)
+    assert coordinate_joints(model) == joint_names(pm)
+    compare(model, pm, rng, states=3)
+    check_link_frames(model, pm, rng)
+
+
+@pytest.mark.parametrize("seed", FLOATING_SEEDS)
+def test_random_tree_floating_base(seed, tmp_path, rng):
+    path = write_tree(tmp_path, seed)
+    model = aggsym.load(path, floating_base=True)
+    pm = pinocchio_model(path, floating_base=True)
+    assert coordinate_joints(model)[6:] == joint_names(pm)[6:]
+    compare(model, pm, rng, states=2)
+
+
+def test_random_trees_cover_the_features(tmp_path):
+    """The generator really produces what the comparisons above are meant to exercise."""
+    joined = "\n".join(random_urdf(seed) for seed in RANDOM_SEEDS)
+    for jtype in ("revolute", "continuous", "prismatic", "fixed"):
+        assert f'type="{jtype}"' in joined
+    for axis in ("-1.0 0.0 0.0", "0.0 -1.0 0.0", "0.0 0.0 -1.0", "0.0 0.0 2.0"):
+        assert f'<axis xyz="{axis}"/>' in joined
+    assert '<mass value="0.0"/>' in joined
+    assert 'rpy="1.5707963267948966' in joined and 'quat_xyzw=' in joined
+    general_axis = merged = branching = reordered = 0
+    for seed in range(8):
+        model = aggsym.load(write_tree(tmp_path, seed))
+        general_axis += sum(b.link_rotation is not None and any(not x.is_Rational for row in b.link_rotation for x in row)
+                            for b in model.bodies)
+        merged += len(model.meta["links"]) - len(model.bodies)
+        parents = [b.parent for b in model.bodies]
+        branching += any(parents.count(b.name) > 1 for b in model.bodies)
+        joints = coordinate_joints(model)
+        reordered += joints != [j for j in file_order(write_tree(tmp_path, seed)) if j in joints]
+    assert general_axis and merged and branching >= 4 and reordered >= 4
+
+
+def file_order(path) -> list:
+    """Joint names in the order the file lists them."""
+    return re.findall(r'<joint name="([^"]+)"', path.read_text())
