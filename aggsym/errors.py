@@ -28,6 +28,10 @@ class ModelError(AggsymError):
         return f"{loc}:{at}: {self.message}" if at else f"{loc}: {self.message}"
 
 
+class ModelWarning(UserWarning):
+    """A model file that can be used but looks wrong (e.g. a URDF inertia violating the triangle inequality)."""
+
+
 class CheckMismatch(AggsymError):
     """Generated code disagrees with the numeric twin."""
 

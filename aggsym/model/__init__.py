@@ -6,19 +6,22 @@ from pathlib import Path
 from ..errors import ModelError
 from .tree import Tree
 from .types import COORDINATE_CODES, WORLD, Body, Coordinate, Inertial, Model, Pair, Parameter
+from .urdf_reader import load_urdf
 from .yaml_reader import load_yaml
 
 
 def load(path, **options) -> Model:
-    """Read a model from a ``.yaml``/``.yml`` file (URDF support: ``.urdf``)."""
+    """Read a model from a ``.yaml``/``.yml`` or ``.urdf`` file; options go to the reader (``load_urdf``)."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix in (".yaml", ".yml"):
         if options:
             raise TypeError(f"YAML models take no options, got {sorted(options)}")
         return load_yaml(path)
-    raise ModelError(path, "", f"unknown model type {suffix!r}: expected .yaml or .yml")
+    if suffix == ".urdf":
+        return load_urdf(path, **options)
+    raise ModelError(path, "", f"unknown model type {suffix!r}: expected .yaml, .yml or .urdf")
 
 
-__all__ = ["load", "Model", "Body", "Pair", "Coordinate", "Inertial", "Parameter", "Tree", "COORDINATE_CODES",
+__all__ = ["load", "load_urdf", "load_yaml", "Model", "Body", "Pair", "Coordinate", "Inertial", "Parameter", "Tree", "COORDINATE_CODES",
            "WORLD", "ModelError"]

@@ -14,11 +14,11 @@ def mass_problem(mass: float) -> str | None:
     return None
 
 
-def inertia_problem(inertia) -> str | None:
+def inertia_problem(inertia, triangle: bool = True) -> str | None:
     """Why a 3x3 inertia tensor about the centre of mass is not physical, or None.
 
-    It must be symmetric, positive semi-definite, and its principal moments must satisfy the triangle
-    inequality (each at most the sum of the other two).
+    It must be symmetric, positive semi-definite, and (unless ``triangle`` is False) its principal moments
+    must satisfy the triangle inequality (each at most the sum of the other two).
     """
     J = np.asarray(inertia, dtype=float)
     if not np.all(np.isfinite(J)):
@@ -30,7 +30,7 @@ def inertia_problem(inertia) -> str | None:
     if moments[0] < -TOL * scale:
         return f"inertia is not positive semi-definite (principal moments {_fmt(moments)})"
     a, b, c = moments
-    if c > a + b + TOL * scale:
+    if triangle and c > a + b + TOL * scale:
         return f"principal moments {_fmt(moments)} violate the triangle inequality ({c:g} > {a:g} + {b:g})"
     return None
 

@@ -1,0 +1,120 @@
+"""Pinocchio as the reference for URDF models: the example-robot-data files, configurations, comparisons.
+
+The package ``example-robot-data`` (>= 4.4) ships the robot files only; its Python loaders moved to
+``example-robot-data-loaders``.  The files are found the way the package installs them: through the
+distribution's own file list (``importlib.metadata``), which holds ``share/example-robot-data/robots/...``
+under whatever prefix the wheel uses.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+import aggsym
+
+# The files example-robot-data's loaders open for these robots (robots_loader.py: path, urdf_subpath, urdf_filename).
+ROBOTS = {
+    "ur5": "ur_description/urdf/ur5_robot.urdf",
+    "panda": "panda_description/urdf/panda.urdf",
+    "double_pendulum": "double_pendulum_description/urdf/double_pendulum.urdf",
+    "hyq": "hyq_description/robots/hyq_no_sensors.urdf",
+    "solo12": "solo_description/robots/solo12.urdf",
+    "anymal": "anymal_b_simple_description/robots/anymal.urdf",
+    "talos": "talos_data/robots/talos_reduced.urdf",
+    "kinova": "kinova_description/robots/kinova.urdf",
+}
+TOLERANCE = 1e-9
+
+
+@lru_cache(maxsize=None)
+def robots_directory() -> Path:
+    """``share/example-robot-data/robots`` of the installed example-robot-data distribution."""
+    dist = metadata.distribution("example-robot-data")
+    for f in dist.files or ():
+        if f.as_posix().endswith("share/example-robot-data/package.xml"):
+            return Path(dist.locate_file(f)).parent / "robots"
+    raise FileNotFoundError("example-robot-data is installed but lists no share/example-robot-data/package.xml")
+
+
+def robot_path(name: str) -> Path:
+    """The URDF file of one of :data:`ROBOTS`."""
+    path = robots_directory() / ROBOTS[name]
+    if not path.is_file():
+        raise FileNotFoundError(path)
+    return path
+
+
+def free_root() -> "pin.JointModelComposite":
+    """The root joint matching ``floating_base=True``: PX, PY, PZ, RX, RY, RZ in this order."""
+    root = pin.JointModelComposite()
+    for joint in (pin.JointModelPX(), pin.JointModelPY(), pin.JointModelPZ(), pin.JointModelRX(), pin.JointModelRY(),
+                  pin.JointModelRZ()):
+        root.addJoint(joint)
+    return root
+
+
+def pinocchio_model(path, floating_base: bool = False):
+    """Pinocchio's model of a URDF file, fixed base or with :func:`free_root`."""
+    if floating_base:
+        return pin.buildModelFromUrdf(str(path), free_root())
+    return pin.buildModelFromUrdf(str(path))
+
+
+def pinocchio_q(pm, q) -> np.ndarray:
+    """Pinocchio's configuration vector for our joint values q (continuous joints are (cos, sin))."""
+    out = np.zeros(pm.nq)
+    for j in range(1, pm.njoints):
+        joint = pm.joints[j]
+        v = q[joint.idx_v: joint.idx_v + joint.nv]
+        if joint.nq == joint.nv:
+            out[joint.idx_q: joint.idx_q + joint.nq] = v
+        elif joint.nq == 2 and joint.nv == 1:  # unbounded revolute
+            out[joint.idx_q: joint.idx_q + 2] = (np.cos(v[0]), np.sin(v[0]))
+        else:
+            raise ValueError(f"no conversion for Pinocchio joint {joint.shortname()}")
+    return out
+
+
+def joint_names(pm) -> list:
+    """Pinocchio's joint names in q order, one per coordinate (the free root's six under its name)."""
+    names = []
+    for j in range(1, pm.njoints):
+        names += [pm.names[j]] * pm.joints[j].nv
+    return names
+
+
+def relative_error(ours, theirs) -> float:
+    """max |ours - theirs| relative to the largest entry of theirs."""
+    theirs = np.asarray(theirs)
+    return float(np.abs(np.asarray(ours) - theirs).max() / max(np.abs(theirs).max(), 1e-300))
+
+
+def compare(model, pm, rng, states: int = 3, tolerance: float = TOLERANCE) -> float:
+    """Assert A, b + g, g and inverse dynamics equal Pinocchio's on random states; returns the largest error."""
+    assert model.nq == pm.nv
+    twin = aggsym.NumericTwin(model)
+    data = pm.createData()
+    worst = 0.0
+    for _ in range(states):
+        q = rng.uniform(-np.pi, np.pi, model.nq)
+        qd, qdd = rng.normal(size=model.nq), rng.normal(size=model.nq)
+        Q = pinocchio_q(pm, q)
+        M = pin.crba(pm, data, Q)
+        M = np.triu(M) + np.triu(M, 1).T  # crba fills the upper triangle
+        errors = {
+            "A vs crba": relative_error(twin.inertia(q), M),
+            "b + g vs nonLinearEffects": relative_error(twin.bias(q, qd) + twin.gravity(q),
+                                                        pin.nonLinearEffects(pm, data, Q, qd)),
+            "g vs computeGeneralizedGravity": relative_error(twin.gravity(q),
+                                                             pin.computeGeneralizedGravity(pm, data, Q)),
+            "inverse_dynamics vs rnea": relative_error(twin.inverse_dynamics(q, qd, qdd),
+                                                       pin.rnea(pm, data, Q, qd, qdd)),
+        }
+        for what, error in errors.items():
+            assert error <= tolerance, f"{model.name}: {what}: relative error {error:.3g} at q={q.tolist()}"
+        worst = max(worst, *errors.values())
+    return worst
