@@ -9,6 +9,7 @@ import argparse
 import os
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from .errors import AggsymError
@@ -132,7 +133,12 @@ def cmd_ops(args) -> int:
 COMMANDS = {"generate": cmd_generate, "latex": cmd_latex, "check": cmd_check, "ops": cmd_ops}
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    print(f"aggsym: warning: {message}", file=sys.stderr)
+
+
 def main(argv=None) -> int:
+    warnings.showwarning = _show_warning
     args = _parser().parse_args(argv)
     try:
         return COMMANDS[args.command](args)

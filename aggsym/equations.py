@@ -86,13 +86,24 @@ class Equations:
         return M.applyfunc(self.closed_form) if self.simplify else M
 
     def closed_form(self, expr):
-        """A readable closed form: expanded, sin^2 -> 1 - cos^2, products of cos and sin of different angles
-        gathered into cos/sin of sums (TR10i), then collected by velocities and parameters.  Every step is an
-        identity; this is much faster than ``sympy.simplify`` and gives the seeds' forms (e.g. Tokad's C23)."""
+        """A readable closed form of one entry.
+
+        Expanded, sin^2 -> 1 - cos^2, products of sines and cosines of different angles gathered into sines and
+        cosines of sums (TR10i), collected by velocities and parameters, and each coefficient kept factored
+        where that is shorter, with 1 - cos^2 written back as sin^2.  Every step is an identity; this is much
+        faster than ``sympy.simplify`` and gives the seeds' forms (Tokad's C23, the book's m3 (p31 + r31 c)^2).
+        """
         e = sp.expand(expr)
         e = sp.expand(e.subs({sp.sin(s) ** 2: 1 - sp.cos(s) ** 2 for s in self.q}))
         e = TR10i(e)
-        return sp.collect(e, list(self.qd) + list(self.parameters), evaluate=True)
+        back = {1 - sp.cos(s) ** 2: sp.sin(s) ** 2 for s in self.q}
+        parts = sp.collect(e, list(self.qd) + list(self.parameters), evaluate=False)
+        terms = []
+        for key, coeff in parts.items():
+            plain = coeff.subs(back)
+            factored = sp.factor(coeff).subs(back)
+            terms.append(key * (factored if sp.count_ops(factored) < sp.count_ops(plain) else plain))
+        return sp.Add(*terms)
 
     @cached_property
     def S(self) -> sp.Matrix:

@@ -17,7 +17,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import jinja2
-import sympy as sp
 
 from .. import __version__
 from ..backend import Symbolic, bind
@@ -98,7 +97,7 @@ def _input_symbols(sl, c: bool):
     names = {}
     for kind, index in sl.inputs:
         node = sl.program.inputs[(kind, index)]
-        names[node.id] = sp.Symbol(f"{kind}[{index}]" if c else f"{kind}_{index}")
+        names[node.id] = f"{kind}[{index}]" if c else f"{kind}_{index}"
     return names
 
 
@@ -110,7 +109,7 @@ def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> Emitted
         if kind not in allowed:
             raise RuntimeError(f"routine {routine.role} depends on input {kind!r} outside its signature")
     cp, pp = CPrinter(), NumPyPrinter()
-    temp_names = {i: sp.Symbol(f"x{k}") for k, i in enumerate(sl.temps)}
+    temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
     c_names = {**_input_symbols(sl, True), **temp_names}
     py_names = {**_input_symbols(sl, False), **temp_names}
     c_conv, py_conv = Converter(prog, c_names), Converter(prog, py_names)
@@ -123,13 +122,13 @@ def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> Emitted
             py_body.append(f"{kind}_{i} = {kind}[..., {i}]")
     for i in sl.temps:
         node = prog.nodes[i]
-        c_body.append(f"const double {c_names[i].name} = {cp.doprint(c_conv(node))};")
-        py_body.append(f"{py_names[i].name} = {pp.doprint(py_conv(node))}")
+        c_body.append(f"const double {c_names[i]} = {cp._print(c_conv(node))};")
+        py_body.append(f"{py_names[i]} = {pp._print(py_conv(node))}")
     for out, flat in zip(routine.outputs, outputs):
         shape = out.shape(model)
         for k, x in enumerate(flat):
-            rhs_c = cp.doprint(c_conv(x, top=not (isinstance(x, Node) and x.id in c_names)))
-            rhs_py = pp.doprint(py_conv(x, top=not (isinstance(x, Node) and x.id in py_names)))
+            rhs_c = cp._print(c_conv(x, top=not (isinstance(x, Node) and x.id in c_names)))
+            rhs_py = pp._print(py_conv(x, top=not (isinstance(x, Node) and x.id in py_names)))
             c_body.append(f"{out.name}[{k}] = {rhs_c};")
             idx = ", ".join(str(j) for j in _unravel(k, shape))
             py_body.append(f"{out.name}[..., {idx}] = {rhs_py}")

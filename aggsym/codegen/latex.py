@@ -12,7 +12,9 @@ import re
 import sympy as sp
 
 from ..equations import Equations, coordinate_symbols
-from .printing import Converter, straight_line
+from sympy.printing.latex import LatexPrinter
+
+from .printing import Converter, LinComb, Num, Prod, _Common, straight_line
 
 CLOSED_FORM_MAX_NQ = 4
 
@@ -37,27 +39,102 @@ def _latex(expr, names):
     return sp.latex(expr, symbol_names=names, long_frac_ratio=2, mul_symbol=None)
 
 
+def _terms(expr, names) -> list:
+    """LaTeX of the top-level terms of a sum, each with its sign: ['+ a', '- b c', ...]."""
+    terms = sp.Add.make_args(expr) if expr.is_Add else (expr,)
+    out = []
+    for t in terms:
+        negative = t.could_extract_minus_sign()
+        text = _latex(-t if negative else t, names)
+        out.append(("- " if negative else "+ ") + text)
+    return out
+
+
+def broken(lhs: str, terms: list, rhs: str | None = None, width: int = 150) -> str:
+    """An align* row ``lhs &= t1 + t2 ...`` broken into several lines of at most ``width`` LaTeX characters;
+    with ``rhs`` the row is ``&t1 + ... = rhs`` instead."""
+    lines, current = [], ""
+    for t in terms or ["+ 0"]:
+        if current and len(current) + len(t) > width:
+            lines.append(current)
+            current = ""
+        current += (" " if current else "") + t
+    lines.append(current)
+    first = lines[0][2:] if lines[0].startswith("+ ") else lines[0]
+    rows = [first] + lines[1:]
+    if rhs is None:
+        head = f"{lhs} &= {rows[0]}"
+        tail = [f"&\\quad {r}" for r in rows[1:]]
+    else:
+        head = f"&{rows[0]}"
+        tail = [f"&\\quad {r}" for r in rows[1:]]
+        if tail:
+            tail[-1] += f" = {rhs}"
+        else:
+            head += f" = {rhs}"
+    return " \\\\\n".join([head] + tail)
+
+
 def closed_form(model):
-    """Scalar equations (2.26)-style: one LaTeX line per coordinate."""
+    """Closed forms: the nonzero entries of A (upper triangle), b and g, and the scalar equations (2.26)."""
     eq = Equations(model, simplify=True)
     names = symbol_names(model)
-    tau = [sp.Symbol(f"tau_{{{c.name}}}") for c in model.coordinates]
-    lines = []
-    for i in range(model.nq):
+    n = model.nq
+    sections = []
+    rows = [broken(f"A_{{{i + 1}{j + 1}}}", _terms(eq.A[i, j], names))
+            for i in range(n) for j in range(i, n) if eq.A[i, j] != 0]
+    sections.append(("Inertia matrix $A(q)$ (upper triangle; the other entries are zero)", rows))
+    rows = [broken(f"b_{{{i + 1}}}", _terms(eq.b[i], names)) for i in range(n) if eq.b[i] != 0]
+    sections.append(("Velocity terms $b(q,\\dot q)$", rows))
+    rows = [broken(f"g_{{{i + 1}}}", _terms(eq.g[i], names)) for i in range(n) if eq.g[i] != 0]
+    sections.append(("Gravity $g(q)$", rows))
+    rows = []
+    for i, c in enumerate(model.coordinates):
         terms = []
-        for j in range(model.nq):
-            if eq.A[i, j] != 0:
-                coeff = eq.A[i, j]
-                coeff_tex = _latex(coeff, names)
-                if coeff.is_Add:
-                    coeff_tex = f"\\left({coeff_tex}\\right)"
-                terms.append(f"{coeff_tex} {names[eq.qdd[j]]}")
-        rest = eq.closed_form(eq.b[i] + eq.g[i])
-        if rest != 0:
-            terms.append(_latex(rest, names))
-        lhs = " + ".join(terms).replace("+ -", "- ") or "0"
-        lines.append(f"{lhs} &= {sp.latex(tau[i])}")
-    return lines
+        for j in range(n):
+            a = eq.A[i, j]
+            if a == 0:
+                continue
+            if a.is_Add:
+                terms.append(f"+ \\left({_latex(a, names)}\\right) {names[eq.qdd[j]]}")
+            else:
+                (sign, text), = [(t[0], t[2:]) for t in _terms(a, names)]
+                terms.append(f"{sign} {text} {names[eq.qdd[j]]}" if text != "1" else f"{sign} {names[eq.qdd[j]]}")
+        terms += _terms(eq.closed_form(eq.b[i] + eq.g[i]), names) if eq.b[i] + eq.g[i] != 0 else []
+        rows.append(broken("", terms, rhs=f"\\tau_{{{i + 1}}}"))
+    sections.append(("The equations, one per coordinate (for the double pendulum: (2.26))", rows))
+    return sections
+
+
+class IntermediatePrinter(_Common, LatexPrinter):
+    """LaTeX of aggsym's expression trees (a SymPy LaTeX printer subclass); names are LaTeX already."""
+
+    functions = {"sin": "\\sin", "cos": "\\cos", "sqrt": "\\sqrt"}
+    times = " "
+
+    def _print_Num(self, e):
+        return sp.latex(sp.nsimplify(e.value) if not isinstance(e.value, float) else sp.Float(e.value, 6))
+
+    def _print_Call(self, e):
+        arg = self._print(e.arg)
+        if e.name == "sqrt":
+            return f"\\sqrt{{{arg}}}"
+        return f"{self.functions[e.name]}{{\\left({arg}\\right)}}"
+
+    def _operand(self, e):
+        text = self._print(e)
+        if isinstance(e, LinComb) or (isinstance(e, Prod) and e.sign < 0):
+            return f"\\left({text}\\right)"
+        return text
+
+    def _print_Prod(self, e):
+        factors = [self._operand(f) for f in e.factors]
+        body = " ".join(f if not (k and isinstance(e.factors[k], Num)) else f"\\cdot {f}"
+                        for k, f in enumerate(factors))
+        return f"-{body}" if e.sign < 0 else body
+
+    def _print_Ratio(self, e):
+        return f"\\frac{{{self._print(e.num)}}}{{{self._print(e.den)}}}"
 
 
 def intermediate_form(model, prog, outputs, roles=("inertia", "bias", "gravity")):
@@ -72,17 +149,22 @@ def intermediate_form(model, prog, outputs, roles=("inertia", "bias", "gravity")
         sym = {}
         for kind, i in sl.inputs:
             node = prog.inputs[(kind, i)]
-            sym[node.id] = {"q": q, "qd": qd}.get(kind, [None] * model.nq)[i] if kind in ("q", "qd") \
-                else model.parameter_symbols[i]
+            if kind == "q":
+                sym[node.id] = sp.latex(q[i])
+            elif kind == "qd":
+                sym[node.id] = names[qd[i]]
+            else:
+                sym[node.id] = sp.latex(model.parameter_symbols[i])
         for k, i in enumerate(sl.temps):
-            sym[i] = sp.Symbol(f"x_{{{k}}}")
+            sym[i] = f"x_{{{k}}}"
         conv = Converter(prog, sym)
-        lines = [f"{sp.latex(sym[i])} &= {_latex(conv(prog.nodes[i]), names)}" for i in sl.temps]
+        printer = IntermediatePrinter()
+        lines = [f"{sym[i]} &= {printer._print(conv(prog.nodes[i]))}" for i in sl.temps]
         label = {"inertia": "A", "bias": "b", "gravity": "g"}[role]
         flat = outputs[role][0]
         for k, x in enumerate(flat):
             named = getattr(x, "id", None) in sym
-            value = _latex(conv(x, top=not named), names)
+            value = printer._print(conv(x, top=not named))
             if role == "inertia":
                 i, j = divmod(k, model.nq)
                 if j < i:

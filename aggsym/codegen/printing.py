@@ -3,8 +3,10 @@
 A routine's outputs are nodes of a :class:`~aggsym.codegen.program.Program`.  :func:`straight_line` decides which
 nodes get a name: every node used twice or more (common subexpressions, already shared by value numbering) and
 every function call (sin/cos of each angle, named once); the rest is inlined into its single use.  Each named
-right-hand side is converted to an unevaluated SymPy expression (so SymPy neither distributes ``2*(a+b)`` nor
-reorders terms) and printed by :class:`CPrinter` or :class:`NumPyPrinter`, both SymPy code-printer subclasses.
+right-hand side becomes a small expression tree (:class:`LinComb`, :class:`Prod`, :class:`Ratio`, :class:`Call`,
+:class:`Ref`, :class:`Num`), printed exactly as built (no reordering, no distribution of ``2*(a+b)``) by
+:class:`CPrinter` or :class:`NumPyPrinter`: SymPy code-printer subclasses with a ``_print_<Class>`` method per
+node type, which SymPy's printer dispatch calls.
 
 :func:`count_ops` counts the operations of emitted C text: ``*`` multiplications, ``/`` divisions, binary ``+``
 and ``-`` additions (subtractions count as additions), and function calls; unary minus is not counted.
@@ -17,7 +19,6 @@ from collections import Counter
 from dataclasses import dataclass
 from fractions import Fraction
 
-import sympy as sp
 from sympy.printing.c import C99CodePrinter
 from sympy.printing.numpy import NumPyPrinter as _SympyNumPyPrinter
 
@@ -58,60 +59,120 @@ def straight_line(program, outputs) -> StraightLine:
     return StraightLine(program, temps, outputs, sorted(inputs))
 
 
-def constant(x) -> sp.Expr:
-    if type(x) is int:
-        return sp.Integer(x)
-    if isinstance(x, Fraction):
-        return sp.Rational(x.numerator, x.denominator)
-    return sp.Float(x, 17) if x != int(x) else sp.Integer(int(x))
+class Num:
+    """A constant (int, Fraction or float)."""
+
+    __slots__ = ("value",)
+
+    def __init__(self, value):
+        self.value = value
+
+
+class Ref:
+    """A named value: an input entry or a named intermediate."""
+
+    __slots__ = ("symbol",)
+
+    def __init__(self, symbol):
+        self.symbol = symbol
+
+
+class LinComb:
+    """A sum of signed terms: ``[(+1 or -1, expr), ...]``."""
+
+    __slots__ = ("terms",)
+
+    def __init__(self, terms):
+        self.terms = terms
+
+
+class Prod:
+    """A signed product of factors."""
+
+    __slots__ = ("sign", "factors")
+
+    def __init__(self, sign, factors):
+        self.sign = sign
+        self.factors = factors
+
+
+class Ratio:
+    __slots__ = ("num", "den")
+
+    def __init__(self, num, den):
+        self.num = num
+        self.den = den
+
+
+class Call:
+    __slots__ = ("name", "arg")
+
+    def __init__(self, name, arg):
+        self.name = name
+        self.arg = arg
 
 
 class Converter:
-    """Unevaluated SymPy expressions for the right-hand sides of a straight-line program."""
+    """The right-hand side of an assignment as a small expression tree (:class:`LinComb`, :class:`Prod`, ...)
+    with chains of inlined additions and multiplications flattened; named nodes appear as :class:`Ref`."""
 
     def __init__(self, program, names: dict):
         self.program = program
-        self.names = names  # node id -> sp.Symbol (inputs and named temps)
+        self.names = names  # node id -> name (inputs and named temps)
 
     def __call__(self, x, top: bool = True):
         if not isinstance(x, Node):
-            return constant(x)
+            return Num(x)
         if not top and x.id in self.names:
-            return self.names[x.id]
+            return Ref(self.names[x.id])
         entry = self.program.ops[x.id]
         code = entry[0]
         if code == INPUT:
-            return self.names[x.id]
+            return Ref(self.names[x.id])
         if code == NEG:
-            return sp.Mul(-1, self(entry[1], False), evaluate=False)
+            inner = self(entry[1], False)
+            if isinstance(inner, Prod):
+                return Prod(-inner.sign, inner.factors)
+            return LinComb([(-1, inner)])
         if code in FUNCTIONS:
-            f = {SIN: sp.sin, COS: sp.cos, SQRT: sp.sqrt}[code]
-            return f(self(entry[1], False), evaluate=False)
+            return Call({SIN: "sin", COS: "cos", SQRT: "sqrt"}[code], self(entry[1], False))
         if code in (ADD, SUB):
-            return sp.Add(*self._terms(x, top), evaluate=False)
+            return LinComb(self._terms(x, top, 1))
         if code == MUL:
-            return sp.Mul(*self._factors(x, top), evaluate=False)
+            sign, factors = self._factors(x, top)
+            return Prod(sign, factors)
         if code == DIV:
-            num, den = self(entry[1], False), self(entry[2], False)
-            return sp.Mul(num, sp.Pow(den, -1, evaluate=False), evaluate=False)
+            return Ratio(self(entry[1], False), self(entry[2], False))
         raise ValueError(code)
 
     def _inlined(self, x, top):
         return isinstance(x, Node) and (top or x.id not in self.names)
 
-    def _terms(self, x, top, sign=1):
-        """Flatten a chain of inlined additions and subtractions into signed terms."""
-        if self._inlined(x, top) and self.program.ops[x.id][0] in (ADD, SUB):
-            code, a, b = self.program.ops[x.id]
-            return self._terms(a, False, sign) + self._terms(b, False, sign if code == ADD else -sign)
+    def _terms(self, x, top, sign):
+        """Flatten a chain of inlined additions, subtractions and negations into signed terms."""
+        if self._inlined(x, top):
+            entry = self.program.ops[x.id]
+            if entry[0] in (ADD, SUB):
+                return self._terms(entry[1], False, sign) + \
+                    self._terms(entry[2], False, sign if entry[0] == ADD else -sign)
+            if entry[0] == NEG:
+                return self._terms(entry[1], False, -sign)
         term = self(x, False)
-        return [term if sign > 0 else sp.Mul(-1, term, evaluate=False)]
+        if isinstance(term, Prod) and term.sign < 0:
+            return [(-sign, Prod(1, term.factors))]
+        return [(sign, term)]
 
     def _factors(self, x, top):
-        if self._inlined(x, top) and self.program.ops[x.id][0] == MUL:
-            _, a, b = self.program.ops[x.id]
-            return self._factors(a, False) + self._factors(b, False)
-        return [self(x, False)]
+        if self._inlined(x, top):
+            entry = self.program.ops[x.id]
+            if entry[0] == MUL:
+                sa, fa = self._factors(entry[1], False)
+                sb, fb = self._factors(entry[2], False)
+                return sa * sb, fa + fb
+            if entry[0] == NEG:
+                sa, fa = self._factors(entry[1], False)
+                return -sa, fa
+        return 1, [self(x, False)]
 
 
 def _float_literal(value: float) -> str:
@@ -119,25 +180,62 @@ def _float_literal(value: float) -> str:
     return text if ("." in text or "e" in text or "n" in text) else text + ".0"
 
 
+def _number(value) -> str:
+    if type(value) is int:
+        return str(value)
+    if isinstance(value, Fraction):
+        return _float_literal(value.numerator / value.denominator)
+    return _float_literal(value)
+
+
 class _Common:
-    def _print_Float(self, expr):
-        return _float_literal(float(expr))
+    """Printing of aggsym's expression trees; subclasses name the functions."""
 
-    def _print_Rational(self, expr):
-        return _float_literal(float(expr.p) / float(expr.q))
+    functions = {"sin": "sin", "cos": "cos", "sqrt": "sqrt"}
+    times = "*"
 
-    def _print_Pow(self, expr):
-        base, exp = expr.args
-        if exp == -1:
-            return f"1.0/{self.parenthesize(base, 50)}"
-        if exp.is_Integer and 1 < exp <= 4:
-            b = self.parenthesize(base, 50)
-            return "*".join([b] * int(exp))
-        return super()._print_Pow(expr)
+    def _print_Num(self, e):
+        return _number(e.value)
+
+    def _print_Ref(self, e):
+        return str(e.symbol)
+
+    def _print_Call(self, e):
+        return f"{self.functions[e.name]}({self._print(e.arg)})"
+
+    def _operand(self, e):
+        text = self._print(e)
+        if isinstance(e, LinComb) or (isinstance(e, Prod) and e.sign < 0) or \
+                (isinstance(e, Num) and not isinstance(e.value, Fraction) and e.value < 0):
+            return f"({text})"
+        return text
+
+    def _print_Prod(self, e):
+        body = self.times.join(self._operand(f) for f in e.factors)
+        return f"-{body}" if e.sign < 0 else body
+
+    def _print_LinComb(self, e):
+        parts = []
+        for k, (sign, term) in enumerate(e.terms):
+            text = self._print(term)
+            if isinstance(term, LinComb) and (sign < 0 or len(term.terms) > 1 and k > 0):
+                text = f"({text})"
+            if k == 0:
+                parts.append(f"-{text}" if sign < 0 else text)
+            else:
+                parts.append(f" - {text}" if sign < 0 else f" + {text}")
+        return "".join(parts)
+
+    def _print_Ratio(self, e):
+        num = self._operand(e.num)
+        den = self._print(e.den)
+        if not isinstance(e.den, (Ref, Num, Call)):
+            den = f"({den})"
+        return f"{num}/{den}"
 
 
 class CPrinter(_Common, C99CodePrinter):
-    """C99 for aggsym: round-trip float literals, x*x for small powers, no pow() for reciprocals."""
+    """C99 for aggsym: round-trip float literals, sin/cos/sqrt from <math.h>."""
 
     def __init__(self):
         super().__init__({"order": "none", "strict": False})
@@ -146,13 +244,10 @@ class CPrinter(_Common, C99CodePrinter):
 class NumPyPrinter(_Common, _SympyNumPyPrinter):
     """NumPy for aggsym: np.sin etc., element-wise so that inputs may carry a leading batch dimension."""
 
+    functions = {"sin": "np.sin", "cos": "np.cos", "sqrt": "np.sqrt"}
+
     def __init__(self):
         super().__init__({"order": "none", "fully_qualified_modules": False})
-
-    def _module_format(self, fqn, register=True):
-        if fqn.startswith("numpy."):
-            return "np." + fqn[len("numpy."):]
-        return super()._module_format(fqn, register)
 
 
 _TOKEN = re.compile(r"\s*(?:(?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)|(?P<name>[A-Za-z_]\w*)|(?P<op>.))")

@@ -52,6 +52,15 @@ def order_tree(names: list, parents: list, world: str):
             return None, f"unknown parent {p!r} (no body has that name; the root's parent is {world!r})", i
         if p == names[i]:
             return None, f"body {names[i]!r} is its own parent", i
+    for i in range(len(names)):  # a cycle: following parents from i comes back to a body already seen
+        chain, j = [], i
+        while parents[j] != world and j not in chain:
+            chain.append(j)
+            j = index[parents[j]]
+        if parents[j] != world:
+            loop = chain[chain.index(j):] + [j]
+            return None, ("cycle in the tree: " + " -> ".join(names[k] for k in loop)
+                          + " (each is the child of the next)"), loop[0]
     if not roots:
         return None, "no root: exactly one body must have parent 'world'", 0
     if len(roots) > 1:
@@ -61,22 +70,11 @@ def order_tree(names: list, parents: list, world: str):
     placed: list[int] = []
     done: set[int] = set()
     remaining = list(range(len(names)))
-    while remaining:
-        progress = False
+    while remaining:  # stable: each pass places, in file order, the bodies whose parent is placed
         for i in list(remaining):
             p = parents[i]
             if p == world or index[p] in done:
                 placed.append(i)
                 done.add(i)
                 remaining.remove(i)
-                progress = True
-        if not progress:
-            i = remaining[0]
-            chain = [names[i]]
-            j = index[parents[i]]
-            while names[j] not in chain:
-                chain.append(names[j])
-                j = index[parents[j]]
-            chain.append(names[j])
-            return None, "cycle in the tree: " + " -> ".join(chain) + " (each is the parent of the one before)", i
     return placed, None, None

@@ -1,0 +1,207 @@
+"""Rung 5: the artifacts.  Every model generates; its C compiles warning-free (-Werror) and, with the NumPy
+module, matches the numeric twin; output is deterministic and reproducible; the LaTeX compiles."""
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import aggsym
+from aggsym import cli
+from aggsym.codegen.compile import check_generated, import_module
+from aggsym.codegen.generate import generate, write
+from aggsym.codegen.printing import count_ops
+from conftest import MODELS, ROOT, model_path
+
+TOLERANCE = 1e-12
+
+
+@pytest.mark.parametrize("path", MODELS, ids=lambda p: p.stem)
+def test_model_compiles_warning_free_and_matches_twin(path, tmp_path):
+    model = aggsym.load(path)
+    gen = generate(model, latex=False)
+    results = check_generated(model, gen.files, trials=5, seed=1, workdir=tmp_path)
+    roles = {r.role for r in results}
+    assert {"inertia", "bias", "gravity", "inverse_dynamics", "kinetic_energy", "potential_energy"} <= roles
+    for r in results:
+        assert r.c_error <= TOLERANCE and r.py_error <= TOLERANCE, (r.role, r.c_error, r.py_error)
+
+
+def test_generated_folder_is_reproducible():
+    """generated/NAME/ holds the outputs of every model in models/, byte for byte (make generate)."""
+    for path in MODELS:
+        model = aggsym.load(path)
+        folder = ROOT / "generated" / model.name
+        gen = generate(model)
+        assert sorted(p.name for p in folder.iterdir()) == sorted(gen.files), model.name
+        for name, text in gen.files.items():
+            assert (folder / name).read_text(encoding="utf-8") == text, f"{model.name}/{name} differs"
+
+
+def run_generate(model, out, seed):
+    env = dict(os.environ, PYTHONHASHSEED=str(seed))
+    subprocess.run([sys.executable, "-m", "aggsym", "generate", str(model), "-o", str(out), "-q"],
+                   check=True, env=env, capture_output=True)
+    return {p.name: p.read_bytes() for p in sorted(out.iterdir())}
+
+
+@pytest.mark.parametrize("name", ["double_pendulum", "walking_machine"])
+def test_output_is_deterministic_across_hash_seeds(name, tmp_path):
+    a = run_generate(model_path(name), tmp_path / "a", 1)
+    b = run_generate(model_path(name), tmp_path / "b", 4242)
+    assert a.keys() == b.keys() and len(a) == 5
+    for k in a:
+        assert a[k] == b[k], k
+
+
+def pdflatex(tex: Path):
+    return subprocess.run(["pdflatex", "-halt-on-error", "-interaction=nonstopmode", tex.name],
+                          cwd=tex.parent, capture_output=True, text=True)
+
+
+@pytest.mark.parametrize("name", ["double_pendulum", "planar_3link", "manipulator6", "spacecraft"])
+def test_latex_compiles(name, tmp_path):
+    """Closed forms (small models) and the intermediate-variable form (larger ones) compile with pdflatex."""
+    model = aggsym.load(model_path(name))
+    tex = tmp_path / f"{name}.tex"
+    tex.write_text(generate(model).files[tex.name])
+    proc = pdflatex(tex)
+    assert proc.returncode == 0, proc.stdout[-2000:]
+    assert (tmp_path / f"{name}.pdf").stat().st_size > 1000
+
+
+def test_broken_latex_fails_the_same_check(tmp_path):
+    """The LaTeX check can fail: a document with an unbalanced brace is rejected."""
+    model = aggsym.load(model_path("double_pendulum"))
+    text = generate(model).files["double_pendulum.tex"].replace(r"\ddot{o}_{12}", r"\ddot{o_{12}", 1)
+    tex = tmp_path / "broken.tex"
+    tex.write_text(text)
+    assert pdflatex(tex).returncode != 0
+
+
+def test_count_ops_counts_the_c_text():
+    code = "const double x0 = a*b + c/d - sin(e);\nA[0] = -x0*q[1] - (x0 - 2.5e-3);\n(void)p;"
+    assert count_ops(code) == {"mul": 2, "add": 4, "div": 1, "call": 1}  # the leading minus is unary
+
+
+def test_manifest_follows_the_contract():
+    model = aggsym.load(model_path("double_pendulum"))
+    m = json.loads(generate(model, latex=False).files["double_pendulum.json"])
+    assert m["name"] == "double_pendulum" and m["nq"] == 3
+    assert [c["name"] for c in m["coordinates"]] == ["o12", "theta25", "theta36"]
+    assert [c["kind"] for c in m["coordinates"]] == ["translation", "rotation", "rotation"]
+    assert [c["joint"] for c in m["coordinates"]] == ["slide", "shoulder", "elbow"]
+    assert m["parameters"][0] == {"name": "m2", "value": 1.0}
+    assert m["functions"]["inertia"] == "double_pendulum_inertia"
+    assert m["conservative"] is True
+    for role, ops in m["ops"].items():
+        assert set(ops) == {"mul", "add", "div", "call"}, role
+
+
+def test_header_declares_the_contract_signatures():
+    model = aggsym.load(model_path("double_pendulum"))
+    h = generate(model, latex=False).files["double_pendulum.h"]
+    for sig in ["void double_pendulum_inertia(const double *q, const double *p, double *A);",
+                "void double_pendulum_bias(const double *q, const double *qd, const double *p, double *b);",
+                "void double_pendulum_gravity(const double *q, const double *p, double *g);",
+                "void double_pendulum_inverse_dynamics(const double *q, const double *qd, const double *qdd, "
+                "const double *p, double *tau);",
+                "void double_pendulum_kinetic_energy(const double *q, const double *qd, const double *p, double *T);",
+                "void double_pendulum_potential_energy(const double *q, const double *p, double *U);"]:
+        assert sig in h, sig
+
+
+def test_numpy_module_accepts_a_batch_and_parameters(tmp_path, rng):
+    model = aggsym.load(model_path("planar_3link"))
+    write(generate(model, latex=False), tmp_path)
+    mod = import_module(tmp_path / "planar_3link.py")
+    twin = aggsym.NumericTwin(model)
+    q, qd = rng.normal(size=(2, 4, 3))
+    p = np.array(mod.PARAMETERS) * 1.1
+    A = mod.inertia(q, p)
+    b = mod.bias(q, qd, p)
+    T = mod.kinetic_energy(q, qd)
+    assert A.shape == (4, 3, 3) and b.shape == (4, 3) and T.shape == (4,)
+    for k in range(4):
+        assert np.allclose(A[k], twin.inertia(q[k], p=p), rtol=1e-13)
+        assert np.allclose(b[k], twin.bias(q[k], qd[k], p=p), rtol=1e-13)
+    assert isinstance(mod.kinetic_energy(q[0], qd[0]), float)
+
+
+def test_check_exits_1_on_mismatch(monkeypatch, capsys):
+    import aggsym.codegen.generate as g
+
+    real = g.generate
+
+    def corrupted(model, **kw):
+        gen = real(model, **kw)
+        name = f"{model.name}.c"
+        gen.files[name] = gen.files[name].replace("A[0] = ", "A[0] = 1e-9 + ", 1)
+        return gen
+
+    monkeypatch.setattr(g, "generate", corrupted)
+    rc = cli.main(["check", str(model_path("planar_2link")), "--trials", "2"])
+    out = capsys.readouterr()
+    assert rc == 1
+    assert "MISMATCH" in out.out and "inertia" in out.err
+
+
+def test_every_command_has_help_with_an_example():
+    for command in ("generate", "latex", "check", "ops"):
+        proc = subprocess.run([sys.executable, "-m", "aggsym", command, "--help"], capture_output=True, text=True)
+        assert proc.returncode == 0 and "example:" in proc.stdout and "aggsym " + command in proc.stdout
+
+
+def test_generate_reports_stage_timings_and_writes_the_five_files(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "aggsym", "generate", str(model_path("gyroscope")), "-o",
+                           str(tmp_path / "g")], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "recursions:" in proc.stderr and "printing:" in proc.stderr
+    assert sorted(p.name for p in (tmp_path / "g").iterdir()) == [
+        "gyroscope.c", "gyroscope.h", "gyroscope.json", "gyroscope.py", "gyroscope.tex"]
+
+
+def test_failed_generation_leaves_the_output_folder_as_it_was(tmp_path, monkeypatch):
+    import aggsym.codegen.generate as g
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("old")
+
+    def fail(*a, **k):
+        raise RuntimeError("boom in the middle of generation")
+
+    monkeypatch.setattr(g, "emit_routine", fail)
+    rc = cli.main(["generate", str(model_path("gyroscope")), "-o", str(out), "-q"])
+    assert rc == 3
+    assert [p.name for p in out.iterdir()] == ["keep.txt"]
+
+
+def test_templates_ship_inside_the_wheel(tmp_path):
+    """A non-editable install, run from another directory, finds its templates."""
+    wheel_dir = tmp_path / "wheel"
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w",
+                    str(wheel_dir), str(ROOT)], check=True, capture_output=True)
+    wheel = next(wheel_dir.glob("aggsym-*.whl"))
+    import zipfile
+
+    names = zipfile.ZipFile(wheel).namelist()
+    assert {"aggsym/templates/model.c.j2", "aggsym/templates/model.h.j2", "aggsym/templates/model.py.j2",
+            "aggsym/templates/model.tex.j2"} <= set(names)
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target), str(wheel)],
+                   check=True, capture_output=True)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    shutil.copy(model_path("planar_2link"), elsewhere)
+    env = dict(os.environ, PYTHONPATH=str(target))
+    proc = subprocess.run([sys.executable, "-c", "import aggsym, sys; print(aggsym.__file__); "
+                           "from aggsym.cli import main; sys.exit(main(['generate', 'planar_2link.yaml', '-q']))"],
+                          cwd=elsewhere, env=env, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith(str(target))
+    assert (elsewhere / "generated" / "planar_2link" / "planar_2link.c").exists()
