@@ -1,0 +1,182 @@
+"""Inverse dynamics by the forward and backward sweeps, the wrench in every pair, and d(q, q') (2.39)-(2.46).
+
+Forward sweep (Prop. 2.20): the quasi-velocities and quasi-accelerations of every body, in its own frame,
+
+* ``V_lk = L^T V_parent + M F q'`` (2.39),
+* ``V'_lk = Phi^T L^T V_parent + L^T V'_parent + (M F)' q' + M F q''`` (2.40),
+
+run by :meth:`aggsym.kinematics.TreeKinematics.velocities` and ``.accelerations``.  Gravity enters as the
+acceleration ``(-g, 0)`` of the inertial frame E_10: every body then sees ``V'_lk - (g_lk, 0)``, and
+``Theta (V' - (g_lk, 0)) = Theta V' - G_lk`` is exactly the gravity wrench ``G_lk = Theta (g_lk, 0)`` put into
+``H_lk`` of (2.9), at no cost per body.
+
+Backward sweep (Prop. 2.21): the wrench transmitted through the pair (mu,k-1; lk) from the parent to the body lk
+and its subtree, in the body's frame E_lk about its origin O_lk,
+
+* ``Z(mu,k-1; lk) = Theta V' + Phi Theta V + sum over children L^{lk}_{i,k+1} Z(lk; i,k+1) - (H + T)_lk`` (2.42),
+
+with ``Z = R + U + N`` (2.9): reaction, control and friction together.  The generalized force of the pair is its
+projection on the pair's mobility axes, ``u* = F^T M^T Z`` (2.15), (2.46) (``Psi^T Z`` here).
+
+What "reaction" means.  Z is the *whole* wrench the parent exerts on the child through the pair.  For a pair with
+one coordinate along a unit axis f_i of the child frame (every single-coordinate pair: Psi = f_i in E_lk, since
+the pair's own rotation keeps its axis), the book's statement after (2.42) holds literally: the component i of Z
+is u* (control plus friction, what an actuator supplies) and the other five components are the reaction R, the
+constraint wrench that does no work.  For a pair with several coordinates (a ball joint, a free pair,
+``M = diag(c^T, eps)``) the mobility axes Psi are in general not coordinate axes of E_lk; aggsym then reports Z
+itself (nothing is subtracted) together with u* = Psi^T Z; the reaction is the part of Z that annihilates every
+column of Psi, which is not a separate output.
+
+d(q, q') is the same sweep with q'' = 0 (2.44)-(2.46), so that ``A(q) q'' + d(q, q') = u + n`` (2.45); with
+gravity as the only external wrench, ``d = b - S (H + T) = b + g`` (2.52).
+"""
+from __future__ import annotations
+
+from .backend import to_scalar
+from .group import phi_force
+from .kinematics import ZERO6, project, world_frame_vectors
+from .linalg import ZERO3, mtv, neg, sub
+
+__all__ = ["gravity_base", "gravity_wrenches", "forward_sweep", "body_wrenches", "backward_sweep",
+           "transmitted_wrenches", "inverse_dynamics", "d_vector", "pair_bodies", "link_rotation",
+           "joint_wrench_rows", "joint_wrench_layout"]
+
+
+def gravity_base(bound):
+    """(-g, 0): the quasi-acceleration given to the inertial frame so that gravity needs no wrench (2.40)."""
+    return tuple(neg(bound.gravity)) + ZERO3
+
+
+def gravity_wrenches(bound, kin):
+    """G_lk = Theta_lk (g_lk, 0), the gravity wrench of every body in its frame (2.9); ZERO6 when massless."""
+    g = world_frame_vectors(kin, bound.gravity)
+    return [ZERO6 if b.mises is None else b.mises.apply(g[k] + ZERO3) for k, b in enumerate(bound.bodies)]
+
+
+def forward_sweep(kin, qd, qdd, base=ZERO6):
+    """V and V' of every body by (2.39), (2.40); ``base`` is the quasi-acceleration of E_10 (e.g. gravity_base)."""
+    V = kin.velocities(qd)
+    return V, kin.accelerations(qd, qdd, V, base)
+
+
+def body_wrenches(bound, V, A, H=None):
+    """Theta V' + Phi Theta V - H of every body, the left side of (2.10) less the external wrench."""
+    Y = []
+    for k, body in enumerate(bound.bodies):
+        th = body.mises
+        y = ZERO6 if th is None else _add6(th.apply(A[k]), phi_force(V[k], th.apply(V[k])))
+        Y.append(y if H is None else sub(y, H[k]))
+    return Y
+
+
+def backward_sweep(kin, Y):
+    """Z(mu,k-1; lk) of (2.42): Y_lk plus the children's Z moved by L, from the buds to the root."""
+    return kin.backward(Y)
+
+
+def transmitted_wrenches(bound, kin, qd, qdd, H=None, gravity=True):
+    """Z of every pair (2.39)-(2.42), body frame, (f, mu) about the body origin; gravity by the base (-g, 0)."""
+    V, A = forward_sweep(kin, qd, qdd, gravity_base(bound) if gravity else ZERO6)
+    return backward_sweep(kin, body_wrenches(bound, V, A, H))
+
+
+def inverse_dynamics(bound, kin, qd, qdd, H=None, gravity=True):
+    """u* = F^T M^T Z (2.42), (2.15) in coordinate order, and the wrenches Z; equals A q'' + b + g when H = 0."""
+    Z = transmitted_wrenches(bound, kin, qd, qdd, H, gravity)
+    return generalized_forces(kin, Z), Z
+
+
+def d_vector(bound, kin, qd, H=None, gravity=True):
+    """d(q, q') = F^T M^T Z_o by the sweeps with q'' = 0 (2.44)-(2.46); with gravity only, d = b + g (2.52)."""
+    return inverse_dynamics(bound, kin, qd, [0] * kin.tree.nq, H, gravity)[0]
+
+
+def generalized_forces(kin, Z):
+    """Psi_k^T Z_k for every pair, in coordinate order (2.15), (2.46)."""
+    out = [0] * kin.tree.nq
+    for k in range(len(kin.tree)):
+        for i, x in zip(kin.tree.coords[k], project(kin.psi[k], Z[k])):
+            out[i] = x
+    return out
+
+
+# joint wrenches as an output -----------------------------------------------------------------------------
+
+def pair_bodies(model):
+    """Indices of the bodies whose pair carries at least one coordinate, in coordinate order."""
+    return [k for k, b in enumerate(model.bodies) if b.pair.coordinates]
+
+
+def link_rotation(bound, k):
+    """The body's link_rotation R (x_body = R x_link) as backend scalars, or None."""
+    R = bound.model.bodies[k].link_rotation
+    if R is None:
+        return None
+    values = dict(zip(bound.model.parameter_symbols, bound.params))
+    return tuple(tuple(to_scalar(R[i][j], values, bound.backend) for j in range(3)) for i in range(3))
+
+
+def joint_wrench_rows(bound, Z):
+    """Z of every coordinate-bearing pair as (f, mu), in the source file's link frame where one is given."""
+    rows = []
+    for k in pair_bodies(bound.model):
+        z = Z[k]
+        R = link_rotation(bound, k)
+        if R is not None:
+            z = mtv(R, z[:3]) + mtv(R, z[3:])
+        rows.append(tuple(z))
+    return rows
+
+
+FRAME_CONVENTION = (
+    "row r: the wrench (fx, fy, fz, mx, my, mz) that the parent exerts on the child body and its subtree through "
+    "the joint (reaction + control + friction, Z = R + U + N of (2.9), (2.42)), moment about the child frame "
+    "origin, both in the child frame's axes (for URDF models the child link frame); the joint's generalized "
+    "forces tau are the projections of this wrench on its axes")
+
+
+def joint_wrench_layout(model):
+    """The manifest entry of joint_wrenches: one row per coordinate-bearing joint, its names and frame."""
+    rows = []
+    for k in pair_bodies(model):
+        body = model.bodies[k]
+        rows.append({
+            "joint": body.pair.name,
+            "body": body.name,
+            "coordinates": [c.name for c in body.pair.coordinates],
+            "frame": "link" if body.link_rotation is not None else "body",
+        })
+    return {"W": {"shape": [len(rows), 6], "order": "row-major",
+                  "columns": ["fx", "fy", "fz", "mx", "my", "mz"],
+                  "convention": FRAME_CONVENTION, "rows": rows}}
+
+
+def _add6(a, b):
+    return tuple(x + y for x, y in zip(a, b))
+
+
+# registration ---------------------------------------------------------------------------------------------
+
+def _register():
+    from .routines import ROUTINES, Output, Routine, nq_vector, register
+
+    def tau(bound, kin, x):
+        return (inverse_dynamics(bound, kin, x["qd"], x["qdd"])[0],)
+
+    def wrenches(bound, kin, x):
+        Z = transmitted_wrenches(bound, kin, x["qd"], x["qdd"])
+        return ([v for row in joint_wrench_rows(bound, Z) for v in row],)
+
+    new = Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), (Output("tau", nq_vector),), tau,
+                  "tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)")
+    old = ROUTINES.get("inverse_dynamics")
+    if old is not None and (old.inputs != new.inputs or [o.name for o in old.outputs] != ["tau"]):
+        raise RuntimeError("the sweep must keep the signature of inverse_dynamics")
+    register(new)  # replaces the A qdd + b + g entry in place (same role, same position)
+    register(Routine("joint_wrenches", ("q", "qd", "qdd", "p"),
+                     (Output("W", lambda model: (len(pair_bodies(model)), 6)),), wrenches,
+                     "W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)",
+                     layout=joint_wrench_layout))
+
+
+_register()
