@@ -32,14 +32,18 @@ gravity as the only external wrench, ``d = b - S (H + T) = b + g`` (2.52).
 """
 from __future__ import annotations
 
-from .backend import to_scalar
-from .group import phi_force
-from .kinematics import ZERO6, project, world_frame_vectors
-from .linalg import ZERO3, mtv, neg, sub
+from fractions import Fraction
 
-__all__ = ["gravity_base", "gravity_wrenches", "forward_sweep", "body_wrenches", "backward_sweep",
-           "transmitted_wrenches", "inverse_dynamics", "d_vector", "pair_bodies", "link_rotation",
-           "joint_wrench_rows", "joint_wrench_layout"]
+from .aggregates import Rigid
+from .backend import to_scalar
+from .codegen.program import Node, is_zero, normalize_const
+from .group import phi_force
+from .kinematics import ZERO6, combine, project, world_frame_vectors
+from .linalg import ZERO3, add, cross, mtv, neg, scale, sub
+
+__all__ = ["gravity_base", "gravity_wrenches", "forward_sweep", "origin_sweep", "body_wrench", "body_wrenches",
+           "backward_sweep", "transmitted_wrenches", "inverse_dynamics", "d_vector", "generalized_forces",
+           "pair_bodies", "link_rotation", "joint_wrench_rows", "joint_wrench_layout", "lincomb"]
 
 
 def gravity_base(bound):
@@ -59,12 +63,94 @@ def forward_sweep(kin, qd, qdd, base=ZERO6):
     return V, kin.accelerations(qd, qdd, V, base)
 
 
-def body_wrenches(bound, V, A, H=None):
-    """Theta V' + Phi Theta V - H of every body, the left side of (2.10) less the external wrench."""
+def origin_sweep(kin, qd, qdd, base=ZERO3):
+    """(2.40) for w, w' and the acceleration a = v' + w x v of every body origin, body axes; ``base``: a of E_10.
+
+    With the pair's motion L = T(d) C(c) (d the origin of E_lk in the parent's axes), its relative rates
+    ``(v_r, w_r) = M F q'`` (2.39) and ``(M F)' q'`` (2.19):
+    ``w = c^T w_p + w_r``, ``w' = c^T w'_p + (c^T w_p) x w_r + w_r' + (M F)'q'|_w``,
+    ``a = c^T (a_p + w'_p x d + w_p x (w_p x d)) + 2 (c^T w_p) x v_r + (M F q'')_v``.
+    Returns three lists of 3-vectors (w, w', a)."""
+    W, WD, Acc = [], [], []
+    for k, p in enumerate(kin.tree.parent):
+        L = kin.L[k]
+        rates = kin.pair_rates(k, qd)
+        own = combine(kin.psi[k], [qdd[i] for i in kin.tree.coords[k]])
+        rel = combine(kin.psi[k], rates)
+        if p < 0:
+            a = L.unrotate_free(base)
+            w, wd = rel[3:], add(own[3:], kin.relative_acceleration(k, qd)[3:])
+        else:
+            wp = L.unrotate_free(W[p])
+            a = L.unrotate_free(add(Acc[p], transport(WD[p], W[p], L.o)))
+            a = add(a, scale(2, cross(wp, rel[:3])))
+            w = add(wp, rel[3:])
+            wd = add(L.unrotate_free(WD[p]), cross(wp, rel[3:]))
+            wd = add(wd, add(own[3:], kin.relative_acceleration(k, qd)[3:]))
+        a = add(a, own[:3])
+        W.append(w)
+        WD.append(wd)
+        Acc.append(a)
+    return W, WD, Acc
+
+
+def transport(wd, w, d):
+    """w' x d + w x (w x d): the acceleration of a point fixed at d relative to an origin at rest (body axes)."""
+    P = _products(w)
+    return tuple(lincomb(_transport_terms(wd, P, d, i)) for i in range(3))
+
+
+def body_wrench(th, w, wd, a):
+    """Theta V' + Phi Theta V of (2.10) multiplied out for a Mises matrix (2.3) [[m E, -hat h], [hat h, theta]].
+
+    With a = v' + w x v, the terms m v x v cancel and the Jacobi identity joins the rest:
+    ``f = m a + w' x h + w x (w x h)``, ``mu = h x a + theta w' + w x (theta w)`` (Newton and Euler about the
+    body origin); w x (theta w) is written on the six products w_i w_j, so that zero and equal entries of
+    theta fold.  Body axes, moment about the origin."""
+    m, h, theta = th.m, th.h, th.theta
+    P = _products(w)
+    f = tuple(lincomb([(1, m, a[i])] + _transport_terms(wd, P, h, i)) for i in range(3))
+    mu = []
+    for i, j, k in _CYCLIC:
+        terms = [(1, theta[i][l], wd[l]) for l in range(3)]
+        terms += [(1, h[j], a[k]), (-1, h[k], a[j])]
+        for l in range(3):  # w_j (theta w)_k - w_k (theta w)_j
+            terms += [(1, theta[k][l], P[_pk(j, l)]), (-1, theta[j][l], P[_pk(k, l)])]
+        mu.append(lincomb(terms))
+    return f + tuple(mu)
+
+
+_CYCLIC = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
+
+
+def _transport_terms(wd, P, d, i):
+    """Component i of w' x d + w x (w x d) as signed terms (sign, coefficient d_m, variable), P the products."""
+    _, j, k = _CYCLIC[i]
+    terms = [(1, d[k], wd[j]), (-1, d[j], wd[k])]
+    for m in (j, k):  # (w x (w x d))_i = sum over m != i of d_m w_i w_m - d_i w_m^2
+        terms += [(1, d[m], P[_pk(i, m)]), (-1, d[i], P[(m, m)])]
+    return terms
+
+
+def body_wrenches(bound, kin, qd, qdd, H=None, gravity=True):
+    """Theta V' + Phi Theta V - H of every body, the left side of (2.10) less the external wrench, body frame.
+
+    Gravity enters as the acceleration -g of E_10 (see the module docstring)."""
+    base = neg(bound.gravity) if gravity else ZERO3
+    W, WD, Acc = origin_sweep(kin, qd, qdd, base)
+    spatial = None
     Y = []
     for k, body in enumerate(bound.bodies):
         th = body.mises
-        y = ZERO6 if th is None else _add6(th.apply(A[k]), phi_force(V[k], th.apply(V[k])))
+        if th is None:
+            y = ZERO6
+        elif isinstance(th, Rigid):
+            y = body_wrench(th, W[k], WD[k], Acc[k])
+        else:  # a general aggregate (added masses): the book's form, with the quasi-velocities of (2.39), (2.40)
+            if spatial is None:
+                spatial = forward_sweep(kin, qd, qdd, base + ZERO3)
+            V, A = spatial[0][k], spatial[1][k]
+            y = add(th.apply(A), phi_force(V, th.apply(V)))
         Y.append(y if H is None else sub(y, H[k]))
     return Y
 
@@ -76,8 +162,7 @@ def backward_sweep(kin, Y):
 
 def transmitted_wrenches(bound, kin, qd, qdd, H=None, gravity=True):
     """Z of every pair (2.39)-(2.42), body frame, (f, mu) about the body origin; gravity by the base (-g, 0)."""
-    V, A = forward_sweep(kin, qd, qdd, gravity_base(bound) if gravity else ZERO6)
-    return backward_sweep(kin, body_wrenches(bound, V, A, H))
+    return backward_sweep(kin, body_wrenches(bound, kin, qd, qdd, H, gravity))
 
 
 def inverse_dynamics(bound, kin, qd, qdd, H=None, gravity=True):
@@ -97,6 +182,62 @@ def generalized_forces(kin, Z):
     for k in range(len(kin.tree)):
         for i, x in zip(kin.tree.coords[k], project(kin.psi[k], Z[k])):
             out[i] = x
+    return out
+
+
+# scalar helpers -------------------------------------------------------------------------------------------
+
+_NUMBER = (int, float, Fraction)
+
+
+def _number(x) -> bool:
+    return isinstance(x, _NUMBER) and not isinstance(x, bool)
+
+
+def _pk(i, j):
+    return (i, j) if i <= j else (j, i)
+
+
+def _products(w):
+    """The six products w_i w_j (i <= j), structural zeros kept as 0."""
+    return {(i, j): 0 if is_zero(w[i]) or is_zero(w[j]) else w[i] * w[j] for i in range(3) for j in range(i, 3)}
+
+
+def _ident(x):
+    return ("n", x.id) if isinstance(x, Node) else ("o", id(x))
+
+
+def lincomb(terms):
+    """sum s c x over (s, c, x) triples, s = +-1: zeros skipped, equal x merged, then equal |c| factored out.
+
+    The coefficients c are model constants (numbers, or expressions in the parameters); the factoring is what
+    turns ``h w_x w_y - h w'_z`` into one product, ``h (w_x w_y - w'_z)``."""
+    merged = {}
+    for s, c, x in terms:
+        if is_zero(c) or is_zero(x):
+            continue
+        key = _ident(x)
+        if key in merged:
+            s0, c0, _ = merged[key]
+            c = c0 + c if s0 == s else c0 - c
+            s = s0
+            if _number(c):
+                c = normalize_const(c)
+        merged[key] = (s, c, x)
+    groups = {}
+    for s, c, x in merged.values():
+        if is_zero(c):
+            continue
+        if _number(c) and c < 0:
+            c, s = normalize_const(-c), -s
+        key = ("c", c) if _number(c) else _ident(c)
+        if key not in groups:
+            groups[key] = [c, 0]
+        acc = groups[key][1]
+        groups[key][1] = acc + x if s > 0 else acc - x
+    out = 0
+    for c, acc in groups.values():
+        out = out + c * acc
     return out
 
 
@@ -149,10 +290,6 @@ def joint_wrench_layout(model):
     return {"W": {"shape": [len(rows), 6], "order": "row-major",
                   "columns": ["fx", "fy", "fz", "mx", "my", "mz"],
                   "convention": FRAME_CONVENTION, "rows": rows}}
-
-
-def _add6(a, b):
-    return tuple(x + y for x, y in zip(a, b))
 
 
 # registration ---------------------------------------------------------------------------------------------
