@@ -23,7 +23,8 @@ from aggsym.sweeps import (
 from conftest import MODELS, ROOT, model_path
 from reference import NumericModel, newton_euler_full, pair_wrenches, rot
 
-ALL_MODELS = MODELS + [ROOT / "tests" / "data" / "branching_tree.yaml"]
+DATA = ROOT / "tests" / "data"
+ALL_MODELS = MODELS + [DATA / "branching_tree.yaml", DATA / "shared_origins.yaml"]
 TRIALS = 4
 
 
@@ -263,7 +264,7 @@ def test_d_equals_b_minus_s_times_external_wrenches(model, rng):
 
 def test_gravity_wrench_is_weight_at_the_centre_of_mass(rng):
     """G_lk = Theta (g_lk, 0) is m g_lk at the centre of mass: (m g, m r_c x g) in the body frame."""
-    model = aggsym.load(ROOT / "tests" / "data" / "branching_tree.yaml")
+    model = aggsym.load(DATA / "branching_tree.yaml")
     bound = bind(model, Numeric())
     kin = TreeKinematics(bound, list(rng.normal(size=model.nq)))
     g = world_frame_vectors(kin, bound.gravity)
@@ -278,32 +279,34 @@ def test_gravity_wrench_is_weight_at_the_centre_of_mass(rng):
 
 def pinocchio_model(model):
     """The model as a Pinocchio model, one joint per coordinate (multi-coordinate pairs as chains of joints with
-    massless frames between, variant 1 of the book).  The first joint of a pair is placed at SE3(R0, p) of the
-    constructive configuration, so its frame after the joint motion is our body frame; inertias are given in it.
-    Returns the model and, per body, the index of the joint whose frame is the body frame."""
+    massless frames between, variant 1 of the book; welded bodies appended to their parent's joint).  The first
+    joint of a pair is placed at SE3(R0, p) of the constructive configuration, so its frame after the joint
+    motion is our body frame; inertias are given in it.  Returns the model and, per body, the index of the joint
+    whose frame is the body frame (the parent's joint for a welded body, with the body's placement in it)."""
     nm = NumericModel(model)
     pm = pin.Model()
     pm.gravity = pin.Motion(np.concatenate([nm.gravity, np.zeros(3)]))
-    joint_of = []
+    frame = []  # per body: (joint id, placement of the body frame in that joint's frame)
     kinds = {0: pin.JointModelPX, 1: pin.JointModelPY, 2: pin.JointModelPZ,
              3: pin.JointModelRX, 4: pin.JointModelRY, 5: pin.JointModelRZ}
-    for k, (b, body) in enumerate(zip(nm.bodies, model.bodies)):
-        parent = 0 if b["parent"] < 0 else joint_of[b["parent"]]
-        placement = pin.SE3(b["R0"], b["p"])
-        assert b["coords"], "a coordinate-free pair has no Pinocchio joint here"
+    for b, body in zip(nm.bodies, model.bodies):
+        parent, above = (0, pin.SE3.Identity()) if b["parent"] < 0 else frame[b["parent"]]
+        placement = above * pin.SE3(b["R0"], b["p"])
         for j, (_, axis) in enumerate(b["coords"]):
             name = body.pair.name if j == len(b["coords"]) - 1 else f"{body.pair.name}_{j}"
-            parent = pm.addJoint(parent, kinds[axis](), placement if j == 0 else pin.SE3.Identity(), name)
-        joint_of.append(parent)
+            parent = pm.addJoint(parent, kinds[axis](), placement, name)
+            placement = pin.SE3.Identity()
+        frame.append((parent, placement))
         inertia = pin.Inertia(b["m"], b["c"], b["I"]) if "m" in b else pin.Inertia.Zero()
-        pm.appendBodyToJoint(parent, inertia, pin.SE3.Identity())
+        pm.appendBodyToJoint(parent, inertia, placement)
     assert pm.nq == model.nq
+    joint_of = [j for j, _ in frame]
     return pm, joint_of
 
 
 PINOCCHIO_MODELS = [model_path(n) for n in ("manipulator6", "planar_3link", "gyroscope", "test_bench",
                                             "double_pendulum", "walking_machine", "spacecraft")] + [
-    ROOT / "tests" / "data" / "branching_tree.yaml"]
+    DATA / "branching_tree.yaml", DATA / "shared_origins.yaml"]
 
 
 @pytest.mark.parametrize("path", PINOCCHIO_MODELS, ids=lambda p: p.stem)
