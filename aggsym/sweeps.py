@@ -231,7 +231,7 @@ def generalized_forces_lumped(bound, kin, origins, rest):
     (2.32) and multiplied by an acceleration only where an origin moves, and u*_k is read in the parent's frame,
     ``Psi'^T (L Z_k)`` with Psi' = L^{-T} Psi = c Psi.  The first moment goes along when that is free
     (c h+ = h+, h+ on the pair's axis) or when nothing else needs a_k (every child keeps its origin too);
-    otherwise h+ x a_k is added to E_k there.  Structural decisions only: the same code on every backend."""
+    otherwise h+ x a_k is added to E_k there.  The decisions read structural zeros only, never runtime values."""
     tree = kin.tree
     mass = [b.mises.m if isinstance(b.mises, Rigid) else 0 for b in bound.bodies]
     first = [b.mises.h if isinstance(b.mises, Rigid) else ZERO3 for b in bound.bodies]
@@ -241,11 +241,13 @@ def generalized_forces_lumped(bound, kin, origins, rest):
         p = tree.parent[k]
         L = kin.L[k]
         if p >= 0 and keeps_origin(kin, k):
-            h = L.rotate_free(first[k])
+            axis = _kept_axis(bound, k)
+            free = all(is_zero(x) for j, x in enumerate(first[k]) if j != axis)  # then c h+ = h+
             a_needed = any(not keeps_origin(kin, c) for c in tree.children[k])
-            if a_needed and not all(_same(x, y) for x, y in zip(h, first[k])):
+            if a_needed and not free:
                 E[k] = E[k][:3] + add(E[k][3:], cross(first[k], origins[k].a))
-                h = ZERO3
+                first[k] = ZERO3
+            h = L.rotate_free(first[k])
             moved = L.wrench(E[k])
             a = origins[p].a
             Z = add(_times(mass[k], a), moved[:3]) + add(cross(h, a), moved[3:])  # L Z_k, parent frame
@@ -292,13 +294,6 @@ _NUMBER = (int, float, Fraction)
 
 def _number(x) -> bool:
     return isinstance(x, _NUMBER) and not isinstance(x, bool)
-
-
-def _same(x, y):
-    """Structurally the same scalar: the same node, or equal numbers."""
-    if isinstance(x, Node) or isinstance(y, Node):
-        return isinstance(x, Node) and isinstance(y, Node) and x.id == y.id
-    return _number(x) and _number(y) and x == y
 
 
 def _times(m, v):
