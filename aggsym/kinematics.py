@@ -116,6 +116,10 @@ class TreeKinematics:
     def pair_rates(self, k, qd):
         return [qd[i] for i in self.tree.coords[k]]
 
+    def relative_acceleration(self, k, qd):
+        """(M F)' q' of pair k (2.19): its relative quasi-acceleration at zero q'' (child frame)."""
+        return pair_velocity_product(self.bound.bodies[k].codes, self.pair_rates(k, qd), self._rots[k])
+
     def velocities(self, qd):
         """Quasi-velocities V_lk of every body (2.39)."""
         V = []

@@ -56,11 +56,12 @@ def _flat(rows):
     return [x for row in rows for x in row]
 
 
-def _inverse_dynamics(bound, kin, x):
+def inverse_dynamics_by_equations(bound, kin, qd, qdd):
+    """A(q) qdd + b(q, qd) + g(q) from the assembled equations (2.17), (2.29): a cross-check of the sweep."""
     A = inertia_matrix(bound, kin)
-    b = bias_vector(bound, kin, x["qd"])
+    b = bias_vector(bound, kin, qd)
     g = gravity_vector(bound, kin)
-    return ([dot(A[i], x["qdd"]) + b[i] + g[i] for i in range(len(b))],)
+    return [dot(A[i], qdd) + b[i] + g[i] for i in range(len(b))]
 
 
 ROUTINES: dict[str, Routine] = {}
@@ -81,7 +82,9 @@ register(Routine("bias", ("q", "qd", "p"), (Output("b", nq_vector),),
 register(Routine("gravity", ("q", "p"), (Output("g", nq_vector),),
                  lambda bound, kin, x: (gravity_vector(bound, kin),),
                  "g(q) = -S G, the generalized gravity force on the left side"))
-register(Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), (Output("tau", nq_vector),), _inverse_dynamics,
+# replaced in place (same role, same position) by the sweep of aggsym.sweeps, imported at the bottom
+register(Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), (Output("tau", nq_vector),),
+                 lambda bound, kin, x: (inverse_dynamics_by_equations(bound, kin, x["qd"], x["qdd"]),),
                  "tau = A(q) qdd + b(q, qd) + g(q)"))
 register(Routine("kinetic_energy", ("q", "qd", "p"), (Output("T", scalar),),
                  lambda bound, kin, x: ([kinetic_energy(bound, kin, x["qd"])],),
@@ -101,3 +104,6 @@ def run(routine: Routine, bound, inputs: dict) -> tuple:
 
 def input_length(model, name: str) -> int:
     return len(model.parameters) if name == "p" else model.nq
+
+
+from . import sweeps  # noqa: E402,F401  (registers inverse_dynamics by the sweeps and joint_wrenches)

@@ -3,7 +3,8 @@
 Nothing here uses aggsym's spatial algebra; it reads only the model's data (evaluated with NumPy) and walks
 every pair as its elementary motions in the world frame: poses (R, p), angular velocity and acceleration,
 origin velocity and acceleration, then Newton's and Euler's laws about each centre of mass, and the projection
-of the wrench transmitted into each subtree on the world axis of each coordinate.
+of the wrench transmitted into each subtree on the world axis of each coordinate.  ``pair_wrenches`` gives those
+transmitted wrenches themselves, re-expressed in each body's frame about its origin with plain rotation matrices.
 """
 from __future__ import annotations
 
@@ -59,6 +60,16 @@ class NumericModel:
 
 def newton_euler(nm: NumericModel, q, qd, qdd, gravity=True):
     """tau = A q'' + b + g by world-frame Newton-Euler; also returns T and U."""
+    out = newton_euler_full(nm, q, qd, qdd, gravity)
+    return out["tau"], out["T"], out["U"]
+
+
+def newton_euler_full(nm: NumericModel, q, qd, qdd, gravity=True):
+    """World-frame Newton-Euler with everything it computes: a dict with ``tau``, ``T``, ``U``, the body poses
+    ``R``, ``P`` (axes and origin of every body frame in the world frame), and ``force``, ``moment``: for every
+    body k the wrench transmitted from its parent into the subtree rooted at k (the sum over the subtree of
+    m (a_c - g) and of the moments of those forces and of the bodies' rates of angular momentum), world axes,
+    moment about the world origin."""
     q, qd, qdd = (np.asarray(x, dtype=float) for x in (q, qd, qdd))
     g = nm.gravity if gravity else np.zeros(3)
     n = len(nm.bodies)
@@ -127,7 +138,18 @@ def newton_euler(nm: NumericModel, q, qd, qdd, gravity=True):
             tau[i] = u @ force[k]
         else:
             tau[i] = u @ (moment[k] - np.cross(point, force[k]))
-    return tau, T, U
+    return {"tau": tau, "T": T, "U": U, "R": R, "P": P, "force": force, "moment": moment}
+
+
+def pair_wrenches(nm: NumericModel, q, qd, qdd, gravity=True):
+    """For every body, the wrench transmitted from its parent into its subtree, as (f, mu) in the body's own
+    axes with the moment about the body origin: an N x 6 array (rows of massless or coordinate-free pairs
+    included)."""
+    out = newton_euler_full(nm, q, qd, qdd, gravity)
+    rows = []
+    for R, P, f, m in zip(out["R"], out["P"], out["force"], out["moment"]):
+        rows.append(np.concatenate([R.T @ f, R.T @ (m - np.cross(P, f))]))
+    return np.array(rows)
 
 
 def mass_matrix(nm: NumericModel, q):
