@@ -14,6 +14,7 @@ from .bias import bias_vector, gravity_vector
 from .energy import kinetic_energy, potential_energy
 from .inertia import inertia_matrix
 from .kinematics import TreeKinematics
+from . import sweeps
 from .linalg import dot
 
 
@@ -73,25 +74,34 @@ def register(routine: Routine) -> Routine:
     return routine
 
 
+def _zeros(kin):
+    return [0] * kin.tree.nq
+
+
 register(Routine("inertia", ("q", "p"), (Output("A", nq_square, symmetric=True),),
                  lambda bound, kin, x: (_flat(inertia_matrix(bound, kin)),),
-                 "A(q), the inertia matrix, n*n row-major (2.32)-(2.34)"))
+                 "A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)"))
 register(Routine("bias", ("q", "qd", "p"), (Output("b", nq_vector),),
-                 lambda bound, kin, x: (bias_vector(bound, kin, x["qd"]),),
-                 "b(q, qd), the velocity terms (2.36)-(2.37), Prop. 2.19"))
+                 lambda bound, kin, x: (sweeps.d_vector(bound, kin, x["qd"], gravity=False),),
+                 "b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)"))
 register(Routine("gravity", ("q", "p"), (Output("g", nq_vector),),
-                 lambda bound, kin, x: (gravity_vector(bound, kin),),
-                 "g(q) = -S G, the generalized gravity force on the left side"))
-# replaced in place (same role, same position) by the sweep of aggsym.sweeps, imported at the bottom
+                 lambda bound, kin, x: (sweeps.inverse_dynamics(bound, kin, _zeros(kin), _zeros(kin)),),
+                 "g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"))
 register(Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), (Output("tau", nq_vector),),
-                 lambda bound, kin, x: (inverse_dynamics_by_equations(bound, kin, x["qd"], x["qdd"]),),
-                 "tau = A(q) qdd + b(q, qd) + g(q)"))
+                 lambda bound, kin, x: (sweeps.inverse_dynamics(bound, kin, x["qd"], x["qdd"]),),
+                 "tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)"))
 register(Routine("kinetic_energy", ("q", "qd", "p"), (Output("T", scalar),),
                  lambda bound, kin, x: ([kinetic_energy(bound, kin, x["qd"])],),
                  "T = 1/2 qd^T A(q) qd (Def. 2.4)"))
 register(Routine("potential_energy", ("q", "p"), (Output("U", scalar),),
                  lambda bound, kin, x: ([potential_energy(bound, kin)],),
                  "U(q), the potential energy of gravity"))
+register(Routine("joint_wrenches", ("q", "qd", "qdd", "p"),
+                 (Output("W", lambda model: (len(sweeps.pair_bodies(model)), 6)),),
+                 lambda bound, kin, x: ([v for row in sweeps.joint_wrench_rows(
+                     bound, sweeps.transmitted_wrenches(bound, kin, x["qd"], x["qdd"])) for v in row],),
+                 "W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)",
+                 layout=sweeps.joint_wrench_layout))
 
 
 def run(routine: Routine, bound, inputs: dict) -> tuple:
@@ -105,5 +115,3 @@ def run(routine: Routine, bound, inputs: dict) -> tuple:
 def input_length(model, name: str) -> int:
     return len(model.parameters) if name == "p" else model.nq
 
-
-from . import sweeps  # noqa: E402,F401  (registers inverse_dynamics by the sweeps and joint_wrenches)

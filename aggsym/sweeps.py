@@ -401,30 +401,3 @@ def joint_wrench_layout(model):
     return {"W": {"shape": [len(rows), 6], "order": "row-major",
                   "columns": ["fx", "fy", "fz", "mx", "my", "mz"],
                   "convention": FRAME_CONVENTION, "rows": rows}}
-
-
-# registration ---------------------------------------------------------------------------------------------
-
-def _register():
-    from .routines import ROUTINES, Output, Routine, nq_vector, register
-
-    def tau(bound, kin, x):
-        return (inverse_dynamics(bound, kin, x["qd"], x["qdd"]),)
-
-    def wrenches(bound, kin, x):
-        Z = transmitted_wrenches(bound, kin, x["qd"], x["qdd"])
-        return ([v for row in joint_wrench_rows(bound, Z) for v in row],)
-
-    new = Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), (Output("tau", nq_vector),), tau,
-                  "tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)")
-    old = ROUTINES.get("inverse_dynamics")
-    if old is not None and (old.inputs != new.inputs or [o.name for o in old.outputs] != ["tau"]):
-        raise RuntimeError("the sweep must keep the signature of inverse_dynamics")
-    register(new)  # replaces the A qdd + b + g entry in place (same role, same position)
-    register(Routine("joint_wrenches", ("q", "qd", "qdd", "p"),
-                     (Output("W", lambda model: (len(pair_bodies(model)), 6)),), wrenches,
-                     "W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)",
-                     layout=joint_wrench_layout))
-
-
-_register()

@@ -48,12 +48,22 @@ def close(a, b, rel):
 
 # tau ----------------------------------------------------------------------------------------------------------
 
-def test_inverse_dynamics_routine_is_the_sweep():
-    """The contract's inverse_dynamics is the sweep, with the old signature."""
+def test_routines_are_the_sweeps(model, rng):
+    """The contract's inverse_dynamics is the sweep (same signature); bias and gravity are its d(q, q') without
+    gravity and at rest (2.44)-(2.46), (2.52), and agree with the O(n) recursion (2.36)-(2.37) and -S G."""
+    from aggsym.bias import bias_vector, gravity_vector
+
     routine = ROUTINES["inverse_dynamics"]
     assert routine.inputs == ("q", "qd", "qdd", "p")
     assert [o.name for o in routine.outputs] == ["tau"]
-    assert routine.build.__module__ == "aggsym.sweeps"
+    twin = aggsym.NumericTwin(model)
+    bound = bind(model, Numeric())
+    for q, qd, qdd in states(model, rng, 2):
+        kin = TreeKinematics(bound, list(q))
+        sweep = inverse_dynamics(bound, kin, list(qd), list(qdd))
+        assert np.array_equal(twin.inverse_dynamics(q, qd, qdd), np.array(sweep, dtype=float))
+        close(twin.bias(q, qd), bias_vector(bound, kin, list(qd)), 1e-10)
+        close(twin.gravity(q), gravity_vector(bound, kin), 1e-10)
 
 
 def test_sweep_equals_assembled_equations(model, rng):

@@ -45,13 +45,18 @@ def is_const(x) -> bool:
     return not isinstance(x, Node)
 
 
+_EXACT = (int, float, Fraction)  # Python constants; NumPy scalars and arrays are runtime values
+
+
 def is_zero(x) -> bool:
-    """True only for an exact structural zero (a Python int 0), never for a runtime value."""
-    return type(x) is int and x == 0
+    """True for a constant zero (int, float or Fraction, e.g. 0.00078 - 0.00078 computed on constants), never
+    for a symbolic node or a NumPy value.  (On the numeric twin's Python floats it may also skip a runtime exact
+    zero, which changes nothing: 0 * x = 0 for finite x.)"""
+    return type(x) in _EXACT and x == 0
 
 
 def is_one(x) -> bool:
-    return type(x) is int and x == 1
+    return type(x) in _EXACT and x == 1
 
 
 class Node:
