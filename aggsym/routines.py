@@ -101,3 +101,6 @@ def run(routine: Routine, bound, inputs: dict) -> tuple:
 
 def input_length(model, name: str) -> int:
     return len(model.parameters) if name == "p" else model.nq
+
+
+from . import transvective  # noqa: E402,F401  (registers forward_dynamics, inertia_inverse, transvective_factors)
