@@ -343,3 +343,28 @@ def test_against_pinocchio(model, rng):
         Minv = pin.computeMinverse(pm, data, q)
         Minv = np.triu(Minv) + np.triu(Minv, 1).T
         assert rel(twin.inertia_inverse(q), Minv) <= eps
+
+
+# --------------------------------------------------------------------------------------------------------------
+# operation count (deterministic, not timed)
+
+
+def program_operations(model, role) -> int:
+    """Arithmetic nodes (* / + - and negations) reachable from a routine's outputs in its straight-line program,
+    after folding and value numbering (the code generator's CSE comes on top)."""
+    from aggsym.codegen.program import ADD, DIV, MUL, NEG, SUB
+
+    routine = ROUTINES[role]
+    back = Symbolic()
+    prog = back.program
+    bound = bind(model, back)
+    ins = {n: prog.vector(n, model.nq) for n in routine.inputs if n != "p"}
+    outs = routine.build(bound, TreeKinematics(bound, ins["q"]), ins)
+    ids = prog.reachable([x for out in outs for x in out])
+    return sum(prog.ops[i][0] in (MUL, DIV, ADD, SUB, NEG) for i in ids)
+
+
+def test_forward_dynamics_operation_count():
+    """Issue 5: q'' for the six-link arm in at most a third of Table 3.2's 2,579 operations at n = 6."""
+    model = aggsym.load(model_path("manipulator6"))
+    assert program_operations(model, "forward_dynamics") <= 2579 // 3
