@@ -139,6 +139,7 @@ def _rows(X):
 
 
 def _general(M) -> General:
+    """The General (symmetric 6x6) of a list of 6 rows."""
     return General(tuple(tuple(M[i][j] for j in range(3)) for i in range(3)),
                    tuple(tuple(M[i][j] for j in range(3, 6)) for i in range(3)),
                    tuple(tuple(M[i][j] for j in range(3, 6)) for i in range(3, 6)))
@@ -173,6 +174,7 @@ def _eliminate(X, psi, fold):
 
 
 def _mul(a, b):
+    """a b, or the structural zero when either factor is one."""
     return 0 if is_zero(a) or is_zero(b) else a * b
 
 
@@ -241,6 +243,7 @@ def _folder(backend):
 
 
 def _identity(x):
+    """No folding (numeric backend)."""
     return x
 
 
@@ -459,6 +462,7 @@ def layout(model) -> dict:
 
 
 def _n_transvections(model):
+    """Shape of the targs output: one scalar per transvection."""
     from .model.tree import Tree
 
     return (len(transvection_pairs(Tree(model))),)
