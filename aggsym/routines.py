@@ -14,7 +14,7 @@ from .bias import bias_vector, gravity_vector
 from .energy import kinetic_energy, potential_energy
 from .inertia import inertia_matrix
 from .kinematics import TreeKinematics
-from . import sweeps
+from . import sweeps, transvective
 from .linalg import dot
 
 
@@ -102,6 +102,18 @@ register(Routine("joint_wrenches", ("q", "qd", "qdd", "p"),
                      bound, sweeps.transmitted_wrenches(bound, kin, x["qd"], x["qdd"])) for v in row],),
                  "W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)",
                  layout=sweeps.joint_wrench_layout))
+register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_vector),),
+                 lambda bound, kin, x: (transvective.forward_dynamics(
+                     bound, kin, x["tau"], sweeps.d_vector(bound, kin, x["qd"])),),
+                 "qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)"))
+register(Routine("inertia_inverse", ("q", "p"), (Output("Ainv", nq_square, symmetric=True),),
+                 lambda bound, kin, x: (_flat(transvective.inertia_inverse(bound, kin)),),
+                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)"))
+register(Routine("transvective_factors", ("q", "p"),
+                 (Output("targs", transvective.number_of_transvections), Output("diag", nq_vector)),
+                 lambda bound, kin, x: transvective.factor_outputs(bound, kin),
+                 "the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k "
+                 "of T A(q) T^T = diag (3.11)", layout=transvective.layout))
 
 
 def run(routine: Routine, bound, inputs: dict) -> tuple:
@@ -114,4 +126,3 @@ def run(routine: Routine, bound, inputs: dict) -> tuple:
 
 def input_length(model, name: str) -> int:
     return len(model.parameters) if name == "p" else model.nq
-

@@ -1,0 +1,507 @@
+"""The transvective factors of A(q) and of its inverse, and the Cauchy form of the equations, (3.7)-(3.20).
+
+Gauss elimination of A(q) starting from its last row is a product of transvections ``t_tk(a) = E + a E_tk``
+(3.4), one for every coordinate t above coordinate k on k's path to the root (branch-induced sparsity: no
+transvection ever joins two coordinates of different branches):
+
+* ``T = prod_k prod_{t above k} t_tk^-1(<t,k>)``, k ascending, t ascending (3.9); ``t_tk^-1(a) = E - a E_tk``;
+* ``T A(q) T^T = diag (beta,beta)^k`` (3.11), (3.16);
+* ``A(q) = T^-1 diag (beta,beta)^k T^-T`` (3.18) and ``A(q)^-1 = T^T diag 1/(beta,beta)^k T`` (3.19);
+* the Cauchy form ``q'' = T^T diag 1/(beta,beta)^k T F``, ``F = tau - b(q,q') - g(q)`` (3.20).
+
+The argument of a transvection is an inner product like the entries (3.2) of A(q):
+``<t,k> = s^{t}_k betabar^k = psi_t^T L^t_k betabar^k`` (3.8), (3.17), ``betabar^k = beta^k / (beta,beta)^k``,
+where ``beta^k`` is the column of a 6x6 matrix that already accounts for the eliminated coordinates below k.
+The book gives two recurrences for it; both are here:
+
+* the Delta form (3.7)-(3.11), :func:`articulated_factors`: a one-step recurrence of 6x6 matrices,
+  ``A^Delta_k = A_kk + sum_{children p} L^k_p (A^Delta_p - beta^p beta^p,T / (beta,beta)^p) L^k,T_p`` (3.7), and
+  ``beta^k = A^Delta_k psi_k`` (these are articulated-body inertias);
+* the delta form (3.12)-(3.17), :func:`corrected_factors`: the composite columns ``beta^k+ = A^k+ psi_k`` of (3.3)
+  corrected by a multi-step sum over all descendants, ``beta^k = beta^k+ - delta^k+``,
+  ``delta^k+ = sum_{p below k} L(k,p) L(k,p)^T psi_k (beta,beta)^p`` with ``L(k,p) = L^k_p betabar^p`` (3.15),
+  i.e. ``delta^k+ = sum_p <k,p> L^k_p beta^p``.
+
+The routines emit the Delta form.  It costs one 6x6 congruence per body (O(n)), where the delta form needs
+O(n d) moved columns and O(n d) 6-vector corrections (d the depth); and most of its 6x6 work folds away: the
+eliminated unit axis e_m makes row and column m of ``A^Delta - beta beta^T/(beta,beta)`` exactly zero, and the
+congruence with the pair's elementary rotation about that same axis is done in the rotation's plane with
+4 products per 2x2 block (:func:`_rotate_sym6`).  Six-link arm (``models/manipulator6.yaml``), arithmetic nodes
+of the straight-line program: factors 292 (Delta) against 513 (delta); q'' 818 against 1041.
+``tests/test_transvective.py`` checks that both forms give the same arguments, pivots and columns.
+
+A pair with several coordinates is eliminated one coordinate at a time, last coordinate first, inside the
+pair's own frame: the coordinates of one pair are a chain, and T then holds transvections between coordinates
+of the same pair too (their L is the identity).  "Coordinate t is above coordinate k" means: t belongs to a
+pair on the path from k's pair to the root, or to k's own pair and comes before k.
+
+The vector F = tau - b - g of (3.20) takes b + g from the sweeps at q'' = 0 (d(q, q') of (2.44)-(2.46), (2.52),
+:mod:`aggsym.sweeps`), and q'' comes from the transvections applied to it one by one (:func:`cauchy_solve`):
+2 operations per transvection and one product per pivot, never forming A(q) or A(q)^-1.
+
+Everything runs on both backends (floats and straight-line-program nodes): the only divisions are by the
+pivots (beta,beta)^k, and the only branching is on structural zeros and ones.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .aggregates import General
+from .codegen.program import is_const, is_one, is_zero, normalize_const
+from .group import Motion
+from .inertia import composite_inertias
+from .kinematics import pair_functional
+from .linalg import EYE3, dot, scale, sub
+
+__all__ = [
+    "Factors", "coordinate_parents", "coordinates_above", "transvection_pairs", "articulated_factors",
+    "corrected_factors", "transvective_factors", "apply_T", "apply_T_transpose", "cauchy_solve",
+    "T_columns", "inverse_from_factors", "forward_dynamics", "inertia_inverse", "factor_outputs",
+    "number_of_transvections", "factored_form", "layout",
+]
+
+
+# --------------------------------------------------------------------------------------------------------------
+# the coordinate tree (backend-free)
+
+
+def coordinate_parents(tree) -> list[int]:
+    """For each coordinate, the coordinate just above it on its root path (-1 for none), see the module doc."""
+    parent = [-1] * tree.nq
+    last = [-1] * len(tree)  # the last coordinate on the path from the root to body k, k included
+    for k, p in enumerate(tree.parent):
+        prev = -1 if p < 0 else last[p]
+        for i in tree.coords[k]:
+            parent[i] = prev
+            prev = i
+        last[k] = prev
+    return parent
+
+
+def coordinates_above(tree) -> list[list[int]]:
+    """For each coordinate k, the coordinates t above it on its root path, root first (so t < k ascending)."""
+    parent = coordinate_parents(tree)
+    above: list[list[int]] = []
+    for k, p in enumerate(parent):
+        above.append([] if p < 0 else above[p] + [p])
+    return above
+
+
+def transvection_pairs(tree) -> list[tuple[int, int]]:
+    """The (t, k) of every transvection t_tk^-1(<t,k>) in the order of the product T (3.9).
+
+    k ascending, and for each k the coordinates above it root first.  Their number is the sum over the
+    coordinates of the number of coordinates above them on their root path.
+    """
+    return [(t, k) for k, above in enumerate(coordinates_above(tree)) for t in above]
+
+
+def _unit_axis(psi):
+    """m when the 6-vector psi is structurally the unit vector e_m, else None."""
+    m = None
+    for i, x in enumerate(psi):
+        if is_zero(x):
+            continue
+        if is_one(x) and m is None:
+            m = i
+        else:
+            return None
+    return m
+
+
+# --------------------------------------------------------------------------------------------------------------
+# the factors
+
+
+@dataclass
+class Factors:
+    """The transvective factors of A(q): T by its arguments, and the diagonal.
+
+    ``pairs``: the (t, k) in product order (3.9); ``args[(t, k)] = <t,k>`` (3.8), (3.17); ``diag[k] =
+    (beta,beta)^k`` and ``recip[k]`` its reciprocal; ``beta[k]`` the column beta^k (6-vector, axes of k's body).
+    """
+
+    pairs: list
+    args: dict
+    diag: list
+    recip: list
+    beta: list
+
+    def arguments(self) -> list:
+        """The arguments <t,k> in product order."""
+        return [self.args[pk] for pk in self.pairs]
+
+
+def _rows(X):
+    """A symmetric 6x6 (Rigid or General) as a list of 6 rows."""
+    return X.general().matrix()
+
+
+def _general(M) -> General:
+    """The General (symmetric 6x6) of a list of 6 rows."""
+    return General(tuple(tuple(M[i][j] for j in range(3)) for i in range(3)),
+                   tuple(tuple(M[i][j] for j in range(3, 6)) for i in range(3)),
+                   tuple(tuple(M[i][j] for j in range(3, 6)) for i in range(3, 6)))
+
+
+def _pivot(beta, psi):
+    """(beta,beta) = psi^T beta (3.12), its reciprocal and betabar = beta / (beta,beta) (3.13)."""
+    d = dot(psi, beta)
+    r = 1 / d
+    return d, r, scale(r, beta)
+
+
+def _eliminate(X, psi, fold):
+    """One step of (3.7) inside a body: beta = X psi, and X - beta beta^T / (beta,beta) as a General.
+
+    Returns ``(beta, d, r, betabar, X')``.  When psi is the unit axis e_m, ``betabar_m = 1`` and row and column
+    m of X' are exactly zero (X' psi = beta - beta (psi^T beta)/(beta,beta) = 0); both are set structurally.
+    """
+    beta = X.apply(psi)
+    d, r, bbar = _pivot(beta, psi)
+    m = _unit_axis(psi)
+    if m is not None:
+        bbar = tuple(1 if i == m else x for i, x in enumerate(bbar))
+    M = _rows(X)
+    out = [[0] * 6 for _ in range(6)]
+    for i in range(6):
+        for j in range(i, 6):
+            if i == m or j == m:
+                continue
+            out[i][j] = out[j][i] = fold(M[i][j] - _mul(beta[i], bbar[j]))
+    return beta, d, r, bbar, _general(out)
+
+
+def _mul(a, b):
+    """a b, or the structural zero when either factor is one."""
+    return 0 if is_zero(a) or is_zero(b) else a * b
+
+
+def _rotate_sym6(M, axis, c, s, s2, sc, fold):
+    """R M R^T for R = diag(c_axis, c_axis) (elementary rotation (Prop. 1.17) of both 3-blocks) and a symmetric
+    6x6 M given as rows; ``s2 = sin^2``, ``sc = sin cos``.
+
+    In the plane (i, j) of the rotation a 2x2 block B = [[a, b], [e, d]] becomes
+    ``[[a - delta, b - gamma], [e - gamma, d + delta]]`` with ``delta = (a - d) s2 + (b + e) sc`` and
+    ``gamma = (b + e) s2 - (a - d) sc`` (its antisymmetric part is invariant): 4 products where R B R^T takes 16.
+    The entries joining the axis itself to the plane turn as 2-vectors."""
+    a = axis - 1
+    i, j = (a + 1) % 3, (a + 2) % 3
+    planes = ((i, j), (3 + i, 3 + j))
+    out = [list(row) for row in M]
+    for f in (a, 3 + a):
+        for p, q in planes:
+            x, y = M[f][p], M[f][q]
+            out[f][p] = out[p][f] = fold(_mul(c, x) - _mul(s, y))
+            out[f][q] = out[q][f] = fold(_mul(s, x) + _mul(c, y))
+    for (p0, p1), (q0, q1) in ((planes[0], planes[0]), (planes[1], planes[1]), (planes[0], planes[1])):
+        ba, bb, be, bd = M[p0][q0], M[p0][q1], M[p1][q0], M[p1][q1]
+        amd, bpe = fold(ba - bd), fold(bb + be)
+        delta = fold(_mul(amd, s2) + _mul(bpe, sc))
+        gamma = fold(_mul(bpe, s2) - _mul(amd, sc))
+        out[p0][q0] = out[q0][p0] = fold(ba - delta)
+        out[p1][q1] = out[q1][p1] = fold(bd + delta)
+        out[p0][q1] = out[q1][p0] = fold(bb - gamma)
+        out[p1][q0] = out[q0][p1] = fold(be - gamma)
+    return out
+
+
+def _moved_to_parent(P, L0, functional, rots, fold):
+    """L P L^T (2.7) for the pair's L = L_constructive T(o) C(c1 c2 c3): the elementary rotations one at a time
+    by :func:`_rotate_sym6`, then the functional translation, then the constant constructive motion."""
+    M = _rows(P)
+    for axis, rot in reversed(rots):
+        i = axis % 3  # the first axis of the rotation's plane: rot[i][i] = cos, rot[(i + 1) % 3][i] = sin
+        c, s = rot[i][i], rot[(i + 1) % 3][i]
+        M = _rotate_sym6(M, axis, c, s, s * s, s * c, fold)
+    X = _general(M)
+    if not all(is_zero(x) for x in functional.o):
+        X = _folded(X.moved(Motion(EYE3, functional.o)), fold)
+    if not (all(is_zero(x) for x in L0.o) and _is_identity(L0.c)):
+        X = _folded(X.moved(L0), fold)
+    return X
+
+
+def _is_identity(c) -> bool:
+    """c is structurally the 3x3 identity."""
+    return all(is_one(c[i][j]) if i == j else is_zero(c[i][j]) for i in range(3) for j in range(3))
+
+
+def _folded(X, fold):
+    """X with its constant entries folded (see :func:`_folder`)."""
+    return _general([[fold(x) for x in row] for row in _rows(X)])
+
+
+def _folder(backend):
+    """On the symbolic backend, constants are compile-time values: fold the results of constant arithmetic
+    (``0.00078 - 0.00078`` is the structural zero 0, not the float 0.0).  On the numeric backend every value is a
+    runtime value and nothing is folded."""
+    if not backend.symbolic:
+        return _identity
+    return lambda x: normalize_const(x) if is_const(x) else x
+
+
+def _identity(x):
+    """No folding (numeric backend)."""
+    return x
+
+
+def _record_arguments(tree, kin, args, k, pos, bbar, reach):
+    """<t,j> = psi_t^T L^t_k betabar^j (3.8) for every coordinate t above j = coords[k][pos]: the earlier
+    coordinates of the pair, then betabar carried towards the root with the wrench motions L, as far as
+    ``reach[a]`` says coordinates remain above body a."""
+    j = tree.coords[k][pos]
+    for t, psi in zip(tree.coords[k][:pos], kin.psi[k][:pos]):
+        args[(t, j)] = dot(psi, bbar)
+    w, a = bbar, k
+    while reach[a]:
+        w = kin.L[a].wrench(w)
+        a = tree.parent[a]
+        for t, psi in zip(tree.coords[a], kin.psi[a]):
+            args[(t, j)] = dot(psi, w)
+
+
+def _coordinates_above_body(tree) -> list[bool]:
+    """For every body, whether some pair strictly above it (on its path to the root) has coordinates."""
+    out = []
+    for p in tree.parent:
+        out.append(p >= 0 and (bool(tree.coords[p]) or out[p]))
+    return out
+
+
+def articulated_factors(bound, kin) -> Factors:
+    """The factors by the Delta form (3.7)-(3.11): one-step recurrence of A^Delta_k from the buds to the root."""
+    tree = kin.tree
+    n = tree.nq
+    diag, recip, beta = [0] * n, [0] * n, [None] * n
+    args: dict = {}
+    acc = [b.mises for b in bound.bodies]  # A_kk, then + sum over children L (A^Delta - beta beta^T/(.,.)) L^T
+    fold = _folder(bound.backend)
+    reach = _coordinates_above_body(tree)
+    for k in range(len(tree) - 1, -1, -1):
+        X = acc[k]
+        coords = tree.coords[k]
+        for pos in range(len(coords) - 1, -1, -1):
+            if X is None:
+                raise ZeroDivisionError(f"coordinate {coords[pos]} moves no mass: A(q) is singular")
+            j = coords[pos]
+            beta[j], diag[j], recip[j], bbar, X = _eliminate(X, kin.psi[k][pos], fold)
+            _record_arguments(tree, kin, args, k, pos, bbar, reach)
+        p = tree.parent[k]
+        if p >= 0 and X is not None:
+            qv = [kin.q[i] for i in coords]
+            functional, _, rots = pair_functional(bound.bodies[k].codes, qv, bound.backend)
+            moved = _moved_to_parent(X, bound.bodies[k].L0, functional, rots, fold)
+            acc[p] = moved if acc[p] is None else _folded(acc[p] + moved, fold)
+    return Factors(transvection_pairs(tree), args, diag, recip, beta)
+
+
+def corrected_factors(bound, kin) -> Factors:
+    """The factors by the delta form (3.12)-(3.17): composite columns beta^k+ (3.3) minus the corrections (3.15).
+
+    ``beta^j = beta^j+ - sum_{p below j} <j,p> L^k_p beta^p`` where the moved columns ``L^k_p beta^p`` and
+    ``L(k,p) = L^k_p betabar^p`` are carried up from p's pair one motion at a time, L(k,p) = L^k_k+1 L(k+1,p).
+    """
+    tree = kin.tree
+    n = tree.nq
+    plus = composite_inertias(bound, kin)
+    body_of = tree.body_of
+    below = [[] for _ in range(n)]
+    for t, k in transvection_pairs(tree):
+        below[t].append(k)
+    diag, recip, beta = [0] * n, [0] * n, [None] * n
+    args: dict = {}
+    moved: dict = {}  # (body a, coordinate p) -> L^a_{body(p)} beta^p
+    reach = _coordinates_above_body(tree)
+    for j in range(n - 1, -1, -1):
+        k = body_of[j]
+        pos = tree.coords[k].index(j)
+        psi = kin.psi[k][pos]
+        if plus[k] is None:
+            raise ZeroDivisionError(f"coordinate {j} moves no mass: A(q) is singular")
+        col = plus[k].apply(psi)  # beta^j+ (3.3)
+        for p in below[j]:  # delta^j+ (3.15)
+            col = sub(col, scale(args[(j, p)], moved[(k, p)]))
+        beta[j] = col
+        diag[j], recip[j], bbar = _pivot(col, psi)
+        _record_arguments(tree, kin, args, k, pos, bbar, reach)
+        w, a = col, k
+        moved[(a, j)] = w
+        while reach[a]:
+            w = kin.L[a].wrench(w)
+            a = tree.parent[a]
+            moved[(a, j)] = w
+    return Factors(transvection_pairs(tree), args, diag, recip, beta)
+
+
+def transvective_factors(bound, kin, form: str = "Delta") -> Factors:
+    """The factors of (3.11)/(3.16) by the Delta form (3.7) (default, emitted) or the delta form (3.15)."""
+    if form == "Delta":
+        return articulated_factors(bound, kin)
+    if form == "delta":
+        return corrected_factors(bound, kin)
+    raise ValueError(f"form must be 'Delta' or 'delta', not {form!r}")
+
+
+# --------------------------------------------------------------------------------------------------------------
+# applying the factors
+
+
+def apply_T(fac: Factors, F) -> list:
+    """T F (3.9): the transvections applied right to left, k descending: F_t -= <t,k> F_k for t above k."""
+    y = list(F)
+    for t, k in reversed(fac.pairs):
+        a = fac.args[(t, k)]
+        if not (is_zero(a) or is_zero(y[k])):
+            y[t] = y[t] - a * y[k]
+    return y
+
+
+def apply_T_transpose(fac: Factors, z) -> list:
+    """T^T z (3.10): x_k = z_k - sum_{t above k} <t,k> x_t, k ascending."""
+    x = list(z)
+    for t, k in fac.pairs:
+        a = fac.args[(t, k)]
+        if not (is_zero(a) or is_zero(x[t])):
+            x[k] = x[k] - a * x[t]
+    return x
+
+
+def cauchy_solve(fac: Factors, F) -> list:
+    """q'' = T^T diag 1/(beta,beta)^k T F (3.20), in O(number of transvections) scalar operations."""
+    y = apply_T(fac, F)
+    return apply_T_transpose(fac, [r * x for r, x in zip(fac.recip, y)])
+
+
+def T_columns(fac: Factors, n: int) -> list[dict]:
+    """The entries of T column by column, ``cols[i][t] = T_ti`` for t above i and t = i (all others are zero).
+
+    ``T^-1 = E + sum <t,k> E_tk`` (the product (3.9) inverted: its factors commute into a sum), so T U = E with
+    U = T^-1 gives ``T_ti = -sum_j T_tj <j,i>`` over the j above i that t is above or equal to."""
+    above: list[list[int]] = [[] for _ in range(n)]
+    for t, k in fac.pairs:
+        above[k].append(t)
+    cols: list[dict] = []
+    for i in range(n):
+        col = {i: 1}
+        for t in above[i]:
+            acc = 0
+            for j in above[i]:
+                if j < t:
+                    continue
+                acc = acc - _mul(1 if j == t else cols[j][t], fac.args[(j, i)])
+            col[t] = acc
+        cols.append(col)
+    return cols
+
+
+def inverse_from_factors(fac: Factors, n: int) -> list:
+    """A(q)^-1 = T^T diag 1/(beta,beta)^k T (3.19) as n x n rows: entry (i, j) is the sum of T_ki T_kj /
+    (beta,beta)^k over the coordinates k above or equal to both i and j (symmetric: computed for i <= j)."""
+    cols = T_columns(fac, n)
+    out = [[0] * n for _ in range(n)]
+    for i in range(n):
+        scaled = {k: _mul(fac.recip[k], x) for k, x in cols[i].items()}
+        for j in range(i, n):
+            acc = 0
+            for k, x in scaled.items():
+                y = cols[j].get(k)
+                if y is not None:
+                    acc = acc + _mul(x, y)
+            out[i][j] = out[j][i] = acc
+    return out
+
+
+# --------------------------------------------------------------------------------------------------------------
+# routine outputs and the manifest
+
+
+def layout(model) -> dict:
+    """The manifest's description of the outputs of ``transvective_factors``: enough to rebuild T and A^-1."""
+    from .model.tree import Tree
+
+    tree = Tree(model)
+    names = [c.name for c in model.coordinates]
+    pairs = transvection_pairs(tree)
+    return {
+        "indexing": "0-based coordinate indices in q order",
+        "targs": [[t, k] for t, k in pairs],
+        "targs_names": [[names[t], names[k]] for t, k in pairs],
+        "diag": names,
+        "T": "T = prod_i (E - targs[i] E_{t_i k_i}) in the listed order, E_tk the unit matrix at row t, column k "
+             "(the transvections t_tk^-1(<t,k>) of (3.9)); t is above k on k's path to the root",
+        "identities": ["T A(q) T^T = diag(diag) (3.11)", "A(q)^-1 = T^T diag(1/diag) T (3.19)",
+                       "qdd = T^T diag(1/diag) T (tau - b - g) (3.20)"],
+    }
+
+
+def number_of_transvections(model):
+    """Shape of the targs output: one scalar per transvection."""
+    from .model.tree import Tree
+
+    return (len(transvection_pairs(Tree(model))),)
+
+
+def forward_dynamics(bound, kin, tau, h):
+    """q'' = T^T diag(1/(beta,beta)) T (tau - h) (3.20), with h = b + g (the sweep's d(q, q') (2.52))."""
+    return cauchy_solve(articulated_factors(bound, kin), [t - hi for t, hi in zip(tau, h)])
+
+
+def inertia_inverse(bound, kin):
+    """A(q)^-1 = T^T diag(1/(beta,beta)) T (3.19), as rows."""
+    return inverse_from_factors(articulated_factors(bound, kin), kin.tree.nq)
+
+
+def factor_outputs(bound, kin):
+    """(targs, diag): the arguments <t,k> in the order of :func:`transvection_pairs` and the pivots."""
+    fac = articulated_factors(bound, kin)
+    return fac.arguments(), list(fac.diag)
+
+
+# --------------------------------------------------------------------------------------------------------------
+# SymPy form for small models
+
+
+def factored_form(model, simplify: bool = False):
+    """The Cauchy form (3.20) as SymPy objects: ``(T_factors, diag)``.
+
+    ``T_factors`` are the n x n matrices ``t_tk^-1(<t,k>) = E - <t,k> E_tk`` in product order, so that
+    ``T = T_factors[0] * T_factors[1] * ...``; factors whose argument is zero (structurally, or after
+    simplification when ``simplify``) are left out.  ``diag`` is the diagonal matrix of the pivots
+    (beta,beta)^k, so ``A^-1 = T^T diag^-1 T`` and ``q'' = T^T diag^-1 T F``.  Symbols are those of
+    :func:`aggsym.equations` (coordinates by name, parameters by name).
+    """
+    import sympy as sp
+
+    from .backend import Symbolic, bind
+    from .equations import coordinate_symbols, to_sympy
+    from .kinematics import TreeKinematics
+    from .model.tree import Tree
+
+    if not hasattr(model, "bodies"):
+        from .model import load
+
+        model = load(model)
+    tree = Tree(model)
+    back = Symbolic()
+    prog = back.program
+    bound = bind(model, back, tree=tree)
+    kin = TreeKinematics(bound, prog.vector("q", model.nq))
+    fac = articulated_factors(bound, kin)
+    q, _, _ = coordinate_symbols(model)
+    symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
+    symbols.update({("q", i): s for i, s in enumerate(q)})
+    args = to_sympy(prog, fac.arguments(), symbols)
+    diag = to_sympy(prog, list(fac.diag), symbols)
+    if simplify:
+        args = [sp.simplify(a) for a in args]
+        diag = [sp.simplify(d) for d in diag]
+    n = model.nq
+    factors = []
+    for (t, k), a in zip(fac.pairs, args):
+        if a == 0:
+            continue
+        m = sp.eye(n)
+        m[t, k] = -a
+        factors.append(m)
+    return factors, sp.diag(*diag)
