@@ -87,6 +87,9 @@ register(Routine("bias", ("q", "qd", "p"), (Output("b", nq_vector),),
 register(Routine("gravity", ("q", "p"), (Output("g", nq_vector),),
                  lambda bound, kin, x: (sweeps.inverse_dynamics(bound, kin, _zeros(kin), _zeros(kin)),),
                  "g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"))
+register(Routine("nonlinear_effects", ("q", "qd", "p"), (Output("d", nq_vector),),
+                 lambda bound, kin, x: (sweeps.d_vector(bound, kin, x["qd"]),),
+                 "d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)"))
 register(Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), (Output("tau", nq_vector),),
                  lambda bound, kin, x: (sweeps.inverse_dynamics(bound, kin, x["qd"], x["qdd"]),),
                  "tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)"))
