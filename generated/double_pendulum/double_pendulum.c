@@ -2,35 +2,65 @@
 #include <math.h>
 #include "double_pendulum.h"
 
+/* sin(x) and cos(x) together: x = k pi/2 + r with |r| <= pi/4 (Cody-Waite: pi/2 split into three doubles whose
+ * first two have 33 significant bits, so k*hi and k*mid are exact for |k| < 2^20), then the Taylor series of sin r
+ * to r^17 and cos r to r^18 (truncation below 1e-19 at r = pi/4); the quadrant k mod 4 swaps and signs them.
+ * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
+static void aggsym_sincos(double x, double *s, double *c)
+{
+    if (!(fabs(x) < 1.0e6)) {
+        *s = sin(x);
+        *c = cos(x);
+        return;
+    }
+    const double t = x * 0.6366197723675814;
+    const long k = (long)(t < 0.0 ? t - 0.5 : t + 0.5);
+    const double kd = (double)k;
+    const double r = ((x - kd * 1.5707963267341256) - kd * 6.077100506303966e-11) - kd * 2.0222662487959506e-21;
+    const double r2 = r * r;
+    const double sr = r + r * r2 * (-0.16666666666666666 + r2 * (0.008333333333333333 + r2 * (-0.0001984126984126984
+        + r2 * (2.7557319223985893e-06 + r2 * (-2.505210838544172e-08 + r2 * (1.6059043836821613e-10
+        + r2 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15)))))));
+    const double cr = 1.0 + r2 * (-0.5 + r2 * (0.041666666666666664 + r2 * (-0.001388888888888889
+        + r2 * (2.48015873015873e-05 + r2 * (-2.755731922398589e-07 + r2 * (2.08767569878681e-09
+        + r2 * (-1.1470745597729725e-11 + r2 * (4.779477332387385e-14 + r2 * -1.5619206968586225e-16))))))));
+    switch (k & 3) {
+    case 0: *s = sr; *c = cr; break;
+    case 1: *s = cr; *c = -sr; break;
+    case 2: *s = -sr; *c = -cr; break;
+    default: *s = -cr; *c = sr; break;
+    }
+}
+
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 14 mul, 8 add, 0 div, 2 call */
+ * operations: 14 mul, 8 add, 0 div, 1 call */
 void double_pendulum_inertia(const double *q, const double *p, double *A)
 {
-    const double x0 = p[1]*p[3]*p[3];
-    const double x1 = cos(q[2]);
-    const double x2 = sin(q[2]);
-    const double x3 = p[1]*p[3]*x1;
-    A[0] = p[0] + p[1];
     A[1] = 0;
-    A[2] = x3;
     A[3] = 0;
-    A[4] = p[6] + p[0]*p[2]*p[2] + x2*p[8]*x2 + x1*(p[9] + x0)*x1 + 2*p[4]*x3 + p[1]*p[4]*p[4];
     A[5] = 0;
-    A[6] = x3;
     A[7] = 0;
+    const double x0 = p[1]*p[3]*p[3];
     A[8] = p[10] + x0;
+    double x2, x1;
+    aggsym_sincos(q[2], &x2, &x1);
+    const double x3 = p[1]*p[3]*x1;
+    A[2] = x3;
+    A[6] = x3;
+    A[0] = p[0] + p[1];
+    A[4] = p[6] + p[0]*p[2]*p[2] + x2*p[8]*x2 + x1*(p[9] + x0)*x1 + 2*p[4]*x3 + p[1]*p[4]*p[4];
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
- * operations: 29 mul, 14 add, 0 div, 2 call */
+ * operations: 29 mul, 14 add, 0 div, 1 call */
 void double_pendulum_bias(const double *q, const double *qd, const double *p, double *b)
 {
     const double x0 = p[1]*p[3];
     const double x1 = p[1]*p[3]*p[3];
     const double x2 = p[9] + x1;
     const double x3 = p[10] + x1;
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
     const double x6 = qd[1]*x5;
     const double x7 = qd[1]*x4;
     const double x8 = p[4]*qd[1]*qd[1];
@@ -38,40 +68,40 @@ void double_pendulum_bias(const double *q, const double *qd, const double *p, do
     const double x10 = qd[2]*x6;
     const double x11 = x6*x7;
     const double x12 = p[8] - x2;
+    b[2] = x0*x9 - x11*x12;
     b[0] = x4*(x0*x11 + p[1]*x9) - x5*(x0*(x7*x7 + qd[2]*qd[2]) + p[1]*x4*x8);
     b[1] = x5*qd[2]*x7*(x3 + x12) + x4*(x10*(p[8] - x3) - x2*x10) - p[4]*x0*(x10 + x10);
-    b[2] = x0*x9 - x11*x12;
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
- * operations: 16 mul, 3 add, 0 div, 4 call */
+ * operations: 16 mul, 3 add, 0 div, 2 call */
 void double_pendulum_gravity(const double *q, const double *p, double *g)
 {
     const double x0 = p[1]*p[3];
-    const double x1 = cos(q[1]);
-    const double x2 = sin(q[1]);
-    const double x3 = cos(q[2]);
-    const double x4 = sin(q[2]);
+    double x2, x1;
+    aggsym_sincos(q[1], &x2, &x1);
+    double x4, x3;
+    aggsym_sincos(q[2], &x4, &x3);
     const double x5 = p[11]*x2;
     const double x6 = p[11]*x1;
     const double x7 = x4*x5;
+    g[2] = x0*x7;
     g[0] = x3*p[1]*x7 - x4*p[1]*x3*x5;
     g[1] = -(p[4]*p[1]*x6 + x3*x0*x6 + p[0]*p[2]*x6);
-    g[2] = x0*x7;
 }
 
 /* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
- * operations: 35 mul, 18 add, 0 div, 4 call */
+ * operations: 35 mul, 18 add, 0 div, 2 call */
 void double_pendulum_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
     const double x0 = p[1]*p[3];
     const double x1 = p[1]*p[3]*p[3];
     const double x2 = p[9] + x1;
     const double x3 = p[10] + x1;
-    const double x4 = cos(q[1]);
-    const double x5 = sin(q[1]);
-    const double x6 = cos(q[2]);
-    const double x7 = sin(q[2]);
+    double x5, x4;
+    aggsym_sincos(q[1], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[2], &x7, &x6);
     const double x8 = qd[1]*x7;
     const double x9 = qd[1]*x6;
     const double x10 = qd[2]*x8;
@@ -80,23 +110,23 @@ void double_pendulum_nonlinear_effects(const double *q, const double *qd, const 
     const double x13 = p[11]*x4;
     const double x14 = p[4]*qd[1]*qd[1] + p[11]*x5;
     const double x15 = x7*x14;
+    d[2] = x0*x15 - x11*x12;
     d[0] = x6*(x0*x11 + p[1]*x15) - x7*(x0*(x9*x9 + qd[2]*qd[2]) + p[1]*x6*x14);
     d[1] = x7*qd[2]*x9*(x3 + x12) + x6*(x10*(p[8] - x3) - x2*x10 - x0*x13) - p[4]*(x0*(x10 + x10) + p[1]*x13) - p[0]*p[2]*x13;
-    d[2] = x0*x15 - x11*x12;
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
- * operations: 46 mul, 30 add, 0 div, 4 call */
+ * operations: 46 mul, 30 add, 0 div, 2 call */
 void double_pendulum_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
     const double x0 = p[1]*p[3];
     const double x1 = p[1]*p[3]*p[3];
     const double x2 = p[9] + x1;
     const double x3 = p[10] + x1;
-    const double x4 = cos(q[1]);
-    const double x5 = sin(q[1]);
-    const double x6 = cos(q[2]);
-    const double x7 = sin(q[2]);
+    double x5, x4;
+    aggsym_sincos(q[1], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[2], &x7, &x6);
     const double x8 = qd[1]*x7;
     const double x9 = qd[1]*x6;
     const double x10 = qd[2]*x9;
@@ -107,19 +137,19 @@ void double_pendulum_inverse_dynamics(const double *q, const double *qd, const d
     const double x15 = x13 - p[4]*qdd[1];
     const double x16 = x7*x14 + qdd[0]*x6;
     const double x17 = qdd[1]*x6;
-    tau[0] = x7*(p[1]*(qdd[0]*x7 - x6*x14) - x0*(x9*x9 + qd[2]*qd[2])) + x6*(x0*(qdd[2] + x12) + p[1]*x16) + p[0]*qdd[0];
-    tau[1] = (p[6] + p[0]*p[2]*p[2])*qdd[1] + x7*(p[8]*(x10 + qdd[1]*x7) - x10*(x2 - x3)) + x6*(x11*(p[8] - x3) + x2*(x17 - x11) - x0*x15) - p[4]*(x0*(x11 + x11 - x17) + p[1]*x15) - p[0]*p[2]*x13;
     tau[2] = x3*qdd[2] - x12*(p[8] - x2) + x0*x16;
+    tau[1] = (p[6] + p[0]*p[2]*p[2])*qdd[1] + x7*(p[8]*(x10 + qdd[1]*x7) - x10*(x2 - x3)) + x6*(x11*(p[8] - x3) + x2*(x17 - x11) - x0*x15) - p[4]*(x0*(x11 + x11 - x17) + p[1]*x15) - p[0]*p[2]*x13;
+    tau[0] = x7*(p[1]*(qdd[0]*x7 - x6*x14) - x0*(x9*x9 + qd[2]*qd[2])) + x6*(x0*(qdd[2] + x12) + p[1]*x16) + p[0]*qdd[0];
 }
 
 /* T = 1/2 qd^T A(q) qd (Def. 2.4)
- * operations: 31 mul, 14 add, 0 div, 2 call */
+ * operations: 31 mul, 14 add, 0 div, 1 call */
 void double_pendulum_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
     const double x0 = p[1]*p[3];
     const double x1 = p[1]*p[3]*p[3];
-    const double x2 = cos(q[2]);
-    const double x3 = sin(q[2]);
+    double x3, x2;
+    aggsym_sincos(q[2], &x3, &x2);
     const double x4 = qd[1]*x3;
     const double x5 = qd[1]*x2;
     const double x6 = p[4]*qd[1];
@@ -132,14 +162,16 @@ void double_pendulum_kinetic_energy(const double *q, const double *qd, const dou
  * operations: 8 mul, 2 add, 0 div, 2 call */
 void double_pendulum_potential_energy(const double *q, const double *p, double *U)
 {
-    const double x0 = sin(q[1]);
-    const double x1 = cos(q[2]);
+    double x0, x0_cos;
+    aggsym_sincos(q[1], &x0, &x0_cos);
+    double x1_sin, x1;
+    aggsym_sincos(q[2], &x1_sin, &x1);
     const double x2 = p[11]*x0;
     U[0] = -(p[0]*p[2]*x2 + p[1]*p[4]*x2 + p[1]*p[3]*x1*x2);
 }
 
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
- * operations: 64 mul, 43 add, 0 div, 4 call */
+ * operations: 64 mul, 43 add, 0 div, 2 call */
 void double_pendulum_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)
 {
     const double x0 = p[0]*p[2];
@@ -147,10 +179,10 @@ void double_pendulum_joint_wrenches(const double *q, const double *qd, const dou
     const double x2 = p[1]*p[3]*p[3];
     const double x3 = p[9] + x2;
     const double x4 = p[10] + x2;
-    const double x5 = cos(q[1]);
-    const double x6 = sin(q[1]);
-    const double x7 = cos(q[2]);
-    const double x8 = sin(q[2]);
+    double x6, x5;
+    aggsym_sincos(q[1], &x6, &x5);
+    double x8, x7;
+    aggsym_sincos(q[2], &x8, &x7);
     const double x9 = qd[1]*qd[1];
     const double x10 = qd[1]*x8;
     const double x11 = qd[1]*x7;
@@ -164,50 +196,50 @@ void double_pendulum_joint_wrenches(const double *q, const double *qd, const dou
     const double x19 = x8*x17 + qdd[0]*x7;
     const double x20 = qdd[1]*x7;
     const double x21 = p[8]*(x12 + qdd[1]*x8) - x12*(x3 - x4);
+    W[15] = x21;
     const double x22 = p[1]*(qdd[0]*x8 - x7*x17) - x1*(x11*x11 + qd[2]*qd[2]);
+    W[12] = x22;
     const double x23 = x1*(qdd[2] + x14) + p[1]*x19;
+    W[13] = x23;
     const double x24 = x1*(x13 + x13 - x20) + p[1]*(x16 - x18);
+    W[14] = x24;
     const double x25 = x8*x22 + x7*x23;
     const double x26 = x25 + p[0]*qdd[0];
-    const double x27 = x13*(p[8] - x4) + x3*(x20 - x13) + x1*(x18 - x16);
-    const double x28 = x4*qdd[2] + x1*x19 - x14*(p[8] - x3);
-    const double x29 = x7*x21 - x8*x27;
-    const double x30 = x7*x22 - x8*x23 - x0*x9 - p[0]*x15;
-    const double x31 = x24 + p[0]*x16 - x0*qdd[1];
-    const double x32 = (p[6] + p[0]*p[2]*p[2])*qdd[1] - x0*x16 + x8*x21 + x7*x27 - p[4]*x24;
-    const double x33 = x0*qdd[0] + p[4]*x25 + x28;
-    W[0] = x5*x30 + x6*x31;
     W[1] = x26;
+    W[7] = x26;
+    const double x27 = x13*(p[8] - x4) + x3*(x20 - x13) + x1*(x18 - x16);
+    W[16] = x27;
+    const double x28 = x4*qdd[2] + x1*x19 - x14*(p[8] - x3);
+    W[17] = x28;
+    const double x29 = x7*x21 - x8*x27;
+    W[9] = x29;
+    const double x30 = x7*x22 - x8*x23 - x0*x9 - p[0]*x15;
+    W[6] = x30;
+    const double x31 = x24 + p[0]*x16 - x0*qdd[1];
+    W[8] = x31;
+    const double x32 = (p[6] + p[0]*p[2]*p[2])*qdd[1] - x0*x16 + x8*x21 + x7*x27 - p[4]*x24;
+    W[4] = x32;
+    W[10] = x32;
+    const double x33 = x0*qdd[0] + p[4]*x25 + x28;
+    W[11] = x33;
+    W[0] = x5*x30 + x6*x31;
     W[2] = x5*x31 - x6*x30;
     W[3] = x5*x29 + x6*x33;
-    W[4] = x32;
     W[5] = x5*x33 - x6*x29;
-    W[6] = x30;
-    W[7] = x26;
-    W[8] = x31;
-    W[9] = x29;
-    W[10] = x32;
-    W[11] = x33;
-    W[12] = x22;
-    W[13] = x23;
-    W[14] = x24;
-    W[15] = x21;
-    W[16] = x27;
-    W[17] = x28;
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)
- * operations: 52 mul, 33 add, 3 div, 4 call */
+ * operations: 52 mul, 33 add, 3 div, 2 call */
 void double_pendulum_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double x0 = p[1]*p[3];
     const double x1 = p[1]*p[3]*p[3];
     const double x2 = p[9] + x1;
     const double x3 = p[10] + x1;
-    const double x4 = cos(q[1]);
-    const double x5 = sin(q[1]);
-    const double x6 = cos(q[2]);
-    const double x7 = sin(q[2]);
+    double x5, x4;
+    aggsym_sincos(q[1], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[2], &x7, &x6);
     const double x8 = p[4]*x0*x6;
     const double x9 = qd[1]*x7;
     const double x10 = qd[1]*x6;
@@ -230,52 +262,52 @@ void double_pendulum_forward_dynamics(const double *q, const double *qd, const d
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 17 mul, 14 add, 3 div, 2 call */
+ * operations: 17 mul, 14 add, 3 div, 1 call */
 void double_pendulum_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
+    Ainv[1] = 0;
+    Ainv[3] = 0;
+    Ainv[5] = 0;
+    Ainv[7] = 0;
     const double x0 = p[1]*p[3];
     const double x1 = p[1]*p[3]*p[3];
     const double x2 = p[9] + x1;
-    const double x3 = cos(q[2]);
-    const double x4 = sin(q[2]);
+    double x4, x3;
+    aggsym_sincos(q[2], &x4, &x3);
     const double x5 = p[4]*x0*x3;
     const double x6 = 1/(p[10] + x1);
     const double x7 = x0*x6;
     const double x8 = p[1] - x0*x7;
     const double x9 = x3*x7;
     const double x10 = x4*x4;
+    Ainv[4] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x5 + x5 + x2 + (p[8] - x2)*x10);
     const double x11 = 1/(p[0] + x8 + x10*(p[1] - x8));
+    Ainv[0] = x11;
     const double x12 = x9*x11;
     const double x13 = -x12;
-    Ainv[0] = x11;
-    Ainv[1] = 0;
     Ainv[2] = x13;
-    Ainv[3] = 0;
-    Ainv[4] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x5 + x5 + x2 + (p[8] - x2)*x10);
-    Ainv[5] = 0;
     Ainv[6] = x13;
-    Ainv[7] = 0;
     Ainv[8] = x6 + x9*x12;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 15 mul, 13 add, 1 div, 2 call */
+ * operations: 15 mul, 13 add, 1 div, 1 call */
 void double_pendulum_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
+    targs[0] = 0;
+    targs[2] = 0;
     const double x0 = p[1]*p[3];
     const double x1 = p[1]*p[3]*p[3];
     const double x2 = p[9] + x1;
     const double x3 = p[10] + x1;
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
+    diag[2] = x3;
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
     const double x6 = p[4]*x0*x4;
     const double x7 = x0*1/x3;
     const double x8 = p[1] - x0*x7;
-    const double x9 = x5*x5;
-    targs[0] = 0;
     targs[1] = x4*x7;
-    targs[2] = 0;
+    const double x9 = x5*x5;
     diag[0] = p[0] + x8 + x9*(p[1] - x8);
     diag[1] = p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x6 + x6 + x2 + (p[8] - x2)*x9;
-    diag[2] = x3;
 }

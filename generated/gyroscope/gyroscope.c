@@ -2,40 +2,70 @@
 #include <math.h>
 #include "gyroscope.h"
 
+/* sin(x) and cos(x) together: x = k pi/2 + r with |r| <= pi/4 (Cody-Waite: pi/2 split into three doubles whose
+ * first two have 33 significant bits, so k*hi and k*mid are exact for |k| < 2^20), then the Taylor series of sin r
+ * to r^17 and cos r to r^18 (truncation below 1e-19 at r = pi/4); the quadrant k mod 4 swaps and signs them.
+ * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
+static void aggsym_sincos(double x, double *s, double *c)
+{
+    if (!(fabs(x) < 1.0e6)) {
+        *s = sin(x);
+        *c = cos(x);
+        return;
+    }
+    const double t = x * 0.6366197723675814;
+    const long k = (long)(t < 0.0 ? t - 0.5 : t + 0.5);
+    const double kd = (double)k;
+    const double r = ((x - kd * 1.5707963267341256) - kd * 6.077100506303966e-11) - kd * 2.0222662487959506e-21;
+    const double r2 = r * r;
+    const double sr = r + r * r2 * (-0.16666666666666666 + r2 * (0.008333333333333333 + r2 * (-0.0001984126984126984
+        + r2 * (2.7557319223985893e-06 + r2 * (-2.505210838544172e-08 + r2 * (1.6059043836821613e-10
+        + r2 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15)))))));
+    const double cr = 1.0 + r2 * (-0.5 + r2 * (0.041666666666666664 + r2 * (-0.001388888888888889
+        + r2 * (2.48015873015873e-05 + r2 * (-2.755731922398589e-07 + r2 * (2.08767569878681e-09
+        + r2 * (-1.1470745597729725e-11 + r2 * (4.779477332387385e-14 + r2 * -1.5619206968586225e-16))))))));
+    switch (k & 3) {
+    case 0: *s = sr; *c = cr; break;
+    case 1: *s = cr; *c = -sr; break;
+    case 2: *s = -sr; *c = -cr; break;
+    default: *s = -cr; *c = sr; break;
+    }
+}
+
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 12 mul, 6 add, 0 div, 4 call */
+ * operations: 12 mul, 6 add, 0 div, 2 call */
 void gyroscope_inertia(const double *q, const double *p, double *A)
 {
     (void)p;
-    const double x0 = cos(q[1]);
-    const double x1 = sin(q[1]);
-    const double x2 = cos(q[2]);
-    const double x3 = sin(q[2]);
+    A[5] = 0;
+    A[7] = 0;
+    A[8] = 0.002;
+    double x1, x0;
+    aggsym_sincos(q[1], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[2], &x3, &x2);
     const double x4 = 0.0011048*x2;
     const double x5 = 0.0011048*x3;
     const double x6 = x2*x4 + x3*x5;
-    const double x7 = x0*(x3*x4 - x2*x5);
-    const double x8 = 0.002*x1;
-    A[0] = 0.004 + x0*x0*(0.0015 + x6) + x1*0.0035*x1;
-    A[1] = x7;
-    A[2] = x8;
-    A[3] = x7;
     A[4] = 0.002 + x6;
-    A[5] = 0;
+    const double x7 = x0*(x3*x4 - x2*x5);
+    A[1] = x7;
+    A[3] = x7;
+    A[0] = 0.004 + x0*x0*(0.0015 + x6) + x1*0.0035*x1;
+    const double x8 = 0.002*x1;
+    A[2] = x8;
     A[6] = x8;
-    A[7] = 0;
-    A[8] = 0.002;
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
- * operations: 27 mul, 13 add, 0 div, 4 call */
+ * operations: 27 mul, 13 add, 0 div, 2 call */
 void gyroscope_bias(const double *q, const double *qd, const double *p, double *b)
 {
     (void)p;
-    const double x0 = cos(q[1]);
-    const double x1 = sin(q[1]);
-    const double x2 = cos(q[2]);
-    const double x3 = sin(q[2]);
+    double x1, x0;
+    aggsym_sincos(q[1], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[2], &x3, &x2);
     const double x4 = qd[0]*x0;
     const double x5 = qd[0]*x1;
     const double x6 = qd[1]*x5;
@@ -43,38 +73,38 @@ void gyroscope_bias(const double *q, const double *qd, const double *p, double *
     const double x8 = qd[1]*x2 - x3*x4;
     const double x9 = qd[2] + x5;
     const double x10 = 0.002*qd[1]*x4;
+    b[2] = x10;
     const double x11 = 0.0011048*(qd[2]*x8 - x2*x6) + 0.0008952000000000001*x8*x9;
     const double x12 = 0.0011048*(x3*x6 - qd[2]*x7) - 0.0008952000000000001*x7*x9;
-    b[0] = x0*(x2*x11 - x3*x12 - 0.0015*x6 - 0.0005*x6) + x1*(x10 + x10);
     b[1] = x3*x11 + x2*x12;
-    b[2] = x10;
+    b[0] = x0*(x2*x11 - x3*x12 - 0.0015*x6 - 0.0005*x6) + x1*(x10 + x10);
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
- * operations: 11 mul, 3 add, 0 div, 4 call */
+ * operations: 11 mul, 3 add, 0 div, 2 call */
 void gyroscope_gravity(const double *q, const double *p, double *g)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
+    g[2] = 0;
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
     g[0] = -0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
     g[1] = -(0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1));
-    g[2] = 0;
 }
 
 /* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
- * operations: 38 mul, 18 add, 0 div, 6 call */
+ * operations: 38 mul, 18 add, 0 div, 3 call */
 void gyroscope_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
     const double x6 = qd[0]*x2;
     const double x7 = qd[0]*x3;
     const double x8 = qd[1]*x7;
@@ -82,24 +112,24 @@ void gyroscope_nonlinear_effects(const double *q, const double *qd, const double
     const double x10 = qd[1]*x4 - x5*x6;
     const double x11 = qd[2] + x7;
     const double x12 = 0.002*qd[1]*x6;
+    d[2] = x12;
     const double x13 = 0.0011048*(qd[2]*x10 - x4*x8) + 0.0008952000000000001*x10*x11;
     const double x14 = 0.0011048*(x5*x8 - qd[2]*x9) - 0.0008952000000000001*x9*x11;
     d[0] = x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) + x3*(x12 + x12) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
     d[1] = x5*x13 + x4*x14 - 0.006596240066423136*x2 - 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1);
-    d[2] = x12;
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
- * operations: 46 mul, 26 add, 0 div, 6 call */
+ * operations: 46 mul, 26 add, 0 div, 3 call */
 void gyroscope_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
     const double x6 = qd[0]*x2;
     const double x7 = qd[0]*x3;
     const double x8 = qd[1]*x7;
@@ -112,20 +142,20 @@ void gyroscope_inverse_dynamics(const double *q, const double *qd, const double 
     const double x15 = 0.0008952000000000001*x11*x12 + 0.0011048*(qd[2]*x11 + x4*x13 + qdd[1]*x5);
     const double x16 = 0.0011048*(qdd[1]*x4 - x5*x13 - qd[2]*x10) - 0.0008952000000000001*x10*x12;
     const double x17 = 0.002*(qdd[2] + x14);
-    tau[0] = 0.004*qdd[0] + x2*(0.0015*x13 - 0.0005*x8 + x4*x15 - x5*x16) + x3*(0.0015*x14 + 0.0005*x9 + x17) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
-    tau[1] = 0.002*qdd[1] + x5*x15 + x4*x16 - 0.006596240066423136*x2 - 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1);
     tau[2] = x17;
+    tau[1] = 0.002*qdd[1] + x5*x15 + x4*x16 - 0.006596240066423136*x2 - 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1);
+    tau[0] = 0.004*qdd[0] + x2*(0.0015*x13 - 0.0005*x8 + x4*x15 - x5*x16) + x3*(0.0015*x14 + 0.0005*x9 + x17) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
 }
 
 /* T = 1/2 qd^T A(q) qd (Def. 2.4)
- * operations: 21 mul, 9 add, 0 div, 4 call */
+ * operations: 21 mul, 9 add, 0 div, 2 call */
 void gyroscope_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
     (void)p;
-    const double x0 = cos(q[1]);
-    const double x1 = sin(q[1]);
-    const double x2 = cos(q[2]);
-    const double x3 = sin(q[2]);
+    double x1, x0;
+    aggsym_sincos(q[1], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[2], &x3, &x2);
     const double x4 = qd[0]*x0;
     const double x5 = qd[0]*x1;
     const double x6 = x2*x4 + qd[1]*x3;
@@ -135,30 +165,30 @@ void gyroscope_kinetic_energy(const double *q, const double *qd, const double *p
 }
 
 /* U(q), the potential energy of gravity
- * operations: 6 mul, 2 add, 0 div, 4 call */
+ * operations: 6 mul, 2 add, 0 div, 2 call */
 void gyroscope_potential_energy(const double *q, const double *p, double *U)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
     U[0] = 0.0024*(x2*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1) - 2.7484333610096403*x3);
 }
 
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
- * operations: 74 mul, 46 add, 0 div, 6 call */
+ * operations: 74 mul, 46 add, 0 div, 3 call */
 void gyroscope_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
     const double x2 = 0.19617469496901108*x0 + 0.9396926207859084*x1;
     const double x3 = 0.9396926207859084*x0 - 0.19617469496901108*x1;
-    const double x4 = cos(q[1]);
-    const double x5 = sin(q[1]);
-    const double x6 = cos(q[2]);
-    const double x7 = sin(q[2]);
+    double x5, x4;
+    aggsym_sincos(q[1], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[2], &x7, &x6);
     const double x8 = qd[0]*x4;
     const double x9 = qd[0]*x5;
     const double x10 = qd[1]*x9;
@@ -175,52 +205,52 @@ void gyroscope_joint_wrenches(const double *q, const double *qd, const double *q
     const double x21 = x7*x17 - x6*x19;
     const double x22 = x7*x19 + x6*x17;
     const double x23 = 1.2*x20 - 0.0024*(x8*x8 + qd[1]*qd[1]);
+    W[14] = x23;
     const double x24 = qdd[0]*x4 - x10;
     const double x25 = x11 + qdd[0]*x5;
     const double x26 = qd[2]*x13 + x6*x24 + qdd[1]*x7;
     const double x27 = qdd[1]*x6 - x7*x24 - qd[2]*x12;
     const double x28 = 0.002*(qdd[2] + x25);
+    W[17] = x28;
     const double x29 = 0.0015*x25 + 0.0005*x11 + x28;
+    W[11] = x29;
     const double x30 = 0.0024*(x15 + x27) + 1.2*x21;
+    W[12] = x30;
     const double x31 = 0.0024*(x16 - x26) + 1.2*x22;
+    W[13] = x31;
     const double x32 = 0.0008952000000000001*x16 + 0.0011048*x26 - 0.0024*x22;
+    W[15] = x32;
     const double x33 = 0.0011048*x27 + 0.0024*x21 - 0.0008952000000000001*x15;
+    W[16] = x33;
     const double x34 = x6*x30 - x7*x31 - 0.4*x19;
+    W[6] = x34;
     const double x35 = 3.9240000000000004*x2 + x7*x30 + x6*x31;
+    W[7] = x35;
     const double x36 = x23 + 0.4*x20;
+    W[8] = x36;
     const double x37 = 0.0015*x24 - 0.0005*x10 + x6*x32 - x7*x33;
+    W[9] = x37;
     const double x38 = 0.002*qdd[1] + x7*x32 + x6*x33;
+    W[4] = x38;
+    W[10] = x38;
+    W[5] = x4*x29 - x5*x37;
     W[0] = x4*x34 + x5*x36 - 1.649060016605784;
     W[1] = 5.886*x2 + x35;
     W[2] = 5.886*x3 + x4*x36 - x5*x34;
     W[3] = 0.004*qdd[0] + x5*x29 + x4*x37;
-    W[4] = x38;
-    W[5] = x4*x29 - x5*x37;
-    W[6] = x34;
-    W[7] = x35;
-    W[8] = x36;
-    W[9] = x37;
-    W[10] = x38;
-    W[11] = x29;
-    W[12] = x30;
-    W[13] = x31;
-    W[14] = x23;
-    W[15] = x32;
-    W[16] = x33;
-    W[17] = x28;
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)
- * operations: 45 mul, 25 add, 1 div, 6 call */
+ * operations: 45 mul, 25 add, 1 div, 3 call */
 void gyroscope_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
     const double x6 = qd[0]*x2;
     const double x7 = qd[0]*x3;
     const double x8 = qd[1]*x7;
@@ -242,18 +272,19 @@ void gyroscope_forward_dynamics(const double *q, const double *qd, const double 
 void gyroscope_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     (void)p;
-    const double x0 = sin(q[1]);
-    const double x1 = 1/(0.004 + 0.0026048 - 0.0011048*x0*x0);
-    const double x2 = x0*x1;
-    const double x3 = -x2;
-    Ainv[0] = x1;
     Ainv[1] = 0;
-    Ainv[2] = x3;
     Ainv[3] = 0;
     Ainv[4] = 322.0819376449369;
     Ainv[5] = 0;
-    Ainv[6] = x3;
     Ainv[7] = 0;
+    double x0, x0_cos;
+    aggsym_sincos(q[1], &x0, &x0_cos);
+    const double x1 = 1/(0.004 + 0.0026048 - 0.0011048*x0*x0);
+    Ainv[0] = x1;
+    const double x2 = x0*x1;
+    const double x3 = -x2;
+    Ainv[2] = x3;
+    Ainv[6] = x3;
     Ainv[8] = 500.0 + x0*x2;
 }
 
@@ -262,11 +293,12 @@ void gyroscope_inertia_inverse(const double *q, const double *p, double *Ainv)
 void gyroscope_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     (void)p;
-    const double x0 = sin(q[1]);
     targs[0] = 0;
-    targs[1] = x0;
     targs[2] = 0;
-    diag[0] = 0.004 + 0.0026048 - 0.0011048*x0*x0;
     diag[1] = 0.0031048;
     diag[2] = 0.002;
+    double x0, x0_cos;
+    aggsym_sincos(q[1], &x0, &x0_cos);
+    targs[1] = x0;
+    diag[0] = 0.004 + 0.0026048 - 0.0011048*x0*x0;
 }

@@ -2,40 +2,81 @@
 #include <math.h>
 #include "manipulator6.h"
 
+/* sin(x) and cos(x) together: x = k pi/2 + r with |r| <= pi/4 (Cody-Waite: pi/2 split into three doubles whose
+ * first two have 33 significant bits, so k*hi and k*mid are exact for |k| < 2^20), then the Taylor series of sin r
+ * to r^17 and cos r to r^18 (truncation below 1e-19 at r = pi/4); the quadrant k mod 4 swaps and signs them.
+ * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
+static void aggsym_sincos(double x, double *s, double *c)
+{
+    if (!(fabs(x) < 1.0e6)) {
+        *s = sin(x);
+        *c = cos(x);
+        return;
+    }
+    const double t = x * 0.6366197723675814;
+    const long k = (long)(t < 0.0 ? t - 0.5 : t + 0.5);
+    const double kd = (double)k;
+    const double r = ((x - kd * 1.5707963267341256) - kd * 6.077100506303966e-11) - kd * 2.0222662487959506e-21;
+    const double r2 = r * r;
+    const double sr = r + r * r2 * (-0.16666666666666666 + r2 * (0.008333333333333333 + r2 * (-0.0001984126984126984
+        + r2 * (2.7557319223985893e-06 + r2 * (-2.505210838544172e-08 + r2 * (1.6059043836821613e-10
+        + r2 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15)))))));
+    const double cr = 1.0 + r2 * (-0.5 + r2 * (0.041666666666666664 + r2 * (-0.001388888888888889
+        + r2 * (2.48015873015873e-05 + r2 * (-2.755731922398589e-07 + r2 * (2.08767569878681e-09
+        + r2 * (-1.1470745597729725e-11 + r2 * (4.779477332387385e-14 + r2 * -1.5619206968586225e-16))))))));
+    switch (k & 3) {
+    case 0: *s = sr; *c = cr; break;
+    case 1: *s = cr; *c = -sr; break;
+    case 2: *s = -sr; *c = -cr; break;
+    default: *s = -cr; *c = sr; break;
+    }
+}
+
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 112 mul, 87 add, 0 div, 10 call */
+ * operations: 112 mul, 87 add, 0 div, 5 call */
 void manipulator6_inertia(const double *q, const double *p, double *A)
 {
     (void)p;
-    const double x0 = cos(q[1]);
-    const double x1 = sin(q[1]);
-    const double x2 = cos(q[2]);
-    const double x3 = sin(q[2]);
-    const double x4 = cos(q[3]);
-    const double x5 = sin(q[3]);
-    const double x6 = cos(q[4]);
-    const double x7 = sin(q[4]);
-    const double x8 = cos(q[5]);
-    const double x9 = sin(q[5]);
+    A[29] = 0;
+    A[34] = 0;
+    A[35] = 0.0002;
+    double x1, x0;
+    aggsym_sincos(q[1], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[2], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[3], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[4], &x7, &x6);
+    double x9, x8;
+    aggsym_sincos(q[5], &x9, &x8);
     const double x10 = 0.00078*x8;
     const double x11 = 0.00078*x9;
     const double x12 = x8*x10 + x9*x11;
     const double x13 = x9*x10 - x8*x11;
     const double x14 = 0.00132 + x12;
     const double x15 = 0.0008 + x12;
+    A[28] = x15;
     const double x16 = 0.012*x7;
     const double x17 = 0.012*x6;
     const double x18 = x6*x14;
     const double x19 = x6*x13;
+    A[22] = x19;
+    A[27] = x19;
     const double x20 = 0.00152*x7;
     const double x21 = x7*x13;
     const double x22 = x6*x20 - x7*x18;
     const double x23 = 0.00435 + x6*x18 + x7*x20;
+    A[21] = x23;
     const double x24 = 0.002 + x15;
     const double x25 = 0.00435 + x7*x7*x14 + x6*0.00152*x6;
     const double x26 = 0.061*x4 - x5*x17;
     const double x27 = 0.061*x5 + x4*x17;
     const double x28 = x4*x19 - x5*x22;
+    A[9] = x28;
+    A[15] = x28;
+    A[19] = x28;
+    A[20] = x28;
     const double x29 = x5*x21;
     const double x30 = x4*x24 + x29;
     const double x31 = x4*x21;
@@ -48,6 +89,9 @@ void manipulator6_inertia(const double *q, const double *p, double *A)
     const double x38 = 0.05 + x27;
     const double x39 = 0.2225 + x23 + x35;
     const double x40 = 0.010500000000000015 + x35 + x4*x30 + x5*x32 - x34 - x34 - 0.4160000000000001;
+    A[8] = x40;
+    A[13] = x40;
+    A[14] = x40;
     const double x41 = x5*x30 - x4*x32 - 0.4*x27 - 0.009;
     const double x42 = 0.22199999999999998 + x5*(x5*x24 - x31) + x4*(x4*x25 - x29) + x35;
     const double x43 = x3*x33;
@@ -58,74 +102,60 @@ void manipulator6_inertia(const double *q, const double *p, double *A)
     const double x48 = 0.45*x37;
     const double x49 = 1.539 + 0.9*x37;
     const double x50 = x2*x36 + x3*x41 - 0.45*(x2*x16 + x3*x38);
+    A[7] = 0.02 + x49 + x40 - x48 - x48 - 1.539;
     const double x51 = x1*(x2*x41 - x3*x36 - 0.45*(x2*x38 - x3*x16));
     const double x52 = x0*(0.001 + x50) + x51;
+    A[1] = x52;
+    A[6] = x52;
+    A[0] = 0.1 + x0*(x0*(0.44000000000000006 + x2*x44 + x3*x46 + x49) + x1*x47) + x1*(x0*x47 + x1*(0.44000000000000006 + x2*(x2*x42 - x43) - x3*(x45 - x3*x39) + x49));
     const double x53 = x51 + x0*x50;
+    A[2] = x53;
+    A[12] = x53;
     const double x54 = x23 + x34;
     const double x55 = x0*(0.45*x2*x26 + x43 + x2*x54) + x1*(x45 - x3*x54 - 0.45*x3*x26);
+    A[3] = x55;
+    A[18] = x55;
     const double x56 = x4*x16;
     const double x57 = x29 + x4*x15;
+    A[10] = x57;
+    A[16] = x57;
+    A[25] = x57;
+    A[26] = x57;
     const double x58 = x19 - 0.4*x56;
     const double x59 = x5*x15 - x31 - 0.0048000000000000004*x6;
     const double x60 = x0*(x2*x58 + x3*x59 - 0.45*(x3*x17 + x2*x56)) + x1*(x2*x59 - x3*x58 - 0.45*(x2*x17 - x3*x56));
+    A[4] = x60;
+    A[24] = x60;
     const double x61 = 0.0002*x7;
+    A[23] = x61;
+    A[33] = x61;
     const double x62 = 0.0002*x6;
     const double x63 = -x5*x62;
-    const double x64 = x4*x62;
-    const double x65 = x0*(x2*x61 + x3*x64) + x1*(x2*x64 - x3*x61);
-    A[0] = 0.1 + x0*(x0*(0.44000000000000006 + x2*x44 + x3*x46 + x49) + x1*x47) + x1*(x0*x47 + x1*(0.44000000000000006 + x2*(x2*x42 - x43) - x3*(x45 - x3*x39) + x49));
-    A[1] = x52;
-    A[2] = x53;
-    A[3] = x55;
-    A[4] = x60;
-    A[5] = x65;
-    A[6] = x52;
-    A[7] = 0.02 + x49 + x40 - x48 - x48 - 1.539;
-    A[8] = x40;
-    A[9] = x28;
-    A[10] = x57;
     A[11] = x63;
-    A[12] = x53;
-    A[13] = x40;
-    A[14] = x40;
-    A[15] = x28;
-    A[16] = x57;
     A[17] = x63;
-    A[18] = x55;
-    A[19] = x28;
-    A[20] = x28;
-    A[21] = x23;
-    A[22] = x19;
-    A[23] = x61;
-    A[24] = x60;
-    A[25] = x57;
-    A[26] = x57;
-    A[27] = x19;
-    A[28] = x15;
-    A[29] = 0;
-    A[30] = x65;
     A[31] = x63;
     A[32] = x63;
-    A[33] = x61;
-    A[34] = 0;
-    A[35] = 0.0002;
+    const double x64 = x4*x62;
+    const double x65 = x0*(x2*x61 + x3*x64) + x1*(x2*x64 - x3*x61);
+    A[5] = x65;
+    A[30] = x65;
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
- * operations: 159 mul, 109 add, 0 div, 10 call */
+ * operations: 159 mul, 109 add, 0 div, 5 call */
 void manipulator6_bias(const double *q, const double *qd, const double *p, double *b)
 {
     (void)p;
-    const double x0 = cos(q[1]);
-    const double x1 = sin(q[1]);
-    const double x2 = cos(q[2]);
-    const double x3 = sin(q[2]);
-    const double x4 = cos(q[3]);
-    const double x5 = sin(q[3]);
-    const double x6 = cos(q[4]);
-    const double x7 = sin(q[4]);
-    const double x8 = cos(q[5]);
-    const double x9 = sin(q[5]);
+    double x1, x0;
+    aggsym_sincos(q[1], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[2], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[3], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[4], &x7, &x6);
+    double x9, x8;
+    aggsym_sincos(q[5], &x9, &x8);
     const double x10 = 0.012*x7;
     const double x11 = 0.012*x6;
     const double x12 = qd[0]*qd[0];
@@ -177,45 +207,46 @@ void manipulator6_bias(const double *q, const double *qd, const double *p, doubl
     const double x58 = 0.00078*x52 - 0.00058*x55;
     const double x59 = 0.00078*x53 + 0.00058*x54;
     const double x60 = 0.0002*x46;
+    b[5] = x60;
     const double x61 = 0.016*(x47 - x46) + x8*x56 - x9*x57;
     const double x62 = 0.016*(x48 - x45) - 0.012*(x42*x42 + x44*x44);
     const double x63 = 0.00052*x48 - 0.00132*x45 + x8*x58 - x9*x59;
     const double x64 = 0.0008*x37 + x9*x58 + x8*x59;
     const double x65 = 0.00132*x46 - 0.00052*x47 + x60;
     const double x66 = x11*0.4*x28 - x10*x33;
+    b[4] = x64 + x66;
     const double x67 = 0.045*(x39 + x36 - x35) + x6*x61 + x7*x62 + 1.04*x28;
     const double x68 = 0.0023499999999999997*x40 - 0.00435*x20 + x6*x63 + x7*x65 + 0.061*x33 - x11*x32;
+    b[3] = x68;
     const double x69 = x66 + 0.002*x37 + x64;
     const double x70 = 0.00435*x38 - 0.0023499999999999997*x39 + x6*x65 - x7*x63 + x10*x32 - 0.0244*x28;
     const double x71 = x5*(x9*x56 + x8*x57 - 0.016*x41 - 0.045*x41 + 2.6*x32) + x4*(0.045*(x40 - x20) + x6*x62 - x7*x61 + 2.6*x33);
     const double x72 = 0.8999999999999999*x28 + 0.05*x23 + x67;
     const double x73 = 0.8999999999999999*x29 - 0.05*(x17*x17 + x24) + x71;
     const double x74 = 0.009*x28 + 0.0005000000000000282*x23 + x4*x69 - x5*x70;
+    b[1] = x74;
+    b[2] = x74;
     const double x75 = 0.22199999999999998*x21 - 0.212*x22 - 0.009*x23 + x5*x69 + x4*x70 - 0.4*x67;
     const double x76 = 0.009*(x18*x18 - x24) - 0.2225*x20 + 0.21149999999999997*x25 + x68 + 0.4*x71 + 0.022500000000000003*x12;
     b[0] = x0*(0.42000000000000004*x15 - 0.44000000000000006*x15 - 0.001*x13*x14 + 0.45*(x2*x73 - x3*x72) + x2*x76 + x3*x75) + x1*(0.02*x16 + 0.001*(x13*x13 - qd[1]*qd[1]) + x2*x75 - x3*x76 - 0.45*(x2*x72 + x3*x73));
-    b[1] = x74;
-    b[2] = x74;
-    b[3] = x68;
-    b[4] = x64 + x66;
-    b[5] = x60;
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
- * operations: 50 mul, 26 add, 0 div, 10 call */
+ * operations: 50 mul, 26 add, 0 div, 5 call */
 void manipulator6_gravity(const double *q, const double *p, double *g)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
-    const double x6 = cos(q[3]);
-    const double x7 = sin(q[3]);
-    const double x8 = cos(q[4]);
-    const double x9 = sin(q[4]);
+    g[5] = 0;
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[3], &x7, &x6);
+    double x9, x8;
+    aggsym_sincos(q[4], &x9, &x8);
     const double x10 = 0.012*x9;
     const double x11 = 0.012*x8;
     const double x12 = 9.81*x1;
@@ -227,39 +258,38 @@ void manipulator6_gravity(const double *q, const double *p, double *g)
     const double x18 = x6*x12 + x7*x17;
     const double x19 = x6*x17 - x7*x12;
     const double x20 = x11*x16 + x10*x19;
+    g[4] = -x20;
     const double x21 = 0.061*x19 - x11*x18;
+    g[3] = x21;
     const double x22 = x10*x18 + 0.061*x16;
     const double x23 = x7*2.6*x18 + x6*2.6*x19;
     const double x24 = 2.6*x16 + 5*x16;
     const double x25 = x23 + 5*x17;
     const double x26 = x21 + 0.4*x23 + 0.8999999999999999*x17 - 0.49050000000000005*x1;
     const double x27 = -(x6*x20 + x7*x22 + 0.05*x16);
-    const double x28 = 1.04*x16 + x6*x22 - x7*x20 + 0.8999999999999999*x16;
-    g[0] = x2*(0.45*(x5*x24 + x4*x25) + x4*x26 + x5*x28) + x3*(x4*x28 - x5*x26 - 0.45*(x5*x25 - x4*x24)) + 15.696000000000002*x0;
     g[1] = x27;
     g[2] = x27;
-    g[3] = x21;
-    g[4] = -x20;
-    g[5] = 0;
+    const double x28 = 1.04*x16 + x6*x22 - x7*x20 + 0.8999999999999999*x16;
+    g[0] = x2*(0.45*(x5*x24 + x4*x25) + x4*x26 + x5*x28) + x3*(x4*x28 - x5*x26 - 0.45*(x5*x25 - x4*x24)) + 15.696000000000002*x0;
 }
 
 /* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
- * operations: 173 mul, 120 add, 0 div, 12 call */
+ * operations: 173 mul, 120 add, 0 div, 6 call */
 void manipulator6_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
-    const double x6 = cos(q[3]);
-    const double x7 = sin(q[3]);
-    const double x8 = cos(q[4]);
-    const double x9 = sin(q[4]);
-    const double x10 = cos(q[5]);
-    const double x11 = sin(q[5]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[3], &x7, &x6);
+    double x9, x8;
+    aggsym_sincos(q[4], &x9, &x8);
+    double x11, x10;
+    aggsym_sincos(q[5], &x11, &x10);
     const double x12 = 0.012*x9;
     const double x13 = 0.012*x8;
     const double x14 = qd[0]*qd[0];
@@ -307,6 +337,7 @@ void manipulator6_nonlinear_effects(const double *q, const double *qd, const dou
     const double x56 = 0.00078*x50 - 0.00058*x53;
     const double x57 = 0.00078*x51 + 0.00058*x52;
     const double x58 = 0.0002*x44;
+    d[5] = x58;
     const double x59 = 0.016*(x45 - x44) + x10*x54 - x11*x55;
     const double x60 = 0.016*(x46 - x43) - 0.012*(x40*x40 + x42*x42);
     const double x61 = 0.00052*x46 - 0.00132*x43 + x10*x56 - x11*x57;
@@ -324,8 +355,10 @@ void manipulator6_nonlinear_effects(const double *q, const double *qd, const dou
     const double x73 = x6*x71 + x7*x72;
     const double x74 = x6*x72 - x7*x71;
     const double x75 = x13*x70 - x12*x74;
+    d[4] = x62 + x75;
     const double x76 = 0.045*(x37 + x34 - x33) + x8*x59 + x9*x60 + 2.6*x70;
     const double x77 = 0.0023499999999999997*x38 - 0.00435*x22 + x8*x61 + x9*x63 + 0.061*x74 - x13*x73;
+    d[3] = x77;
     const double x78 = 0.002*x35 + x62 + x75;
     const double x79 = 0.00435*x36 - 0.0023499999999999997*x37 + x8*x63 - x9*x61 + x12*x73 - 0.061*x70;
     const double x80 = x7*(x11*x54 + x10*x55 - 0.016*x39 - 0.045*x39 + 2.6*x73) + x6*(0.045*(x38 - x22) + x8*x60 - x9*x59 + 2.6*x74);
@@ -333,32 +366,29 @@ void manipulator6_nonlinear_effects(const double *q, const double *qd, const dou
     const double x82 = 5*x68 + 0.8999999999999999*x31 - 0.05*(x19*x19 + x26) + x80;
     const double x83 = 0.009*(x20*x20 - x26) - 0.2225*x22 + 0.21149999999999997*x27 + x77 + 0.4*x80 + 0.8999999999999999*x68 - 0.05*x69;
     const double x84 = 0.009*x30 + 0.0005000000000000282*x25 + x6*x78 - x7*x79 - 0.05*x67;
-    const double x85 = 0.8999999999999999*x67 + 0.22199999999999998*x23 - 0.212*x24 - 0.009*x25 + x7*x78 + x6*x79 - 0.4*x76;
-    d[0] = 15.696000000000002*x0 + x2*(0.42000000000000004*x17 - 0.44000000000000006*x17 - 0.001*x15*x16 + 0.45*(x4*x82 - x5*x81) + x4*x83 + x5*x85) + x3*(0.02*x18 + 0.001*(x15*x15 - qd[1]*qd[1]) + x4*x85 - x5*x83 - 0.45*(x4*x81 + x5*x82));
     d[1] = x84;
     d[2] = x84;
-    d[3] = x77;
-    d[4] = x62 + x75;
-    d[5] = x58;
+    const double x85 = 0.8999999999999999*x67 + 0.22199999999999998*x23 - 0.212*x24 - 0.009*x25 + x7*x78 + x6*x79 - 0.4*x76;
+    d[0] = 15.696000000000002*x0 + x2*(0.42000000000000004*x17 - 0.44000000000000006*x17 - 0.001*x15*x16 + 0.45*(x4*x82 - x5*x81) + x4*x83 + x5*x85) + x3*(0.02*x18 + 0.001*(x15*x15 - qd[1]*qd[1]) + x4*x85 - x5*x83 - 0.45*(x4*x81 + x5*x82));
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
- * operations: 184 mul, 139 add, 0 div, 12 call */
+ * operations: 184 mul, 139 add, 0 div, 6 call */
 void manipulator6_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
-    const double x6 = cos(q[3]);
-    const double x7 = sin(q[3]);
-    const double x8 = cos(q[4]);
-    const double x9 = sin(q[4]);
-    const double x10 = cos(q[5]);
-    const double x11 = sin(q[5]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[3], &x7, &x6);
+    double x9, x8;
+    aggsym_sincos(q[4], &x9, &x8);
+    double x11, x10;
+    aggsym_sincos(q[5], &x11, &x10);
     const double x12 = 0.012*x9;
     const double x13 = 0.012*x8;
     const double x14 = qd[0]*qd[0];
@@ -424,14 +454,17 @@ void manipulator6_inverse_dynamics(const double *q, const double *qd, const doub
     const double x74 = 0.00078*x69 - 0.00058*x42;
     const double x75 = 0.00058*x41 + 0.00078*x70;
     const double x76 = 0.0002*(qdd[5] + x67);
+    tau[5] = x76;
     const double x77 = 0.016*(x36 - x67) + x10*x72 - x11*x73;
     const double x78 = 0.016*(x37 + x66) - 0.012*(x33*x33 + x35*x35);
     const double x79 = 0.00052*x37 + 0.00132*x66 + x10*x74 - x11*x75;
     const double x80 = 0.0008*x68 + x11*x74 + x10*x75;
     const double x81 = 0.00132*x67 - 0.00052*x36 + x76;
     const double x82 = x13*x58 - x12*x61;
+    tau[4] = x80 + x82;
     const double x83 = 0.045*(x30 + x29 - x62) + x8*x77 + x9*x78 + 2.6*x58;
     const double x84 = 0.0023499999999999997*x31 + 0.00435*x65 + x8*x79 + x9*x81 + 0.061*x61 - x13*x60;
+    tau[3] = x84;
     const double x85 = x82 + 0.002*x63 + x80;
     const double x86 = 0.00435*x64 - 0.0023499999999999997*x30 + x8*x81 - x9*x79 + x12*x60 - 0.061*x58;
     const double x87 = x7*(x11*x72 + x10*x73 - 0.016*x32 - 0.045*x32 + 2.6*x60) + x6*(0.045*(x31 + x65) + x8*x78 - x9*x77 + 2.6*x61);
@@ -439,30 +472,27 @@ void manipulator6_inverse_dynamics(const double *q, const double *qd, const doub
     const double x89 = 0.8999999999999999*x57 - 0.05*(x19*x19 + x24) + x87 + 5*x52;
     const double x90 = 0.21149999999999997*x25 + 0.009*(x20*x20 - x24) + 0.2225*x53 + x84 + 0.4*x87 + 0.8999999999999999*x52 - 0.05*x44;
     const double x91 = 0.0005000000000000282*x23 + 0.010500000000000015*x55 + 0.009*x56 + x6*x85 - x7*x86 + 0.05*x51;
-    const double x92 = 0.22199999999999998*x54 - 0.009*x71 - 0.212*x22 + x7*x85 + x6*x86 - 0.4*x83 - 0.8999999999999999*x51;
-    tau[0] = 15.696000000000002*x0 + 0.1*qdd[0] + x2*(0.42000000000000004*x17 + 0.44000000000000006*x46 + 0.001*(qdd[1] - x15*x16) + 0.45*(x4*x89 - x5*x88) + x4*x90 + x5*x92) + x3*(0.001*(x15*x15 - qd[1]*qd[1]) + 0.44000000000000006*x47 - 0.42000000000000004*x18 + x4*x92 - x5*x90 - 0.45*(x4*x88 + x5*x89));
-    tau[1] = 0.001*x48 + 0.02*qdd[1] + x91;
     tau[2] = x91;
-    tau[3] = x84;
-    tau[4] = x80 + x82;
-    tau[5] = x76;
+    const double x92 = 0.22199999999999998*x54 - 0.009*x71 - 0.212*x22 + x7*x85 + x6*x86 - 0.4*x83 - 0.8999999999999999*x51;
+    tau[1] = 0.001*x48 + 0.02*qdd[1] + x91;
+    tau[0] = 15.696000000000002*x0 + 0.1*qdd[0] + x2*(0.42000000000000004*x17 + 0.44000000000000006*x46 + 0.001*(qdd[1] - x15*x16) + 0.45*(x4*x89 - x5*x88) + x4*x90 + x5*x92) + x3*(0.001*(x15*x15 - qd[1]*qd[1]) + 0.44000000000000006*x47 - 0.42000000000000004*x18 + x4*x92 - x5*x90 - 0.45*(x4*x88 + x5*x89));
 }
 
 /* T = 1/2 qd^T A(q) qd (Def. 2.4)
- * operations: 113 mul, 68 add, 0 div, 10 call */
+ * operations: 113 mul, 68 add, 0 div, 5 call */
 void manipulator6_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
     (void)p;
-    const double x0 = cos(q[1]);
-    const double x1 = sin(q[1]);
-    const double x2 = cos(q[2]);
-    const double x3 = sin(q[2]);
-    const double x4 = cos(q[3]);
-    const double x5 = sin(q[3]);
-    const double x6 = cos(q[4]);
-    const double x7 = sin(q[4]);
-    const double x8 = cos(q[5]);
-    const double x9 = sin(q[5]);
+    double x1, x0;
+    aggsym_sincos(q[1], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[2], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[3], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[4], &x7, &x6);
+    double x9, x8;
+    aggsym_sincos(q[5], &x9, &x8);
     const double x10 = qd[0]*x0;
     const double x11 = qd[0]*x1;
     const double x12 = x2*x10 - x3*x11;
@@ -493,20 +523,20 @@ void manipulator6_kinetic_energy(const double *q, const double *qd, const double
 }
 
 /* U(q), the potential energy of gravity
- * operations: 26 mul, 15 add, 0 div, 10 call */
+ * operations: 26 mul, 15 add, 0 div, 5 call */
 void manipulator6_potential_energy(const double *q, const double *p, double *U)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
-    const double x6 = cos(q[3]);
-    const double x7 = sin(q[3]);
-    const double x8 = cos(q[4]);
-    const double x9 = sin(q[4]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[3], &x7, &x6);
+    double x9, x8;
+    aggsym_sincos(q[4], &x9, &x8);
     const double x10 = 9.81*x1;
     const double x11 = 9.81*x0;
     const double x12 = x3*x11;
@@ -518,22 +548,22 @@ void manipulator6_potential_energy(const double *q, const double *p, double *U)
 }
 
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
- * operations: 218 mul, 172 add, 0 div, 12 call */
+ * operations: 218 mul, 172 add, 0 div, 6 call */
 void manipulator6_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
-    const double x6 = cos(q[3]);
-    const double x7 = sin(q[3]);
-    const double x8 = cos(q[4]);
-    const double x9 = sin(q[4]);
-    const double x10 = cos(q[5]);
-    const double x11 = sin(q[5]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[3], &x7, &x6);
+    double x9, x8;
+    aggsym_sincos(q[4], &x9, &x8);
+    double x11, x10;
+    aggsym_sincos(q[5], &x11, &x10);
     const double x12 = qd[0]*qd[0];
     const double x13 = qd[0]*x2;
     const double x14 = qd[0]*x3;
@@ -609,93 +639,93 @@ void manipulator6_joint_wrenches(const double *q, const double *qd, const double
     const double x84 = x10*x79 - x11*x77 - qd[5]*x38;
     const double x85 = x23 + x62;
     const double x86 = 0.0002*(qdd[5] + x78);
+    W[35] = x86;
     const double x87 = 0.3*x76 - 0.012*(x33*x33 + x35*x35);
+    W[32] = x87;
     const double x88 = 0.012*(x41 + x84) + 0.3*x80;
+    W[30] = x88;
     const double x89 = 0.012*(x42 - x83) + 0.3*(x82 - x81);
+    W[31] = x89;
     const double x90 = 0.00078*x83 + 0.012*(x81 - x82) - 0.00058*x42;
+    W[33] = x90;
     const double x91 = 0.00058*x41 + 0.00078*x84 + 0.012*x80;
+    W[34] = x91;
     const double x92 = 0.016*(x36 - x78) + 0.8*x75 + x10*x88 - x11*x89;
+    W[24] = x92;
     const double x93 = 0.8*x67 - 0.016*x32 + x11*x88 + x10*x89;
+    W[25] = x93;
     const double x94 = x87 + 0.016*(x37 + x77) + 0.8*x76;
+    W[26] = x94;
     const double x95 = 0.00052*x37 + 0.00132*x77 + 0.016*x76 + x10*x90 - x11*x91;
+    W[27] = x95;
     const double x96 = 0.0008*x79 + x11*x90 + x10*x91;
+    W[28] = x96;
     const double x97 = x86 + 0.00132*x78 + 0.016*(x74 - x73) - 0.00052*x36;
+    W[29] = x97;
     const double x98 = 0.045*(x30 + x29 - x69) + 1.5*x65 + x8*x92 + x9*x94;
+    W[18] = x98;
     const double x99 = 1.5*x67 - 0.045*x32 + x93;
+    W[19] = x99;
     const double x100 = 0.045*(x31 + x72) + 1.5*x68 + x8*x94 - x9*x92;
+    W[20] = x100;
     const double x101 = 0.0023499999999999997*x31 + 0.00435*x72 + 0.045*x68 + x8*x95 + x9*x97;
+    W[21] = x101;
     const double x102 = 0.002*x70 + x96;
+    W[22] = x102;
     const double x103 = 0.00435*x71 - 0.045*x65 - 0.0023499999999999997*x30 + x8*x97 - x9*x95;
+    W[23] = x103;
     const double x104 = x7*x99 + x6*x100;
     const double x105 = 0.8999999999999999*x63 + 0.05*x85 + 5*x57 + x98;
+    W[12] = x105;
     const double x106 = 5*x47 + 0.05*(x25 + x21 - x59) - 0.8999999999999999*x12 + x6*x99 - x7*x100;
+    W[13] = x106;
     const double x107 = 0.8999999999999999*x64 + 5*x58 - 0.05*(x17*x17 + x24) + x104;
+    W[14] = x107;
     const double x108 = 0.21149999999999997*x25 + 0.009*(x18*x18 - x24) + 0.2225*x60 + 0.8999999999999999*x58 + 0.05*(x19 - x43) + x101 + 0.4*x104;
+    W[15] = x108;
     const double x109 = 0.0005000000000000282*x23 + 0.009*x63 + 0.010500000000000015*x62 + 0.05*x57 + x6*x102 - x7*x103;
+    W[16] = x109;
     const double x110 = 0.22199999999999998*x61 + 0.8999999999999999*(x56 - x55) - 0.009*x85 - 0.212*x22 + x7*x102 + x6*x103 - 0.4*x98;
+    W[17] = x110;
     const double x111 = x4*x105 + x5*x107;
     const double x112 = x4*x107 - x5*x105;
     const double x113 = 1.6*x51 - 8*x45 + x111;
+    W[6] = x113;
     const double x114 = 78.48*x1 - 1.6*x12 + x106;
+    W[7] = x114;
     const double x115 = 1.6*x52 + 8*x46 + x112;
+    W[8] = x115;
     const double x116 = 0.42000000000000004*x15 + 0.001*(qdd[1] - x13*x14) + 0.44000000000000006*x49 + 1.6*x46 + 0.45*x112 + x4*x108 + x5*x110;
+    W[9] = x116;
     const double x117 = 0.001*x52 + 0.02*qdd[1] + x109;
+    W[10] = x117;
     const double x118 = 0.001*(x13*x13 - qd[1]*qd[1]) + 0.44000000000000006*x50 + 1.6*x45 - 0.42000000000000004*x16 + x4*x110 - x5*x108 - 0.45*x111;
+    W[11] = x118;
     W[0] = x2*x113 + x3*x115;
     W[1] = 98.10000000000001*x1 + x114;
     W[2] = 98.10000000000001*x0 + x2*x115 - x3*x113;
     W[3] = 0.1*qdd[0] + x2*x116 + x3*x118;
     W[4] = x117 - 4.905*x0;
     W[5] = 4.905*x1 + x2*x118 - x3*x116;
-    W[6] = x113;
-    W[7] = x114;
-    W[8] = x115;
-    W[9] = x116;
-    W[10] = x117;
-    W[11] = x118;
-    W[12] = x105;
-    W[13] = x106;
-    W[14] = x107;
-    W[15] = x108;
-    W[16] = x109;
-    W[17] = x110;
-    W[18] = x98;
-    W[19] = x99;
-    W[20] = x100;
-    W[21] = x101;
-    W[22] = x102;
-    W[23] = x103;
-    W[24] = x92;
-    W[25] = x93;
-    W[26] = x94;
-    W[27] = x95;
-    W[28] = x96;
-    W[29] = x97;
-    W[30] = x88;
-    W[31] = x89;
-    W[32] = x87;
-    W[33] = x90;
-    W[34] = x91;
-    W[35] = x86;
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)
- * operations: 330 mul, 264 add, 3 div, 12 call */
+ * operations: 330 mul, 264 add, 3 div, 6 call */
 void manipulator6_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     (void)p;
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
-    const double x6 = cos(q[3]);
-    const double x7 = sin(q[3]);
-    const double x8 = cos(q[4]);
-    const double x9 = sin(q[4]);
-    const double x10 = cos(q[5]);
-    const double x11 = sin(q[5]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[3], &x7, &x6);
+    double x9, x8;
+    aggsym_sincos(q[4], &x9, &x8);
+    double x11, x10;
+    aggsym_sincos(q[5], &x11, &x10);
     const double x12 = 0.012*x9;
     const double x13 = 0.012*x8;
     const double x14 = qd[0]*qd[0];
@@ -853,30 +883,30 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
     const double x166 = tau[2] - x84 + x163 - x164 - x165;
     const double x167 = tau[1] - x84 + x163 - x164 - x165 - x166;
     const double x168 = 1/(0.1 + x158 + x3*x3*(0.44000000000000006 + 0.2025*(x132 + x147) + x141 - x150 - x156 - x156 - x158) + x2*x3*(x157 + x157))*(tau[0] - 15.696000000000002*x0 - x2*(0.42000000000000004*x17 - 0.44000000000000006*x17 - 0.001*x15*x16 + 0.45*(x4*x82 - x5*x81) + x4*x83 + x5*x85) - x3*(0.02*x18 + 0.001*(x15*x15 - qd[1]*qd[1]) + x4*x85 - x5*x83 - 0.45*(x4*x81 + x5*x82)) - x88*x161 - x93*x160 - x113*x162 - x142*x166 - x159*x167);
-    const double x169 = 50.0*x167 - x159*x168;
-    const double x170 = x127*x166 - x142*x168 - x169;
-    const double x171 = x100*x162 - x113*x168 - x110*x169 - x110*x170;
     qdd[0] = x168;
+    const double x169 = 50.0*x167 - x159*x168;
     qdd[1] = x169;
+    const double x170 = x127*x166 - x142*x168 - x169;
     qdd[2] = x170;
+    const double x171 = x100*x162 - x113*x168 - x110*x169 - x110*x170;
     qdd[3] = x171;
     qdd[4] = 632.9113924050632*x160 - x93*x168 - x6*x169 - x6*x170;
     qdd[5] = 5000.0*x161 - x88*x168 + x86*x169 + x86*x170 - x9*x171;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 171 mul, 139 add, 3 div, 8 call */
+ * operations: 171 mul, 139 add, 3 div, 4 call */
 void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     (void)p;
-    const double x0 = cos(q[1]);
-    const double x1 = sin(q[1]);
-    const double x2 = cos(q[2]);
-    const double x3 = sin(q[2]);
-    const double x4 = cos(q[3]);
-    const double x5 = sin(q[3]);
-    const double x6 = cos(q[4]);
-    const double x7 = sin(q[4]);
+    double x1, x0;
+    aggsym_sincos(q[1], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[2], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[3], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[4], &x7, &x6);
     const double x8 = 0.012*x6;
     const double x9 = x5*x6;
     const double x10 = x4*x6;
@@ -949,6 +979,7 @@ void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv
     const double x77 = 0.44000000000000006 + 0.2025*(x56 - x66) + x74 + x59 + x69 + x74 - 5e-05;
     const double x78 = 0.05*x0;
     const double x79 = 1/(0.1 + x77 + x1*x1*(0.44000000000000006 + 0.2025*(x52 + x66) + x61 - x69 - x75 - x75 - x77) + x0*x1*(x76 + x76));
+    Ainv[0] = x79;
     const double x80 = x78 - x0*(x3*x51 - x2*x50 - 0.45*(x3*x48 + x2*x49)) - x1*(x3*x50 + x2*x51 - 0.45*(x2*x48 - x3*x49));
     const double x81 = x1*(0.45*x3*x30 + x3*x33 + x2*x32) - x0*(0.45*x2*x30 + x2*x33 - x3*x32) + x31*x78 - x31*x80;
     const double x82 = x4*x78 - x0*(x3*x14 - x2*x13 - 0.45*(x3*x11 + x2*x12)) - x1*(x3*x13 + x2*x14 - 0.45*(x2*x11 - x3*x12)) - x4*x80;
@@ -956,82 +987,94 @@ void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv
     const double x84 = x9 + x7*x31;
     const double x85 = x78*x79;
     const double x86 = -x85;
+    Ainv[1] = x86;
+    Ainv[6] = x86;
     const double x87 = x79*x80;
+    Ainv[2] = x87;
+    Ainv[12] = x87;
     const double x88 = x79*x81;
+    Ainv[3] = x88;
+    Ainv[18] = x88;
     const double x89 = x79*x82;
+    Ainv[4] = x89;
+    Ainv[24] = x89;
     const double x90 = x79*x83;
+    Ainv[5] = x90;
+    Ainv[30] = x90;
+    Ainv[7] = 50.0 + x78*x85;
     const double x91 = -50.0 - x80*x85;
+    Ainv[8] = x91;
+    Ainv[13] = x91;
     const double x92 = -x81*x85;
+    Ainv[9] = x92;
+    Ainv[19] = x92;
     const double x93 = -x82*x85;
+    Ainv[10] = x93;
+    Ainv[25] = x93;
     const double x94 = -x83*x85;
+    Ainv[11] = x94;
+    Ainv[31] = x94;
+    Ainv[14] = 50.0 + x47 + x80*x87;
     const double x95 = x31*x47;
     const double x96 = x81*x87 - x95;
+    Ainv[15] = x96;
+    Ainv[20] = x96;
     const double x97 = x4*x47;
     const double x98 = x82*x87 - x97;
+    Ainv[16] = x98;
+    Ainv[26] = x98;
     const double x99 = x47*x84;
     const double x100 = x99 + x83*x87;
+    Ainv[17] = x100;
+    Ainv[32] = x100;
+    Ainv[21] = x21 + x81*x88 + x31*x95;
     const double x101 = x82*x88 + x4*x95;
+    Ainv[22] = x101;
+    Ainv[27] = x101;
     const double x102 = x7*x21;
     const double x103 = x83*x88 - x102 - x84*x95;
-    const double x104 = x83*x89 - x84*x97;
-    Ainv[0] = x79;
-    Ainv[1] = x86;
-    Ainv[2] = x87;
-    Ainv[3] = x88;
-    Ainv[4] = x89;
-    Ainv[5] = x90;
-    Ainv[6] = x86;
-    Ainv[7] = 50.0 + x78*x85;
-    Ainv[8] = x91;
-    Ainv[9] = x92;
-    Ainv[10] = x93;
-    Ainv[11] = x94;
-    Ainv[12] = x87;
-    Ainv[13] = x91;
-    Ainv[14] = 50.0 + x47 + x80*x87;
-    Ainv[15] = x96;
-    Ainv[16] = x98;
-    Ainv[17] = x100;
-    Ainv[18] = x88;
-    Ainv[19] = x92;
-    Ainv[20] = x96;
-    Ainv[21] = x21 + x81*x88 + x31*x95;
-    Ainv[22] = x101;
     Ainv[23] = x103;
-    Ainv[24] = x89;
-    Ainv[25] = x93;
-    Ainv[26] = x98;
-    Ainv[27] = x101;
-    Ainv[28] = 632.9113924050632 + x82*x89 + x4*x97;
-    Ainv[29] = x104;
-    Ainv[30] = x90;
-    Ainv[31] = x94;
-    Ainv[32] = x100;
     Ainv[33] = x103;
+    Ainv[28] = 632.9113924050632 + x82*x89 + x4*x97;
+    const double x104 = x83*x89 - x84*x97;
+    Ainv[29] = x104;
     Ainv[34] = x104;
     Ainv[35] = 5000.0 + x83*x90 + x84*x99 + x7*x102;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 132 mul, 112 add, 2 div, 8 call */
+ * operations: 132 mul, 112 add, 2 div, 4 call */
 void manipulator6_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     (void)p;
-    const double x0 = cos(q[1]);
-    const double x1 = sin(q[1]);
-    const double x2 = cos(q[2]);
-    const double x3 = sin(q[2]);
-    const double x4 = cos(q[3]);
-    const double x5 = sin(q[3]);
-    const double x6 = cos(q[4]);
-    const double x7 = sin(q[4]);
+    targs[2] = 1;
+    targs[9] = 0;
+    targs[14] = 0;
+    diag[1] = 0.02;
+    diag[4] = 0.00158;
+    diag[5] = 0.0002;
+    double x1, x0;
+    aggsym_sincos(q[1], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[2], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[3], &x5, &x4);
+    targs[7] = x4;
+    targs[8] = x4;
+    double x7, x6;
+    aggsym_sincos(q[4], &x7, &x6);
+    targs[13] = x7;
     const double x8 = 0.012*x6;
     const double x9 = -x5*x6;
+    targs[11] = x9;
+    targs[12] = x9;
     const double x10 = x4*x6;
+    targs[10] = x0*(x2*x7 + x3*x10) + x1*(x2*x10 - x3*x7);
     const double x11 = 7.594936708860759*x6;
     const double x12 = x4*7.594936708860759*x7;
     const double x13 = 0.4*x12;
     const double x14 = x5 - 3.037974683544304*x6;
+    targs[6] = x0*(x3*x14 - x2*x13 - 0.45*(x3*x11 + x2*x12)) + x1*(x3*x13 + x2*x14 - 0.45*(x2*x11 - x3*x12));
     const double x15 = x7*x7;
     const double x16 = x6*x7;
     const double x17 = 0.09113924050632916*x15;
@@ -1039,6 +1082,7 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x19 = 0.0007799999999999999*x16;
     const double x20 = 1.5 + 1.008860759493671 + x17;
     const double x21 = 0.00435 + 0.0021 - x18;
+    diag[3] = x21;
     const double x22 = 1/x21;
     const double x23 = x8*x22;
     const double x24 = 0.061*x22;
@@ -1050,8 +1094,11 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x30 = 0.00435 + 0.00132 + x18 - x19*x25;
     const double x31 = x4*x24 - x5*x23;
     const double x32 = x5*x25;
+    targs[4] = x32;
+    targs[5] = x32;
     const double x33 = x4*x25;
     const double x34 = 1 + 0.4*x31;
+    targs[3] = x0*(0.45*x2*x31 + x2*x34 - x3*x33) - x1*(0.45*x3*x31 + x3*x34 + x2*x33);
     const double x35 = x5*x5;
     const double x36 = x4*x5;
     const double x37 = x4*0.09113924050632916*x16;
@@ -1065,6 +1112,7 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x45 = 0.0244*x4;
     const double x46 = 0.05 + 0.061*x5;
     const double x47 = 0.010500000000000015 + 0.002 - x40;
+    diag[2] = x47;
     const double x48 = x36*x39 - 0.0244*x5 - 0.009;
     const double x49 = 1/x47;
     const double x50 = x46*x49;
@@ -1081,6 +1129,7 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x61 = 0.2225 + 0.16000000000000003*x38 - x44*x52;
     const double x62 = 0.4*x42 - 0.16000000000000003*x37 + x44*x53;
     const double x63 = 0.22199999999999998 + 0.16000000000000003*x20 + x45 + x30 + x40 + x45 - x48*x53;
+    targs[1] = x0*(x3*x53 - x2*x52 - 0.45*(x3*x50 + x2*x51)) + x1*(x3*x52 + x2*x53 - 0.45*(x2*x50 - x3*x51));
     const double x64 = x3*x3;
     const double x65 = x2*x3;
     const double x66 = x58 - x54;
@@ -1098,24 +1147,5 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x78 = x62 - x64*x70 + x65*x69 + 0.45*(x60 - x74) - 0.45*(x56 + x74) - 0.2025*(x55 - x64*x67 + x65*x66);
     const double x79 = 0.44000000000000006 + 0.2025*(x58 - x68) + x76 + x61 + x71 + x76 - 5e-05;
     targs[0] = 0.05*x0;
-    targs[1] = x0*(x3*x53 - x2*x52 - 0.45*(x3*x50 + x2*x51)) + x1*(x3*x52 + x2*x53 - 0.45*(x2*x50 - x3*x51));
-    targs[2] = 1;
-    targs[3] = x0*(0.45*x2*x31 + x2*x34 - x3*x33) - x1*(0.45*x3*x31 + x3*x34 + x2*x33);
-    targs[4] = x32;
-    targs[5] = x32;
-    targs[6] = x0*(x3*x14 - x2*x13 - 0.45*(x3*x11 + x2*x12)) + x1*(x3*x13 + x2*x14 - 0.45*(x2*x11 - x3*x12));
-    targs[7] = x4;
-    targs[8] = x4;
-    targs[9] = 0;
-    targs[10] = x0*(x2*x7 + x3*x10) + x1*(x2*x10 - x3*x7);
-    targs[11] = x9;
-    targs[12] = x9;
-    targs[13] = x7;
-    targs[14] = 0;
     diag[0] = 0.1 + x79 + x1*x1*(0.44000000000000006 + 0.2025*(x54 + x68) + x63 - x71 - x77 - x77 - x79) + x0*x1*(x78 + x78);
-    diag[1] = 0.02;
-    diag[2] = x47;
-    diag[3] = x21;
-    diag[4] = 0.00158;
-    diag[5] = 0.0002;
 }

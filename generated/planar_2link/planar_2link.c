@@ -2,79 +2,110 @@
 #include <math.h>
 #include "planar_2link.h"
 
+/* sin(x) and cos(x) together: x = k pi/2 + r with |r| <= pi/4 (Cody-Waite: pi/2 split into three doubles whose
+ * first two have 33 significant bits, so k*hi and k*mid are exact for |k| < 2^20), then the Taylor series of sin r
+ * to r^17 and cos r to r^18 (truncation below 1e-19 at r = pi/4); the quadrant k mod 4 swaps and signs them.
+ * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
+static void aggsym_sincos(double x, double *s, double *c)
+{
+    if (!(fabs(x) < 1.0e6)) {
+        *s = sin(x);
+        *c = cos(x);
+        return;
+    }
+    const double t = x * 0.6366197723675814;
+    const long k = (long)(t < 0.0 ? t - 0.5 : t + 0.5);
+    const double kd = (double)k;
+    const double r = ((x - kd * 1.5707963267341256) - kd * 6.077100506303966e-11) - kd * 2.0222662487959506e-21;
+    const double r2 = r * r;
+    const double sr = r + r * r2 * (-0.16666666666666666 + r2 * (0.008333333333333333 + r2 * (-0.0001984126984126984
+        + r2 * (2.7557319223985893e-06 + r2 * (-2.505210838544172e-08 + r2 * (1.6059043836821613e-10
+        + r2 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15)))))));
+    const double cr = 1.0 + r2 * (-0.5 + r2 * (0.041666666666666664 + r2 * (-0.001388888888888889
+        + r2 * (2.48015873015873e-05 + r2 * (-2.755731922398589e-07 + r2 * (2.08767569878681e-09
+        + r2 * (-1.1470745597729725e-11 + r2 * (4.779477332387385e-14 + r2 * -1.5619206968586225e-16))))))));
+    switch (k & 3) {
+    case 0: *s = sr; *c = cr; break;
+    case 1: *s = cr; *c = -sr; break;
+    case 2: *s = -sr; *c = -cr; break;
+    default: *s = -cr; *c = sr; break;
+    }
+}
+
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
  * operations: 12 mul, 4 add, 0 div, 1 call */
 void planar_2link_inertia(const double *q, const double *p, double *A)
 {
     const double x0 = p[2]*p[2];
     const double x1 = p[3]*p[3]*0.3333333333333333*p[1];
-    const double x2 = cos(q[1]);
+    A[3] = x1;
+    double x2_sin, x2;
+    aggsym_sincos(q[1], &x2_sin, &x2);
     const double x3 = p[2]*p[1]*0.5*p[3]*x2;
-    const double x4 = x1 + x3;
     A[0] = x0*0.3333333333333333*p[0] + x1 + 2*x3 + p[1]*x0;
+    const double x4 = x1 + x3;
     A[1] = x4;
     A[2] = x4;
-    A[3] = x1;
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
- * operations: 14 mul, 4 add, 0 div, 2 call */
+ * operations: 14 mul, 4 add, 0 div, 1 call */
 void planar_2link_bias(const double *q, const double *qd, const double *p, double *b)
 {
     const double x0 = p[1]*0.5*p[3];
-    const double x1 = cos(q[1]);
-    const double x2 = sin(q[1]);
+    double x2, x1;
+    aggsym_sincos(q[1], &x2, &x1);
     const double x3 = p[2]*qd[0]*qd[0];
     const double x4 = x2*x3;
     const double x5 = qd[0] + qd[1];
     const double x6 = x0*x4;
-    b[0] = x6 + p[2]*(x1*p[1]*x4 - x2*(x0*x5*x5 + p[1]*x1*x3));
     b[1] = x6;
+    b[0] = x6 + p[2]*(x1*p[1]*x4 - x2*(x0*x5*x5 + p[1]*x1*x3));
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
- * operations: 17 mul, 5 add, 0 div, 4 call */
+ * operations: 17 mul, 5 add, 0 div, 2 call */
 void planar_2link_gravity(const double *q, const double *p, double *g)
 {
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
     const double x4 = p[4]*x1;
     const double x5 = p[4]*x0;
     const double x6 = x2*x5 - x3*x4;
     const double x7 = p[1]*0.5*p[3]*x6;
-    g[0] = x7 + p[2]*(x3*p[1]*(x2*x4 + x3*x5) + x2*p[1]*x6) + p[0]*0.5*p[2]*x5;
     g[1] = x7;
+    g[0] = x7 + p[2]*(x3*p[1]*(x2*x4 + x3*x5) + x2*p[1]*x6) + p[0]*0.5*p[2]*x5;
 }
 
 /* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
- * operations: 21 mul, 8 add, 0 div, 4 call */
+ * operations: 21 mul, 8 add, 0 div, 2 call */
 void planar_2link_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
     const double x0 = p[1]*0.5*p[3];
-    const double x1 = cos(q[0]);
-    const double x2 = sin(q[0]);
-    const double x3 = cos(q[1]);
-    const double x4 = sin(q[1]);
+    double x2, x1;
+    aggsym_sincos(q[0], &x2, &x1);
+    double x4, x3;
+    aggsym_sincos(q[1], &x4, &x3);
     const double x5 = qd[0] + qd[1];
     const double x6 = p[4]*x1;
     const double x7 = p[4]*x2 - p[2]*qd[0]*qd[0];
     const double x8 = x3*x6 - x4*x7;
     const double x9 = x0*x8;
-    d[0] = p[0]*0.5*p[2]*x6 + x9 + p[2]*(x4*(p[1]*(x4*x6 + x3*x7) - x0*x5*x5) + x3*p[1]*x8);
     d[1] = x9;
+    d[0] = p[0]*0.5*p[2]*x6 + x9 + p[2]*(x4*(p[1]*(x4*x6 + x3*x7) - x0*x5*x5) + x3*p[1]*x8);
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
- * operations: 31 mul, 13 add, 0 div, 4 call */
+ * operations: 31 mul, 13 add, 0 div, 2 call */
 void planar_2link_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
     const double x0 = p[1]*0.5*p[3];
-    const double x1 = cos(q[0]);
-    const double x2 = sin(q[0]);
-    const double x3 = cos(q[1]);
-    const double x4 = sin(q[1]);
+    double x2, x1;
+    aggsym_sincos(q[0], &x2, &x1);
+    double x4, x3;
+    aggsym_sincos(q[1], &x4, &x3);
     const double x5 = qd[0] + qd[1];
     const double x6 = p[4]*x1;
     const double x7 = p[4]*x2 - p[2]*qd[0]*qd[0];
@@ -82,17 +113,17 @@ void planar_2link_inverse_dynamics(const double *q, const double *qd, const doub
     const double x9 = x3*x8 - x4*x7;
     const double x10 = qdd[0] + qdd[1];
     const double x11 = p[3]*p[3]*0.3333333333333333*p[1]*x10 + x0*x9;
-    tau[0] = p[0]*0.5*p[2]*x6 + p[2]*p[2]*0.3333333333333333*p[0]*qdd[0] + x11 + p[2]*(x4*(p[1]*(x3*x7 + x4*x8) - x0*x5*x5) + x3*(x0*x10 + p[1]*x9));
     tau[1] = x11;
+    tau[0] = p[0]*0.5*p[2]*x6 + p[2]*p[2]*0.3333333333333333*p[0]*qdd[0] + x11 + p[2]*(x4*(p[1]*(x3*x7 + x4*x8) - x0*x5*x5) + x3*(x0*x10 + p[1]*x9));
 }
 
 /* T = 1/2 qd^T A(q) qd (Def. 2.4)
- * operations: 22 mul, 6 add, 0 div, 2 call */
+ * operations: 22 mul, 6 add, 0 div, 1 call */
 void planar_2link_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
     const double x0 = p[1]*0.5*p[3];
-    const double x1 = cos(q[1]);
-    const double x2 = sin(q[1]);
+    double x2, x1;
+    aggsym_sincos(q[1], &x2, &x1);
     const double x3 = qd[0] + qd[1];
     const double x4 = p[2]*qd[0];
     const double x5 = x2*x4;
@@ -101,27 +132,33 @@ void planar_2link_kinetic_energy(const double *q, const double *qd, const double
 }
 
 /* U(q), the potential energy of gravity
- * operations: 12 mul, 3 add, 0 div, 4 call */
+ * operations: 12 mul, 3 add, 0 div, 2 call */
 void planar_2link_potential_energy(const double *q, const double *p, double *U)
 {
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
     const double x4 = p[4]*x1;
     U[0] = p[0]*0.5*p[2]*x4 + p[1]*p[2]*x4 + p[1]*0.5*p[3]*(x2*x4 + x3*p[4]*x0);
 }
 
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
- * operations: 37 mul, 18 add, 0 div, 4 call */
+ * operations: 37 mul, 18 add, 0 div, 2 call */
 void planar_2link_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)
 {
+    W[2] = 0;
+    W[3] = 0;
+    W[4] = 0;
+    W[8] = 0;
+    W[9] = 0;
+    W[10] = 0;
     const double x0 = p[0]*0.5*p[2];
     const double x1 = p[1]*0.5*p[3];
-    const double x2 = cos(q[0]);
-    const double x3 = sin(q[0]);
-    const double x4 = cos(q[1]);
-    const double x5 = sin(q[1]);
+    double x3, x2;
+    aggsym_sincos(q[0], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[1], &x5, &x4);
     const double x6 = qd[0]*qd[0];
     const double x7 = qd[0] + qd[1];
     const double x8 = p[4]*x3;
@@ -131,32 +168,26 @@ void planar_2link_joint_wrenches(const double *q, const double *qd, const double
     const double x12 = x4*x11 - x5*x10;
     const double x13 = qdd[0] + qdd[1];
     const double x14 = p[1]*(x4*x10 + x5*x11) - x1*x7*x7;
+    W[6] = x14;
     const double x15 = x1*x13 + p[1]*x12;
+    W[7] = x15;
     const double x16 = p[3]*p[3]*0.3333333333333333*p[1]*x13 + x1*x12;
+    W[11] = x16;
     const double x17 = x5*x14 + x4*x15;
     W[0] = x4*x14 - x5*x15 + p[0]*x8 - x0*x6;
     W[1] = x17 + p[0]*x9 + x0*qdd[0];
-    W[2] = 0;
-    W[3] = 0;
-    W[4] = 0;
     W[5] = x16 + p[2]*x17 + x0*x9 + p[2]*p[2]*0.3333333333333333*p[0]*qdd[0];
-    W[6] = x14;
-    W[7] = x15;
-    W[8] = 0;
-    W[9] = 0;
-    W[10] = 0;
-    W[11] = x16;
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)
- * operations: 39 mul, 17 add, 2 div, 4 call */
+ * operations: 39 mul, 17 add, 2 div, 2 call */
 void planar_2link_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double x0 = p[1]*0.5*p[3];
-    const double x1 = cos(q[0]);
-    const double x2 = sin(q[0]);
-    const double x3 = cos(q[1]);
-    const double x4 = sin(q[1]);
+    double x2, x1;
+    aggsym_sincos(q[0], &x2, &x1);
+    double x4, x3;
+    aggsym_sincos(q[1], &x4, &x3);
     const double x5 = qd[0] + qd[1];
     const double x6 = p[4]*x1;
     const double x7 = p[4]*x2 - p[2]*qd[0]*qd[0];
@@ -173,36 +204,36 @@ void planar_2link_forward_dynamics(const double *q, const double *qd, const doub
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 18 mul, 6 add, 2 div, 2 call */
+ * operations: 18 mul, 6 add, 2 div, 1 call */
 void planar_2link_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double x0 = p[1]*0.5*p[3];
-    const double x1 = cos(q[1]);
-    const double x2 = sin(q[1]);
+    double x2, x1;
+    aggsym_sincos(q[1], &x2, &x1);
     const double x3 = 1/(p[3]*p[3]*0.3333333333333333*p[1]);
     const double x4 = x0*x3;
     const double x5 = p[1] - x0*x4;
     const double x6 = 1 + p[2]*x1*x4;
     const double x7 = 1/(p[2]*p[2]*0.3333333333333333*p[0] + p[2]*p[2]*(x5 + x2*x2*(p[1] - x5)));
+    Ainv[0] = x7;
     const double x8 = x6*x7;
     const double x9 = -x8;
-    Ainv[0] = x7;
     Ainv[1] = x9;
     Ainv[2] = x9;
     Ainv[3] = x3 + x6*x8;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 16 mul, 5 add, 1 div, 2 call */
+ * operations: 16 mul, 5 add, 1 div, 1 call */
 void planar_2link_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double x0 = p[1]*0.5*p[3];
     const double x1 = p[3]*p[3]*0.3333333333333333*p[1];
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
+    diag[1] = x1;
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
     const double x4 = x0*1/x1;
     const double x5 = p[1] - x0*x4;
     targs[0] = 1 + p[2]*x2*x4;
     diag[0] = p[2]*p[2]*0.3333333333333333*p[0] + p[2]*p[2]*(x5 + x3*x3*(p[1] - x5));
-    diag[1] = x1;
 }

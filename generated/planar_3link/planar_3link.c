@@ -2,47 +2,77 @@
 #include <math.h>
 #include "planar_3link.h"
 
+/* sin(x) and cos(x) together: x = k pi/2 + r with |r| <= pi/4 (Cody-Waite: pi/2 split into three doubles whose
+ * first two have 33 significant bits, so k*hi and k*mid are exact for |k| < 2^20), then the Taylor series of sin r
+ * to r^17 and cos r to r^18 (truncation below 1e-19 at r = pi/4); the quadrant k mod 4 swaps and signs them.
+ * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
+static void aggsym_sincos(double x, double *s, double *c)
+{
+    if (!(fabs(x) < 1.0e6)) {
+        *s = sin(x);
+        *c = cos(x);
+        return;
+    }
+    const double t = x * 0.6366197723675814;
+    const long k = (long)(t < 0.0 ? t - 0.5 : t + 0.5);
+    const double kd = (double)k;
+    const double r = ((x - kd * 1.5707963267341256) - kd * 6.077100506303966e-11) - kd * 2.0222662487959506e-21;
+    const double r2 = r * r;
+    const double sr = r + r * r2 * (-0.16666666666666666 + r2 * (0.008333333333333333 + r2 * (-0.0001984126984126984
+        + r2 * (2.7557319223985893e-06 + r2 * (-2.505210838544172e-08 + r2 * (1.6059043836821613e-10
+        + r2 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15)))))));
+    const double cr = 1.0 + r2 * (-0.5 + r2 * (0.041666666666666664 + r2 * (-0.001388888888888889
+        + r2 * (2.48015873015873e-05 + r2 * (-2.755731922398589e-07 + r2 * (2.08767569878681e-09
+        + r2 * (-1.1470745597729725e-11 + r2 * (4.779477332387385e-14 + r2 * -1.5619206968586225e-16))))))));
+    switch (k & 3) {
+    case 0: *s = sr; *c = cr; break;
+    case 1: *s = cr; *c = -sr; break;
+    case 2: *s = -sr; *c = -cr; break;
+    default: *s = -cr; *c = sr; break;
+    }
+}
+
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 26 mul, 14 add, 0 div, 4 call */
+ * operations: 26 mul, 14 add, 0 div, 2 call */
 void planar_3link_inertia(const double *q, const double *p, double *A)
 {
     const double x0 = p[3]*p[3];
     const double x1 = p[4]*p[4];
     const double x2 = p[2]*0.5*p[5];
     const double x3 = p[5]*p[5]*0.3333333333333333*p[2];
-    const double x4 = cos(q[1]);
-    const double x5 = sin(q[1]);
-    const double x6 = cos(q[2]);
-    const double x7 = sin(q[2]);
+    A[8] = x3;
+    double x5, x4;
+    aggsym_sincos(q[1], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[2], &x7, &x6);
     const double x8 = x2*x6;
     const double x9 = p[4]*x8;
     const double x10 = x1*0.3333333333333333*p[1] + x3 + 2*x9 + p[2]*x1;
+    A[4] = x10;
     const double x11 = x5*x2*x7;
     const double x12 = p[3]*(x4*(p[1]*0.5*p[4] + x8 + p[2]*p[4]) - x11);
-    const double x13 = x10 + x12;
-    const double x14 = x3 + x9;
-    const double x15 = x14 + p[3]*(x4*x8 - x11);
     A[0] = x0*0.3333333333333333*p[0] + x10 + 2*x12 + x0*(p[1] + p[2]);
+    const double x13 = x10 + x12;
     A[1] = x13;
-    A[2] = x15;
     A[3] = x13;
-    A[4] = x10;
+    const double x14 = x3 + x9;
     A[5] = x14;
-    A[6] = x15;
     A[7] = x14;
-    A[8] = x3;
+    const double x15 = x14 + p[3]*(x4*x8 - x11);
+    A[2] = x15;
+    A[6] = x15;
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
- * operations: 31 mul, 15 add, 0 div, 4 call */
+ * operations: 31 mul, 15 add, 0 div, 2 call */
 void planar_3link_bias(const double *q, const double *qd, const double *p, double *b)
 {
     const double x0 = p[1]*0.5*p[4];
     const double x1 = p[2]*0.5*p[5];
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
     const double x6 = p[3]*qd[0]*qd[0];
     const double x7 = x2*x6;
     const double x8 = x3*x6;
@@ -54,23 +84,23 @@ void planar_3link_bias(const double *q, const double *qd, const double *p, doubl
     const double x14 = p[2]*x12;
     const double x15 = p[2]*(x5*x8 - x4*x11) - x1*x13*x13;
     const double x16 = x1*x12;
+    b[2] = x16;
     const double x17 = x5*x15 + x4*x14;
     const double x18 = x16 + p[4]*x17 + x0*x8;
-    b[0] = x18 + p[3]*(x3*(x4*x15 - x5*x14 - x0*x10 - p[1]*x7) + x2*(x17 + p[1]*x8));
     b[1] = x18;
-    b[2] = x16;
+    b[0] = x18 + p[3]*(x3*(x4*x15 - x5*x14 - x0*x10 - p[1]*x7) + x2*(x17 + p[1]*x8));
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
- * operations: 31 mul, 13 add, 0 div, 6 call */
+ * operations: 31 mul, 13 add, 0 div, 3 call */
 void planar_3link_gravity(const double *q, const double *p, double *g)
 {
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
     const double x6 = p[6]*x1;
     const double x7 = p[6]*x0;
     const double x8 = x2*x6 + x3*x7;
@@ -79,25 +109,25 @@ void planar_3link_gravity(const double *q, const double *p, double *g)
     const double x11 = p[2]*(x4*x8 + x5*x9);
     const double x12 = p[2]*x10;
     const double x13 = p[2]*0.5*p[5]*x10;
+    g[2] = x13;
     const double x14 = x5*x11 + x4*x12;
     const double x15 = x13 + p[4]*x14 + p[1]*0.5*p[4]*x9;
-    g[0] = x15 + p[3]*(x3*(x4*x11 - x5*x12 + p[1]*x8) + x2*(x14 + p[1]*x9)) + p[0]*0.5*p[3]*x7;
     g[1] = x15;
-    g[2] = x13;
+    g[0] = x15 + p[3]*(x3*(x4*x11 - x5*x12 + p[1]*x8) + x2*(x14 + p[1]*x9)) + p[0]*0.5*p[3]*x7;
 }
 
 /* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
- * operations: 38 mul, 19 add, 0 div, 6 call */
+ * operations: 38 mul, 19 add, 0 div, 3 call */
 void planar_3link_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
     const double x0 = p[1]*0.5*p[4];
     const double x1 = p[2]*0.5*p[5];
-    const double x2 = cos(q[0]);
-    const double x3 = sin(q[0]);
-    const double x4 = cos(q[1]);
-    const double x5 = sin(q[1]);
-    const double x6 = cos(q[2]);
-    const double x7 = sin(q[2]);
+    double x3, x2;
+    aggsym_sincos(q[0], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[1], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[2], &x7, &x6);
     const double x8 = qd[0] + qd[1];
     const double x9 = x8*x8;
     const double x10 = qd[2] + x8;
@@ -110,25 +140,25 @@ void planar_3link_nonlinear_effects(const double *q, const double *qd, const dou
     const double x17 = p[2]*x16;
     const double x18 = p[2]*(x6*x15 + x7*x14) - x1*x10*x10;
     const double x19 = x1*x16;
+    d[2] = x19;
     const double x20 = x7*x18 + x6*x17;
     const double x21 = x19 + p[4]*x20 + x0*x14;
-    d[0] = p[0]*0.5*p[3]*x11 + x21 + p[3]*(x5*(x6*x18 - x7*x17 - x0*x9 + p[1]*x13) + x4*(x20 + p[1]*x14));
     d[1] = x21;
-    d[2] = x19;
+    d[0] = p[0]*0.5*p[3]*x11 + x21 + p[3]*(x5*(x6*x18 - x7*x17 - x0*x9 + p[1]*x13) + x4*(x20 + p[1]*x14));
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
- * operations: 54 mul, 28 add, 0 div, 6 call */
+ * operations: 54 mul, 28 add, 0 div, 3 call */
 void planar_3link_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
     const double x0 = p[1]*0.5*p[4];
     const double x1 = p[2]*0.5*p[5];
-    const double x2 = cos(q[0]);
-    const double x3 = sin(q[0]);
-    const double x4 = cos(q[1]);
-    const double x5 = sin(q[1]);
-    const double x6 = cos(q[2]);
-    const double x7 = sin(q[2]);
+    double x3, x2;
+    aggsym_sincos(q[0], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[1], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[2], &x7, &x6);
     const double x8 = qd[0] + qd[1];
     const double x9 = x8*x8;
     const double x10 = qd[2] + x8;
@@ -145,23 +175,23 @@ void planar_3link_inverse_dynamics(const double *q, const double *qd, const doub
     const double x21 = p[2]*(x6*x17 + x7*x18) - x1*x10*x10;
     const double x22 = x1*x20 + p[2]*x19;
     const double x23 = p[5]*p[5]*0.3333333333333333*p[2]*x20 + x1*x19;
+    tau[2] = x23;
     const double x24 = x7*x21 + x6*x22;
     const double x25 = p[4]*p[4]*0.3333333333333333*p[1]*x16 + x23 + p[4]*x24 + x0*x15;
-    tau[0] = p[0]*0.5*p[3]*x11 + p[3]*p[3]*0.3333333333333333*p[0]*qdd[0] + x25 + p[3]*(x5*(x6*x21 - x7*x22 - x0*x9 + p[1]*x14) + x4*(x0*x16 + x24 + p[1]*x15));
     tau[1] = x25;
-    tau[2] = x23;
+    tau[0] = p[0]*0.5*p[3]*x11 + p[3]*p[3]*0.3333333333333333*p[0]*qdd[0] + x25 + p[3]*(x5*(x6*x21 - x7*x22 - x0*x9 + p[1]*x14) + x4*(x0*x16 + x24 + p[1]*x15));
 }
 
 /* T = 1/2 qd^T A(q) qd (Def. 2.4)
- * operations: 40 mul, 15 add, 0 div, 4 call */
+ * operations: 40 mul, 15 add, 0 div, 2 call */
 void planar_3link_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
     const double x0 = p[1]*0.5*p[4];
     const double x1 = p[2]*0.5*p[5];
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
     const double x6 = qd[0] + qd[1];
     const double x7 = qd[2] + x6;
     const double x8 = p[3]*qd[0];
@@ -174,15 +204,15 @@ void planar_3link_kinetic_energy(const double *q, const double *qd, const double
 }
 
 /* U(q), the potential energy of gravity
- * operations: 21 mul, 8 add, 0 div, 6 call */
+ * operations: 21 mul, 8 add, 0 div, 3 call */
 void planar_3link_potential_energy(const double *q, const double *p, double *U)
 {
-    const double x0 = cos(q[0]);
-    const double x1 = sin(q[0]);
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
+    double x1, x0;
+    aggsym_sincos(q[0], &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
     const double x6 = p[6]*x1;
     const double x7 = p[6]*x0;
     const double x8 = x2*x6 + x3*x7;
@@ -191,18 +221,27 @@ void planar_3link_potential_energy(const double *q, const double *p, double *U)
 }
 
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
- * operations: 60 mul, 33 add, 0 div, 6 call */
+ * operations: 60 mul, 33 add, 0 div, 3 call */
 void planar_3link_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)
 {
+    W[2] = 0;
+    W[3] = 0;
+    W[4] = 0;
+    W[8] = 0;
+    W[9] = 0;
+    W[10] = 0;
+    W[14] = 0;
+    W[15] = 0;
+    W[16] = 0;
     const double x0 = p[0]*0.5*p[3];
     const double x1 = p[1]*0.5*p[4];
     const double x2 = p[2]*0.5*p[5];
-    const double x3 = cos(q[0]);
-    const double x4 = sin(q[0]);
-    const double x5 = cos(q[1]);
-    const double x6 = sin(q[1]);
-    const double x7 = cos(q[2]);
-    const double x8 = sin(q[2]);
+    double x4, x3;
+    aggsym_sincos(q[0], &x4, &x3);
+    double x6, x5;
+    aggsym_sincos(q[1], &x6, &x5);
+    double x8, x7;
+    aggsym_sincos(q[2], &x8, &x7);
     const double x9 = qd[0]*qd[0];
     const double x10 = qd[0] + qd[1];
     const double x11 = x10*x10;
@@ -219,45 +258,36 @@ void planar_3link_joint_wrenches(const double *q, const double *qd, const double
     const double x22 = x7*x21 - x8*x20;
     const double x23 = qdd[2] + x19;
     const double x24 = p[2]*(x7*x20 + x8*x21) - x2*x12*x12;
+    W[12] = x24;
     const double x25 = x2*x23 + p[2]*x22;
+    W[13] = x25;
     const double x26 = p[5]*p[5]*0.3333333333333333*p[2]*x23 + x2*x22;
+    W[17] = x26;
     const double x27 = x8*x24 + x7*x25;
     const double x28 = x7*x24 - x8*x25 + p[1]*x17 - x1*x11;
+    W[6] = x28;
     const double x29 = x27 + x1*x19 + p[1]*x18;
+    W[7] = x29;
     const double x30 = x26 + p[4]*x27 + p[4]*p[4]*0.3333333333333333*p[1]*x19 + x1*x18;
+    W[11] = x30;
     const double x31 = x6*x28 + x5*x29;
     W[0] = p[0]*x13 - x0*x9 + x5*x28 - x6*x29;
     W[1] = p[0]*x14 + x0*qdd[0] + x31;
-    W[2] = 0;
-    W[3] = 0;
-    W[4] = 0;
     W[5] = x0*x14 + p[3]*p[3]*0.3333333333333333*p[0]*qdd[0] + x30 + p[3]*x31;
-    W[6] = x28;
-    W[7] = x29;
-    W[8] = 0;
-    W[9] = 0;
-    W[10] = 0;
-    W[11] = x30;
-    W[12] = x24;
-    W[13] = x25;
-    W[14] = 0;
-    W[15] = 0;
-    W[16] = 0;
-    W[17] = x26;
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)
- * operations: 85 mul, 49 add, 3 div, 6 call */
+ * operations: 85 mul, 49 add, 3 div, 3 call */
 void planar_3link_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double x0 = p[1]*0.5*p[4];
     const double x1 = p[2]*0.5*p[5];
-    const double x2 = cos(q[0]);
-    const double x3 = sin(q[0]);
-    const double x4 = cos(q[1]);
-    const double x5 = sin(q[1]);
-    const double x6 = cos(q[2]);
-    const double x7 = sin(q[2]);
+    double x3, x2;
+    aggsym_sincos(q[0], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[1], &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q[2], &x7, &x6);
     const double x8 = qd[0] + qd[1];
     const double x9 = x8*x8;
     const double x10 = qd[2] + x8;
@@ -294,21 +324,21 @@ void planar_3link_forward_dynamics(const double *q, const double *qd, const doub
     const double x41 = tau[2] - x19;
     const double x42 = tau[1] - x21 - x26*x41;
     const double x43 = 1/(p[3]*p[3]*0.3333333333333333*p[0] + p[3]*p[3]*(x39 + x5*x5*(p[1] + p[2] - x29 - x32*x36 - x39) + x4*x5*(x38 + x38)))*(tau[0] - p[0]*0.5*p[3]*x11 - x21 - p[3]*(x5*(x6*x18 - x7*x17 - x0*x9 + p[1]*x13) + x4*(x20 + p[1]*x14)) - x27*x41 - x40*x42);
-    const double x44 = x35*x42 - x40*x43;
     qdd[0] = x43;
+    const double x44 = x35*x42 - x40*x43;
     qdd[1] = x44;
     qdd[2] = x22*x41 - x27*x43 - x26*x44;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 50 mul, 26 add, 3 div, 4 call */
+ * operations: 50 mul, 26 add, 3 div, 2 call */
 void planar_3link_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double x0 = p[2]*0.5*p[5];
-    const double x1 = cos(q[1]);
-    const double x2 = sin(q[1]);
-    const double x3 = cos(q[2]);
-    const double x4 = sin(q[2]);
+    double x2, x1;
+    aggsym_sincos(q[1], &x2, &x1);
+    double x4, x3;
+    aggsym_sincos(q[2], &x4, &x3);
     const double x5 = 1/(p[5]*p[5]*0.3333333333333333*p[2]);
     const double x6 = x0*x5;
     const double x7 = p[2] - x0*x6;
@@ -328,37 +358,40 @@ void planar_3link_inertia_inverse(const double *q, const double *p, double *Ainv
     const double x21 = p[1] + x13 - x16*x19;
     const double x22 = 1 + p[3]*(x2*x18 + x1*x19);
     const double x23 = 1/(p[3]*p[3]*0.3333333333333333*p[0] + p[3]*p[3]*(x21 + x2*x2*(p[1] + p[2] - x11 - x14*x18 - x21) + x1*x2*(x20 + x20)));
+    Ainv[0] = x23;
     const double x24 = x9*x22 - x9 - p[3]*(x1*x8 - x2*x4*x6);
     const double x25 = x22*x23;
     const double x26 = -x25;
+    Ainv[1] = x26;
+    Ainv[3] = x26;
     const double x27 = x23*x24;
+    Ainv[2] = x27;
+    Ainv[6] = x27;
+    Ainv[4] = x17 + x22*x25;
     const double x28 = x9*x17;
     const double x29 = -(x28 + x24*x25);
-    Ainv[0] = x23;
-    Ainv[1] = x26;
-    Ainv[2] = x27;
-    Ainv[3] = x26;
-    Ainv[4] = x17 + x22*x25;
     Ainv[5] = x29;
-    Ainv[6] = x27;
     Ainv[7] = x29;
     Ainv[8] = x5 + x24*x27 + x9*x28;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 42 mul, 21 add, 2 div, 4 call */
+ * operations: 42 mul, 21 add, 2 div, 2 call */
 void planar_3link_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double x0 = p[2]*0.5*p[5];
     const double x1 = p[5]*p[5]*0.3333333333333333*p[2];
-    const double x2 = cos(q[1]);
-    const double x3 = sin(q[1]);
-    const double x4 = cos(q[2]);
-    const double x5 = sin(q[2]);
+    diag[2] = x1;
+    double x3, x2;
+    aggsym_sincos(q[1], &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q[2], &x5, &x4);
     const double x6 = x0*1/x1;
     const double x7 = p[2] - x0*x6;
     const double x8 = x4*x6;
     const double x9 = 1 + p[4]*x8;
+    targs[2] = x9;
+    targs[1] = x9 + p[3]*(x2*x8 - x3*x5*x6);
     const double x10 = p[2] - x7;
     const double x11 = x5*x5*x10;
     const double x12 = x4*x5*x10;
@@ -367,15 +400,12 @@ void planar_3link_transvective_factors(const double *q, const double *p, double 
     const double x15 = p[4]*x13;
     const double x16 = p[1]*0.5*p[4] + x15;
     const double x17 = p[4]*p[4]*0.3333333333333333*p[1] + p[4]*x15;
+    diag[1] = x17;
     const double x18 = 1/x17;
     const double x19 = x14*x18;
     const double x20 = x16*x18;
     const double x21 = x12 - x14*x20;
     const double x22 = p[1] + x13 - x16*x20;
     targs[0] = 1 + p[3]*(x3*x19 + x2*x20);
-    targs[1] = x9 + p[3]*(x2*x8 - x3*x5*x6);
-    targs[2] = x9;
     diag[0] = p[3]*p[3]*0.3333333333333333*p[0] + p[3]*p[3]*(x22 + x3*x3*(p[1] + p[2] - x11 - x14*x19 - x22) + x2*x3*(x21 + x21));
-    diag[1] = x17;
-    diag[2] = x1;
 }
