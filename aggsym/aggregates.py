@@ -49,6 +49,30 @@ class Rigid:
         mu = add(add(cross(self.h, a), mv(self.theta, aw)), cross(w, mv(self.theta, w)))
         return f + mu
 
+    def rotated(self, axis, c, s, s2, sc) -> "Rigid":
+        """C Theta C^T (2.7) for the elementary rotation C = diag(c_axis, c_axis) (Prop. 1.17), with cos c, sin s,
+        s2 = sin^2 and sc = sin cos of its angle.
+
+        The first moment and the entries joining the axis to its plane turn as 2-vectors; in the plane (i, j)
+        the symmetric block [[A, B], [B, D]] becomes [[A - d, B - e], [B - e, D + d]] with
+        d = (A - D) s2 + 2B sc and e = 2B s2 - (A - D) sc (a rotation by the double angle): 4 products where
+        the full congruence takes 12."""
+        a = axis - 1
+        i, j = (a + 1) % 3, (a + 2) % 3
+        h = list(self.h)
+        h[i], h[j] = _mul(c, self.h[i]) - _mul(s, self.h[j]), _mul(s, self.h[i]) + _mul(c, self.h[j])
+        th = [list(r) for r in self.theta]
+        x, y = self.theta[a][i], self.theta[a][j]
+        th[a][i] = th[i][a] = _mul(c, x) - _mul(s, y)
+        th[a][j] = th[j][a] = _mul(s, x) + _mul(c, y)
+        A, B, D = self.theta[i][i], self.theta[i][j], self.theta[j][j]
+        amd, b2 = A - D, B + B
+        d = _mul(amd, s2) + _mul(b2, sc)
+        e = _mul(b2, s2) - _mul(amd, sc)
+        th[i][i], th[j][j] = A - d, D + d
+        th[i][j] = th[j][i] = B - e
+        return Rigid(self.m, tuple(h), tuple(tuple(r) for r in th))
+
     def moved(self, L) -> "Rigid":
         """L Theta L^T (2.7) for L = T(o) C(c): the same body seen from the parent frame."""
         c, o, m = L.c, L.o, self.m

@@ -15,7 +15,7 @@ def composite_inertias(bound, kin):
     for k in range(len(plus) - 1, -1, -1):
         p = kin.tree.parent[k]
         if p >= 0 and plus[k] is not None:
-            moved = plus[k].moved(kin.L[k])
+            moved = kin.move_to_parent(k, plus[k])
             plus[p] = moved if plus[p] is None else plus[p] + moved
     return plus
 

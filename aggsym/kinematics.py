@@ -114,20 +114,36 @@ class TreeKinematics:
         self.q = q
         self.L = []
         self.psi = []
-        self._rots = []
+        self.functional = []  # the functional motion of each pair, T(o) C(c1 c2 c3)
+        self.rotations = []  # its elementary rotations in order, (axis, matrix)
         for k, body in enumerate(bound.bodies):
             qv = [q[i] for i in self.tree.coords[k]]
             functional, psi, rots = pair_functional(body.codes, qv, bound.backend)
             self.L.append(body.L0.compose(functional))
             self.psi.append(psi)
-            self._rots.append(rots)
+            self.functional.append(functional)
+            self.rotations.append(rots)
+
+    def move_to_parent(self, k, X):
+        """L X L^T (2.7) for a symmetric 6x6 X (Rigid or General) of body k, L = L_constructive T(o) C(c1 c2 c3):
+        the elementary rotations one at a time within their planes where X is a Mises matrix, then the
+        functional translation, then the constant constructive motion."""
+        rotations = self.rotations[k]
+        if rotations and hasattr(X, "rotated"):
+            for axis, rot in reversed(rotations):
+                i = axis % 3  # the plane's first axis: rot[i][i] = cos, rot[(i + 1) % 3][i] = sin
+                c, s = rot[i][i], rot[(i + 1) % 3][i]
+                X = X.rotated(axis, c, s, s * s, s * c)
+            X = X.moved(Motion(EYE3, self.functional[k].o))
+            return X.moved(self.bound.bodies[k].L0)
+        return X.moved(self.L[k])
 
     def pair_rates(self, k, qd):
         return [qd[i] for i in self.tree.coords[k]]
 
     def relative_acceleration(self, k, qd):
         """(M F)' q' of pair k (2.19): its relative quasi-acceleration at zero q'' (child frame)."""
-        return pair_velocity_product(self.bound.bodies[k].codes, self.pair_rates(k, qd), self._rots[k])
+        return pair_velocity_product(self.bound.bodies[k].codes, self.pair_rates(k, qd), self.rotations[k])
 
     def velocities(self, qd):
         """Quasi-velocities V_lk of every body (2.39)."""
@@ -142,7 +158,7 @@ class TreeKinematics:
         X = []
         for k, p in enumerate(self.tree.parent):
             rates = self.pair_rates(k, qd)
-            x = pair_velocity_product(self.bound.bodies[k].codes, rates, self._rots[k])
+            x = pair_velocity_product(self.bound.bodies[k].codes, rates, self.rotations[k])
             if p >= 0:
                 Vp = self.L[k].twist(V[p])
                 x = add(x, add(self.L[k].twist(X[p]), phi_motion(Vp, combine(self.psi[k], rates))))
@@ -155,7 +171,7 @@ class TreeKinematics:
         for k, p in enumerate(self.tree.parent):
             rates = self.pair_rates(k, qd)
             own = combine(self.psi[k], [qdd[i] for i in self.tree.coords[k]])
-            a = add(pair_velocity_product(self.bound.bodies[k].codes, rates, self._rots[k]), own)
+            a = add(pair_velocity_product(self.bound.bodies[k].codes, rates, self.rotations[k]), own)
             parent_V = ZERO6 if p < 0 else V[p]
             parent_A = base if p < 0 else A[p]
             Vp = self.L[k].twist(parent_V)

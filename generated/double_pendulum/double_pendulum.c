@@ -33,7 +33,7 @@ static void aggsym_sincos(double x, double *s, double *c)
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 14 mul, 8 add, 0 div, 1 call */
+ * operations: 12 mul, 9 add, 0 div, 1 call */
 void double_pendulum_inertia(const double *q, const double *p, double *A)
 {
     A[1] = 0;
@@ -41,14 +41,15 @@ void double_pendulum_inertia(const double *q, const double *p, double *A)
     A[5] = 0;
     A[7] = 0;
     const double x0 = p[1]*p[3]*p[3];
+    const double x1 = p[9] + x0;
     A[8] = p[10] + x0;
-    double x2, x1;
-    aggsym_sincos(q[2], &x2, &x1);
-    const double x3 = p[1]*p[3]*x1;
-    A[2] = x3;
-    A[6] = x3;
+    double x3, x2;
+    aggsym_sincos(q[2], &x3, &x2);
+    const double x4 = p[1]*p[3]*x2;
+    A[2] = x4;
+    A[6] = x4;
     A[0] = p[0] + p[1];
-    A[4] = p[6] + p[0]*p[2]*p[2] + x2*p[8]*x2 + x1*(p[9] + x0)*x1 + 2*p[4]*x3 + p[1]*p[4]*p[4];
+    A[4] = p[6] + p[0]*p[2]*p[2] + x1 + x3*x3*(p[8] - x1) + 2*p[4]*x4 + p[1]*p[4]*p[4];
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
@@ -61,16 +62,16 @@ void double_pendulum_bias(const double *q, const double *qd, const double *p, do
     const double x3 = p[10] + x1;
     double x5, x4;
     aggsym_sincos(q[2], &x5, &x4);
-    const double x6 = qd[1]*x5;
-    const double x7 = qd[1]*x4;
-    const double x8 = p[4]*qd[1]*qd[1];
-    const double x9 = x5*x8;
-    const double x10 = qd[2]*x6;
-    const double x11 = x6*x7;
-    const double x12 = p[8] - x2;
-    b[2] = x0*x9 - x11*x12;
-    b[0] = x4*(x0*x11 + p[1]*x9) - x5*(x0*(x7*x7 + qd[2]*qd[2]) + p[1]*x4*x8);
-    b[1] = x5*qd[2]*x7*(x3 + x12) + x4*(x10*(p[8] - x3) - x2*x10) - p[4]*x0*(x10 + x10);
+    const double x6 = p[8] - x2;
+    const double x7 = qd[1]*x5;
+    const double x8 = qd[1]*x4;
+    const double x9 = p[4]*qd[1]*qd[1];
+    const double x10 = x5*x9;
+    const double x11 = qd[2]*x7;
+    const double x12 = x7*x8;
+    b[2] = x0*x10 - x6*x12;
+    b[0] = x4*(x0*x12 + p[1]*x10) - x5*(x0*(x8*x8 + qd[2]*qd[2]) + p[1]*x4*x9);
+    b[1] = x5*qd[2]*x8*(x3 + x6) + x4*(x11*(p[8] - x3) - x2*x11) - p[4]*x0*(x11 + x11);
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
@@ -102,17 +103,17 @@ void double_pendulum_nonlinear_effects(const double *q, const double *qd, const 
     aggsym_sincos(q[1], &x5, &x4);
     double x7, x6;
     aggsym_sincos(q[2], &x7, &x6);
-    const double x8 = qd[1]*x7;
-    const double x9 = qd[1]*x6;
-    const double x10 = qd[2]*x8;
-    const double x11 = x8*x9;
-    const double x12 = p[8] - x2;
+    const double x8 = p[8] - x2;
+    const double x9 = qd[1]*x7;
+    const double x10 = qd[1]*x6;
+    const double x11 = qd[2]*x9;
+    const double x12 = x9*x10;
     const double x13 = p[11]*x4;
     const double x14 = p[4]*qd[1]*qd[1] + p[11]*x5;
     const double x15 = x7*x14;
-    d[2] = x0*x15 - x11*x12;
-    d[0] = x6*(x0*x11 + p[1]*x15) - x7*(x0*(x9*x9 + qd[2]*qd[2]) + p[1]*x6*x14);
-    d[1] = x7*qd[2]*x9*(x3 + x12) + x6*(x10*(p[8] - x3) - x2*x10 - x0*x13) - p[4]*(x0*(x10 + x10) + p[1]*x13) - p[0]*p[2]*x13;
+    d[2] = x0*x15 - x8*x12;
+    d[0] = x6*(x0*x12 + p[1]*x15) - x7*(x0*(x10*x10 + qd[2]*qd[2]) + p[1]*x6*x14);
+    d[1] = x7*qd[2]*x10*(x3 + x8) + x6*(x11*(p[8] - x3) - x2*x11 - x0*x13) - p[4]*(x0*(x11 + x11) + p[1]*x13) - p[0]*p[2]*x13;
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
@@ -137,7 +138,7 @@ void double_pendulum_inverse_dynamics(const double *q, const double *qd, const d
     const double x15 = x13 - p[4]*qdd[1];
     const double x16 = x7*x14 + qdd[0]*x6;
     const double x17 = qdd[1]*x6;
-    tau[2] = x3*qdd[2] - x12*(p[8] - x2) + x0*x16;
+    tau[2] = x3*qdd[2] - (p[8] - x2)*x12 + x0*x16;
     tau[1] = (p[6] + p[0]*p[2]*p[2])*qdd[1] + x7*(p[8]*(x10 + qdd[1]*x7) - x10*(x2 - x3)) + x6*(x11*(p[8] - x3) + x2*(x17 - x11) - x0*x15) - p[4]*(x0*(x11 + x11 - x17) + p[1]*x15) - p[0]*p[2]*x13;
     tau[0] = x7*(p[1]*(qdd[0]*x7 - x6*x14) - x0*(x9*x9 + qd[2]*qd[2])) + x6*(x0*(qdd[2] + x12) + p[1]*x16) + p[0]*qdd[0];
 }
@@ -209,7 +210,7 @@ void double_pendulum_joint_wrenches(const double *q, const double *qd, const dou
     W[7] = x26;
     const double x27 = x13*(p[8] - x4) + x3*(x20 - x13) + x1*(x18 - x16);
     W[16] = x27;
-    const double x28 = x4*qdd[2] + x1*x19 - x14*(p[8] - x3);
+    const double x28 = x4*qdd[2] + x1*x19 - (p[8] - x3)*x14;
     W[17] = x28;
     const double x29 = x7*x21 - x8*x27;
     W[9] = x29;
@@ -240,25 +241,25 @@ void double_pendulum_forward_dynamics(const double *q, const double *qd, const d
     aggsym_sincos(q[1], &x5, &x4);
     double x7, x6;
     aggsym_sincos(q[2], &x7, &x6);
-    const double x8 = p[4]*x0*x6;
-    const double x9 = qd[1]*x7;
-    const double x10 = qd[1]*x6;
-    const double x11 = qd[2]*x9;
-    const double x12 = x9*x10;
-    const double x13 = p[8] - x2;
-    const double x14 = p[11]*x4;
-    const double x15 = p[4]*qd[1]*qd[1] + p[11]*x5;
-    const double x16 = x7*x15;
-    const double x17 = 1/x3;
-    const double x18 = x0*x17;
-    const double x19 = p[1] - x0*x18;
-    const double x20 = x6*x18;
-    const double x21 = x7*x7;
-    const double x22 = tau[2] - x0*x16 + x12*x13;
-    const double x23 = 1/(p[0] + x19 + x21*(p[1] - x19))*(tau[0] - x6*(x0*x12 + p[1]*x16) + x7*(x0*(x10*x10 + qd[2]*qd[2]) + p[1]*x6*x15) - x20*x22);
+    const double x8 = x7*x7;
+    const double x9 = p[8] - x2;
+    const double x10 = p[4]*x0*x6;
+    const double x11 = qd[1]*x7;
+    const double x12 = qd[1]*x6;
+    const double x13 = qd[2]*x11;
+    const double x14 = x11*x12;
+    const double x15 = p[11]*x4;
+    const double x16 = p[4]*qd[1]*qd[1] + p[11]*x5;
+    const double x17 = x7*x16;
+    const double x18 = 1/x3;
+    const double x19 = x0*x18;
+    const double x20 = p[1] - x0*x19;
+    const double x21 = x6*x19;
+    const double x22 = tau[2] - x0*x17 + x9*x14;
+    const double x23 = 1/(p[0] + x20 + x8*(p[1] - x20))*(tau[0] - x6*(x0*x14 + p[1]*x17) + x7*(x0*(x12*x12 + qd[2]*qd[2]) + p[1]*x6*x16) - x21*x22);
     qdd[0] = x23;
-    qdd[1] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x8 + x8 + x2 + x13*x21)*(tau[1] - x7*qd[2]*x10*(x3 + x13) - x6*(x11*(p[8] - x3) - x2*x11 - x0*x14) + p[4]*(x0*(x11 + x11) + p[1]*x14) + p[0]*p[2]*x14);
-    qdd[2] = x17*x22 - x20*x23;
+    qdd[1] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x10 + x2 + x8*x9 + x10)*(tau[1] - x7*qd[2]*x12*(x3 + x9) - x6*(x13*(p[8] - x3) - x2*x13 - x0*x15) + p[4]*(x0*(x13 + x13) + p[1]*x15) + p[0]*p[2]*x15);
+    qdd[2] = x18*x22 - x21*x23;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
@@ -274,20 +275,20 @@ void double_pendulum_inertia_inverse(const double *q, const double *p, double *A
     const double x2 = p[9] + x1;
     double x4, x3;
     aggsym_sincos(q[2], &x4, &x3);
-    const double x5 = p[4]*x0*x3;
-    const double x6 = 1/(p[10] + x1);
-    const double x7 = x0*x6;
-    const double x8 = p[1] - x0*x7;
-    const double x9 = x3*x7;
-    const double x10 = x4*x4;
-    Ainv[4] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x5 + x5 + x2 + (p[8] - x2)*x10);
-    const double x11 = 1/(p[0] + x8 + x10*(p[1] - x8));
+    const double x5 = x4*x4;
+    const double x6 = p[4]*x0*x3;
+    const double x7 = 1/(p[10] + x1);
+    const double x8 = x0*x7;
+    const double x9 = p[1] - x0*x8;
+    const double x10 = x3*x8;
+    Ainv[4] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x6 + x2 + x5*(p[8] - x2) + x6);
+    const double x11 = 1/(p[0] + x9 + x5*(p[1] - x9));
     Ainv[0] = x11;
-    const double x12 = x9*x11;
+    const double x12 = x10*x11;
     const double x13 = -x12;
     Ainv[2] = x13;
     Ainv[6] = x13;
-    Ainv[8] = x6 + x9*x12;
+    Ainv[8] = x7 + x10*x12;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
@@ -303,11 +304,11 @@ void double_pendulum_transvective_factors(const double *q, const double *p, doub
     diag[2] = x3;
     double x5, x4;
     aggsym_sincos(q[2], &x5, &x4);
-    const double x6 = p[4]*x0*x4;
-    const double x7 = x0*1/x3;
-    const double x8 = p[1] - x0*x7;
-    targs[1] = x4*x7;
-    const double x9 = x5*x5;
-    diag[0] = p[0] + x8 + x9*(p[1] - x8);
-    diag[1] = p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x6 + x6 + x2 + (p[8] - x2)*x9;
+    const double x6 = x5*x5;
+    const double x7 = p[4]*x0*x4;
+    const double x8 = x0*1/x3;
+    const double x9 = p[1] - x0*x8;
+    targs[1] = x4*x8;
+    diag[0] = p[0] + x9 + x6*(p[1] - x9);
+    diag[1] = p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x7 + x2 + x6*(p[8] - x2) + x7;
 }

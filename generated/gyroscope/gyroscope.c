@@ -33,28 +33,22 @@ static void aggsym_sincos(double x, double *s, double *c)
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 12 mul, 6 add, 0 div, 2 call */
+ * operations: 3 mul, 2 add, 0 div, 1 call */
 void gyroscope_inertia(const double *q, const double *p, double *A)
 {
     (void)p;
+    A[1] = 0;
+    A[3] = 0;
+    A[4] = 0.0031048;
     A[5] = 0;
     A[7] = 0;
     A[8] = 0.002;
-    double x1, x0;
-    aggsym_sincos(q[1], &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q[2], &x3, &x2);
-    const double x4 = 0.0011048*x2;
-    const double x5 = 0.0011048*x3;
-    const double x6 = x2*x4 + x3*x5;
-    A[4] = 0.002 + x6;
-    const double x7 = x0*(x3*x4 - x2*x5);
-    A[1] = x7;
-    A[3] = x7;
-    A[0] = 0.004 + x0*x0*(0.0015 + x6) + x1*0.0035*x1;
-    const double x8 = 0.002*x1;
-    A[2] = x8;
-    A[6] = x8;
+    double x0, x0_cos;
+    aggsym_sincos(q[1], &x0, &x0_cos);
+    A[0] = 0.004 + 0.0026048 + 0.0008952000000000001*x0*x0;
+    const double x1 = 0.002*x0;
+    A[2] = x1;
+    A[6] = x1;
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
