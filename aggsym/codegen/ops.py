@@ -29,6 +29,7 @@ BOOK_SH = Reference("book (2.29) SH, Table 2.3", lambda n: 3 * n * n + 3 * n, la
 BOOK_TABLE_23 = Reference("book Table 2.3 total (S, A, b, SH)", lambda n: 11 * n * n + 125 * n - 58,
                           lambda n: 8 * n * n + 118 * n - 63)
 BOOK_SWEEPS = Reference("book sweeps (2.41)+(2.43)", lambda n: 64 * n, lambda n: 44 * n)
+BOOK_D_246 = Reference("book (2.46) d(q,q'), Tables 2.6-2.7", lambda n: 64 * n, lambda n: 44 * n)
 # Table 3.2: the extracted N+ of the A(q) line reads 8.5n^2 + 669.5n - 79, which gives 4244 at n = 6 against
 # the printed 644; 8.5n^2 + 69.5n - 79 gives 644.  The total 36n^2 + 234n - 121 = 2579 at n = 6 is consistent.
 BOOK_TABLE_32 = Reference("book Table 3.2 total (q'' by (3.20))", lambda n: 21 * n * n + 123 * n - 64,
@@ -49,7 +50,9 @@ REFERENCES = {
     "inertia": (BOOK_A_234, BOOK_A_230, FEATHERSTONE_CRBA),
     "bias": (BOOK_B_236,),
     "gravity": (BOOK_SH,),
+    "nonlinear_effects": (BOOK_D_246, FEATHERSTONE_RNEA),
     "inverse_dynamics": (BOOK_SWEEPS, FEATHERSTONE_RNEA),
+    "joint_wrenches": (BOOK_SWEEPS,),
     "forward_dynamics": (BOOK_TABLE_32, BOOK_TABLE_31, FEATHERSTONE_ABA),
     "transvective_factors": (BOOK_A_38, BOOK_TRANSVECTIVE),
 }
