@@ -231,3 +231,22 @@ void many(const double *x, double *s, double *c, int n) { for (int i = 0; i < n;
     special = np.array([np.nan, np.inf, -np.inf])
     lib.many(special.ctypes.data_as(p), s.ctypes.data_as(p), c.ctypes.data_as(p), ctypes.c_int(3))
     assert np.all(np.isnan(s[:3])) and np.all(np.isnan(c[:3]))
+
+
+def test_outputs_may_alias_inputs(tmp_path, rng):
+    """Every input is read before any output is written, so a routine may write its result over an input
+    (e.g. q'' over tau in place)."""
+    import ctypes
+
+    model = aggsym.load(model_path("manipulator6"))
+    write(generate(model, latex=False), tmp_path)
+    lib = ctypes.CDLL(str(compile_shared(tmp_path / "manipulator6.c", tmp_path / "m.so")))
+    p = ctypes.POINTER(ctypes.c_double)
+    q, qd, tau = rng.normal(size=(3, 6))
+    separate = np.zeros(6)
+    args = [a.ctypes.data_as(p) for a in (q, qd, tau)]
+    lib.manipulator6_forward_dynamics(*args, None, separate.ctypes.data_as(p))
+    inplace = tau.copy()
+    lib.manipulator6_forward_dynamics(q.ctypes.data_as(p), qd.ctypes.data_as(p), inplace.ctypes.data_as(p), None,
+                                      inplace.ctypes.data_as(p))
+    assert np.array_equal(inplace, separate)

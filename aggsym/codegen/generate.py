@@ -97,7 +97,7 @@ def _input_symbols(sl, c: bool):
     names = {}
     for kind, index in sl.inputs:
         node = sl.program.inputs[(kind, index)]
-        names[node.id] = f"{kind}[{index}]" if c else f"{kind}_{index}"
+        names[node.id] = f"{kind}_{index}"
     return names
 
 
@@ -114,11 +114,12 @@ def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> Emitted
     py_names = {**_input_symbols(sl, False), **temp_names}
     c_conv, py_conv = Converter(prog, c_names), Converter(prog, py_names)
     c_body, py_body = [], []
-    for kind in routine.inputs:
+    for kind in routine.inputs:  # every input is read before any output is written: outputs may alias inputs
         used = [i for k, i in sl.inputs if k == kind]
         if not used:
             c_body.append(f"(void){kind};")
         for i in used:
+            c_body.append(f"const double {kind}_{i} = {kind}[{i}];")
             py_body.append(f"{kind}_{i} = {kind}[..., {i}]")
     trig = _trig_pairs(prog, sl.temps)
     done = set()

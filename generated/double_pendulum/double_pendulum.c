@@ -36,192 +36,287 @@ static void aggsym_sincos(double x, double *s, double *c)
  * operations: 12 mul, 9 add, 0 div, 1 call */
 void double_pendulum_inertia(const double *q, const double *p, double *A)
 {
+    const double q_2 = q[2];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_6 = p[6];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
     A[1] = 0;
     A[3] = 0;
     A[5] = 0;
     A[7] = 0;
-    const double x0 = p[1]*p[3]*p[3];
-    const double x1 = p[9] + x0;
-    A[8] = p[10] + x0;
+    const double x0 = p_1*p_3*p_3;
+    const double x1 = p_9 + x0;
+    A[8] = p_10 + x0;
     double x3, x2;
-    aggsym_sincos(q[2], &x3, &x2);
-    const double x4 = p[1]*p[3]*x2;
+    aggsym_sincos(q_2, &x3, &x2);
+    const double x4 = p_1*p_3*x2;
     A[2] = x4;
     A[6] = x4;
-    A[0] = p[0] + p[1];
-    A[4] = p[6] + p[0]*p[2]*p[2] + x1 + x3*x3*(p[8] - x1) + 2*p[4]*x4 + p[1]*p[4]*p[4];
+    A[0] = p_0 + p_1;
+    A[4] = p_6 + p_0*p_2*p_2 + x1 + x3*x3*(p_8 - x1) + 2*p_4*x4 + p_1*p_4*p_4;
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
  * operations: 29 mul, 14 add, 0 div, 1 call */
 void double_pendulum_bias(const double *q, const double *qd, const double *p, double *b)
 {
-    const double x0 = p[1]*p[3];
-    const double x1 = p[1]*p[3]*p[3];
-    const double x2 = p[9] + x1;
-    const double x3 = p[10] + x1;
+    const double q_2 = q[2];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double p_1 = p[1];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
+    const double x0 = p_1*p_3;
+    const double x1 = p_1*p_3*p_3;
+    const double x2 = p_9 + x1;
+    const double x3 = p_10 + x1;
     double x5, x4;
-    aggsym_sincos(q[2], &x5, &x4);
-    const double x6 = p[8] - x2;
-    const double x7 = qd[1]*x5;
-    const double x8 = qd[1]*x4;
-    const double x9 = p[4]*qd[1]*qd[1];
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = p_8 - x2;
+    const double x7 = qd_1*x5;
+    const double x8 = qd_1*x4;
+    const double x9 = p_4*qd_1*qd_1;
     const double x10 = x5*x9;
-    const double x11 = qd[2]*x7;
+    const double x11 = qd_2*x7;
     const double x12 = x7*x8;
     b[2] = x0*x10 - x6*x12;
-    b[0] = x4*(x0*x12 + p[1]*x10) - x5*(x0*(x8*x8 + qd[2]*qd[2]) + p[1]*x4*x9);
-    b[1] = x5*qd[2]*x8*(x3 + x6) + x4*(x11*(p[8] - x3) - x2*x11) - p[4]*x0*(x11 + x11);
+    b[0] = x4*(x0*x12 + p_1*x10) - x5*(x0*(x8*x8 + qd_2*qd_2) + p_1*x4*x9);
+    b[1] = x5*qd_2*x8*(x3 + x6) + x4*(x11*(p_8 - x3) - x2*x11) - p_4*x0*(x11 + x11);
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
  * operations: 16 mul, 3 add, 0 div, 2 call */
 void double_pendulum_gravity(const double *q, const double *p, double *g)
 {
-    const double x0 = p[1]*p[3];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_11 = p[11];
+    const double x0 = p_1*p_3;
     double x2, x1;
-    aggsym_sincos(q[1], &x2, &x1);
+    aggsym_sincos(q_1, &x2, &x1);
     double x4, x3;
-    aggsym_sincos(q[2], &x4, &x3);
-    const double x5 = p[11]*x2;
-    const double x6 = p[11]*x1;
+    aggsym_sincos(q_2, &x4, &x3);
+    const double x5 = p_11*x2;
+    const double x6 = p_11*x1;
     const double x7 = x4*x5;
     g[2] = x0*x7;
-    g[0] = x3*p[1]*x7 - x4*p[1]*x3*x5;
-    g[1] = -(p[4]*p[1]*x6 + x3*x0*x6 + p[0]*p[2]*x6);
+    g[0] = x3*p_1*x7 - x4*p_1*x3*x5;
+    g[1] = -(p_4*p_1*x6 + x3*x0*x6 + p_0*p_2*x6);
 }
 
 /* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
  * operations: 35 mul, 18 add, 0 div, 2 call */
 void double_pendulum_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
-    const double x0 = p[1]*p[3];
-    const double x1 = p[1]*p[3]*p[3];
-    const double x2 = p[9] + x1;
-    const double x3 = p[10] + x1;
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
+    const double p_11 = p[11];
+    const double x0 = p_1*p_3;
+    const double x1 = p_1*p_3*p_3;
+    const double x2 = p_9 + x1;
+    const double x3 = p_10 + x1;
     double x5, x4;
-    aggsym_sincos(q[1], &x5, &x4);
+    aggsym_sincos(q_1, &x5, &x4);
     double x7, x6;
-    aggsym_sincos(q[2], &x7, &x6);
-    const double x8 = p[8] - x2;
-    const double x9 = qd[1]*x7;
-    const double x10 = qd[1]*x6;
-    const double x11 = qd[2]*x9;
+    aggsym_sincos(q_2, &x7, &x6);
+    const double x8 = p_8 - x2;
+    const double x9 = qd_1*x7;
+    const double x10 = qd_1*x6;
+    const double x11 = qd_2*x9;
     const double x12 = x9*x10;
-    const double x13 = p[11]*x4;
-    const double x14 = p[4]*qd[1]*qd[1] + p[11]*x5;
+    const double x13 = p_11*x4;
+    const double x14 = p_4*qd_1*qd_1 + p_11*x5;
     const double x15 = x7*x14;
     d[2] = x0*x15 - x8*x12;
-    d[0] = x6*(x0*x12 + p[1]*x15) - x7*(x0*(x10*x10 + qd[2]*qd[2]) + p[1]*x6*x14);
-    d[1] = x7*qd[2]*x10*(x3 + x8) + x6*(x11*(p[8] - x3) - x2*x11 - x0*x13) - p[4]*(x0*(x11 + x11) + p[1]*x13) - p[0]*p[2]*x13;
+    d[0] = x6*(x0*x12 + p_1*x15) - x7*(x0*(x10*x10 + qd_2*qd_2) + p_1*x6*x14);
+    d[1] = x7*qd_2*x10*(x3 + x8) + x6*(x11*(p_8 - x3) - x2*x11 - x0*x13) - p_4*(x0*(x11 + x11) + p_1*x13) - p_0*p_2*x13;
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
  * operations: 46 mul, 30 add, 0 div, 2 call */
 void double_pendulum_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
-    const double x0 = p[1]*p[3];
-    const double x1 = p[1]*p[3]*p[3];
-    const double x2 = p[9] + x1;
-    const double x3 = p[10] + x1;
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_6 = p[6];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
+    const double p_11 = p[11];
+    const double x0 = p_1*p_3;
+    const double x1 = p_1*p_3*p_3;
+    const double x2 = p_9 + x1;
+    const double x3 = p_10 + x1;
     double x5, x4;
-    aggsym_sincos(q[1], &x5, &x4);
+    aggsym_sincos(q_1, &x5, &x4);
     double x7, x6;
-    aggsym_sincos(q[2], &x7, &x6);
-    const double x8 = qd[1]*x7;
-    const double x9 = qd[1]*x6;
-    const double x10 = qd[2]*x9;
-    const double x11 = qd[2]*x8;
+    aggsym_sincos(q_2, &x7, &x6);
+    const double x8 = qd_1*x7;
+    const double x9 = qd_1*x6;
+    const double x10 = qd_2*x9;
+    const double x11 = qd_2*x8;
     const double x12 = x8*x9;
-    const double x13 = p[11]*x4;
-    const double x14 = p[4]*qd[1]*qd[1] + p[11]*x5;
-    const double x15 = x13 - p[4]*qdd[1];
-    const double x16 = x7*x14 + qdd[0]*x6;
-    const double x17 = qdd[1]*x6;
-    tau[2] = x3*qdd[2] - (p[8] - x2)*x12 + x0*x16;
-    tau[1] = (p[6] + p[0]*p[2]*p[2])*qdd[1] + x7*(p[8]*(x10 + qdd[1]*x7) - x10*(x2 - x3)) + x6*(x11*(p[8] - x3) + x2*(x17 - x11) - x0*x15) - p[4]*(x0*(x11 + x11 - x17) + p[1]*x15) - p[0]*p[2]*x13;
-    tau[0] = x7*(p[1]*(qdd[0]*x7 - x6*x14) - x0*(x9*x9 + qd[2]*qd[2])) + x6*(x0*(qdd[2] + x12) + p[1]*x16) + p[0]*qdd[0];
+    const double x13 = p_11*x4;
+    const double x14 = p_4*qd_1*qd_1 + p_11*x5;
+    const double x15 = x13 - p_4*qdd_1;
+    const double x16 = x7*x14 + qdd_0*x6;
+    const double x17 = qdd_1*x6;
+    tau[2] = x3*qdd_2 - (p_8 - x2)*x12 + x0*x16;
+    tau[1] = (p_6 + p_0*p_2*p_2)*qdd_1 + x7*(p_8*(x10 + qdd_1*x7) - x10*(x2 - x3)) + x6*(x11*(p_8 - x3) + x2*(x17 - x11) - x0*x15) - p_4*(x0*(x11 + x11 - x17) + p_1*x15) - p_0*p_2*x13;
+    tau[0] = x7*(p_1*(qdd_0*x7 - x6*x14) - x0*(x9*x9 + qd_2*qd_2)) + x6*(x0*(qdd_2 + x12) + p_1*x16) + p_0*qdd_0;
 }
 
 /* T = 1/2 qd^T A(q) qd (Def. 2.4)
  * operations: 31 mul, 14 add, 0 div, 1 call */
 void double_pendulum_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
-    const double x0 = p[1]*p[3];
-    const double x1 = p[1]*p[3]*p[3];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_6 = p[6];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
+    const double x0 = p_1*p_3;
+    const double x1 = p_1*p_3*p_3;
     double x3, x2;
-    aggsym_sincos(q[2], &x3, &x2);
-    const double x4 = qd[1]*x3;
-    const double x5 = qd[1]*x2;
-    const double x6 = p[4]*qd[1];
-    const double x7 = qd[0]*x3;
-    const double x8 = qd[0]*x2;
-    T[0] = 0.5*(qd[0]*p[0]*qd[0] + qd[1]*(p[6] + p[0]*p[2]*p[2])*qd[1] + x7*p[1]*x7 + x8*(p[1]*x8 + x0*qd[2]) + x6*(p[1]*x6 + x0*x5) + x4*p[8]*x4 + x5*(x0*x6 + (p[9] + x1)*x5) + qd[2]*(x0*x8 + (p[10] + x1)*qd[2]));
+    aggsym_sincos(q_2, &x3, &x2);
+    const double x4 = qd_1*x3;
+    const double x5 = qd_1*x2;
+    const double x6 = p_4*qd_1;
+    const double x7 = qd_0*x3;
+    const double x8 = qd_0*x2;
+    T[0] = 0.5*(qd_0*p_0*qd_0 + qd_1*(p_6 + p_0*p_2*p_2)*qd_1 + x7*p_1*x7 + x8*(p_1*x8 + x0*qd_2) + x6*(p_1*x6 + x0*x5) + x4*p_8*x4 + x5*(x0*x6 + (p_9 + x1)*x5) + qd_2*(x0*x8 + (p_10 + x1)*qd_2));
 }
 
 /* U(q), the potential energy of gravity
  * operations: 8 mul, 2 add, 0 div, 2 call */
 void double_pendulum_potential_energy(const double *q, const double *p, double *U)
 {
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_11 = p[11];
     double x0, x0_cos;
-    aggsym_sincos(q[1], &x0, &x0_cos);
+    aggsym_sincos(q_1, &x0, &x0_cos);
     double x1_sin, x1;
-    aggsym_sincos(q[2], &x1_sin, &x1);
-    const double x2 = p[11]*x0;
-    U[0] = -(p[0]*p[2]*x2 + p[1]*p[4]*x2 + p[1]*p[3]*x1*x2);
+    aggsym_sincos(q_2, &x1_sin, &x1);
+    const double x2 = p_11*x0;
+    U[0] = -(p_0*p_2*x2 + p_1*p_4*x2 + p_1*p_3*x1*x2);
 }
 
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
  * operations: 64 mul, 43 add, 0 div, 2 call */
 void double_pendulum_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)
 {
-    const double x0 = p[0]*p[2];
-    const double x1 = p[1]*p[3];
-    const double x2 = p[1]*p[3]*p[3];
-    const double x3 = p[9] + x2;
-    const double x4 = p[10] + x2;
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_6 = p[6];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
+    const double p_11 = p[11];
+    const double x0 = p_0*p_2;
+    const double x1 = p_1*p_3;
+    const double x2 = p_1*p_3*p_3;
+    const double x3 = p_9 + x2;
+    const double x4 = p_10 + x2;
     double x6, x5;
-    aggsym_sincos(q[1], &x6, &x5);
+    aggsym_sincos(q_1, &x6, &x5);
     double x8, x7;
-    aggsym_sincos(q[2], &x8, &x7);
-    const double x9 = qd[1]*qd[1];
-    const double x10 = qd[1]*x8;
-    const double x11 = qd[1]*x7;
-    const double x12 = qd[2]*x11;
-    const double x13 = qd[2]*x10;
+    aggsym_sincos(q_2, &x8, &x7);
+    const double x9 = qd_1*qd_1;
+    const double x10 = qd_1*x8;
+    const double x11 = qd_1*x7;
+    const double x12 = qd_2*x11;
+    const double x13 = qd_2*x10;
     const double x14 = x10*x11;
-    const double x15 = p[11]*x6;
-    const double x16 = p[11]*x5;
-    const double x17 = p[4]*x9 + x15;
-    const double x18 = p[4]*qdd[1];
-    const double x19 = x8*x17 + qdd[0]*x7;
-    const double x20 = qdd[1]*x7;
-    const double x21 = p[8]*(x12 + qdd[1]*x8) - x12*(x3 - x4);
+    const double x15 = p_11*x6;
+    const double x16 = p_11*x5;
+    const double x17 = p_4*x9 + x15;
+    const double x18 = p_4*qdd_1;
+    const double x19 = x8*x17 + qdd_0*x7;
+    const double x20 = qdd_1*x7;
+    const double x21 = p_8*(x12 + qdd_1*x8) - x12*(x3 - x4);
     W[15] = x21;
-    const double x22 = p[1]*(qdd[0]*x8 - x7*x17) - x1*(x11*x11 + qd[2]*qd[2]);
+    const double x22 = p_1*(qdd_0*x8 - x7*x17) - x1*(x11*x11 + qd_2*qd_2);
     W[12] = x22;
-    const double x23 = x1*(qdd[2] + x14) + p[1]*x19;
+    const double x23 = x1*(qdd_2 + x14) + p_1*x19;
     W[13] = x23;
-    const double x24 = x1*(x13 + x13 - x20) + p[1]*(x16 - x18);
+    const double x24 = x1*(x13 + x13 - x20) + p_1*(x16 - x18);
     W[14] = x24;
     const double x25 = x8*x22 + x7*x23;
-    const double x26 = x25 + p[0]*qdd[0];
+    const double x26 = x25 + p_0*qdd_0;
     W[1] = x26;
     W[7] = x26;
-    const double x27 = x13*(p[8] - x4) + x3*(x20 - x13) + x1*(x18 - x16);
+    const double x27 = x13*(p_8 - x4) + x3*(x20 - x13) + x1*(x18 - x16);
     W[16] = x27;
-    const double x28 = x4*qdd[2] + x1*x19 - (p[8] - x3)*x14;
+    const double x28 = x4*qdd_2 + x1*x19 - (p_8 - x3)*x14;
     W[17] = x28;
     const double x29 = x7*x21 - x8*x27;
     W[9] = x29;
-    const double x30 = x7*x22 - x8*x23 - x0*x9 - p[0]*x15;
+    const double x30 = x7*x22 - x8*x23 - x0*x9 - p_0*x15;
     W[6] = x30;
-    const double x31 = x24 + p[0]*x16 - x0*qdd[1];
+    const double x31 = x24 + p_0*x16 - x0*qdd_1;
     W[8] = x31;
-    const double x32 = (p[6] + p[0]*p[2]*p[2])*qdd[1] - x0*x16 + x8*x21 + x7*x27 - p[4]*x24;
+    const double x32 = (p_6 + p_0*p_2*p_2)*qdd_1 - x0*x16 + x8*x21 + x7*x27 - p_4*x24;
     W[4] = x32;
     W[10] = x32;
-    const double x33 = x0*qdd[0] + p[4]*x25 + x28;
+    const double x33 = x0*qdd_0 + p_4*x25 + x28;
     W[11] = x33;
     W[0] = x5*x30 + x6*x31;
     W[2] = x5*x31 - x6*x30;
@@ -233,32 +328,49 @@ void double_pendulum_joint_wrenches(const double *q, const double *qd, const dou
  * operations: 52 mul, 33 add, 3 div, 2 call */
 void double_pendulum_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
-    const double x0 = p[1]*p[3];
-    const double x1 = p[1]*p[3]*p[3];
-    const double x2 = p[9] + x1;
-    const double x3 = p[10] + x1;
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double tau_0 = tau[0];
+    const double tau_1 = tau[1];
+    const double tau_2 = tau[2];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_6 = p[6];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
+    const double p_11 = p[11];
+    const double x0 = p_1*p_3;
+    const double x1 = p_1*p_3*p_3;
+    const double x2 = p_9 + x1;
+    const double x3 = p_10 + x1;
     double x5, x4;
-    aggsym_sincos(q[1], &x5, &x4);
+    aggsym_sincos(q_1, &x5, &x4);
     double x7, x6;
-    aggsym_sincos(q[2], &x7, &x6);
+    aggsym_sincos(q_2, &x7, &x6);
     const double x8 = x7*x7;
-    const double x9 = p[8] - x2;
-    const double x10 = p[4]*x0*x6;
-    const double x11 = qd[1]*x7;
-    const double x12 = qd[1]*x6;
-    const double x13 = qd[2]*x11;
+    const double x9 = p_8 - x2;
+    const double x10 = p_4*x0*x6;
+    const double x11 = qd_1*x7;
+    const double x12 = qd_1*x6;
+    const double x13 = qd_2*x11;
     const double x14 = x11*x12;
-    const double x15 = p[11]*x4;
-    const double x16 = p[4]*qd[1]*qd[1] + p[11]*x5;
+    const double x15 = p_11*x4;
+    const double x16 = p_4*qd_1*qd_1 + p_11*x5;
     const double x17 = x7*x16;
     const double x18 = 1/x3;
     const double x19 = x0*x18;
-    const double x20 = p[1] - x0*x19;
+    const double x20 = p_1 - x0*x19;
     const double x21 = x6*x19;
-    const double x22 = tau[2] - x0*x17 + x9*x14;
-    const double x23 = 1/(p[0] + x20 + x8*(p[1] - x20))*(tau[0] - x6*(x0*x14 + p[1]*x17) + x7*(x0*(x12*x12 + qd[2]*qd[2]) + p[1]*x6*x16) - x21*x22);
+    const double x22 = tau_2 - x0*x17 + x9*x14;
+    const double x23 = 1/(p_0 + x20 + x8*(p_1 - x20))*(tau_0 - x6*(x0*x14 + p_1*x17) + x7*(x0*(x12*x12 + qd_2*qd_2) + p_1*x6*x16) - x21*x22);
     qdd[0] = x23;
-    qdd[1] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x10 + x2 + x8*x9 + x10)*(tau[1] - x7*qd[2]*x12*(x3 + x9) - x6*(x13*(p[8] - x3) - x2*x13 - x0*x15) + p[4]*(x0*(x13 + x13) + p[1]*x15) + p[0]*p[2]*x15);
+    qdd[1] = 1/(p_6 + p_0*p_2*p_2 + p_4*p_1*p_4 + x10 + x2 + x8*x9 + x10)*(tau_1 - x7*qd_2*x12*(x3 + x9) - x6*(x13*(p_8 - x3) - x2*x13 - x0*x15) + p_4*(x0*(x13 + x13) + p_1*x15) + p_0*p_2*x15);
     qdd[2] = x18*x22 - x21*x23;
 }
 
@@ -266,23 +378,33 @@ void double_pendulum_forward_dynamics(const double *q, const double *qd, const d
  * operations: 17 mul, 14 add, 3 div, 1 call */
 void double_pendulum_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
+    const double q_2 = q[2];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_6 = p[6];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
     Ainv[1] = 0;
     Ainv[3] = 0;
     Ainv[5] = 0;
     Ainv[7] = 0;
-    const double x0 = p[1]*p[3];
-    const double x1 = p[1]*p[3]*p[3];
-    const double x2 = p[9] + x1;
+    const double x0 = p_1*p_3;
+    const double x1 = p_1*p_3*p_3;
+    const double x2 = p_9 + x1;
     double x4, x3;
-    aggsym_sincos(q[2], &x4, &x3);
+    aggsym_sincos(q_2, &x4, &x3);
     const double x5 = x4*x4;
-    const double x6 = p[4]*x0*x3;
-    const double x7 = 1/(p[10] + x1);
+    const double x6 = p_4*x0*x3;
+    const double x7 = 1/(p_10 + x1);
     const double x8 = x0*x7;
-    const double x9 = p[1] - x0*x8;
+    const double x9 = p_1 - x0*x8;
     const double x10 = x3*x8;
-    Ainv[4] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x6 + x2 + x5*(p[8] - x2) + x6);
-    const double x11 = 1/(p[0] + x9 + x5*(p[1] - x9));
+    Ainv[4] = 1/(p_6 + p_0*p_2*p_2 + p_4*p_1*p_4 + x6 + x2 + x5*(p_8 - x2) + x6);
+    const double x11 = 1/(p_0 + x9 + x5*(p_1 - x9));
     Ainv[0] = x11;
     const double x12 = x10*x11;
     const double x13 = -x12;
@@ -295,20 +417,30 @@ void double_pendulum_inertia_inverse(const double *q, const double *p, double *A
  * operations: 15 mul, 13 add, 1 div, 1 call */
 void double_pendulum_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
+    const double q_2 = q[2];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_6 = p[6];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
     targs[0] = 0;
     targs[2] = 0;
-    const double x0 = p[1]*p[3];
-    const double x1 = p[1]*p[3]*p[3];
-    const double x2 = p[9] + x1;
-    const double x3 = p[10] + x1;
+    const double x0 = p_1*p_3;
+    const double x1 = p_1*p_3*p_3;
+    const double x2 = p_9 + x1;
+    const double x3 = p_10 + x1;
     diag[2] = x3;
     double x5, x4;
-    aggsym_sincos(q[2], &x5, &x4);
+    aggsym_sincos(q_2, &x5, &x4);
     const double x6 = x5*x5;
-    const double x7 = p[4]*x0*x4;
+    const double x7 = p_4*x0*x4;
     const double x8 = x0*1/x3;
-    const double x9 = p[1] - x0*x8;
+    const double x9 = p_1 - x0*x8;
     targs[1] = x4*x8;
-    diag[0] = p[0] + x9 + x6*(p[1] - x9);
-    diag[1] = p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x7 + x2 + x6*(p[8] - x2) + x7;
+    diag[0] = p_0 + x9 + x6*(p_1 - x9);
+    diag[1] = p_6 + p_0*p_2*p_2 + p_4*p_1*p_4 + x7 + x2 + x6*(p_8 - x2) + x7;
 }

@@ -36,6 +36,7 @@ static void aggsym_sincos(double x, double *s, double *c)
  * operations: 3 mul, 2 add, 0 div, 1 call */
 void gyroscope_inertia(const double *q, const double *p, double *A)
 {
+    const double q_1 = q[1];
     (void)p;
     A[1] = 0;
     A[3] = 0;
@@ -44,7 +45,7 @@ void gyroscope_inertia(const double *q, const double *p, double *A)
     A[7] = 0;
     A[8] = 0.002;
     double x0, x0_cos;
-    aggsym_sincos(q[1], &x0, &x0_cos);
+    aggsym_sincos(q_1, &x0, &x0_cos);
     A[0] = 0.004 + 0.0026048 + 0.0008952000000000001*x0*x0;
     const double x1 = 0.002*x0;
     A[2] = x1;
@@ -55,21 +56,26 @@ void gyroscope_inertia(const double *q, const double *p, double *A)
  * operations: 27 mul, 13 add, 0 div, 2 call */
 void gyroscope_bias(const double *q, const double *qd, const double *p, double *b)
 {
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
     (void)p;
     double x1, x0;
-    aggsym_sincos(q[1], &x1, &x0);
+    aggsym_sincos(q_1, &x1, &x0);
     double x3, x2;
-    aggsym_sincos(q[2], &x3, &x2);
-    const double x4 = qd[0]*x0;
-    const double x5 = qd[0]*x1;
-    const double x6 = qd[1]*x5;
-    const double x7 = x2*x4 + qd[1]*x3;
-    const double x8 = qd[1]*x2 - x3*x4;
-    const double x9 = qd[2] + x5;
-    const double x10 = 0.002*qd[1]*x4;
+    aggsym_sincos(q_2, &x3, &x2);
+    const double x4 = qd_0*x0;
+    const double x5 = qd_0*x1;
+    const double x6 = qd_1*x5;
+    const double x7 = x2*x4 + qd_1*x3;
+    const double x8 = qd_1*x2 - x3*x4;
+    const double x9 = qd_2 + x5;
+    const double x10 = 0.002*qd_1*x4;
     b[2] = x10;
-    const double x11 = 0.0011048*(qd[2]*x8 - x2*x6) + 0.0008952000000000001*x8*x9;
-    const double x12 = 0.0011048*(x3*x6 - qd[2]*x7) - 0.0008952000000000001*x7*x9;
+    const double x11 = 0.0011048*(qd_2*x8 - x2*x6) + 0.0008952000000000001*x8*x9;
+    const double x12 = 0.0011048*(x3*x6 - qd_2*x7) - 0.0008952000000000001*x7*x9;
     b[1] = x3*x11 + x2*x12;
     b[0] = x0*(x2*x11 - x3*x12 - 0.0015*x6 - 0.0005*x6) + x1*(x10 + x10);
 }
@@ -78,12 +84,14 @@ void gyroscope_bias(const double *q, const double *qd, const double *p, double *
  * operations: 11 mul, 3 add, 0 div, 2 call */
 void gyroscope_gravity(const double *q, const double *p, double *g)
 {
+    const double q_0 = q[0];
+    const double q_1 = q[1];
     (void)p;
     g[2] = 0;
     double x1, x0;
-    aggsym_sincos(q[0], &x1, &x0);
+    aggsym_sincos(q_0, &x1, &x0);
     double x3, x2;
-    aggsym_sincos(q[1], &x3, &x2);
+    aggsym_sincos(q_1, &x3, &x2);
     g[0] = -0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
     g[1] = -(0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1));
 }
@@ -92,23 +100,29 @@ void gyroscope_gravity(const double *q, const double *p, double *g)
  * operations: 38 mul, 18 add, 0 div, 3 call */
 void gyroscope_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
     (void)p;
     double x1, x0;
-    aggsym_sincos(q[0], &x1, &x0);
+    aggsym_sincos(q_0, &x1, &x0);
     double x3, x2;
-    aggsym_sincos(q[1], &x3, &x2);
+    aggsym_sincos(q_1, &x3, &x2);
     double x5, x4;
-    aggsym_sincos(q[2], &x5, &x4);
-    const double x6 = qd[0]*x2;
-    const double x7 = qd[0]*x3;
-    const double x8 = qd[1]*x7;
-    const double x9 = x4*x6 + qd[1]*x5;
-    const double x10 = qd[1]*x4 - x5*x6;
-    const double x11 = qd[2] + x7;
-    const double x12 = 0.002*qd[1]*x6;
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = qd_0*x2;
+    const double x7 = qd_0*x3;
+    const double x8 = qd_1*x7;
+    const double x9 = x4*x6 + qd_1*x5;
+    const double x10 = qd_1*x4 - x5*x6;
+    const double x11 = qd_2 + x7;
+    const double x12 = 0.002*qd_1*x6;
     d[2] = x12;
-    const double x13 = 0.0011048*(qd[2]*x10 - x4*x8) + 0.0008952000000000001*x10*x11;
-    const double x14 = 0.0011048*(x5*x8 - qd[2]*x9) - 0.0008952000000000001*x9*x11;
+    const double x13 = 0.0011048*(qd_2*x10 - x4*x8) + 0.0008952000000000001*x10*x11;
+    const double x14 = 0.0011048*(x5*x8 - qd_2*x9) - 0.0008952000000000001*x9*x11;
     d[0] = x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) + x3*(x12 + x12) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
     d[1] = x5*x13 + x4*x14 - 0.006596240066423136*x2 - 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1);
 }
@@ -117,56 +131,72 @@ void gyroscope_nonlinear_effects(const double *q, const double *qd, const double
  * operations: 46 mul, 26 add, 0 div, 3 call */
 void gyroscope_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
     (void)p;
     double x1, x0;
-    aggsym_sincos(q[0], &x1, &x0);
+    aggsym_sincos(q_0, &x1, &x0);
     double x3, x2;
-    aggsym_sincos(q[1], &x3, &x2);
+    aggsym_sincos(q_1, &x3, &x2);
     double x5, x4;
-    aggsym_sincos(q[2], &x5, &x4);
-    const double x6 = qd[0]*x2;
-    const double x7 = qd[0]*x3;
-    const double x8 = qd[1]*x7;
-    const double x9 = qd[1]*x6;
-    const double x10 = x4*x6 + qd[1]*x5;
-    const double x11 = qd[1]*x4 - x5*x6;
-    const double x12 = qd[2] + x7;
-    const double x13 = qdd[0]*x2 - x8;
-    const double x14 = x9 + qdd[0]*x3;
-    const double x15 = 0.0008952000000000001*x11*x12 + 0.0011048*(qd[2]*x11 + x4*x13 + qdd[1]*x5);
-    const double x16 = 0.0011048*(qdd[1]*x4 - x5*x13 - qd[2]*x10) - 0.0008952000000000001*x10*x12;
-    const double x17 = 0.002*(qdd[2] + x14);
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = qd_0*x2;
+    const double x7 = qd_0*x3;
+    const double x8 = qd_1*x7;
+    const double x9 = qd_1*x6;
+    const double x10 = x4*x6 + qd_1*x5;
+    const double x11 = qd_1*x4 - x5*x6;
+    const double x12 = qd_2 + x7;
+    const double x13 = qdd_0*x2 - x8;
+    const double x14 = x9 + qdd_0*x3;
+    const double x15 = 0.0008952000000000001*x11*x12 + 0.0011048*(qd_2*x11 + x4*x13 + qdd_1*x5);
+    const double x16 = 0.0011048*(qdd_1*x4 - x5*x13 - qd_2*x10) - 0.0008952000000000001*x10*x12;
+    const double x17 = 0.002*(qdd_2 + x14);
     tau[2] = x17;
-    tau[1] = 0.002*qdd[1] + x5*x15 + x4*x16 - 0.006596240066423136*x2 - 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1);
-    tau[0] = 0.004*qdd[0] + x2*(0.0015*x13 - 0.0005*x8 + x4*x15 - x5*x16) + x3*(0.0015*x14 + 0.0005*x9 + x17) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
+    tau[1] = 0.002*qdd_1 + x5*x15 + x4*x16 - 0.006596240066423136*x2 - 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1);
+    tau[0] = 0.004*qdd_0 + x2*(0.0015*x13 - 0.0005*x8 + x4*x15 - x5*x16) + x3*(0.0015*x14 + 0.0005*x9 + x17) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
 }
 
 /* T = 1/2 qd^T A(q) qd (Def. 2.4)
  * operations: 21 mul, 9 add, 0 div, 2 call */
 void gyroscope_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
     (void)p;
     double x1, x0;
-    aggsym_sincos(q[1], &x1, &x0);
+    aggsym_sincos(q_1, &x1, &x0);
     double x3, x2;
-    aggsym_sincos(q[2], &x3, &x2);
-    const double x4 = qd[0]*x0;
-    const double x5 = qd[0]*x1;
-    const double x6 = x2*x4 + qd[1]*x3;
-    const double x7 = qd[1]*x2 - x3*x4;
-    const double x8 = qd[2] + x5;
-    T[0] = 0.5*(qd[0]*0.004*qd[0] + x4*0.0015*x4 + qd[1]*0.002*qd[1] + x5*0.0015*x5 + x6*0.0011048*x6 + x7*0.0011048*x7 + x8*0.002*x8);
+    aggsym_sincos(q_2, &x3, &x2);
+    const double x4 = qd_0*x0;
+    const double x5 = qd_0*x1;
+    const double x6 = x2*x4 + qd_1*x3;
+    const double x7 = qd_1*x2 - x3*x4;
+    const double x8 = qd_2 + x5;
+    T[0] = 0.5*(qd_0*0.004*qd_0 + x4*0.0015*x4 + qd_1*0.002*qd_1 + x5*0.0015*x5 + x6*0.0011048*x6 + x7*0.0011048*x7 + x8*0.002*x8);
 }
 
 /* U(q), the potential energy of gravity
  * operations: 6 mul, 2 add, 0 div, 2 call */
 void gyroscope_potential_energy(const double *q, const double *p, double *U)
 {
+    const double q_0 = q[0];
+    const double q_1 = q[1];
     (void)p;
     double x1, x0;
-    aggsym_sincos(q[0], &x1, &x0);
+    aggsym_sincos(q_0, &x1, &x0);
     double x3, x2;
-    aggsym_sincos(q[1], &x3, &x2);
+    aggsym_sincos(q_1, &x3, &x2);
     U[0] = 0.0024*(x2*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1) - 2.7484333610096403*x3);
 }
 
@@ -174,22 +204,31 @@ void gyroscope_potential_energy(const double *q, const double *p, double *U)
  * operations: 74 mul, 46 add, 0 div, 3 call */
 void gyroscope_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)
 {
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
     (void)p;
     double x1, x0;
-    aggsym_sincos(q[0], &x1, &x0);
+    aggsym_sincos(q_0, &x1, &x0);
     const double x2 = 0.19617469496901108*x0 + 0.9396926207859084*x1;
     const double x3 = 0.9396926207859084*x0 - 0.19617469496901108*x1;
     double x5, x4;
-    aggsym_sincos(q[1], &x5, &x4);
+    aggsym_sincos(q_1, &x5, &x4);
     double x7, x6;
-    aggsym_sincos(q[2], &x7, &x6);
-    const double x8 = qd[0]*x4;
-    const double x9 = qd[0]*x5;
-    const double x10 = qd[1]*x9;
-    const double x11 = qd[1]*x8;
-    const double x12 = x6*x8 + qd[1]*x7;
-    const double x13 = qd[1]*x6 - x7*x8;
-    const double x14 = qd[2] + x9;
+    aggsym_sincos(q_2, &x7, &x6);
+    const double x8 = qd_0*x4;
+    const double x9 = qd_0*x5;
+    const double x10 = qd_1*x9;
+    const double x11 = qd_1*x8;
+    const double x12 = x6*x8 + qd_1*x7;
+    const double x13 = qd_1*x6 - x7*x8;
+    const double x14 = qd_2 + x9;
     const double x15 = x12*x14;
     const double x16 = x13*x14;
     const double x17 = 9.81*x2;
@@ -198,13 +237,13 @@ void gyroscope_joint_wrenches(const double *q, const double *qd, const double *q
     const double x20 = x4*x18 - 2.7484333610096403*x5;
     const double x21 = x7*x17 - x6*x19;
     const double x22 = x7*x19 + x6*x17;
-    const double x23 = 1.2*x20 - 0.0024*(x8*x8 + qd[1]*qd[1]);
+    const double x23 = 1.2*x20 - 0.0024*(x8*x8 + qd_1*qd_1);
     W[14] = x23;
-    const double x24 = qdd[0]*x4 - x10;
-    const double x25 = x11 + qdd[0]*x5;
-    const double x26 = qd[2]*x13 + x6*x24 + qdd[1]*x7;
-    const double x27 = qdd[1]*x6 - x7*x24 - qd[2]*x12;
-    const double x28 = 0.002*(qdd[2] + x25);
+    const double x24 = qdd_0*x4 - x10;
+    const double x25 = x11 + qdd_0*x5;
+    const double x26 = qd_2*x13 + x6*x24 + qdd_1*x7;
+    const double x27 = qdd_1*x6 - x7*x24 - qd_2*x12;
+    const double x28 = 0.002*(qdd_2 + x25);
     W[17] = x28;
     const double x29 = 0.0015*x25 + 0.0005*x11 + x28;
     W[11] = x29;
@@ -224,40 +263,49 @@ void gyroscope_joint_wrenches(const double *q, const double *qd, const double *q
     W[8] = x36;
     const double x37 = 0.0015*x24 - 0.0005*x10 + x6*x32 - x7*x33;
     W[9] = x37;
-    const double x38 = 0.002*qdd[1] + x7*x32 + x6*x33;
+    const double x38 = 0.002*qdd_1 + x7*x32 + x6*x33;
     W[4] = x38;
     W[10] = x38;
     W[5] = x4*x29 - x5*x37;
     W[0] = x4*x34 + x5*x36 - 1.649060016605784;
     W[1] = 5.886*x2 + x35;
     W[2] = 5.886*x3 + x4*x36 - x5*x34;
-    W[3] = 0.004*qdd[0] + x5*x29 + x4*x37;
+    W[3] = 0.004*qdd_0 + x5*x29 + x4*x37;
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)
  * operations: 45 mul, 25 add, 1 div, 3 call */
 void gyroscope_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double tau_0 = tau[0];
+    const double tau_1 = tau[1];
+    const double tau_2 = tau[2];
     (void)p;
     double x1, x0;
-    aggsym_sincos(q[0], &x1, &x0);
+    aggsym_sincos(q_0, &x1, &x0);
     double x3, x2;
-    aggsym_sincos(q[1], &x3, &x2);
+    aggsym_sincos(q_1, &x3, &x2);
     double x5, x4;
-    aggsym_sincos(q[2], &x5, &x4);
-    const double x6 = qd[0]*x2;
-    const double x7 = qd[0]*x3;
-    const double x8 = qd[1]*x7;
-    const double x9 = x4*x6 + qd[1]*x5;
-    const double x10 = qd[1]*x4 - x5*x6;
-    const double x11 = qd[2] + x7;
-    const double x12 = 0.002*qd[1]*x6;
-    const double x13 = 0.0011048*(qd[2]*x10 - x4*x8) + 0.0008952000000000001*x10*x11;
-    const double x14 = 0.0011048*(x5*x8 - qd[2]*x9) - 0.0008952000000000001*x9*x11;
-    const double x15 = tau[2] - x12;
-    const double x16 = 1/(0.004 + 0.0026048 - 0.0011048*x3*x3)*(tau[0] - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(x12 + x12) + 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1) - x3*x15);
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = qd_0*x2;
+    const double x7 = qd_0*x3;
+    const double x8 = qd_1*x7;
+    const double x9 = x4*x6 + qd_1*x5;
+    const double x10 = qd_1*x4 - x5*x6;
+    const double x11 = qd_2 + x7;
+    const double x12 = 0.002*qd_1*x6;
+    const double x13 = 0.0011048*(qd_2*x10 - x4*x8) + 0.0008952000000000001*x10*x11;
+    const double x14 = 0.0011048*(x5*x8 - qd_2*x9) - 0.0008952000000000001*x9*x11;
+    const double x15 = tau_2 - x12;
+    const double x16 = 1/(0.004 + 0.0026048 - 0.0011048*x3*x3)*(tau_0 - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(x12 + x12) + 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1) - x3*x15);
     qdd[0] = x16;
-    qdd[1] = 322.0819376449369*(tau[1] - x5*x13 - x4*x14 + 0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1));
+    qdd[1] = 322.0819376449369*(tau_1 - x5*x13 - x4*x14 + 0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1));
     qdd[2] = 500.0*x15 - x3*x16;
 }
 
@@ -265,6 +313,7 @@ void gyroscope_forward_dynamics(const double *q, const double *qd, const double 
  * operations: 4 mul, 3 add, 1 div, 1 call */
 void gyroscope_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
+    const double q_1 = q[1];
     (void)p;
     Ainv[1] = 0;
     Ainv[3] = 0;
@@ -272,7 +321,7 @@ void gyroscope_inertia_inverse(const double *q, const double *p, double *Ainv)
     Ainv[5] = 0;
     Ainv[7] = 0;
     double x0, x0_cos;
-    aggsym_sincos(q[1], &x0, &x0_cos);
+    aggsym_sincos(q_1, &x0, &x0_cos);
     const double x1 = 1/(0.004 + 0.0026048 - 0.0011048*x0*x0);
     Ainv[0] = x1;
     const double x2 = x0*x1;
@@ -286,13 +335,14 @@ void gyroscope_inertia_inverse(const double *q, const double *p, double *Ainv)
  * operations: 2 mul, 2 add, 0 div, 1 call */
 void gyroscope_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
+    const double q_1 = q[1];
     (void)p;
     targs[0] = 0;
     targs[2] = 0;
     diag[1] = 0.0031048;
     diag[2] = 0.002;
     double x0, x0_cos;
-    aggsym_sincos(q[1], &x0, &x0_cos);
+    aggsym_sincos(q_1, &x0, &x0_cos);
     targs[1] = x0;
     diag[0] = 0.004 + 0.0026048 - 0.0011048*x0*x0;
 }

@@ -36,13 +36,18 @@ static void aggsym_sincos(double x, double *s, double *c)
  * operations: 12 mul, 4 add, 0 div, 1 call */
 void planar_2link_inertia(const double *q, const double *p, double *A)
 {
-    const double x0 = p[2]*p[2];
-    const double x1 = p[3]*p[3]*0.3333333333333333*p[1];
+    const double q_1 = q[1];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double x0 = p_2*p_2;
+    const double x1 = p_3*p_3*0.3333333333333333*p_1;
     A[3] = x1;
     double x2_sin, x2;
-    aggsym_sincos(q[1], &x2_sin, &x2);
-    const double x3 = p[2]*p[1]*0.5*p[3]*x2;
-    A[0] = x0*0.3333333333333333*p[0] + x1 + 2*x3 + p[1]*x0;
+    aggsym_sincos(q_1, &x2_sin, &x2);
+    const double x3 = p_2*p_1*0.5*p_3*x2;
+    A[0] = x0*0.3333333333333333*p_0 + x1 + 2*x3 + p_1*x0;
     const double x4 = x1 + x3;
     A[1] = x4;
     A[2] = x4;
@@ -52,153 +57,222 @@ void planar_2link_inertia(const double *q, const double *p, double *A)
  * operations: 14 mul, 4 add, 0 div, 1 call */
 void planar_2link_bias(const double *q, const double *qd, const double *p, double *b)
 {
-    const double x0 = p[1]*0.5*p[3];
+    const double q_1 = q[1];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double x0 = p_1*0.5*p_3;
     double x2, x1;
-    aggsym_sincos(q[1], &x2, &x1);
-    const double x3 = p[2]*qd[0]*qd[0];
+    aggsym_sincos(q_1, &x2, &x1);
+    const double x3 = p_2*qd_0*qd_0;
     const double x4 = x2*x3;
-    const double x5 = qd[0] + qd[1];
+    const double x5 = qd_0 + qd_1;
     const double x6 = x0*x4;
     b[1] = x6;
-    b[0] = x6 + p[2]*(x1*p[1]*x4 - x2*(x0*x5*x5 + p[1]*x1*x3));
+    b[0] = x6 + p_2*(x1*p_1*x4 - x2*(x0*x5*x5 + p_1*x1*x3));
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
  * operations: 17 mul, 5 add, 0 div, 2 call */
 void planar_2link_gravity(const double *q, const double *p, double *g)
 {
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
     double x1, x0;
-    aggsym_sincos(q[0], &x1, &x0);
+    aggsym_sincos(q_0, &x1, &x0);
     double x3, x2;
-    aggsym_sincos(q[1], &x3, &x2);
-    const double x4 = p[4]*x1;
-    const double x5 = p[4]*x0;
+    aggsym_sincos(q_1, &x3, &x2);
+    const double x4 = p_4*x1;
+    const double x5 = p_4*x0;
     const double x6 = x2*x5 - x3*x4;
-    const double x7 = p[1]*0.5*p[3]*x6;
+    const double x7 = p_1*0.5*p_3*x6;
     g[1] = x7;
-    g[0] = x7 + p[2]*(x3*p[1]*(x2*x4 + x3*x5) + x2*p[1]*x6) + p[0]*0.5*p[2]*x5;
+    g[0] = x7 + p_2*(x3*p_1*(x2*x4 + x3*x5) + x2*p_1*x6) + p_0*0.5*p_2*x5;
 }
 
 /* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
  * operations: 21 mul, 8 add, 0 div, 2 call */
 void planar_2link_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
-    const double x0 = p[1]*0.5*p[3];
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double x0 = p_1*0.5*p_3;
     double x2, x1;
-    aggsym_sincos(q[0], &x2, &x1);
+    aggsym_sincos(q_0, &x2, &x1);
     double x4, x3;
-    aggsym_sincos(q[1], &x4, &x3);
-    const double x5 = qd[0] + qd[1];
-    const double x6 = p[4]*x1;
-    const double x7 = p[4]*x2 - p[2]*qd[0]*qd[0];
+    aggsym_sincos(q_1, &x4, &x3);
+    const double x5 = qd_0 + qd_1;
+    const double x6 = p_4*x1;
+    const double x7 = p_4*x2 - p_2*qd_0*qd_0;
     const double x8 = x3*x6 - x4*x7;
     const double x9 = x0*x8;
     d[1] = x9;
-    d[0] = p[0]*0.5*p[2]*x6 + x9 + p[2]*(x4*(p[1]*(x4*x6 + x3*x7) - x0*x5*x5) + x3*p[1]*x8);
+    d[0] = p_0*0.5*p_2*x6 + x9 + p_2*(x4*(p_1*(x4*x6 + x3*x7) - x0*x5*x5) + x3*p_1*x8);
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
  * operations: 31 mul, 13 add, 0 div, 2 call */
 void planar_2link_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
-    const double x0 = p[1]*0.5*p[3];
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double x0 = p_1*0.5*p_3;
     double x2, x1;
-    aggsym_sincos(q[0], &x2, &x1);
+    aggsym_sincos(q_0, &x2, &x1);
     double x4, x3;
-    aggsym_sincos(q[1], &x4, &x3);
-    const double x5 = qd[0] + qd[1];
-    const double x6 = p[4]*x1;
-    const double x7 = p[4]*x2 - p[2]*qd[0]*qd[0];
-    const double x8 = x6 + p[2]*qdd[0];
+    aggsym_sincos(q_1, &x4, &x3);
+    const double x5 = qd_0 + qd_1;
+    const double x6 = p_4*x1;
+    const double x7 = p_4*x2 - p_2*qd_0*qd_0;
+    const double x8 = x6 + p_2*qdd_0;
     const double x9 = x3*x8 - x4*x7;
-    const double x10 = qdd[0] + qdd[1];
-    const double x11 = p[3]*p[3]*0.3333333333333333*p[1]*x10 + x0*x9;
+    const double x10 = qdd_0 + qdd_1;
+    const double x11 = p_3*p_3*0.3333333333333333*p_1*x10 + x0*x9;
     tau[1] = x11;
-    tau[0] = p[0]*0.5*p[2]*x6 + p[2]*p[2]*0.3333333333333333*p[0]*qdd[0] + x11 + p[2]*(x4*(p[1]*(x3*x7 + x4*x8) - x0*x5*x5) + x3*(x0*x10 + p[1]*x9));
+    tau[0] = p_0*0.5*p_2*x6 + p_2*p_2*0.3333333333333333*p_0*qdd_0 + x11 + p_2*(x4*(p_1*(x3*x7 + x4*x8) - x0*x5*x5) + x3*(x0*x10 + p_1*x9));
 }
 
 /* T = 1/2 qd^T A(q) qd (Def. 2.4)
  * operations: 22 mul, 6 add, 0 div, 1 call */
 void planar_2link_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
-    const double x0 = p[1]*0.5*p[3];
+    const double q_1 = q[1];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double x0 = p_1*0.5*p_3;
     double x2, x1;
-    aggsym_sincos(q[1], &x2, &x1);
-    const double x3 = qd[0] + qd[1];
-    const double x4 = p[2]*qd[0];
+    aggsym_sincos(q_1, &x2, &x1);
+    const double x3 = qd_0 + qd_1;
+    const double x4 = p_2*qd_0;
     const double x5 = x2*x4;
     const double x6 = x1*x4;
-    T[0] = 0.5*(qd[0]*p[2]*p[2]*0.3333333333333333*p[0]*qd[0] + x5*p[1]*x5 + x6*(p[1]*x6 + x0*x3) + x3*(x0*x6 + p[3]*p[3]*0.3333333333333333*p[1]*x3));
+    T[0] = 0.5*(qd_0*p_2*p_2*0.3333333333333333*p_0*qd_0 + x5*p_1*x5 + x6*(p_1*x6 + x0*x3) + x3*(x0*x6 + p_3*p_3*0.3333333333333333*p_1*x3));
 }
 
 /* U(q), the potential energy of gravity
  * operations: 12 mul, 3 add, 0 div, 2 call */
 void planar_2link_potential_energy(const double *q, const double *p, double *U)
 {
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
     double x1, x0;
-    aggsym_sincos(q[0], &x1, &x0);
+    aggsym_sincos(q_0, &x1, &x0);
     double x3, x2;
-    aggsym_sincos(q[1], &x3, &x2);
-    const double x4 = p[4]*x1;
-    U[0] = p[0]*0.5*p[2]*x4 + p[1]*p[2]*x4 + p[1]*0.5*p[3]*(x2*x4 + x3*p[4]*x0);
+    aggsym_sincos(q_1, &x3, &x2);
+    const double x4 = p_4*x1;
+    U[0] = p_0*0.5*p_2*x4 + p_1*p_2*x4 + p_1*0.5*p_3*(x2*x4 + x3*p_4*x0);
 }
 
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
  * operations: 37 mul, 18 add, 0 div, 2 call */
 void planar_2link_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)
 {
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
     W[2] = 0;
     W[3] = 0;
     W[4] = 0;
     W[8] = 0;
     W[9] = 0;
     W[10] = 0;
-    const double x0 = p[0]*0.5*p[2];
-    const double x1 = p[1]*0.5*p[3];
+    const double x0 = p_0*0.5*p_2;
+    const double x1 = p_1*0.5*p_3;
     double x3, x2;
-    aggsym_sincos(q[0], &x3, &x2);
+    aggsym_sincos(q_0, &x3, &x2);
     double x5, x4;
-    aggsym_sincos(q[1], &x5, &x4);
-    const double x6 = qd[0]*qd[0];
-    const double x7 = qd[0] + qd[1];
-    const double x8 = p[4]*x3;
-    const double x9 = p[4]*x2;
-    const double x10 = x8 - p[2]*x6;
-    const double x11 = x9 + p[2]*qdd[0];
+    aggsym_sincos(q_1, &x5, &x4);
+    const double x6 = qd_0*qd_0;
+    const double x7 = qd_0 + qd_1;
+    const double x8 = p_4*x3;
+    const double x9 = p_4*x2;
+    const double x10 = x8 - p_2*x6;
+    const double x11 = x9 + p_2*qdd_0;
     const double x12 = x4*x11 - x5*x10;
-    const double x13 = qdd[0] + qdd[1];
-    const double x14 = p[1]*(x4*x10 + x5*x11) - x1*x7*x7;
+    const double x13 = qdd_0 + qdd_1;
+    const double x14 = p_1*(x4*x10 + x5*x11) - x1*x7*x7;
     W[6] = x14;
-    const double x15 = x1*x13 + p[1]*x12;
+    const double x15 = x1*x13 + p_1*x12;
     W[7] = x15;
-    const double x16 = p[3]*p[3]*0.3333333333333333*p[1]*x13 + x1*x12;
+    const double x16 = p_3*p_3*0.3333333333333333*p_1*x13 + x1*x12;
     W[11] = x16;
     const double x17 = x5*x14 + x4*x15;
-    W[0] = x4*x14 - x5*x15 + p[0]*x8 - x0*x6;
-    W[1] = x17 + p[0]*x9 + x0*qdd[0];
-    W[5] = x16 + p[2]*x17 + x0*x9 + p[2]*p[2]*0.3333333333333333*p[0]*qdd[0];
+    W[0] = x4*x14 - x5*x15 + p_0*x8 - x0*x6;
+    W[1] = x17 + p_0*x9 + x0*qdd_0;
+    W[5] = x16 + p_2*x17 + x0*x9 + p_2*p_2*0.3333333333333333*p_0*qdd_0;
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)
  * operations: 39 mul, 17 add, 2 div, 2 call */
 void planar_2link_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
-    const double x0 = p[1]*0.5*p[3];
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double tau_0 = tau[0];
+    const double tau_1 = tau[1];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double x0 = p_1*0.5*p_3;
     double x2, x1;
-    aggsym_sincos(q[0], &x2, &x1);
+    aggsym_sincos(q_0, &x2, &x1);
     double x4, x3;
-    aggsym_sincos(q[1], &x4, &x3);
-    const double x5 = qd[0] + qd[1];
-    const double x6 = p[4]*x1;
-    const double x7 = p[4]*x2 - p[2]*qd[0]*qd[0];
+    aggsym_sincos(q_1, &x4, &x3);
+    const double x5 = qd_0 + qd_1;
+    const double x6 = p_4*x1;
+    const double x7 = p_4*x2 - p_2*qd_0*qd_0;
     const double x8 = x3*x6 - x4*x7;
     const double x9 = x0*x8;
-    const double x10 = 1/(p[3]*p[3]*0.3333333333333333*p[1]);
+    const double x10 = 1/(p_3*p_3*0.3333333333333333*p_1);
     const double x11 = x0*x10;
-    const double x12 = p[1] - x0*x11;
-    const double x13 = 1 + p[2]*x3*x11;
-    const double x14 = tau[1] - x9;
-    const double x15 = 1/(p[2]*p[2]*0.3333333333333333*p[0] + p[2]*p[2]*(x12 + x4*x4*(p[1] - x12)))*(tau[0] - p[0]*0.5*p[2]*x6 - x9 - p[2]*(x4*(p[1]*(x4*x6 + x3*x7) - x0*x5*x5) + x3*p[1]*x8) - x13*x14);
+    const double x12 = p_1 - x0*x11;
+    const double x13 = 1 + p_2*x3*x11;
+    const double x14 = tau_1 - x9;
+    const double x15 = 1/(p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x12 + x4*x4*(p_1 - x12)))*(tau_0 - p_0*0.5*p_2*x6 - x9 - p_2*(x4*(p_1*(x4*x6 + x3*x7) - x0*x5*x5) + x3*p_1*x8) - x13*x14);
     qdd[0] = x15;
     qdd[1] = x10*x14 - x13*x15;
 }
@@ -207,14 +281,19 @@ void planar_2link_forward_dynamics(const double *q, const double *qd, const doub
  * operations: 18 mul, 6 add, 2 div, 1 call */
 void planar_2link_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
-    const double x0 = p[1]*0.5*p[3];
+    const double q_1 = q[1];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double x0 = p_1*0.5*p_3;
     double x2, x1;
-    aggsym_sincos(q[1], &x2, &x1);
-    const double x3 = 1/(p[3]*p[3]*0.3333333333333333*p[1]);
+    aggsym_sincos(q_1, &x2, &x1);
+    const double x3 = 1/(p_3*p_3*0.3333333333333333*p_1);
     const double x4 = x0*x3;
-    const double x5 = p[1] - x0*x4;
-    const double x6 = 1 + p[2]*x1*x4;
-    const double x7 = 1/(p[2]*p[2]*0.3333333333333333*p[0] + p[2]*p[2]*(x5 + x2*x2*(p[1] - x5)));
+    const double x5 = p_1 - x0*x4;
+    const double x6 = 1 + p_2*x1*x4;
+    const double x7 = 1/(p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x5 + x2*x2*(p_1 - x5)));
     Ainv[0] = x7;
     const double x8 = x6*x7;
     const double x9 = -x8;
@@ -227,13 +306,18 @@ void planar_2link_inertia_inverse(const double *q, const double *p, double *Ainv
  * operations: 16 mul, 5 add, 1 div, 1 call */
 void planar_2link_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
-    const double x0 = p[1]*0.5*p[3];
-    const double x1 = p[3]*p[3]*0.3333333333333333*p[1];
+    const double q_1 = q[1];
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double x0 = p_1*0.5*p_3;
+    const double x1 = p_3*p_3*0.3333333333333333*p_1;
     diag[1] = x1;
     double x3, x2;
-    aggsym_sincos(q[1], &x3, &x2);
+    aggsym_sincos(q_1, &x3, &x2);
     const double x4 = x0*1/x1;
-    const double x5 = p[1] - x0*x4;
-    targs[0] = 1 + p[2]*x2*x4;
-    diag[0] = p[2]*p[2]*0.3333333333333333*p[0] + p[2]*p[2]*(x5 + x3*x3*(p[1] - x5));
+    const double x5 = p_1 - x0*x4;
+    targs[0] = 1 + p_2*x2*x4;
+    diag[0] = p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x5 + x3*x3*(p_1 - x5));
 }
