@@ -36,8 +36,24 @@ of the same pair too (their L is the identity).  "Coordinate t is above coordina
 pair on the path from k's pair to the root, or to k's own pair and comes before k.
 
 The vector F = tau - b - g of (3.20) takes b + g from the sweeps at q'' = 0 (d(q, q') of (2.44)-(2.46), (2.52),
-:mod:`aggsym.sweeps`), and q'' comes from the transvections applied to it one by one (:func:`cauchy_solve`):
-2 operations per transvection and one product per pivot, never forming A(q) or A(q)^-1.
+:mod:`aggsym.sweeps`).  The product (3.20) is evaluated in two orders, both exact:
+
+* transvection by transvection with the explicit arguments (:func:`apply_T`, :func:`apply_T_transpose`,
+  :func:`cauchy_solve`): 2 operations per transvection, but forming the arguments moves every betabar^k to
+  every pair above it, O(n d) 6-vector motions;
+* in O(n) (:func:`apply_T_tree`, :func:`apply_T_transpose_tree`, :func:`cauchy_solve_tree`), the arguments
+  never formed.  In ``(T F)_t = F_t - sum_{k below t} <t,k> (T F)_k`` the sum is ``psi_t^T W``,
+  ``W = sum_{k below t} L^t_k betabar^k (T F)_k``, one 6-vector per body summed from the buds to the root with
+  the wrench motions L (like Z of Prop. 2.19); in ``(T^T z)_k = z_k - sum_{t above k} <t,k> (T^T z)_t`` the sum
+  is ``betabar^k,T U``, ``U = sum_{t above k} L^t_k,T psi_t (T^T z)_t``, one 6-vector per body carried from the
+  root to the buds with the quasi-velocity motions L^T (like (2.39)).  Inside a pair the coordinates go in
+  the elimination order: last first for T (``(T F)_t = F_t - psi_t^T W``, then ``W += betabar^t (T F)_t``),
+  first first for T^T (``x_t = z_t - betabar^t,T U``, then ``U += psi_t x_t``); L is the identity there.
+
+``forward_dynamics`` (emitted) is the O(n) order with the sum W riding on the sweeps' backward pass inside the
+transmitted wrench Z (:func:`transvected_forces`: both move by the same L, so T F costs no motion of its own),
+then T^T by :func:`apply_T_transpose_tree`.  ``transvective_factors`` emits the explicit arguments (they are
+its output, in the layout of :func:`layout`).
 
 Everything runs on both backends (floats and straight-line-program nodes): the only divisions are by the
 pivots (beta,beta)^k, and the only branching is on structural zeros and ones.
@@ -56,6 +72,7 @@ from .linalg import EYE3, dot, scale, sub
 __all__ = [
     "Factors", "coordinate_parents", "coordinates_above", "transvection_pairs", "articulated_factors",
     "corrected_factors", "transvective_factors", "apply_T", "apply_T_transpose", "cauchy_solve",
+    "transvect_pair", "apply_T_tree", "apply_T_transpose_tree", "cauchy_solve_tree", "transvected_forces",
     "T_columns", "inverse_from_factors", "forward_dynamics", "inertia_inverse", "factor_outputs",
     "number_of_transvections", "factored_form", "layout",
 ]
@@ -117,8 +134,9 @@ def _unit_axis(psi):
 class Factors:
     """The transvective factors of A(q): T by its arguments, and the diagonal.
 
-    ``pairs``: the (t, k) in product order (3.9); ``args[(t, k)] = <t,k>`` (3.8), (3.17); ``diag[k] =
-    (beta,beta)^k`` and ``recip[k]`` its reciprocal; ``beta[k]`` the column beta^k (6-vector, axes of k's body).
+    ``pairs``: the (t, k) in product order (3.9); ``args[(t, k)] = <t,k>`` (3.8), (3.17) (empty when the
+    arguments were not asked for); ``diag[k] = (beta,beta)^k`` and ``recip[k]`` its reciprocal; ``beta[k]`` the
+    column beta^k and ``betabar[k] = beta^k / (beta,beta)^k`` (3.13) (6-vectors, axes of k's body).
     """
 
     pairs: list
@@ -126,6 +144,7 @@ class Factors:
     diag: list
     recip: list
     beta: list
+    betabar: list
 
     def arguments(self) -> list:
         """The arguments <t,k> in product order."""
@@ -269,11 +288,14 @@ def _coordinates_above_body(tree) -> list[bool]:
     return out
 
 
-def articulated_factors(bound, kin) -> Factors:
-    """The factors by the Delta form (3.7)-(3.11): one-step recurrence of A^Delta_k from the buds to the root."""
+def articulated_factors(bound, kin, arguments: bool = True) -> Factors:
+    """The factors by the Delta form (3.7)-(3.11): one-step recurrence of A^Delta_k from the buds to the root.
+
+    With ``arguments=False`` the arguments <t,k> (3.8) are not formed (``args`` is empty): the O(n) evaluation
+    of (3.19), (3.20) (:func:`apply_T_tree`, :func:`apply_T_transpose_tree`) needs only the columns betabar."""
     tree = kin.tree
     n = tree.nq
-    diag, recip, beta = [0] * n, [0] * n, [None] * n
+    diag, recip, beta, betabar = [0] * n, [0] * n, [None] * n, [None] * n
     args: dict = {}
     acc = [b.mises for b in bound.bodies]  # A_kk, then + sum over children L (A^Delta - beta beta^T/(.,.)) L^T
     fold = _folder(bound.backend)
@@ -286,14 +308,16 @@ def articulated_factors(bound, kin) -> Factors:
                 raise ZeroDivisionError(f"coordinate {coords[pos]} moves no mass: A(q) is singular")
             j = coords[pos]
             beta[j], diag[j], recip[j], bbar, X = _eliminate(X, kin.psi[k][pos], fold)
-            _record_arguments(tree, kin, args, k, pos, bbar, reach)
+            betabar[j] = bbar
+            if arguments:
+                _record_arguments(tree, kin, args, k, pos, bbar, reach)
         p = tree.parent[k]
         if p >= 0 and X is not None:
             qv = [kin.q[i] for i in coords]
             functional, _, rots = pair_functional(bound.bodies[k].codes, qv, bound.backend)
             moved = _moved_to_parent(X, bound.bodies[k].L0, functional, rots, fold)
             acc[p] = moved if acc[p] is None else _folded(acc[p] + moved, fold)
-    return Factors(transvection_pairs(tree), args, diag, recip, beta)
+    return Factors(transvection_pairs(tree), args, diag, recip, beta, betabar)
 
 
 def corrected_factors(bound, kin) -> Factors:
@@ -309,7 +333,7 @@ def corrected_factors(bound, kin) -> Factors:
     below = [[] for _ in range(n)]
     for t, k in transvection_pairs(tree):
         below[t].append(k)
-    diag, recip, beta = [0] * n, [0] * n, [None] * n
+    diag, recip, beta, betabar = [0] * n, [0] * n, [None] * n, [None] * n
     args: dict = {}
     moved: dict = {}  # (body a, coordinate p) -> L^a_{body(p)} beta^p
     reach = _coordinates_above_body(tree)
@@ -324,6 +348,7 @@ def corrected_factors(bound, kin) -> Factors:
             col = sub(col, scale(args[(j, p)], moved[(k, p)]))
         beta[j] = col
         diag[j], recip[j], bbar = _pivot(col, psi)
+        betabar[j] = bbar
         _record_arguments(tree, kin, args, k, pos, bbar, reach)
         w, a = col, k
         moved[(a, j)] = w
@@ -331,7 +356,7 @@ def corrected_factors(bound, kin) -> Factors:
             w = kin.L[a].wrench(w)
             a = tree.parent[a]
             moved[(a, j)] = w
-    return Factors(transvection_pairs(tree), args, diag, recip, beta)
+    return Factors(transvection_pairs(tree), args, diag, recip, beta, betabar)
 
 
 def transvective_factors(bound, kin, form: str = "Delta") -> Factors:
@@ -371,6 +396,89 @@ def cauchy_solve(fac: Factors, F) -> list:
     """q'' = T^T diag 1/(beta,beta)^k T F (3.20), in O(number of transvections) scalar operations."""
     y = apply_T(fac, F)
     return apply_T_transpose(fac, [r * x for r, x in zip(fac.recip, y)])
+
+
+# --------------------------------------------------------------------------------------------------------------
+# the same products in O(n): the arguments summed on the tree
+
+
+def _axpy(acc, x, v):
+    """acc + x v for a 6-vector v (acc None: nothing accumulated yet); products with structural zeros skipped."""
+    xv = tuple(_mul(x, e) for e in v)
+    return xv if acc is None else tuple(a + b for a, b in zip(acc, xv))
+
+
+def _sum6(a, b):
+    """a + b for 6-vectors, None standing for an empty sum."""
+    if a is None:
+        return b
+    if b is None:
+        return a
+    return tuple(x + y for x, y in zip(a, b))
+
+
+def transvect_pair(kin, fac, k, F, W=None):
+    """The rows of T F (3.9) for the coordinates of body k's pair, given the moved sum W of the buds' columns.
+
+    ``W = sum_{j below the pair} L^k_{body j} betabar^j (T F)_j`` (k's axes; None when empty).  The pair's
+    coordinates are taken last first, as they were eliminated: ``(T F)_t = F_t - psi_t^T W`` and then
+    ``W += betabar^t (T F)_t``, so a later coordinate of the same pair enters through ``psi_t^T betabar^j =
+    <t, j>`` (L is the identity inside a pair).  Returns ``({t: (T F)_t}, W)``, W now including the pair."""
+    out = {}
+    for pos in range(len(kin.tree.coords[k]) - 1, -1, -1):
+        t = kin.tree.coords[k][pos]
+        y = F[t] if W is None else F[t] - dot(kin.psi[k][pos], W)
+        out[t] = y
+        W = _axpy(W, y, fac.betabar[t])
+    return out, W
+
+
+def apply_T_tree(kin, fac: Factors, F) -> list:
+    """T F (3.9) in O(n) 6-vector operations, the arguments never formed.
+
+    ``(T F)_t = F_t - sum_{k below t} <t,k> (T F)_k`` (the transvections applied k descending, as in
+    :func:`apply_T`), and with <t,k> = psi_t^T L^t_k betabar^k (3.8) the sum is ``psi_t^T W_t``,
+    ``W = sum_{k below t} L^t_k betabar^k (T F)_k``: one 6-vector per body, summed from the buds to the root and
+    moved by the wrench motions L (like Z of Prop. 2.19); see :func:`transvect_pair` for a pair's own
+    coordinates.  This is an evaluation order of the same product T."""
+    tree = kin.tree
+    y = list(F)
+    W = [None] * len(tree)
+    reach = _coordinates_above_body(tree)
+    for k in range(len(tree) - 1, -1, -1):
+        rows, w = transvect_pair(kin, fac, k, F, W[k])
+        for t, v in rows.items():
+            y[t] = v
+        p = tree.parent[k]
+        if reach[k] and w is not None:
+            W[p] = _sum6(W[p], kin.L[k].wrench(w))
+    return y
+
+
+def apply_T_transpose_tree(kin, fac: Factors, z) -> list:
+    """T^T z (3.10) in O(n) 6-vector operations, the arguments never formed.
+
+    ``(T^T z)_k = z_k - sum_{t above k} <t,k> (T^T z)_t`` (k ascending, as in :func:`apply_T_transpose`), and
+    the sum is ``betabar^k,T U_k``, ``U_k = sum_{t above k} L^t_k,T psi_t (T^T z)_t``: one 6-vector per body,
+    carried from the root to the buds by the quasi-velocity motions L^T (like (2.39)); inside a pair, first
+    coordinate first, ``U += psi_t (T^T z)_t`` after each."""
+    tree = kin.tree
+    x = list(z)
+    U = [None] * len(tree)
+    for k, p in enumerate(tree.parent):
+        u = None if p < 0 or U[p] is None else kin.L[k].twist(U[p])
+        for t, psi in zip(tree.coords[k], kin.psi[k]):
+            if u is not None:
+                x[t] = z[t] - dot(fac.betabar[t], u)
+            u = _axpy(u, x[t], psi)
+        U[k] = u
+    return x
+
+
+def cauchy_solve_tree(kin, fac: Factors, F) -> list:
+    """q'' = T^T diag 1/(beta,beta)^k T F (3.20) by :func:`apply_T_tree` and :func:`apply_T_transpose_tree`."""
+    y = apply_T_tree(kin, fac, F)
+    return apply_T_transpose_tree(kin, fac, [_mul(r, v) for r, v in zip(fac.recip, y)])
 
 
 def T_columns(fac: Factors, n: int) -> list[dict]:
@@ -442,9 +550,28 @@ def number_of_transvections(model):
     return (len(transvection_pairs(Tree(model))),)
 
 
-def forward_dynamics(bound, kin, tau, h):
-    """q'' = T^T diag(1/(beta,beta)) T (tau - h) (3.20), with h = b + g (the sweep's d(q, q') (2.52))."""
-    return cauchy_solve(articulated_factors(bound, kin), [t - hi for t, hi in zip(tau, h)])
+def transvected_forces(bound, kin, fac: Factors, tau, qd) -> list:
+    """T F = T (tau - b - g) (3.9), (3.20), with the sum W of :func:`apply_T_tree` carried by the sweeps'
+    backward pass: the pair's d_t = psi_t^T Z_k (2.46) arrives, ``(T F)_t = tau_t - d_t - psi_t^T W`` is formed
+    (:func:`transvect_pair`) and W travels to the root inside Z_k (both move by the same L).  The same product
+    T F as ``apply_T_tree(kin, fac, tau - d_vector(...))``, one wrench motion per body fewer."""
+    from .sweeps import inverse_dynamics
+
+    def transvect(k, d):
+        F = {t: tau[t] - x for t, x in zip(kin.tree.coords[k], d)}
+        rows, W = transvect_pair(kin, fac, k, F)
+        return [rows[t] for t in kin.tree.coords[k]], W
+
+    return inverse_dynamics(bound, kin, qd, [0] * kin.tree.nq, transvect=transvect)
+
+
+def forward_dynamics(bound, kin, tau, qd):
+    """q'' = T^T diag(1/(beta,beta)) T (tau - b - g) (3.20) in O(n): T F by :func:`transvected_forces` on the
+    sweeps (b + g = d(q, q') (2.52)), then T^T by :func:`apply_T_transpose_tree`; the arguments <t,k> are never
+    formed."""
+    fac = articulated_factors(bound, kin, arguments=False)
+    y = transvected_forces(bound, kin, fac, tau, qd)
+    return apply_T_transpose_tree(kin, fac, [_mul(r, v) for r, v in zip(fac.recip, y)])
 
 
 def inertia_inverse(bound, kin):

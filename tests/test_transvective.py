@@ -18,8 +18,11 @@ from aggsym.equations import coordinate_symbols, to_sympy
 from aggsym.kinematics import TreeKinematics
 from aggsym.model.tree import Tree
 from aggsym.routines import ROUTINES
+from aggsym import sweeps
 from aggsym.transvective import (
-    articulated_factors, corrected_factors, coordinates_above, factored_form, layout, transvection_pairs,
+    apply_T, apply_T_transpose, apply_T_transpose_tree, apply_T_tree, articulated_factors, cauchy_solve,
+    cauchy_solve_tree, coordinates_above, corrected_factors, factored_form, forward_dynamics, layout,
+    transvected_forces, transvection_pairs,
 )
 from conftest import MODELS, model_path
 from test_variants import chain_of_elementary_frames
@@ -120,6 +123,24 @@ def test_delta_and_Delta_forms_agree(model, rng):
             1.0, np.abs(big.arguments()).max(initial=0))
         assert np.abs(np.subtract(big.diag, small.diag)).max() <= 1e-10 * scale
         assert np.abs(np.subtract(big.beta, small.beta)).max() <= 1e-10 * max(1.0, np.abs(big.beta).max())
+
+
+def test_tree_evaluation_is_the_same_product(model, rng):
+    """The O(n) evaluation (arguments summed on the tree as 6-vectors) applies the same T, T^T and (3.20) as the
+    transvections one by one with the explicit arguments <t,k>, to round-off; so does T F carried by the sweeps."""
+    bound = bind(model, Numeric())
+    for q, qd, tau in states(model, rng, 3):
+        kin = TreeKinematics(bound, list(q))
+        fac = articulated_factors(bound, kin)
+        lean = articulated_factors(bound, kin, arguments=False)
+        assert lean.args == {} and np.array_equal(lean.betabar, fac.betabar)
+        F = list(rng.normal(size=model.nq))
+        assert rel(apply_T_tree(kin, lean, F), apply_T(fac, F)) <= 1e-13
+        assert rel(apply_T_transpose_tree(kin, lean, F), apply_T_transpose(fac, F)) <= 1e-13
+        assert rel(cauchy_solve_tree(kin, lean, F), cauchy_solve(fac, F)) <= 1e-13
+        F = [t - d for t, d in zip(tau, sweeps.d_vector(bound, kin, list(qd)))]
+        assert rel(transvected_forces(bound, kin, lean, list(tau), list(qd)), apply_T(fac, F)) <= 1e-13
+        assert rel(forward_dynamics(bound, kin, list(tau), list(qd)), cauchy_solve(fac, F)) <= 1e-13
 
 
 def test_symbolic_programs_equal_numeric_twin(model, rng):

@@ -334,7 +334,7 @@ def joint_wrenches(q, qd, qdd, p=None):
 
 
 def forward_dynamics(q, qd, tau, p=None):
-    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)"""
+    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     tau = np.asarray(tau, dtype=float)
@@ -378,13 +378,12 @@ def forward_dynamics(q, qd, tau, p=None):
     x17 = 1/x3
     x18 = x0*x17
     x19 = p_1 - x0*x18
-    x20 = x6*x18
-    x21 = x7*x7
-    x22 = tau_2 - x0*x16 + x12*x13
-    x23 = 1/(p_0 + x19 + x21*(p_1 - x19))*(tau_0 - x6*(x0*x12 + p_1*x16) + x7*(x0*(x10*x10 + qd_2*qd_2) + p_1*x6*x15) - x20*x22)
-    qdd[..., 0] = x23
-    qdd[..., 1] = 1/(p_6 + p_0*p_2*p_2 + p_4*p_1*p_4 + x8 + x8 + x2 + x13*x21)*(tau_1 - x7*qd_2*x10*(x3 + x13) - x6*(x11*(p_8 - x3) - x2*x11 - x0*x14) + p_4*(x0*(x11 + x11) + p_1*x14) + p_0*p_2*x14)
-    qdd[..., 2] = x17*x22 - x20*x23
+    x20 = x7*x7
+    x21 = tau_2 - x0*x16 + x12*x13
+    x22 = 1/(p_0 + x19 + x20*(p_1 - x19))*(tau_0 - x6*(x0*x12 + p_1*x16 + x18*x21) + x7*(x0*(x10*x10 + qd_2*qd_2) + p_1*x6*x15))
+    qdd[..., 0] = x22
+    qdd[..., 1] = 1/(p_6 + p_0*p_2*p_2 + p_4*p_1*p_4 + x8 + x8 + x2 + x13*x20)*(tau_1 - x7*qd_2*x10*(x3 + x13) - x6*(x11*(p_8 - x3) - x2*x11 - x0*x14) + p_4*(x0*(x11 + x11) + p_1*x14) + p_0*p_2*x14)
+    qdd[..., 2] = x17*x21 - x18*x6*x22
     return qdd
 
 
@@ -413,20 +412,20 @@ def inertia_inverse(q, p=None):
     x6 = 1/(p_10 + x1)
     x7 = x0*x6
     x8 = p_1 - x0*x7
-    x9 = x3*x7
-    x10 = x4*x4
-    x11 = 1/(p_0 + x8 + x10*(p_1 - x8))
-    x12 = x9*x11
+    x9 = x4*x4
+    x10 = 1/(p_0 + x8 + x9*(p_1 - x8))
+    x11 = x3*x7
+    x12 = x10*x11
     x13 = -x12
-    Ainv[..., 0, 0] = x11
+    Ainv[..., 0, 0] = x10
     Ainv[..., 0, 1] = 0
     Ainv[..., 0, 2] = x13
     Ainv[..., 1, 0] = 0
-    Ainv[..., 1, 1] = 1/(p_6 + p_0*p_2*p_2 + p_4*p_1*p_4 + x5 + x5 + x2 + (p_8 - x2)*x10)
+    Ainv[..., 1, 1] = 1/(p_6 + p_0*p_2*p_2 + p_4*p_1*p_4 + x5 + x5 + x2 + (p_8 - x2)*x9)
     Ainv[..., 1, 2] = 0
     Ainv[..., 2, 0] = x13
     Ainv[..., 2, 1] = 0
-    Ainv[..., 2, 2] = x6 + x9*x12
+    Ainv[..., 2, 2] = x6 + x11*x12
     return Ainv
 
 

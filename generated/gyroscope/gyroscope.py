@@ -285,7 +285,7 @@ def joint_wrenches(q, qd, qdd, p=None):
 
 
 def forward_dynamics(q, qd, tau, p=None):
-    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)"""
+    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     tau = np.asarray(tau, dtype=float)
@@ -317,7 +317,7 @@ def forward_dynamics(q, qd, tau, p=None):
     x13 = 0.0011048*(qd_2*x10 - x4*x8) + 0.0008952000000000001*x10*x11
     x14 = 0.0011048*(x5*x8 - qd_2*x9) - 0.0008952000000000001*x9*x11
     x15 = tau_2 - x12
-    x16 = 1/(0.004 + 0.0026048 - 0.0011048*x3*x3)*(tau_0 - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(x12 + x12) + 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1) - x3*x15)
+    x16 = 1/(0.004 + 0.0026048 - 0.0011048*x3*x3)*(tau_0 - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(x12 + x12 + x15) + 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1))
     qdd[..., 0] = x16
     qdd[..., 1] = 322.0819376449369*(tau_1 - x5*x13 - x4*x14 + 0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1))
     qdd[..., 2] = 500.0*x15 - x3*x16
