@@ -228,8 +228,8 @@ def generalized_forces_lumped(bound, kin, origins, rest, transvect=None):
     h+, and E_k everything else (``rest``: each body's own E from :func:`body_wrenches` with ``rest=True``).
     When pair k keeps its origin (L = C(c), a_k = c^T a_p), moving Z_k to the parent by (2.7) gives
     ``(m+_k a_p, (c h+_k) x a_p) + c E_k``: the masses are summed towards the root like the composite bodies of
-    (2.32) and multiplied by an acceleration only where an origin moves, and u*_k is read in the parent's frame,
-    ``Psi'^T (L Z_k)`` with Psi' = L^{-T} Psi = c Psi.  The first moment goes along when that is free
+    (2.32) and multiplied by an acceleration only where an origin moves, and u*_k is read as
+    ``(c Psi)^T (m+_k a_p, (c h+_k) x a_p) + Psi^T E_k`` (L = diag(c, c) is orthogonal).  The first moment goes along when that is free
     (c h+ = h+, h+ on the pair's axis) or when nothing else needs a_k (every child keeps its origin too);
     otherwise h+ x a_k is added to E_k there.  The decisions read structural zeros only, never runtime values.
 
@@ -252,18 +252,18 @@ def generalized_forces_lumped(bound, kin, origins, rest, transvect=None):
                 E[k] = E[k][:3] + add(E[k][3:], cross(first[k], origins[k].a))
                 first[k] = ZERO3
             h = L.rotate_free(first[k])
-            moved = L.wrench(E[k])
             a = origins[p].a
-            Z = add(_times(mass[k], a), moved[:3]) + add(cross(h, a), moved[3:])  # L Z_k, parent frame
-            u = [dot(L.wrench(col), Z) for col in kin.psi[k]]
-            W = None
+            lumped = _times(mass[k], a) + cross(h, a)  # L Theta+_k (a_k, 0), parent frame
+            u = [dot(L.wrench(col), lumped) + dot(col, E[k]) for col in kin.psi[k]]  # L = diag(c, c): L^T L = E
             if transvect is not None:
                 u, W = transvect(k, u)
+                if W is not None:
+                    E[k] = add(E[k], W)
             for i, x in zip(tree.coords[k], u):
                 tau[i] = x
             mass[p] = _fold(mass[p] + mass[k])
             first[p] = tuple(_fold(x) for x in add(first[p], h))
-            E[p] = add(E[p], moved if W is None else add(moved, L.wrench(W)))
+            E[p] = add(E[p], L.wrench(E[k]))
         else:
             a = origins[k].a
             Z = add(_times(mass[k], a), E[k][:3]) + add(cross(first[k], a), E[k][3:])

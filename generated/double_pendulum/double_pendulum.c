@@ -208,7 +208,7 @@ void double_pendulum_forward_dynamics(const double *q, const double *qd, const d
     const double x5 = sin(q[1]);
     const double x6 = cos(q[2]);
     const double x7 = sin(q[2]);
-    const double x8 = p[4]*x0*x6;
+    const double x8 = x0*x6;
     const double x9 = qd[1]*x7;
     const double x10 = qd[1]*x6;
     const double x11 = qd[2]*x9;
@@ -224,7 +224,7 @@ void double_pendulum_forward_dynamics(const double *q, const double *qd, const d
     const double x21 = tau[2] - x0*x16 + x12*x13;
     const double x22 = 1/(p[0] + x19 + x20*(p[1] - x19))*(tau[0] - x6*(x0*x12 + p[1]*x16 + x18*x21) + x7*(x0*(x10*x10 + qd[2]*qd[2]) + p[1]*x6*x15));
     qdd[0] = x22;
-    qdd[1] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x8 + x8 + x2 + x13*x20)*(tau[1] - x7*qd[2]*x10*(x3 + x13) - x6*(x11*(p[8] - x3) - x2*x11 - x0*x14) + p[4]*(x0*(x11 + x11) + p[1]*x14) + p[0]*p[2]*x14);
+    qdd[1] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*(x8 + p[1]*p[4]) + p[4]*x8 + x2 + x13*x20)*(tau[1] - x7*qd[2]*x10*(x3 + x13) - x6*(x11*(p[8] - x3) - x2*x11 - x0*x14) + p[4]*(x0*(x11 + x11) + p[1]*x14) + p[0]*p[2]*x14);
     qdd[2] = x17*x21 - x18*x6*x22;
 }
 
@@ -237,7 +237,7 @@ void double_pendulum_inertia_inverse(const double *q, const double *p, double *A
     const double x2 = p[9] + x1;
     const double x3 = cos(q[2]);
     const double x4 = sin(q[2]);
-    const double x5 = p[4]*x0*x3;
+    const double x5 = x0*x3;
     const double x6 = 1/(p[10] + x1);
     const double x7 = x0*x6;
     const double x8 = p[1] - x0*x7;
@@ -250,7 +250,7 @@ void double_pendulum_inertia_inverse(const double *q, const double *p, double *A
     Ainv[1] = 0;
     Ainv[2] = x13;
     Ainv[3] = 0;
-    Ainv[4] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x5 + x5 + x2 + (p[8] - x2)*x9);
+    Ainv[4] = 1/(p[6] + p[0]*p[2]*p[2] + p[4]*(x5 + p[1]*p[4]) + p[4]*x5 + x2 + (p[8] - x2)*x9);
     Ainv[5] = 0;
     Ainv[6] = x13;
     Ainv[7] = 0;
@@ -267,7 +267,7 @@ void double_pendulum_transvective_factors(const double *q, const double *p, doub
     const double x3 = p[10] + x1;
     const double x4 = cos(q[2]);
     const double x5 = sin(q[2]);
-    const double x6 = p[4]*x0*x4;
+    const double x6 = x0*x4;
     const double x7 = x0*1/x3;
     const double x8 = p[1] - x0*x7;
     const double x9 = x5*x5;
@@ -275,6 +275,6 @@ void double_pendulum_transvective_factors(const double *q, const double *p, doub
     targs[1] = x4*x7;
     targs[2] = 0;
     diag[0] = p[0] + x8 + x9*(p[1] - x8);
-    diag[1] = p[6] + p[0]*p[2]*p[2] + p[4]*p[1]*p[4] + x6 + x6 + x2 + (p[8] - x2)*x9;
+    diag[1] = p[6] + p[0]*p[2]*p[2] + p[4]*(x6 + p[1]*p[4]) + p[4]*x6 + x2 + (p[8] - x2)*x9;
     diag[2] = x3;
 }
