@@ -385,6 +385,45 @@ def program_operations(model, role) -> int:
     return sum(prog.ops[i][0] in (MUL, DIV, ADD, SUB, NEG) for i in ids)
 
 
+def chain_urdf(n: int) -> str:
+    """A chain of n revolute joints about e1, e2, e3 in turn, every origin, centre of mass and inertia general."""
+    axes = ("1 0 0", "0 1 0", "0 0 1")
+    parts = ['<?xml version="1.0"?>', '<robot name="chain">']
+    for k in range(n + 1):
+        parts.append(f'<link name="l{k}"><inertial><origin xyz="0.05 0.02 0.1"/><mass value="1.5"/>'
+                     f'<inertia ixx="0.02" ixy="0.001" ixz="0.002" iyy="0.03" iyz="0.003" izz="0.025"/>'
+                     f'</inertial></link>')
+    for k in range(n):
+        parts.append(f'<joint name="j{k}" type="revolute"><parent link="l{k}"/><child link="l{k + 1}"/>'
+                     f'<origin xyz="0.1 0.02 0.3"/><axis xyz="{axes[k % 3]}"/>'
+                     f'<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>')
+    return "\n".join(parts + ["</robot>"])
+
+
+def test_forward_dynamics_is_linear_in_n(tmp_path, monkeypatch):
+    """The emitted q'' costs O(n): on chains of 6, 12 and 24 links the operations grow by equal steps per link
+    (the transvection-by-transvection order with the explicit arguments grows like n d = n^2 on a chain)."""
+    from aggsym import transvective
+
+    def counts():
+        out = []
+        for n in (6, 12, 24):
+            path = tmp_path / f"chain{n}.urdf"
+            path.write_text(chain_urdf(n))
+            out.append(program_operations(aggsym.load(path), "forward_dynamics"))
+        return out
+
+    def growth(c):
+        return (c[2] - c[1]) / (c[1] - c[0])  # 2 for linear, 3 for quadratic (+ linear) growth
+
+    linear = counts()
+    monkeypatch.setattr(transvective, "forward_dynamics", lambda bound, kin, tau, qd: cauchy_solve(
+        articulated_factors(bound, kin), [t - d for t, d in zip(tau, sweeps.d_vector(bound, kin, qd))]))
+    explicit = counts()
+    assert growth(linear) <= 2.05 < 2.6 <= growth(explicit)
+    assert linear[2] < explicit[2]
+
+
 def test_forward_dynamics_operation_count():
     """Issue 5: q'' for the six-link arm in at most a third of Table 3.2's 2,579 operations at n = 6."""
     model = aggsym.load(model_path("manipulator6"))
