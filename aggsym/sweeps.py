@@ -231,7 +231,8 @@ def generalized_forces_lumped(bound, kin, origins, rest, transvect=None):
     (2.32) and multiplied by an acceleration only where an origin moves, and u*_k is read as
     ``(c Psi)^T (m+_k a_p, (c h+_k) x a_p) + Psi^T E_k`` (L = diag(c, c) is orthogonal).  The first moment goes
     along when that is free (c h+ = h+, h+ on the pair's axis) or when nothing else needs a_k (every child keeps
-    its origin too); otherwise h+ x a_k is added to E_k there.  The decisions read structural zeros only, never runtime values.
+    its origin too); otherwise h+ x a_k is added to E_k there.  The decisions read structural zeros only, never
+    runtime values.
 
     ``transvect(k, u)``, when given, is called with the pair's u* (coordinate order) and returns new values for
     them and a wrench W (k's axes, or None) that joins Z_k on its way to the root: this is how the transvections
