@@ -106,9 +106,9 @@ register(Routine("joint_wrenches", ("q", "qd", "qdd", "p"),
                  "W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)",
                  layout=sweeps.joint_wrench_layout))
 register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_vector),),
-                 lambda bound, kin, x: (transvective.forward_dynamics(
-                     bound, kin, x["tau"], sweeps.d_vector(bound, kin, x["qd"])),),
-                 "qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)"))
+                 lambda bound, kin, x: (transvective.forward_dynamics(bound, kin, x["tau"], x["qd"]),),
+                 "qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated "
+                 "in O(n)"))
 register(Routine("inertia_inverse", ("q", "p"), (Output("Ainv", nq_square, symmetric=True),),
                  lambda bound, kin, x: (_flat(transvective.inertia_inverse(bound, kin)),),
                  "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)"))

@@ -221,17 +221,22 @@ def keeps_origin(kin, k):
     return all(is_zero(x) for x in kin.L[k].o) and all(is_zero(x) for col in kin.psi[k] for x in col[:3])
 
 
-def generalized_forces_lumped(bound, kin, origins, rest):
+def generalized_forces_lumped(bound, kin, origins, rest, transvect=None):
     """u* = F^T M^T Z (2.42), (2.15), with the bodies that share an origin lumped as composite bodies (2.32).
 
     Write Z_k = Theta+_k (a_k, 0) + E_k, with Theta+_k (a, 0) = (m+ a, h+ x a) for a mass m+ and a first moment
     h+, and E_k everything else (``rest``: each body's own E from :func:`body_wrenches` with ``rest=True``).
     When pair k keeps its origin (L = C(c), a_k = c^T a_p), moving Z_k to the parent by (2.7) gives
     ``(m+_k a_p, (c h+_k) x a_p) + c E_k``: the masses are summed towards the root like the composite bodies of
-    (2.32) and multiplied by an acceleration only where an origin moves, and u*_k is read in the parent's frame,
-    ``Psi'^T (L Z_k)`` with Psi' = L^{-T} Psi = c Psi.  The first moment goes along when that is free
-    (c h+ = h+, h+ on the pair's axis) or when nothing else needs a_k (every child keeps its origin too);
-    otherwise h+ x a_k is added to E_k there.  The decisions read structural zeros only, never runtime values."""
+    (2.32) and multiplied by an acceleration only where an origin moves, and u*_k is read as
+    ``(c Psi)^T (m+_k a_p, (c h+_k) x a_p) + Psi^T E_k`` (L = diag(c, c) is orthogonal).  The first moment goes
+    along when that is free (c h+ = h+, h+ on the pair's axis) or when nothing else needs a_k (every child keeps
+    its origin too); otherwise h+ x a_k is added to E_k there.  The decisions read structural zeros only, never
+    runtime values.
+
+    ``transvect(k, u)``, when given, is called with the pair's u* (coordinate order) and returns new values for
+    them and a wrench W (k's axes, or None) that joins Z_k on its way to the root: this is how the transvections
+    of (3.20) ride on the backward sweep (:func:`aggsym.transvective.transvected_forces`)."""
     tree = kin.tree
     mass = [b.mises.m if isinstance(b.mises, Rigid) else 0 for b in bound.bodies]
     first = [b.mises.h if isinstance(b.mises, Rigid) else ZERO3 for b in bound.bodies]
@@ -248,29 +253,40 @@ def generalized_forces_lumped(bound, kin, origins, rest):
                 E[k] = E[k][:3] + add(E[k][3:], cross(first[k], origins[k].a))
                 first[k] = ZERO3
             h = L.rotate_free(first[k])
-            moved = L.wrench(E[k])
             a = origins[p].a
-            Z = add(_times(mass[k], a), moved[:3]) + add(cross(h, a), moved[3:])  # L Z_k, parent frame
-            for i, col in zip(tree.coords[k], kin.psi[k]):
-                tau[i] = dot(L.wrench(col), Z)
+            lumped = _times(mass[k], a) + cross(h, a)  # L Theta+_k (a_k, 0), parent frame
+            u = [dot(L.wrench(col), lumped) + dot(col, E[k]) for col in kin.psi[k]]  # L = diag(c, c): L^T L = E
+            if transvect is not None:
+                u, W = transvect(k, u)
+                if W is not None:
+                    E[k] = add(E[k], W)
+            for i, x in zip(tree.coords[k], u):
+                tau[i] = x
             mass[p] = _fold(mass[p] + mass[k])
             first[p] = tuple(_fold(x) for x in add(first[p], h))
-            E[p] = add(E[p], moved)
+            E[p] = add(E[p], L.wrench(E[k]))
         else:
             a = origins[k].a
             Z = add(_times(mass[k], a), E[k][:3]) + add(cross(first[k], a), E[k][3:])
-            for i, x in zip(tree.coords[k], project(kin.psi[k], Z)):
+            u = project(kin.psi[k], Z)
+            if transvect is not None:
+                u, W = transvect(k, u)
+                if W is not None:
+                    Z = add(Z, W)
+            for i, x in zip(tree.coords[k], u):
                 tau[i] = x
             if p >= 0:
                 E[p] = add(E[p], L.wrench(Z))
     return tau
 
 
-def inverse_dynamics(bound, kin, qd, qdd, H=None, gravity=True):
-    """u* by the sweeps (2.39)-(2.42), (2.15) in coordinate order; equals A q'' + b + g when H = 0."""
+def inverse_dynamics(bound, kin, qd, qdd, H=None, gravity=True, transvect=None):
+    """u* by the sweeps (2.39)-(2.42), (2.15) in coordinate order; equals A q'' + b + g when H = 0.
+
+    ``transvect``: see :func:`generalized_forces_lumped`."""
     origins = origin_sweep(bound, kin, qd, qdd, _gravity(bound, gravity))
     rest = body_wrenches(bound, kin, qd, qdd, H, gravity, origins=origins, rest=True)
-    return generalized_forces_lumped(bound, kin, origins, rest)
+    return generalized_forces_lumped(bound, kin, origins, rest, transvect)
 
 
 def d_vector(bound, kin, qd, H=None, gravity=True):

@@ -26,9 +26,10 @@ The routines emit the Delta form.  It costs one 6x6 congruence per body (O(n)), 
 O(n d) moved columns and O(n d) 6-vector corrections (d the depth); and most of its 6x6 work folds away: the
 eliminated unit axis e_m makes row and column m of ``A^Delta - beta beta^T/(beta,beta)`` exactly zero, and the
 congruence with the pair's elementary rotation about that same axis is done in the rotation's plane with
-4 products per 2x2 block (:func:`_rotate_sym6`).  Six-link arm (``models/manipulator6.yaml``), arithmetic nodes
-of the straight-line program: factors 292 (Delta) against 513 (delta); q'' 818 against 1041.
-``tests/test_transvective.py`` checks that both forms give the same arguments, pivots and columns.
+4 products per 2x2 block (:func:`_rotate_sym6`); the translations reuse the off-diagonal block
+(:func:`_translate_sym6`).  Six-link arm (``models/manipulator6.yaml``), arithmetic nodes of the straight-line
+program: factors 246 (Delta) against 423 (delta); q'' 551 in the O(n) order below against 596 transvection by
+transvection.  ``tests/test_transvective.py`` checks that both forms give the same arguments, pivots and columns.
 
 A pair with several coordinates is eliminated one coordinate at a time, last coordinate first, inside the
 pair's own frame: the coordinates of one pair are a chain, and T then holds transvections between coordinates
@@ -36,8 +37,24 @@ of the same pair too (their L is the identity).  "Coordinate t is above coordina
 pair on the path from k's pair to the root, or to k's own pair and comes before k.
 
 The vector F = tau - b - g of (3.20) takes b + g from the sweeps at q'' = 0 (d(q, q') of (2.44)-(2.46), (2.52),
-:mod:`aggsym.sweeps`), and q'' comes from the transvections applied to it one by one (:func:`cauchy_solve`):
-2 operations per transvection and one product per pivot, never forming A(q) or A(q)^-1.
+:mod:`aggsym.sweeps`).  The product (3.20) is evaluated in two orders, both exact:
+
+* transvection by transvection with the explicit arguments (:func:`apply_T`, :func:`apply_T_transpose`,
+  :func:`cauchy_solve`): 2 operations per transvection, but forming the arguments moves every betabar^k to
+  every pair above it, O(n d) 6-vector motions;
+* in O(n) (:func:`apply_T_tree`, :func:`apply_T_transpose_tree`, :func:`cauchy_solve_tree`), the arguments
+  never formed.  In ``(T F)_t = F_t - sum_{k below t} <t,k> (T F)_k`` the sum is ``psi_t^T W``,
+  ``W = sum_{k below t} L^t_k betabar^k (T F)_k``, one 6-vector per body summed from the buds to the root with
+  the wrench motions L (like Z of Prop. 2.19); in ``(T^T z)_k = z_k - sum_{t above k} <t,k> (T^T z)_t`` the sum
+  is ``betabar^k,T U``, ``U = sum_{t above k} L^t_k,T psi_t (T^T z)_t``, one 6-vector per body carried from the
+  root to the buds with the quasi-velocity motions L^T (like (2.39)).  Inside a pair the coordinates go in
+  the elimination order: last first for T (``(T F)_t = F_t - psi_t^T W``, then ``W += betabar^t (T F)_t``),
+  first first for T^T (``x_t = z_t - betabar^t,T U``, then ``U += psi_t x_t``); L is the identity there.
+
+``forward_dynamics`` (emitted) is the O(n) order with the sum W riding on the sweeps' backward pass inside the
+transmitted wrench Z (:func:`transvected_forces`: both move by the same L, so T F costs no motion of its own),
+then T^T by :func:`apply_T_transpose_tree`.  ``transvective_factors`` emits the explicit arguments (they are
+its output, in the layout of :func:`layout`).
 
 Everything runs on both backends (floats and straight-line-program nodes): the only divisions are by the
 pivots (beta,beta)^k, and the only branching is on structural zeros and ones.
@@ -51,11 +68,12 @@ from .codegen.program import is_const, is_one, is_zero, normalize_const
 from .group import Motion
 from .inertia import composite_inertias
 from .kinematics import pair_functional
-from .linalg import EYE3, dot, scale, sub
+from .linalg import dot, scale, sub
 
 __all__ = [
     "Factors", "coordinate_parents", "coordinates_above", "transvection_pairs", "articulated_factors",
     "corrected_factors", "transvective_factors", "apply_T", "apply_T_transpose", "cauchy_solve",
+    "transvect_pair", "apply_T_tree", "apply_T_transpose_tree", "cauchy_solve_tree", "transvected_forces",
     "T_columns", "inverse_from_factors", "forward_dynamics", "inertia_inverse", "factor_outputs",
     "number_of_transvections", "factored_form", "layout",
 ]
@@ -117,8 +135,9 @@ def _unit_axis(psi):
 class Factors:
     """The transvective factors of A(q): T by its arguments, and the diagonal.
 
-    ``pairs``: the (t, k) in product order (3.9); ``args[(t, k)] = <t,k>`` (3.8), (3.17); ``diag[k] =
-    (beta,beta)^k`` and ``recip[k]`` its reciprocal; ``beta[k]`` the column beta^k (6-vector, axes of k's body).
+    ``pairs``: the (t, k) in product order (3.9); ``args[(t, k)] = <t,k>`` (3.8), (3.17) (empty when the
+    arguments were not asked for); ``diag[k] = (beta,beta)^k`` and ``recip[k]`` its reciprocal; ``beta[k]`` the
+    column beta^k and ``betabar[k] = beta^k / (beta,beta)^k`` (3.13) (6-vectors, axes of k's body).
     """
 
     pairs: list
@@ -126,6 +145,7 @@ class Factors:
     diag: list
     recip: list
     beta: list
+    betabar: list
 
     def arguments(self) -> list:
         """The arguments <t,k> in product order."""
@@ -208,18 +228,52 @@ def _rotate_sym6(M, axis, c, s, s2, sc, fold):
 
 def _moved_to_parent(P, L0, functional, rots, fold):
     """L P L^T (2.7) for the pair's L = L_constructive T(o) C(c1 c2 c3): the elementary rotations one at a time
-    by :func:`_rotate_sym6`, then the functional translation, then the constant constructive motion."""
+    by :func:`_rotate_sym6`, then the functional translation, then the constant constructive motion
+    T(p) C(c0), each translation by :func:`_translate_sym6`."""
     M = _rows(P)
     for axis, rot in reversed(rots):
         i = axis % 3  # the first axis of the rotation's plane: rot[i][i] = cos, rot[(i + 1) % 3][i] = sin
         c, s = rot[i][i], rot[(i + 1) % 3][i]
         M = _rotate_sym6(M, axis, c, s, s * s, s * c, fold)
-    X = _general(M)
     if not all(is_zero(x) for x in functional.o):
-        X = _folded(X.moved(Motion(EYE3, functional.o)), fold)
-    if not (all(is_zero(x) for x in L0.o) and _is_identity(L0.c)):
-        X = _folded(X.moved(L0), fold)
-    return X
+        M = _translate_sym6(M, functional.o, fold)
+    if not _is_identity(L0.c):
+        M = _rows(_folded(_general(M).moved(Motion(L0.c)), fold))
+    if not all(is_zero(x) for x in L0.o):
+        M = _translate_sym6(M, L0.o, fold)
+    return _general(M)
+
+
+def _translate_sym6(M, o, fold):
+    """T(o) M T(o)^T for a symmetric 6x6 M given as rows, T(o) = [[E, 0], [hat(o), E]] (1.13).
+
+    With the blocks Y11, Y12, Y22 of M: ``Z12 = Y12 - Y11 hat(o)`` and, reusing it,
+    ``Z22 = Y22 + (hat(o) Y12)^T + hat(o) Z12`` (= Y22 + W + W^T - hat(o) Y11 hat(o), W = hat(o) Y12), upper
+    triangle only; Y11 stays.  Products with structural zeros of o are skipped."""
+    oh = ((0, -o[2], o[1]), (o[2], 0, -o[0]), (-o[1], o[0], 0))
+    y11 = [row[:3] for row in M[:3]]
+    y12 = [row[3:] for row in M[:3]]
+    y22 = [row[3:] for row in M[3:]]
+    z12 = [[fold(y12[i][j] - _lincomb([(y11[i][k], oh[k][j]) for k in range(3)])) for j in range(3)]
+           for i in range(3)]
+    out = [list(row) for row in M]
+    for i in range(3):
+        for j in range(3):
+            out[i][3 + j] = out[3 + j][i] = z12[i][j]
+        for j in range(i, 3):
+            w_ji = _lincomb([(oh[j][k], y12[k][i]) for k in range(3)])
+            oz_ij = _lincomb([(oh[i][k], z12[k][j]) for k in range(3)])
+            out[3 + i][3 + j] = out[3 + j][3 + i] = fold(y22[i][j] + w_ji + oz_ij)
+    return out
+
+
+def _lincomb(pairs):
+    """sum a b over (a, b) pairs, products with a structural zero skipped."""
+    acc = 0
+    for a, b in pairs:
+        if not (is_zero(a) or is_zero(b)):
+            acc = acc + a * b
+    return acc
 
 
 def _is_identity(c) -> bool:
@@ -269,11 +323,14 @@ def _coordinates_above_body(tree) -> list[bool]:
     return out
 
 
-def articulated_factors(bound, kin) -> Factors:
-    """The factors by the Delta form (3.7)-(3.11): one-step recurrence of A^Delta_k from the buds to the root."""
+def articulated_factors(bound, kin, arguments: bool = True) -> Factors:
+    """The factors by the Delta form (3.7)-(3.11): one-step recurrence of A^Delta_k from the buds to the root.
+
+    With ``arguments=False`` the arguments <t,k> (3.8) are not formed (``args`` is empty): the O(n) evaluation
+    of (3.19), (3.20) (:func:`apply_T_tree`, :func:`apply_T_transpose_tree`) needs only the columns betabar."""
     tree = kin.tree
     n = tree.nq
-    diag, recip, beta = [0] * n, [0] * n, [None] * n
+    diag, recip, beta, betabar = [0] * n, [0] * n, [None] * n, [None] * n
     args: dict = {}
     acc = [b.mises for b in bound.bodies]  # A_kk, then + sum over children L (A^Delta - beta beta^T/(.,.)) L^T
     fold = _folder(bound.backend)
@@ -286,14 +343,16 @@ def articulated_factors(bound, kin) -> Factors:
                 raise ZeroDivisionError(f"coordinate {coords[pos]} moves no mass: A(q) is singular")
             j = coords[pos]
             beta[j], diag[j], recip[j], bbar, X = _eliminate(X, kin.psi[k][pos], fold)
-            _record_arguments(tree, kin, args, k, pos, bbar, reach)
+            betabar[j] = bbar
+            if arguments:
+                _record_arguments(tree, kin, args, k, pos, bbar, reach)
         p = tree.parent[k]
         if p >= 0 and X is not None:
             qv = [kin.q[i] for i in coords]
             functional, _, rots = pair_functional(bound.bodies[k].codes, qv, bound.backend)
             moved = _moved_to_parent(X, bound.bodies[k].L0, functional, rots, fold)
             acc[p] = moved if acc[p] is None else _folded(acc[p] + moved, fold)
-    return Factors(transvection_pairs(tree), args, diag, recip, beta)
+    return Factors(transvection_pairs(tree), args, diag, recip, beta, betabar)
 
 
 def corrected_factors(bound, kin) -> Factors:
@@ -309,7 +368,7 @@ def corrected_factors(bound, kin) -> Factors:
     below = [[] for _ in range(n)]
     for t, k in transvection_pairs(tree):
         below[t].append(k)
-    diag, recip, beta = [0] * n, [0] * n, [None] * n
+    diag, recip, beta, betabar = [0] * n, [0] * n, [None] * n, [None] * n
     args: dict = {}
     moved: dict = {}  # (body a, coordinate p) -> L^a_{body(p)} beta^p
     reach = _coordinates_above_body(tree)
@@ -324,6 +383,7 @@ def corrected_factors(bound, kin) -> Factors:
             col = sub(col, scale(args[(j, p)], moved[(k, p)]))
         beta[j] = col
         diag[j], recip[j], bbar = _pivot(col, psi)
+        betabar[j] = bbar
         _record_arguments(tree, kin, args, k, pos, bbar, reach)
         w, a = col, k
         moved[(a, j)] = w
@@ -331,7 +391,7 @@ def corrected_factors(bound, kin) -> Factors:
             w = kin.L[a].wrench(w)
             a = tree.parent[a]
             moved[(a, j)] = w
-    return Factors(transvection_pairs(tree), args, diag, recip, beta)
+    return Factors(transvection_pairs(tree), args, diag, recip, beta, betabar)
 
 
 def transvective_factors(bound, kin, form: str = "Delta") -> Factors:
@@ -371,6 +431,89 @@ def cauchy_solve(fac: Factors, F) -> list:
     """q'' = T^T diag 1/(beta,beta)^k T F (3.20), in O(number of transvections) scalar operations."""
     y = apply_T(fac, F)
     return apply_T_transpose(fac, [r * x for r, x in zip(fac.recip, y)])
+
+
+# --------------------------------------------------------------------------------------------------------------
+# the same products in O(n): the arguments summed on the tree
+
+
+def _axpy(acc, x, v):
+    """acc + x v for a 6-vector v (acc None: nothing accumulated yet); products with structural zeros skipped."""
+    xv = tuple(_mul(x, e) for e in v)
+    return xv if acc is None else tuple(a + b for a, b in zip(acc, xv))
+
+
+def _sum6(a, b):
+    """a + b for 6-vectors, None standing for an empty sum."""
+    if a is None:
+        return b
+    if b is None:
+        return a
+    return tuple(x + y for x, y in zip(a, b))
+
+
+def transvect_pair(kin, fac, k, F, W=None):
+    """The rows of T F (3.9) for the coordinates of body k's pair, given the moved sum W of the buds' columns.
+
+    ``W = sum_{j below the pair} L^k_{body j} betabar^j (T F)_j`` (k's axes; None when empty).  The pair's
+    coordinates are taken last first, as they were eliminated: ``(T F)_t = F_t - psi_t^T W`` and then
+    ``W += betabar^t (T F)_t``, so a later coordinate of the same pair enters through ``psi_t^T betabar^j =
+    <t, j>`` (L is the identity inside a pair).  Returns ``({t: (T F)_t}, W)``, W now including the pair."""
+    out = {}
+    for pos in range(len(kin.tree.coords[k]) - 1, -1, -1):
+        t = kin.tree.coords[k][pos]
+        y = F[t] if W is None else F[t] - dot(kin.psi[k][pos], W)
+        out[t] = y
+        W = _axpy(W, y, fac.betabar[t])
+    return out, W
+
+
+def apply_T_tree(kin, fac: Factors, F) -> list:
+    """T F (3.9) in O(n) 6-vector operations, the arguments never formed.
+
+    ``(T F)_t = F_t - sum_{k below t} <t,k> (T F)_k`` (the transvections applied k descending, as in
+    :func:`apply_T`), and with <t,k> = psi_t^T L^t_k betabar^k (3.8) the sum is ``psi_t^T W_t``,
+    ``W = sum_{k below t} L^t_k betabar^k (T F)_k``: one 6-vector per body, summed from the buds to the root and
+    moved by the wrench motions L (like Z of Prop. 2.19); see :func:`transvect_pair` for a pair's own
+    coordinates.  This is an evaluation order of the same product T."""
+    tree = kin.tree
+    y = list(F)
+    W = [None] * len(tree)
+    reach = _coordinates_above_body(tree)
+    for k in range(len(tree) - 1, -1, -1):
+        rows, w = transvect_pair(kin, fac, k, F, W[k])
+        for t, v in rows.items():
+            y[t] = v
+        p = tree.parent[k]
+        if reach[k] and w is not None:
+            W[p] = _sum6(W[p], kin.L[k].wrench(w))
+    return y
+
+
+def apply_T_transpose_tree(kin, fac: Factors, z) -> list:
+    """T^T z (3.10) in O(n) 6-vector operations, the arguments never formed.
+
+    ``(T^T z)_k = z_k - sum_{t above k} <t,k> (T^T z)_t`` (k ascending, as in :func:`apply_T_transpose`), and
+    the sum is ``betabar^k,T U_k``, ``U_k = sum_{t above k} L^t_k,T psi_t (T^T z)_t``: one 6-vector per body,
+    carried from the root to the buds by the quasi-velocity motions L^T (like (2.39)); inside a pair, first
+    coordinate first, ``U += psi_t (T^T z)_t`` after each."""
+    tree = kin.tree
+    x = list(z)
+    U = [None] * len(tree)
+    for k, p in enumerate(tree.parent):
+        u = None if p < 0 or U[p] is None else kin.L[k].twist(U[p])
+        for t, psi in zip(tree.coords[k], kin.psi[k]):
+            if u is not None:
+                x[t] = z[t] - dot(fac.betabar[t], u)
+            u = _axpy(u, x[t], psi)
+        U[k] = u
+    return x
+
+
+def cauchy_solve_tree(kin, fac: Factors, F) -> list:
+    """q'' = T^T diag 1/(beta,beta)^k T F (3.20) by :func:`apply_T_tree` and :func:`apply_T_transpose_tree`."""
+    y = apply_T_tree(kin, fac, F)
+    return apply_T_transpose_tree(kin, fac, [_mul(r, v) for r, v in zip(fac.recip, y)])
 
 
 def T_columns(fac: Factors, n: int) -> list[dict]:
@@ -442,13 +585,37 @@ def number_of_transvections(model):
     return (len(transvection_pairs(Tree(model))),)
 
 
-def forward_dynamics(bound, kin, tau, h):
-    """q'' = T^T diag(1/(beta,beta)) T (tau - h) (3.20), with h = b + g (the sweep's d(q, q') (2.52))."""
-    return cauchy_solve(articulated_factors(bound, kin), [t - hi for t, hi in zip(tau, h)])
+def transvected_forces(bound, kin, fac: Factors, tau, qd) -> list:
+    """T F = T (tau - b - g) (3.9), (3.20), with the sum W of :func:`apply_T_tree` carried by the sweeps'
+    backward pass: the pair's d_t = psi_t^T Z_k (2.46) arrives, ``(T F)_t = tau_t - d_t - psi_t^T W`` is formed
+    (:func:`transvect_pair`) and W travels to the root inside Z_k (both move by the same L).  The same product
+    T F as ``apply_T_tree(kin, fac, tau - d_vector(...))``, one wrench motion per body fewer."""
+    from .sweeps import inverse_dynamics
+
+    def transvect(k, d):
+        F = {t: tau[t] - x for t, x in zip(kin.tree.coords[k], d)}
+        rows, W = transvect_pair(kin, fac, k, F)
+        return [rows[t] for t in kin.tree.coords[k]], W
+
+    return inverse_dynamics(bound, kin, qd, [0] * kin.tree.nq, transvect=transvect)
+
+
+def forward_dynamics(bound, kin, tau, qd):
+    """q'' = T^T diag(1/(beta,beta)) T (tau - b - g) (3.20) in O(n): T F by :func:`transvected_forces` on the
+    sweeps (b + g = d(q, q') (2.52)), then T^T by :func:`apply_T_transpose_tree`; the arguments <t,k> are never
+    formed."""
+    fac = articulated_factors(bound, kin, arguments=False)
+    y = transvected_forces(bound, kin, fac, tau, qd)
+    return apply_T_transpose_tree(kin, fac, [_mul(r, v) for r, v in zip(fac.recip, y)])
 
 
 def inertia_inverse(bound, kin):
-    """A(q)^-1 = T^T diag(1/(beta,beta)) T (3.19), as rows."""
+    """A(q)^-1 = T^T diag(1/(beta,beta)) T (3.19), as rows, from the explicit arguments (:func:`inverse_from_factors`).
+
+    Chosen by the operation counts of the emitted C: the columns of A^-1 as (3.20) applied to the unit vectors
+    in O(n) each (:func:`cauchy_solve_tree`) cost more on every model (six-link arm 478 against 312, panda 1968
+    against 1370, talos 10598 against 6144, test bench 25588 against 20785), and so do the columns of T carried
+    up the tree as 6-vectors (:func:`apply_T_tree` on unit vectors) except on the deepest tree (test bench 20050)."""
     return inverse_from_factors(articulated_factors(bound, kin), kin.tree.nq)
 
 

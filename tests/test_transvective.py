@@ -18,8 +18,11 @@ from aggsym.equations import coordinate_symbols, to_sympy
 from aggsym.kinematics import TreeKinematics
 from aggsym.model.tree import Tree
 from aggsym.routines import ROUTINES
+from aggsym import sweeps
 from aggsym.transvective import (
-    articulated_factors, corrected_factors, coordinates_above, factored_form, layout, transvection_pairs,
+    apply_T, apply_T_transpose, apply_T_transpose_tree, apply_T_tree, articulated_factors, cauchy_solve,
+    cauchy_solve_tree, coordinates_above, corrected_factors, factored_form, forward_dynamics, layout,
+    transvected_forces, transvection_pairs,
 )
 from conftest import MODELS, model_path
 from test_variants import chain_of_elementary_frames
@@ -120,6 +123,24 @@ def test_delta_and_Delta_forms_agree(model, rng):
             1.0, np.abs(big.arguments()).max(initial=0))
         assert np.abs(np.subtract(big.diag, small.diag)).max() <= 1e-10 * scale
         assert np.abs(np.subtract(big.beta, small.beta)).max() <= 1e-10 * max(1.0, np.abs(big.beta).max())
+
+
+def test_tree_evaluation_is_the_same_product(model, rng):
+    """The O(n) evaluation (arguments summed on the tree as 6-vectors) applies the same T, T^T and (3.20) as the
+    transvections one by one with the explicit arguments <t,k>, to round-off; so does T F carried by the sweeps."""
+    bound = bind(model, Numeric())
+    for q, qd, tau in states(model, rng, 3):
+        kin = TreeKinematics(bound, list(q))
+        fac = articulated_factors(bound, kin)
+        lean = articulated_factors(bound, kin, arguments=False)
+        assert lean.args == {} and np.array_equal(lean.betabar, fac.betabar)
+        F = list(rng.normal(size=model.nq))
+        assert rel(apply_T_tree(kin, lean, F), apply_T(fac, F)) <= 1e-13
+        assert rel(apply_T_transpose_tree(kin, lean, F), apply_T_transpose(fac, F)) <= 1e-13
+        assert rel(cauchy_solve_tree(kin, lean, F), cauchy_solve(fac, F)) <= 1e-13
+        F = [t - d for t, d in zip(tau, sweeps.d_vector(bound, kin, list(qd)))]
+        assert rel(transvected_forces(bound, kin, lean, list(tau), list(qd)), apply_T(fac, F)) <= 1e-13
+        assert rel(forward_dynamics(bound, kin, list(tau), list(qd)), cauchy_solve(fac, F)) <= 1e-13
 
 
 def test_symbolic_programs_equal_numeric_twin(model, rng):
@@ -362,6 +383,45 @@ def program_operations(model, role) -> int:
     outs = routine.build(bound, TreeKinematics(bound, ins["q"]), ins)
     ids = prog.reachable([x for out in outs for x in out])
     return sum(prog.ops[i][0] in (MUL, DIV, ADD, SUB, NEG) for i in ids)
+
+
+def chain_urdf(n: int) -> str:
+    """A chain of n revolute joints about e1, e2, e3 in turn, every origin, centre of mass and inertia general."""
+    axes = ("1 0 0", "0 1 0", "0 0 1")
+    parts = ['<?xml version="1.0"?>', '<robot name="chain">']
+    for k in range(n + 1):
+        parts.append(f'<link name="l{k}"><inertial><origin xyz="0.05 0.02 0.1"/><mass value="1.5"/>'
+                     f'<inertia ixx="0.02" ixy="0.001" ixz="0.002" iyy="0.03" iyz="0.003" izz="0.025"/>'
+                     f'</inertial></link>')
+    for k in range(n):
+        parts.append(f'<joint name="j{k}" type="revolute"><parent link="l{k}"/><child link="l{k + 1}"/>'
+                     f'<origin xyz="0.1 0.02 0.3"/><axis xyz="{axes[k % 3]}"/>'
+                     f'<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>')
+    return "\n".join(parts + ["</robot>"])
+
+
+def test_forward_dynamics_is_linear_in_n(tmp_path, monkeypatch):
+    """The emitted q'' costs O(n): on chains of 6, 12 and 24 links the operations grow by equal steps per link
+    (the transvection-by-transvection order with the explicit arguments grows like n d = n^2 on a chain)."""
+    from aggsym import transvective
+
+    def counts():
+        out = []
+        for n in (6, 12, 24):
+            path = tmp_path / f"chain{n}.urdf"
+            path.write_text(chain_urdf(n))
+            out.append(program_operations(aggsym.load(path), "forward_dynamics"))
+        return out
+
+    def growth(c):
+        return (c[2] - c[1]) / (c[1] - c[0])  # 2 for linear, 3 for quadratic (+ linear) growth
+
+    linear = counts()
+    monkeypatch.setattr(transvective, "forward_dynamics", lambda bound, kin, tau, qd: cauchy_solve(
+        articulated_factors(bound, kin), [t - d for t, d in zip(tau, sweeps.d_vector(bound, kin, qd))]))
+    explicit = counts()
+    assert growth(linear) <= 2.05 < 2.6 <= growth(explicit)
+    assert linear[2] < explicit[2]
 
 
 def test_forward_dynamics_operation_count():

@@ -50,7 +50,7 @@ void double_pendulum_variant2_kinetic_energy(const double *q, const double *qd, 
 void double_pendulum_variant2_potential_energy(const double *q, const double *p, double *U);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void double_pendulum_variant2_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
-/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20) */
+/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n) */
 void double_pendulum_variant2_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd);
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19) */
 void double_pendulum_variant2_inertia_inverse(const double *q, const double *p, double *Ainv);

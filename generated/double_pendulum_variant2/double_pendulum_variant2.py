@@ -323,7 +323,7 @@ def joint_wrenches(q, qd, qdd, p=None):
 
 
 def forward_dynamics(q, qd, tau, p=None):
-    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)"""
+    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     tau = np.asarray(tau, dtype=float)
@@ -356,8 +356,8 @@ def forward_dynamics(q, qd, tau, p=None):
     x6 = np.cos(q_2)
     x7 = np.sin(q_2)
     x8 = x7*x7
-    x9 = p_8 - x2
-    x10 = p_4*x0*x6
+    x9 = x0*x6
+    x10 = p_8 - x2
     x11 = qd_1*x7
     x12 = qd_1*x6
     x13 = qd_2*x11
@@ -368,12 +368,11 @@ def forward_dynamics(q, qd, tau, p=None):
     x18 = 1/x3
     x19 = x0*x18
     x20 = p_1 - x0*x19
-    x21 = x6*x19
-    x22 = tau_2 - x0*x17 + x9*x14
-    x23 = 1/(p_0 + x20 + x8*(p_1 - x20))*(tau_0 - x6*(x0*x14 + p_1*x17) + x7*(x0*(x12*x12 + qd_2*qd_2) + p_1*x6*x16) - x21*x22)
-    qdd[..., 0] = x23
-    qdd[..., 1] = 1/(p_6 + p_0*p_2*p_2 + p_4*p_1*p_4 + x10 + x2 + x8*x9 + x10)*(tau_1 - x7*qd_2*x12*(x3 + x9) - x6*(x13*(p_8 - x3) - x2*x13 - x0*x15) + p_4*(x0*(x13 + x13) + p_1*x15) + p_0*p_2*x15)
-    qdd[..., 2] = x18*x22 - x21*x23
+    x21 = tau_2 - x0*x17 + x10*x14
+    x22 = 1/(p_0 + x20 + x8*(p_1 - x20))*(tau_0 - x6*(x0*x14 + p_1*x17 + x19*x21) + x7*(x0*(x12*x12 + qd_2*qd_2) + p_1*x6*x16))
+    qdd[..., 0] = x22
+    qdd[..., 1] = 1/(p_6 + p_0*p_2*p_2 + p_4*(x9 + p_1*p_4) + x2 + x8*x10 + p_4*x9)*(tau_1 - x7*qd_2*x12*(x3 + x10) - x6*(x13*(p_8 - x3) - x2*x13 - x0*x15) + p_4*(x0*(x13 + x13) + p_1*x15) + p_0*p_2*x15)
+    qdd[..., 2] = x18*x21 - x19*x6*x22
     return qdd
 
 
@@ -403,19 +402,19 @@ def inertia_inverse(q, p=None):
     x3 = np.cos(q_2)
     x4 = np.sin(q_2)
     x5 = x4*x4
-    x6 = p_4*x0*x3
+    x6 = x0*x3
     x7 = 1/(p_10 + x1)
     x8 = x0*x7
     x9 = p_1 - x0*x8
-    x10 = x3*x8
-    Ainv[..., 1, 1] = 1/(p_6 + p_0*p_2*p_2 + p_4*p_1*p_4 + x6 + x2 + x5*(p_8 - x2) + x6)
-    x11 = 1/(p_0 + x9 + x5*(p_1 - x9))
-    Ainv[..., 0, 0] = x11
+    Ainv[..., 1, 1] = 1/(p_6 + p_0*p_2*p_2 + p_4*(x6 + p_1*p_4) + x2 + x5*(p_8 - x2) + p_4*x6)
+    x10 = 1/(p_0 + x9 + x5*(p_1 - x9))
+    Ainv[..., 0, 0] = x10
+    x11 = x3*x8
     x12 = x10*x11
     x13 = -x12
     Ainv[..., 0, 2] = x13
     Ainv[..., 2, 0] = x13
-    Ainv[..., 2, 2] = x7 + x10*x12
+    Ainv[..., 2, 2] = x7 + x11*x12
     return Ainv
 
 
@@ -446,10 +445,10 @@ def transvective_factors(q, p=None):
     x4 = np.cos(q_2)
     x5 = np.sin(q_2)
     x6 = x5*x5
-    x7 = p_4*x0*x4
+    x7 = x0*x4
     x8 = x0*1/x3
     x9 = p_1 - x0*x8
-    targs[..., 1] = x4*x8
     diag[..., 0] = p_0 + x9 + x6*(p_1 - x9)
-    diag[..., 1] = p_6 + p_0*p_2*p_2 + p_4*p_1*p_4 + x7 + x2 + x6*(p_8 - x2) + x7
+    diag[..., 1] = p_6 + p_0*p_2*p_2 + p_4*(x7 + p_1*p_4) + x2 + x6*(p_8 - x2) + p_4*x7
+    targs[..., 1] = x4*x8
     return targs, diag

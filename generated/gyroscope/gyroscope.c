@@ -123,8 +123,8 @@ void gyroscope_nonlinear_effects(const double *q, const double *qd, const double
     d[2] = x12;
     const double x13 = 0.0011048*(qd_2*x10 - x4*x8) + 0.0008952000000000001*x10*x11;
     const double x14 = 0.0011048*(x5*x8 - qd_2*x9) - 0.0008952000000000001*x9*x11;
-    d[0] = x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) + x3*(x12 + x12) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
     d[1] = x5*x13 + x4*x14 - 0.006596240066423136*x2 - 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1);
+    d[0] = x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) + x3*(x12 + x12) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
@@ -237,44 +237,44 @@ void gyroscope_joint_wrenches(const double *q, const double *qd, const double *q
     const double x20 = x4*x18 - 2.7484333610096403*x5;
     const double x21 = x7*x17 - x6*x19;
     const double x22 = x7*x19 + x6*x17;
-    const double x23 = 1.2*x20 - 0.0024*(x8*x8 + qd_1*qd_1);
-    W[14] = x23;
-    const double x24 = qdd_0*x4 - x10;
-    const double x25 = x11 + qdd_0*x5;
-    const double x26 = qd_2*x13 + x6*x24 + qdd_1*x7;
-    const double x27 = qdd_1*x6 - x7*x24 - qd_2*x12;
-    const double x28 = 0.002*(qdd_2 + x25);
-    W[17] = x28;
-    const double x29 = 0.0015*x25 + 0.0005*x11 + x28;
-    W[11] = x29;
-    const double x30 = 0.0024*(x15 + x27) + 1.2*x21;
-    W[12] = x30;
-    const double x31 = 0.0024*(x16 - x26) + 1.2*x22;
-    W[13] = x31;
-    const double x32 = 0.0008952000000000001*x16 + 0.0011048*x26 - 0.0024*x22;
+    const double x23 = qdd_0*x4 - x10;
+    const double x24 = x11 + qdd_0*x5;
+    const double x25 = qd_2*x13 + x6*x23 + qdd_1*x7;
+    const double x26 = qdd_1*x6 - x7*x23 - qd_2*x12;
+    const double x27 = 0.002*(qdd_2 + x24);
+    W[17] = x27;
+    const double x28 = 0.0015*x24 + 0.0005*x11 + x27;
+    W[11] = x28;
+    const double x29 = 0.0024*(x15 + x26) + 1.2*x21;
+    W[12] = x29;
+    const double x30 = 0.0024*(x16 - x25) + 1.2*x22;
+    W[13] = x30;
+    const double x31 = 1.2*x20 - 0.0024*(x8*x8 + qd_1*qd_1);
+    W[14] = x31;
+    const double x32 = 0.0008952000000000001*x16 + 0.0011048*x25 - 0.0024*x22;
     W[15] = x32;
-    const double x33 = 0.0011048*x27 + 0.0024*x21 - 0.0008952000000000001*x15;
+    const double x33 = 0.0011048*x26 + 0.0024*x21 - 0.0008952000000000001*x15;
     W[16] = x33;
-    const double x34 = x6*x30 - x7*x31 - 0.4*x19;
+    const double x34 = x6*x29 - x7*x30 - 0.4*x19;
     W[6] = x34;
-    const double x35 = 3.9240000000000004*x2 + x7*x30 + x6*x31;
+    const double x35 = 3.9240000000000004*x2 + x7*x29 + x6*x30;
     W[7] = x35;
-    const double x36 = x23 + 0.4*x20;
+    const double x36 = 0.4*x20 + x31;
     W[8] = x36;
-    const double x37 = 0.0015*x24 - 0.0005*x10 + x6*x32 - x7*x33;
+    const double x37 = 0.0015*x23 - 0.0005*x10 + x6*x32 - x7*x33;
     W[9] = x37;
     const double x38 = 0.002*qdd_1 + x7*x32 + x6*x33;
     W[4] = x38;
     W[10] = x38;
-    W[5] = x4*x29 - x5*x37;
+    W[5] = x4*x28 - x5*x37;
     W[0] = x4*x34 + x5*x36 - 1.649060016605784;
     W[1] = 5.886*x2 + x35;
     W[2] = 5.886*x3 + x4*x36 - x5*x34;
-    W[3] = 0.004*qdd_0 + x5*x29 + x4*x37;
+    W[3] = 0.004*qdd_0 + x5*x28 + x4*x37;
 }
 
-/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)
- * operations: 45 mul, 25 add, 1 div, 3 call */
+/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)
+ * operations: 44 mul, 25 add, 1 div, 3 call */
 void gyroscope_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_0 = q[0];
@@ -303,7 +303,7 @@ void gyroscope_forward_dynamics(const double *q, const double *qd, const double 
     const double x13 = 0.0011048*(qd_2*x10 - x4*x8) + 0.0008952000000000001*x10*x11;
     const double x14 = 0.0011048*(x5*x8 - qd_2*x9) - 0.0008952000000000001*x9*x11;
     const double x15 = tau_2 - x12;
-    const double x16 = 1/(0.004 + 0.0026048 - 0.0011048*x3*x3)*(tau_0 - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(x12 + x12) + 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1) - x3*x15);
+    const double x16 = 1/(0.004 + 0.0026048 - 0.0011048*x3*x3)*(tau_0 - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(x12 + x12 + x15) + 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1));
     qdd[0] = x16;
     qdd[1] = 322.0819376449369*(tau_1 - x5*x13 - x4*x14 + 0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1));
     qdd[2] = 500.0*x15 - x3*x16;

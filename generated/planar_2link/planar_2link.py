@@ -254,7 +254,7 @@ def joint_wrenches(q, qd, qdd, p=None):
 
 
 def forward_dynamics(q, qd, tau, p=None):
-    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20)"""
+    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     tau = np.asarray(tau, dtype=float)
@@ -285,11 +285,10 @@ def forward_dynamics(q, qd, tau, p=None):
     x10 = 1/(p_3*p_3*0.3333333333333333*p_1)
     x11 = x0*x10
     x12 = p_1 - x0*x11
-    x13 = 1 + p_2*x3*x11
-    x14 = tau_1 - x9
-    x15 = 1/(p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x12 + x4*x4*(p_1 - x12)))*(tau_0 - p_0*0.5*p_2*x6 - x9 - p_2*(x4*(p_1*(x4*x6 + x3*x7) - x0*x5*x5) + x3*p_1*x8) - x13*x14)
-    qdd[..., 0] = x15
-    qdd[..., 1] = x10*x14 - x13*x15
+    x13 = tau_1 - x9
+    x14 = 1/(p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x12 + x4*x4*(p_1 - x12)))*(tau_0 - p_0*0.5*p_2*x6 - x9 - x13 - p_2*(x4*(p_1*(x4*x6 + x3*x7) - x0*x5*x5) + x3*(p_1*x8 + x11*x13)))
+    qdd[..., 0] = x14
+    qdd[..., 1] = x10*x13 - x14 - x11*x3*p_2*x14
     return qdd
 
 
@@ -310,14 +309,14 @@ def inertia_inverse(q, p=None):
     x3 = 1/(p_3*p_3*0.3333333333333333*p_1)
     x4 = x0*x3
     x5 = p_1 - x0*x4
-    x6 = 1 + p_2*x1*x4
-    x7 = 1/(p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x5 + x2*x2*(p_1 - x5)))
-    Ainv[..., 0, 0] = x7
+    x6 = 1/(p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x5 + x2*x2*(p_1 - x5)))
+    Ainv[..., 0, 0] = x6
+    x7 = 1 + p_2*x1*x4
     x8 = x6*x7
     x9 = -x8
     Ainv[..., 0, 1] = x9
     Ainv[..., 1, 0] = x9
-    Ainv[..., 1, 1] = x3 + x6*x8
+    Ainv[..., 1, 1] = x3 + x7*x8
     return Ainv
 
 
@@ -340,6 +339,6 @@ def transvective_factors(q, p=None):
     x3 = np.sin(q_1)
     x4 = x0*1/x1
     x5 = p_1 - x0*x4
-    targs[..., 0] = 1 + p_2*x2*x4
     diag[..., 0] = p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x5 + x3*x3*(p_1 - x5))
+    targs[..., 0] = 1 + p_2*x2*x4
     return targs[..., 0][()], diag

@@ -45,7 +45,7 @@ void planar_3link_kinetic_energy(const double *q, const double *qd, const double
 void planar_3link_potential_energy(const double *q, const double *p, double *U);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void planar_3link_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
-/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20) */
+/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n) */
 void planar_3link_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd);
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19) */
 void planar_3link_inertia_inverse(const double *q, const double *p, double *Ainv);
