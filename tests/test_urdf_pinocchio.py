@@ -74,8 +74,8 @@ def check_link_frames(model, pm, rng):
     for body in model.bodies[1:]:
         frame = data.oMf[pm.getFrameId(body_link[body.name], pin.BODY)]
         R, p = ours[body.name]
-        assert np.allclose(R, frame.rotation, atol=1e-12), body.name
-        assert np.allclose(p, frame.translation, atol=1e-12), body.name
+        assert np.allclose(R, frame.rotation, atol=1e-9), body.name  # URDF angles within 1e-9 rad of k pi/2 are taken as exact
+        assert np.allclose(p, frame.translation, atol=1e-9), body.name
 
 
 @pytest.mark.parametrize("robot", list(ROBOTS))

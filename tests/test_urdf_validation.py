@@ -434,3 +434,22 @@ def test_ignores_what_dynamics_does_not_need(write):
 def test_messages_have_no_placeholders(write):
     text = arm().replace('<parent link="upper"/>', '<parent link="uper"/>')
     assert not re.search(r"\{|\}", str(error(write(text))))
+
+
+def test_right_angles_written_as_decimals_are_exact(tmp_path):
+    """rpy="1.57079632679 0 -3.14159265359" is taken as (pi/2, 0, -pi): the constant rotation has exact zeros and
+    ones, so they fold in the generated code."""
+    import aggsym
+
+    text = """<robot name="r">
+  <link name="a"/>
+  <link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j" type="revolute"><parent link="a"/><child link="b"/>
+    <origin xyz="0 0 0.1" rpy="1.57079632679 0 -3.14159265359"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>"""
+    path = tmp_path / "r.urdf"
+    path.write_text(text)
+    model = aggsym.load(path)
+    c = model.bodies[-1].pair.constructive_rotation()
+    assert all(x in (0, 1, -1) for x in c), c
