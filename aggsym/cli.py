@@ -52,6 +52,8 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--trials", type=int, default=20, help="random states per routine (default 20)")
     c.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     c.add_argument("--tol", type=float, default=1e-12, help="largest relative error accepted (default 1e-12)")
+    c.add_argument("--opt", default="-O2", choices=["-O0", "-O1", "-O2", "-O3"],
+                   help="optimization level of the compile (default -O2; large models compile much faster at -O0)")
     command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
     return parser
 
@@ -103,7 +105,7 @@ def cmd_check(args) -> int:
 
     model = _load(args)
     gen = generate(model, latex=False)
-    results = check_generated(model, gen.files, trials=args.trials, seed=args.seed)
+    results = check_generated(model, gen.files, trials=args.trials, seed=args.seed, opt=args.opt)
     width = max(len(r.role) for r in results)
     print(f"{model.name}: {args.trials} random states per routine; worst relative error against the numeric twin")
     print(f"{'routine'.ljust(width)}  {'C':>9}  {'NumPy':>9}")

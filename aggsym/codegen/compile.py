@@ -110,14 +110,14 @@ def relative_error(a, b) -> float:
     return float(np.max(np.abs(a - b)) / (scale if scale > 0 else 1.0))
 
 
-def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir=None):
-    """Compile the C, import the NumPy module, compare both with the numeric twin on random states."""
+def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir=None, opt: str = "-O2"):
+    """Compile the C (with ``opt``), import the NumPy module, compare both with the numeric twin on random states."""
     manifest = __import__("json").loads(files[f"{model.name}.json"])
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
         tmp = Path(tmp)
         for name, text in files.items():
             (tmp / name).write_text(text, encoding="utf-8")
-        lib = CLibrary(compile_shared(tmp / f"{model.name}.c", tmp / f"lib{model.name}.so"), manifest)
+        lib = CLibrary(compile_shared(tmp / f"{model.name}.c", tmp / f"lib{model.name}.so", extra=(opt,)), manifest)
         module = import_module(tmp / f"{model.name}.py")
         twin = NumericTwin(model)
         rng = np.random.default_rng(seed)
