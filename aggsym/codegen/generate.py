@@ -47,11 +47,25 @@ class Generated:
     timings: list = field(default_factory=list)  # (stage, seconds)
 
 
-def templates() -> jinja2.Environment:
-    """The Jinja environment over the package's templates (shipped inside the wheel as aggsym/templates)."""
+def template_root():
+    """Where the templates are: ``templates/`` of the source tree this package was imported from (a checkout: the
+    folder holds pyproject.toml naming aggsym), else the installed package data ``aggsym.templates`` (the wheel).
+
+    The check matters when the package is imported from one checkout (PYTHONPATH) while an editable install of
+    another one maps ``aggsym.templates`` there: the code and its templates must come from the same tree."""
     from importlib.resources import files
 
-    root = files("aggsym.templates")
+    tree = Path(__file__).resolve().parents[2]
+    project = tree / "pyproject.toml"
+    if (tree / "templates" / "model.c.j2").is_file() and project.is_file() and \
+            'name = "aggsym"' in project.read_text(encoding="utf-8"):
+        return tree / "templates"
+    return files("aggsym.templates")
+
+
+def templates() -> jinja2.Environment:
+    """The Jinja environment over the package's templates (shipped inside the wheel as aggsym/templates)."""
+    root = template_root()
     return jinja2.Environment(
         loader=jinja2.FunctionLoader(lambda name: (root / name).read_text(encoding="utf-8")),
         undefined=jinja2.StrictUndefined,
