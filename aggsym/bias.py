@@ -5,7 +5,8 @@
 
 Gravity enters the book's right-hand side as ``S H`` with the gravity wrench ``G_lk`` in H (2.9), (2.29); aggsym
 moves it to the left: ``g(q) = -S G``.  Since ``G_lk = Theta_lk (g_lk, 0)`` with g_lk the gravity vector in the
-body's axes, ``g = F^T M^T L Y_g`` with ``Y_g = Theta (-g_lk, 0)``: the same backward recurrence.
+body's axes, ``g = F^T M^T L Y_g`` with ``Y_g = Theta (-g_lk, 0)``: the same backward recurrence.  Theta is the
+body's own Mises matrix, without added masses (gravity acts on the body, not on the medium, Prop. 2.8).
 """
 from __future__ import annotations
 
@@ -32,7 +33,7 @@ def gravity_accelerations(bound, kin):
 def gravity_vector(bound, kin):
     """g(q) = -S G (see the module docstring): a list of n scalars."""
     gam = gravity_accelerations(bound, kin)
-    Y = [ZERO6 if b.mises is None else b.mises.apply(gam[k]) for k, b in enumerate(bound.bodies)]
+    Y = [ZERO6 if b.rigid is None else b.rigid.apply(gam[k]) for k, b in enumerate(bound.bodies)]
     return generalized(kin, kin.backward(Y))
 
 

@@ -1,9 +1,13 @@
 """Kinetic and potential energy (Def. 2.4).
 
-``T = 1/2 V^T A V`` summed over bodies with the body quasi-velocities V of (1.41), and
+``T = 1/2 V^T A V`` summed over bodies with the body quasi-velocities V of (1.41) (A the body's aggregate: with
+added masses Theta + Lambda, so T holds the medium's 1/2 V^T Lambda V (Prop. 2.8); a prescribed spin's velocity
+is in V), and
 ``U = sum_k m_k (-g . o_k) + (-g_k) . h_k`` with o_k the body origin in the world frame, g_k gravity in the body's
-axes and h_k = m_k r_ck the first moment: the work against gravity of lifting every centre of mass.  The heights
-``-g . o_k`` are carried from the root: ``-g . o_k = -g . o_parent + (-g_parent) . o^{parent}_{k}``.
+axes and h_k = m_k r_ck the first moment of the body's own Mises matrix: the work against gravity of lifting
+every centre of mass.  The heights ``-g . o_k`` are carried from the root:
+``-g . o_k = -g . o_parent + (-g_parent) . o^{parent}_{k}``.  (The springs' 1/2 (q - q0)^T C (q - q0) is
+:func:`aggsym.elastic.elastic_energy`.)
 """
 from __future__ import annotations
 
@@ -30,7 +34,7 @@ def potential_energy(bound, kin):
         h = dot(up, kin.L[k].o)
         height.append(h if p < 0 else height[p] + h)
         h = height[-1]
-        th = bound.bodies[k].mises
+        th = bound.bodies[k].rigid
         if th is not None:
             acc = acc + th.m * h + dot(gam[k], th.h)
     return acc

@@ -13,6 +13,10 @@ For the tree (1.34)-(1.43): ``V_lk = L^T V_parent + M F q'`` (2.39), the rows of
 ``s^{st}_{lk} = s^{st}_{parent} L^{parent}_{lk}`` (1.43), and the column ``X = S'^T q'`` by (2.37):
 ``X_lk = L^T X_parent + L'^T V_parent + (M F)' q'`` where ``L'^T V_parent = Phi-action(L^T V_parent, V_pair)``.
 
+A pair with a prescribed motion (a rotor's spin (2.13)) has no coordinate; its relative quasi-velocity U = f theta'
+and quasi-acceleration U' = f theta'' are known at the bound time (``BoundBody.spin``) and enter wherever the
+pair's own M F q' and (M F)' q' + M F q'' do: V, X (so X is the quasi-acceleration at q'' = 0) and V'.
+
 All 6-vectors are in the body's own frame, (v, w) order.
 """
 from __future__ import annotations
@@ -116,27 +120,37 @@ class TreeKinematics:
     def pair_rates(self, k, qd):
         return [qd[i] for i in self.tree.coords[k]]
 
+    def relative_velocity(self, k, qd):
+        """M F q' of pair k (1.31), plus the prescribed U = f theta' of a rotor's pair: its quasi-velocity relative
+        to the parent (child frame)."""
+        own = combine(self.psi[k], self.pair_rates(k, qd))
+        spin = self.bound.bodies[k].spin
+        return own if spin is None else add(own, spin[0])
+
     def relative_acceleration(self, k, qd):
-        """(M F)' q' of pair k (2.19): its relative quasi-acceleration at zero q'' (child frame)."""
-        return pair_velocity_product(self.bound.bodies[k].codes, self.pair_rates(k, qd), self._rots[k])
+        """(M F)' q' of pair k (2.19), plus the prescribed U' of a rotor's pair: its relative quasi-acceleration
+        at zero q'' (child frame)."""
+        out = pair_velocity_product(self.bound.bodies[k].codes, self.pair_rates(k, qd), self._rots[k])
+        spin = self.bound.bodies[k].spin
+        return out if spin is None else add(out, spin[1])
 
     def velocities(self, qd):
         """Quasi-velocities V_lk of every body (2.39)."""
         V = []
         for k, p in enumerate(self.tree.parent):
-            own = combine(self.psi[k], self.pair_rates(k, qd))
+            own = self.relative_velocity(k, qd)
             V.append(own if p < 0 else add(self.L[k].twist(V[p]), own))
         return V
 
     def velocity_products(self, qd, V):
-        """X = S'^T q' by the recurrence (2.37), including each pair's own (M F)' q' term (2.19)."""
+        """X = S'^T q' by the recurrence (2.37), including each pair's own (M F)' q' term (2.19) (and a
+        prescribed pair's U': X is every body's quasi-acceleration at q'' = 0)."""
         X = []
         for k, p in enumerate(self.tree.parent):
-            rates = self.pair_rates(k, qd)
-            x = pair_velocity_product(self.bound.bodies[k].codes, rates, self._rots[k])
+            x = self.relative_acceleration(k, qd)
             if p >= 0:
                 Vp = self.L[k].twist(V[p])
-                x = add(x, add(self.L[k].twist(X[p]), phi_motion(Vp, combine(self.psi[k], rates))))
+                x = add(x, add(self.L[k].twist(X[p]), phi_motion(Vp, self.relative_velocity(k, qd))))
             X.append(x)
         return X
 
@@ -144,13 +158,12 @@ class TreeKinematics:
         """Quasi-accelerations V'_lk of the forward sweep (2.40); ``base`` is the world frame's (e.g. -gravity)."""
         A = []
         for k, p in enumerate(self.tree.parent):
-            rates = self.pair_rates(k, qd)
             own = combine(self.psi[k], [qdd[i] for i in self.tree.coords[k]])
-            a = add(pair_velocity_product(self.bound.bodies[k].codes, rates, self._rots[k]), own)
+            a = add(self.relative_acceleration(k, qd), own)
             parent_V = ZERO6 if p < 0 else V[p]
             parent_A = base if p < 0 else A[p]
             Vp = self.L[k].twist(parent_V)
-            a = add(a, add(self.L[k].twist(parent_A), phi_motion(Vp, combine(self.psi[k], rates))))
+            a = add(a, add(self.L[k].twist(parent_A), phi_motion(Vp, self.relative_velocity(k, qd))))
             A.append(a)
         return A
 

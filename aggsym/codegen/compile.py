@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import AggsymError
 from ..numeric import NumericTwin
-from ..routines import ROUTINES
+from ..routines import ROUTINES, signature
 
 CFLAGS = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-fPIC", "-shared"]
 
@@ -92,11 +92,13 @@ class CheckResult:
 def random_inputs(model, role, rng):
     routine = ROUTINES[role]
     args = []
-    for name in routine.inputs:
+    for name in signature(routine, model):
         if name == "p":
             continue
         if name == "q":
             args.append(rng.uniform(-np.pi, np.pi, model.nq))
+        elif name == "t":
+            args.append(float(rng.uniform(0, 10)))
         else:
             args.append(rng.normal(size=model.nq))
     return args
