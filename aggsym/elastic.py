@@ -1,5 +1,5 @@
-"""Hooke elasticity: the stiffness C of elastic pairs, the generalized elastic force C q and its energy,
-(1.32)-(1.33), (2.27), Prop. 2.13.
+"""Hooke elasticity: the stiffness C of elastic pairs, the generalized elastic force C q, its energy, and the
+slow/fast partition of the equations, (1.32)-(1.33), (2.27), Prop. 2.13, Prop. 2.14.
 
 An elastic pair (Def. 1.10) is a pair whose coordinates are deformations of the parent element; the model gives
 its stiffness, a symmetric positive semi-definite k x k matrix over the pair's coordinates, and optionally the
@@ -12,10 +12,22 @@ the potential energy.  Sign convention: C is the stiffness itself (positive), so
 restoring force.  (The book's example after (2.28) prints C = -[[c22, c25, 0], [c52, c55, 0], [0, 0, 0]] and
 the terms "- c22 delta12 - c25 delta15" on the left; there c_ij are the coefficients of the elastic wrench acting
 on the body, i.e. minus our stiffness, see ``tests/test_elastic.py``.)
+
+Prop. 2.14: the coordinates of elastic pairs are the fast ones (-), the others the slow ones (+).  The
+permutation P puts the slow coordinates first (each group in q order), and
+
+    P A(q) P^T = [[A++, A-+], [A+-, A--]],  P B P^T = [[B++, B-+], [B+-, B--]],  P C P^T = [[O, O], [O, C--]]
+
+in the book's notation D^{upper}_{lower} = "contribution of the upper motion to the lower one's equation": A-+
+has the rows of the slow coordinates and the columns of the fast ones.  The emitted names are A_pp, A_mp, A_pm,
+A_mm (p = +, m = -, upper index first) and likewise for B; B is :func:`aggsym.bias.coriolis_matrix`
+(b = B q').
 """
 from __future__ import annotations
 
+from .bias import coriolis_matrix
 from .codegen.program import is_zero
+from .inertia import inertia_matrix
 
 
 def is_elastic(model) -> bool:
@@ -75,3 +87,60 @@ def elastic_energy(bound, q):
         if not (is_zero(x) or is_zero(f)):
             acc = acc + x * f
     return 0 if is_zero(acc) else bound.rational(1, 2) * acc
+
+
+def fast_slow(model) -> tuple:
+    """(slow, fast): coordinate indices of the non-elastic and the elastic motions, each in q order (Prop. 2.14)."""
+    fast = list(model.elastic_coordinates)
+    slow = [i for i in range(model.nq) if i not in set(fast)]
+    return slow, fast
+
+
+BLOCKS = (("A_pp", "A", "slow", "slow"), ("A_mp", "A", "slow", "fast"), ("A_pm", "A", "fast", "slow"),
+          ("A_mm", "A", "fast", "fast"), ("B_pp", "B", "slow", "slow"), ("B_mp", "B", "slow", "fast"),
+          ("B_pm", "B", "fast", "slow"), ("B_mm", "B", "fast", "fast"), ("C_mm", "C", "fast", "fast"))
+
+
+def block_shape(name):
+    """model -> shape of one output block of :func:`partition`."""
+    _, _, rows, cols = next(b for b in BLOCKS if b[0] == name)
+
+    def shape(model):
+        slow, fast = fast_slow(model)
+        groups = {"slow": len(slow), "fast": len(fast)}
+        return (groups[rows], groups[cols])
+
+    return shape
+
+
+def partition(bound, kin, qd) -> tuple:
+    """The blocks of Prop. 2.14 in the order of :data:`BLOCKS`, each flattened row-major."""
+    slow, fast = fast_slow(bound.model)
+    groups = {"slow": slow, "fast": fast}
+    mats = {"A": inertia_matrix(bound, kin), "B": coriolis_matrix(bound, kin, qd), "C": stiffness_matrix(bound)}
+    return tuple([mats[m][i][j] for i in groups[rows] for j in groups[cols]] for _, m, rows, cols in BLOCKS)
+
+
+def partition_layout(model) -> dict:
+    """The manifest entry of elastic_partition: the permutation and the meaning of every block."""
+    slow, fast = fast_slow(model)
+    names = [c.name for c in model.coordinates]
+    book = {"pp": "++", "mp": "-+", "pm": "+-", "mm": "--"}
+    blocks = {}
+    for name, m, rows, cols in BLOCKS:
+        blocks[name] = {"book": f"{m}{book[name[2:]]}", "rows": rows, "columns": cols,
+                        "shape": list(block_shape(name)(model)), "order": "row-major"}
+    return {
+        "slow": [names[i] for i in slow],
+        "fast": [names[i] for i in fast],
+        "permutation": slow + fast,
+        "convention": (
+            "Prop. 2.14: (P q)[r] = q[permutation[r]], the slow (non-elastic, +) coordinates first, then the fast "
+            "(elastic, -) ones.  X_pp, X_mp, X_pm, X_mm are the book's X++, X-+, X+-, X-- (upper index first: "
+            "the motion that contributes, lower: the equation it contributes to): rows are the equations of "
+            "'rows', columns the motions of 'columns'.  A: inertia, B: the matrix with b = B qd, "
+            "B = S Phi(V) A S^T + S A S'^T (2.17), C: stiffness.  Slow rows: "
+            "A_pp qdd+ + B_pp qd+ + A_mp qdd- + B_mp qd- + g+ = tau+; fast rows: "
+            "A_mm qdd- + B_mm qd- + A_pm qdd+ + B_pm qd+ + C_mm (q- - q0-) + g- = tau-"),
+        "blocks": blocks,
+    }

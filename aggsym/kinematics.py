@@ -87,6 +87,31 @@ def pair_velocity_product(codes, qdv, rots):
     return A
 
 
+def pair_velocity_bilinear(codes, u, w, rots):
+    """(M F)'(u) w: the rate of change of the pair's M F w at a fixed w while its coordinates move with rates u
+    (2.19); ``pair_velocity_product(codes, u, rots)`` is the case w = u.
+
+    The same chain of elementary frames as :func:`pair_velocity_product`: the velocity is built from w, the
+    frames turn with u, ``A <- c^T A + phi(c^T V_w, (0, u_r e))``."""
+    v = [0, 0, 0]
+    rates_u, rates_w = [], []
+    for code, x, y in zip(codes, u, w):
+        i = code_index(code)
+        if i < 3:
+            v[i] = y
+        else:
+            rates_u.append(x)
+            rates_w.append(y)
+    V = tuple(v) + ZERO3
+    A = ZERO6
+    for (axis, m), ru, rw in zip(rots, rates_u, rates_w):
+        Vr = mtv(m, V[:3]) + mtv(m, V[3:])
+        Ar = mtv(m, A[:3]) + mtv(m, A[3:])
+        A = add(Ar, phi_motion(Vr, ZERO3 + tuple(ru if j == axis - 1 else 0 for j in range(3))))
+        V = add(Vr, ZERO3 + tuple(rw if j == axis - 1 else 0 for j in range(3)))
+    return A
+
+
 def combine(psi, rates):
     """Psi rates: the 6-vector sum of columns times scalars (M F q' of (1.31))."""
     out = ZERO6
@@ -133,6 +158,11 @@ class TreeKinematics:
         out = pair_velocity_product(self.bound.bodies[k].codes, self.pair_rates(k, qd), self._rots[k])
         spin = self.bound.bodies[k].spin
         return out if spin is None else add(out, spin[1])
+
+    def relative_acceleration_bilinear(self, k, u, w):
+        """(M F)'(u) w of pair k, u and w rate vectors of all coordinates (see :func:`pair_velocity_bilinear`)."""
+        return pair_velocity_bilinear(self.bound.bodies[k].codes, self.pair_rates(k, u), self.pair_rates(k, w),
+                                      self._rots[k])
 
     def velocities(self, qd):
         """Quasi-velocities V_lk of every body (2.39)."""
@@ -200,5 +230,5 @@ def world_frame_vectors(kin, vec_world):
     return out
 
 
-__all__ = ["TreeKinematics", "pair_functional", "pair_velocity_product", "combine", "project",
+__all__ = ["TreeKinematics", "pair_functional", "pair_velocity_product", "pair_velocity_bilinear", "combine", "project",
            "world_frame_vectors", "ZERO6"]

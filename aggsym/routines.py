@@ -167,6 +167,15 @@ register(Routine("transvective_factors", ("q", "p"),
                  "of T A(q) T^T = diag (3.11)", layout=transvective.layout))
 
 
+register(Routine("elastic_partition", ("q", "qd", "p"),
+                 tuple(Output(name, elastic.block_shape(name)) for name, _, _, _ in elastic.BLOCKS),
+                 lambda bound, kin, x: elastic.partition(bound, kin, x["qd"]),
+                 "the slow/fast partition of Prop. 2.14: blocks of A(q), B(q, qd) (b = B qd) and C, slow (+) "
+                 "and fast (-, elastic) coordinates, see the manifest's layout",
+                 layout=elastic.partition_layout,
+                 applies=lambda model: elastic.is_elastic(model) and not model.time_dependent))
+
+
 def run(routine: Routine, bound, inputs: dict) -> tuple:
     """Evaluate a routine on a bound model; ``inputs`` maps vector names (without p) to lists of scalars.
 

@@ -142,6 +142,8 @@ def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> Emitted
         py_body.append(f"{py_names[i]} = {pp._print(py_conv(node))}")
     for out, flat in zip(routine.outputs, outputs):
         shape = out.shape(model)
+        if not flat:
+            c_body.append(f"(void){out.name};")
         for k, x in enumerate(flat):
             rhs_c = cp._print(c_conv(x, top=not (isinstance(x, Node) and x.id in c_names)))
             rhs_py = pp._print(py_conv(x, top=not (isinstance(x, Node) and x.id in py_names)))
