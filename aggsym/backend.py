@@ -5,7 +5,10 @@
 * :class:`Numeric` computes with floats or NumPy arrays (the numeric twin); parameters are numbers.
 
 :func:`bind` turns the model's SymPy expressions (masses, centres of mass, constructive configurations,
-gravity) into scalars of the backend once, so that the recursions only see scalars.
+gravity, added masses, stiffnesses, prescribed spins) into scalars of the backend once, so that the recursions
+only see scalars.  A model with prescribed motions (rotors, (2.13)) is bound at a time t: the program input
+``t[0]`` on the symbolic backend, a number on the numeric one; the prescribed rotation then belongs to the
+pair's q-independent part ``L0``, and its rates to ``spin``.
 """
 from __future__ import annotations
 
@@ -15,11 +18,13 @@ from fractions import Fraction
 import numpy as np
 import sympy as sp
 
-from .aggregates import Rigid
+from .aggregates import General, Rigid
 from .codegen.program import Program, normalize_const
 from .group import Motion
+from .kinematics import combine, pair_functional, pair_velocity_product
+from .linalg import add
 from .model.tree import Tree
-from .model.types import Model
+from .model.types import TIME, Model, code_index
 
 
 class Symbolic:
@@ -80,7 +85,13 @@ def to_scalar(expr, values: dict, backend):
             n = int(exponent)
             out = _power(base, abs(n))
             return 1 / out if n < 0 else out
+        if exponent.is_Rational and exponent.q == 2:  # x^(k/2) = sqrt(x)^k (derivatives of sqrt)
+            n = int(exponent.p)
+            out = _power(backend.sqrt(base), abs(n))
+            return 1 / out if n < 0 else out
         raise ValueError(f"unsupported power {expr}")
+    if expr.func == sp.tan:
+        return backend.sin(args[0]) / backend.cos(args[0])
     if expr.func in _FUNCS:
         return getattr(backend, _FUNCS[expr.func])(args[0])
     if expr.func == sp.sqrt:
@@ -103,9 +114,16 @@ def _power(x, n: int):
 class BoundBody:
     """One body's constant data as backend scalars."""
 
-    L0: Motion  # constructive part of the pair, L^{mu,k-1}_{lkk} = T(p) C(c)
+    L0: Motion  # the pair's part that does not depend on q: constructive L^{mu,k-1}_{lkk} = T(p) C(c), then the
+    # prescribed rotation at time t for a rotor's pair
     codes: tuple  # the pair's coordinate codes in f order
-    mises: Rigid | None  # Theta_lk (2.3) at the body origin, or None for a massless frame
+    mises: Rigid | General | None  # the aggregate A_lk that multiplies accelerations: Theta_lk (2.3) at the
+    # body origin, or Theta + Lambda (a General) with added masses (Prop. 2.8); None when it is zero
+    rigid: Rigid | None = None  # Theta_lk alone: what gravity acts on (None for a massless frame)
+    spin: tuple | None = None  # (U, U'): the prescribed relative quasi-velocity and quasi-acceleration of the
+    # pair at time t (child frame): f theta', f theta'' (2.13); None for pairs with coordinates
+    stiffness: tuple | None = None  # k x k scalars: Hooke stiffness C of the pair (2.27)
+    rest: tuple | None = None  # k scalars: q0 of C (q - q0)
 
 
 @dataclass
@@ -118,6 +136,7 @@ class Bound:
     bodies: list
     gravity: tuple  # in the world frame
     params: list  # the backend scalars of p
+    t: object = None  # the time (models with prescribed motions), a backend scalar
 
     def rational(self, num: int, den: int):
         """num/den as an exact constant on the symbolic backend, a float on the numeric one."""
@@ -136,11 +155,25 @@ def parameter_scalars(model: Model, backend, p=None) -> list:
     return list(p)
 
 
-def bind(model: Model, backend, p=None, tree: Tree | None = None) -> Bound:
-    """Evaluate the model's constant expressions on a backend (parameters symbolic or numeric)."""
+def time_scalar(model: Model, backend, t=None):
+    """The time as a backend scalar: the program input t[0] (symbolic), the given number or 0 (numeric); None for
+    a model without prescribed motions."""
+    if not model.time_dependent:
+        return None
+    if backend.symbolic:
+        return backend.inputs("t", 1)[0] if t is None else t
+    return 0.0 if t is None else t
+
+
+def bind(model: Model, backend, p=None, tree: Tree | None = None, t=None) -> Bound:
+    """Evaluate the model's constant expressions on a backend (parameters symbolic or numeric), at time ``t``
+    for a model with prescribed motions (default: the input t[0] on the symbolic backend, 0 on the numeric)."""
     tree = tree or Tree(model)
     params = parameter_scalars(model, backend, p)
     values = dict(zip(model.parameter_symbols, params))
+    t = time_scalar(model, backend, t)
+    if t is not None:
+        values[TIME] = t
 
     def s(expr):
         return to_scalar(expr, values, backend)
@@ -150,11 +183,43 @@ def bind(model: Model, backend, p=None, tree: Tree | None = None) -> Bound:
         pair = body.pair
         c0 = pair.constructive_rotation()
         L0 = Motion(tuple(tuple(s(c0[i, j]) for j in range(3)) for i in range(3)), tuple(s(x) for x in pair.translation))
-        mises = None
+        rigid = None
         if body.inertial is not None:
             m, h, theta = body.inertial.mises()
-            mises = Rigid(s(m), tuple(s(x) for x in h), tuple(tuple(s(x) for x in row) for row in theta))
-        bodies.append(BoundBody(L0, pair.codes, mises))
+            rigid = Rigid(s(m), tuple(s(x) for x in h), tuple(tuple(s(x) for x in row) for row in theta))
+        mises = rigid
+        if body.added_mass is not None:
+            X = [[s(x) for x in row] for row in body.added_mass]
+            added = General(tuple(tuple(X[i][j] for j in range(3)) for i in range(3)),
+                            tuple(tuple(X[i][j] for j in range(3, 6)) for i in range(3)),
+                            tuple(tuple(X[i][j] for j in range(3, 6)) for i in range(3, 6)))
+            mises = added if rigid is None else rigid + added
+        spin = None
+        if pair.prescribed:
+            L0, spin = _prescribed(pair, L0, s, backend)
+        stiffness = rest = None
+        if pair.stiffness is not None:
+            stiffness = tuple(tuple(s(x) for x in row) for row in pair.stiffness)
+            rest = tuple(s(x) for x in pair.rest) if pair.rest is not None else (0,) * len(pair.coordinates)
+        bodies.append(BoundBody(L0, pair.codes, mises, rigid, spin, stiffness, rest))
     gravity = tuple(s(x) for x in model.gravity)
-    return Bound(model, tree, backend, bodies, gravity, params)
+    return Bound(model, tree, backend, bodies, gravity, params, t)
+
+
+def _prescribed(pair, L0, s, backend):
+    """The prescribed rotations of a pair at time t: L0 extended by them, and (U, U') = (f theta',
+    f theta'' + (M F)' theta') in the child frame (1.31), (2.19).  Derivatives in t are taken by SymPy."""
+    if pair.coordinates:
+        raise ValueError(f"pair {pair.name!r}: a pair has either coordinates or a prescribed motion, not both")
+    items = sorted(pair.prescribed, key=lambda item: code_index(item[0]))
+    codes = tuple(code for code, _ in items)
+    if any(code_index(c) < 3 for c in codes):
+        raise ValueError(f"pair {pair.name!r}: only rotations (theta4..theta6) can be prescribed")
+    angle = [s(expr) for _, expr in items]
+    rate = [s(sp.diff(expr, TIME)) for _, expr in items]
+    accel = [s(sp.diff(expr, TIME, 2)) for _, expr in items]
+    motion, psi, rots = pair_functional(codes, angle, backend)
+    U = combine(psi, rate)
+    Ud = add(combine(psi, accel), pair_velocity_product(codes, rate, rots))
+    return L0.compose(motion), (U, Ud)
 

@@ -1,16 +1,18 @@
-"""The bias b(q, q') = B(q, q') q' in O(n) (2.36)-(2.37), Prop. 2.19, and the gravity column g(q).
+"""The bias b(q, q') = B(q, q') q' in O(n) (2.36)-(2.37), Prop. 2.19, the matrix B(q, q'), and the gravity g(q).
 
 ``b = F^T M^T Z`` with ``Z = L Y`` accumulated from the buds to the root (Prop. 2.19),
 ``Y_lk = Theta_lk X_lk + Phi_lk Theta_lk V_lk`` (2.36), X from (2.37) (see :mod:`aggsym.kinematics`).
 
 Gravity enters the book's right-hand side as ``S H`` with the gravity wrench ``G_lk`` in H (2.9), (2.29); aggsym
 moves it to the left: ``g(q) = -S G``.  Since ``G_lk = Theta_lk (g_lk, 0)`` with g_lk the gravity vector in the
-body's axes, ``g = F^T M^T L Y_g`` with ``Y_g = Theta (-g_lk, 0)``: the same backward recurrence.
+body's axes, ``g = F^T M^T L Y_g`` with ``Y_g = Theta (-g_lk, 0)``: the same backward recurrence.  Theta is the
+body's own Mises matrix, without added masses (gravity acts on the body, not on the medium, Prop. 2.8).
 """
 from __future__ import annotations
 
+from .group import phi_force, phi_motion
 from .kinematics import ZERO6, generalized, world_frame_vectors
-from .linalg import neg
+from .linalg import add, neg
 
 
 def bias_vector(bound, kin, qd, V=None):
@@ -32,5 +34,41 @@ def gravity_accelerations(bound, kin):
 def gravity_vector(bound, kin):
     """g(q) = -S G (see the module docstring): a list of n scalars."""
     gam = gravity_accelerations(bound, kin)
-    Y = [ZERO6 if b.mises is None else b.mises.apply(gam[k]) for k, b in enumerate(bound.bodies)]
+    Y = [ZERO6 if b.rigid is None else b.rigid.apply(gam[k]) for k, b in enumerate(bound.bodies)]
     return generalized(kin, kin.backward(Y))
+
+
+def coriolis_matrix(bound, kin, qd):
+    """B(q, q') = S Phi(V) A S^T + S A S'^T, the book's matrix of (2.17), (2.31) (A = diag A_lk of (2.13)).
+
+    Column j is ``S (Phi(V) A V(e_j) + A X(q', e_j))`` with ``V(e_j) = S^T e_j`` (row j of S, (1.43)) and
+    ``X(u, e_j) = S'^T(u) e_j`` carried down the subtree of j's pair like (2.37):
+    ``X_k = L^T X_parent + phi(L^T V_parent(e_j), M F u)``, starting from the pair's own (M F)'(u) e_j (2.19).
+    So ``B q' = S (Phi A V + A X) = b`` (2.36).  This B is linear in q' but is not the Christoffel matrix
+    (A' - 2B is not skew in general).  O(n) per column; n x n rows.  For models without prescribed motions:
+    a prescribed spin's terms in b are not of the form B q' (the partition routine is not emitted for them)."""
+    tree = kin.tree
+    n = tree.nq
+    V = kin.velocities(qd)
+    S = kin.parastrophic()
+    B = [[0] * n for _ in range(n)]
+    for j in range(n):
+        st = tree.body_of[j]
+        W = S[j]
+        X = [None] * len(tree)
+        Y = [ZERO6] * len(tree)
+        unit = [1 if i == j else 0 for i in range(n)]
+        for k in tree.subtrees[st]:
+            if k == st:
+                x = kin.relative_acceleration_bilinear(k, qd, unit)
+            else:
+                p = tree.parent[k]
+                x = add(kin.L[k].twist(X[p]), phi_motion(kin.L[k].twist(W[p]), kin.relative_velocity(k, qd)))
+            X[k] = x
+            th = bound.bodies[k].mises
+            if th is not None:
+                Y[k] = add(phi_force(V[k], th.apply(W[k])), th.apply(x))
+        col = generalized(kin, kin.backward(Y))
+        for i in range(n):
+            B[i][j] = col[i]
+    return B

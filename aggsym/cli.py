@@ -107,7 +107,8 @@ def cmd_check(args) -> int:
     gen = generate(model, latex=False)
     results = check_generated(model, gen.files, trials=args.trials, seed=args.seed, opt=args.opt)
     width = max(len(r.role) for r in results)
-    print(f"{model.name}: {args.trials} random states per routine; worst relative error against the numeric twin")
+    print(f"{model.name}: {args.trials} random states per routine; worst error against the numeric twin, relative "
+          f"to the largest value the routine returns")
     print(f"{'routine'.ljust(width)}  {'C':>9}  {'NumPy':>9}")
     bad = []
     for r in results:

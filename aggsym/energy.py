@@ -1,11 +1,14 @@
 """Kinetic and potential energy (Def. 2.4).
 
-``T = 1/2 V^T A V`` summed over bodies with the body quasi-velocities V of (1.41), and
+``T = 1/2 V^T A V`` summed over bodies with the body quasi-velocities V of (1.41) (A the body's aggregate: with
+added masses Theta + Lambda, so T holds the medium's 1/2 V^T Lambda V (Prop. 2.8); a prescribed spin's velocity
+is in V), and
 ``U = sum_k m_k (-g . o_k) + (-g_k) . h_k`` with o_k the body origin in the world frame, g_k gravity in the body's
 axes and h_k = m_k r_ck the first moment: the work against gravity of lifting every centre of mass, from the world
 origin.  The heights ``-g . o_k`` are carried from the root: ``-g . o_k = -g . o_parent + (-g_parent) . o^{parent}_{k}``.
-Bodies welded to the world (no coordinate on their path from the root) are left out of U: their potential is a
+Bodies welded to the world (no coordinate or prescribed spin on their path from the root) are left out of U: their potential is a
 constant, and Pinocchio's computePotentialEnergy leaves them out too.
+(The springs' 1/2 (q - q0)^T C (q - q0) is :func:`aggsym.elastic.elastic_energy`.)
 """
 from __future__ import annotations
 
@@ -32,8 +35,8 @@ def potential_energy(bound, kin):
         up = minus_g if p < 0 else gam[p]
         h = dot(up, kin.L[k].o)
         height.append(h if p < 0 else height[p] + h)
-        moves.append(bool(kin.tree.coords[k]) or (p >= 0 and moves[p]))
-        th = bound.bodies[k].mises
+        moves.append(bool(kin.tree.coords[k]) or bound.bodies[k].spin is not None or (p >= 0 and moves[p]))
+        th = bound.bodies[k].rigid
         if th is not None and moves[k]:
             acc = acc + th.m * height[k] + dot(gam[k], th.h)
     return acc

@@ -1,6 +1,7 @@
 """The equations of motion as SymPy matrices: ``aggsym.equations(model)``.
 
-``A(q) q'' + b(q, q') + g(q) = tau`` (2.17), (2.29) with g = -S G moved to the left.  The matrices are built from
+``A(q) q'' + b(q, q') + g(q) + c(q) = tau`` (2.17), (2.27), (2.29) with g = -S G moved to the left and c = C (q - q0)
+the force of the elastic pairs.  The matrices are built from
 the straight-line programs of the recursions and converted to SymPy; ``simplify=True`` simplifies every entry
 (meant for small models: the double pendulum comes out as (2.23)-(2.26)).
 """
@@ -17,6 +18,7 @@ from .codegen.program import Node
 from .inertia import inertia_matrix
 from .kinematics import TreeKinematics
 from .model.tree import Tree
+from .model.types import TIME
 
 
 def coordinate_symbols(model):
@@ -77,6 +79,7 @@ class Equations:
         self._qdd = prog.vector("qdd", model.nq)
         self._kin = TreeKinematics(self._bound, self._q)
         self._symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
+        self._symbols[("t", 0)] = TIME  # the time of prescribed motions (rotors)
         for i in range(model.nq):
             self._symbols[("q", i)] = q[i]
             self._symbols[("qd", i)] = qd[i]
@@ -130,14 +133,31 @@ class Equations:
     @cached_property
     def u_star(self) -> sp.Matrix:
         """The preplanned control u* = tau for the motion (q, q', q'') by the forward and backward sweeps
-        (2.39)-(2.42), without assembling A, b, g."""
+        (2.39)-(2.42), without assembling A, b, g; with the elastic forces C (q - q0) of (2.27) where there are
+        springs."""
         from .sweeps import inverse_dynamics
 
-        return self._matrix(inverse_dynamics(self._bound, self._kin, self._qd, self._qdd), self.model.nq, 1)
+        return self._matrix(inverse_dynamics(self._bound, self._kin, self._qd, self._qdd), self.model.nq, 1) + self.c
+
+    @cached_property
+    def c(self) -> sp.Matrix:
+        """C (q - q0), the elastic generalized force of (2.27) (zero without elastic pairs)."""
+        out = sp.zeros(self.model.nq, 1)
+        for k, body in enumerate(self.model.bodies):
+            pair = body.pair
+            if not pair.elastic:
+                continue
+            idx = self.tree.coords[k]
+            rest = pair.rest if pair.rest is not None else (0,) * len(idx)
+            d = sp.Matrix([self.q[i] - r for i, r in zip(idx, rest)])
+            f = sp.Matrix(pair.stiffness) * d
+            for a, i in enumerate(idx):
+                out[i] = sp.expand(f[a])
+        return out
 
     def lhs(self) -> sp.Matrix:
-        """A q'' + b + g."""
-        return self.A * self.qdd + self.b + self.g
+        """A q'' + b + g + c (2.27)."""
+        return self.A * self.qdd + self.b + self.g + self.c
 
 
 def equations(model, simplify: bool = False) -> Equations:

@@ -13,6 +13,10 @@ For the tree (1.34)-(1.43): ``V_lk = L^T V_parent + M F q'`` (2.39), the rows of
 ``s^{st}_{lk} = s^{st}_{parent} L^{parent}_{lk}`` (1.43), and the column ``X = S'^T q'`` by (2.37):
 ``X_lk = L^T X_parent + L'^T V_parent + (M F)' q'`` where ``L'^T V_parent = Phi-action(L^T V_parent, V_pair)``.
 
+A pair with a prescribed motion (a rotor's spin (2.13)) has no coordinate; its relative quasi-velocity U = f theta'
+and quasi-acceleration U' = f theta'' are known at the bound time (``BoundBody.spin``) and enter wherever the
+pair's own M F q' and (M F)' q' + M F q'' do: V, X (so X is the quasi-acceleration at q'' = 0) and V'.
+
 All 6-vectors are in the body's own frame, (v, w) order.
 """
 from __future__ import annotations
@@ -83,6 +87,31 @@ def pair_velocity_product(codes, qdv, rots):
     return A
 
 
+def pair_velocity_bilinear(codes, u, w, rots):
+    """(M F)'(u) w: the rate of change of the pair's M F w at a fixed w while its coordinates move with rates u
+    (2.19); ``pair_velocity_product(codes, u, rots)`` is the case w = u.
+
+    The same chain of elementary frames as :func:`pair_velocity_product`: the velocity is built from w, the
+    frames turn with u, ``A <- c^T A + phi(c^T V_w, (0, u_r e))``."""
+    v = [0, 0, 0]
+    rates_u, rates_w = [], []
+    for code, x, y in zip(codes, u, w):
+        i = code_index(code)
+        if i < 3:
+            v[i] = y
+        else:
+            rates_u.append(x)
+            rates_w.append(y)
+    V = tuple(v) + ZERO3
+    A = ZERO6
+    for (axis, m), ru, rw in zip(rots, rates_u, rates_w):
+        Vr = mtv(m, V[:3]) + mtv(m, V[3:])
+        Ar = mtv(m, A[:3]) + mtv(m, A[3:])
+        A = add(Ar, phi_motion(Vr, ZERO3 + tuple(ru if j == axis - 1 else 0 for j in range(3))))
+        V = add(Vr, ZERO3 + tuple(rw if j == axis - 1 else 0 for j in range(3)))
+    return A
+
+
 def combine(psi, rates):
     """Psi rates: the 6-vector sum of columns times scalars (M F q' of (1.31))."""
     out = ZERO6
@@ -141,27 +170,42 @@ class TreeKinematics:
     def pair_rates(self, k, qd):
         return [qd[i] for i in self.tree.coords[k]]
 
+    def relative_velocity(self, k, qd):
+        """M F q' of pair k (1.31), plus the prescribed U = f theta' of a rotor's pair: its quasi-velocity relative
+        to the parent (child frame)."""
+        own = combine(self.psi[k], self.pair_rates(k, qd))
+        spin = self.bound.bodies[k].spin
+        return own if spin is None else add(own, spin[0])
+
     def relative_acceleration(self, k, qd):
-        """(M F)' q' of pair k (2.19): its relative quasi-acceleration at zero q'' (child frame)."""
-        return pair_velocity_product(self.bound.bodies[k].codes, self.pair_rates(k, qd), self.rotations[k])
+        """(M F)' q' of pair k (2.19), plus the prescribed U' of a rotor's pair: its relative quasi-acceleration
+        at zero q'' (child frame)."""
+        out = pair_velocity_product(self.bound.bodies[k].codes, self.pair_rates(k, qd), self.rotations[k])
+        spin = self.bound.bodies[k].spin
+        return out if spin is None else add(out, spin[1])
+
+    def relative_acceleration_bilinear(self, k, u, w):
+        """(M F)'(u) w of pair k, u and w rate vectors of all coordinates (see :func:`pair_velocity_bilinear`)."""
+        return pair_velocity_bilinear(self.bound.bodies[k].codes, self.pair_rates(k, u), self.pair_rates(k, w),
+                                      self.rotations[k])
 
     def velocities(self, qd):
         """Quasi-velocities V_lk of every body (2.39)."""
         V = []
         for k, p in enumerate(self.tree.parent):
-            own = combine(self.psi[k], self.pair_rates(k, qd))
+            own = self.relative_velocity(k, qd)
             V.append(own if p < 0 else add(self.L[k].twist(V[p]), own))
         return V
 
     def velocity_products(self, qd, V):
-        """X = S'^T q' by the recurrence (2.37), including each pair's own (M F)' q' term (2.19)."""
+        """X = S'^T q' by the recurrence (2.37), including each pair's own (M F)' q' term (2.19) (and a
+        prescribed pair's U': X is every body's quasi-acceleration at q'' = 0)."""
         X = []
         for k, p in enumerate(self.tree.parent):
-            rates = self.pair_rates(k, qd)
-            x = pair_velocity_product(self.bound.bodies[k].codes, rates, self.rotations[k])
+            x = self.relative_acceleration(k, qd)
             if p >= 0:
                 Vp = self.L[k].twist(V[p])
-                x = add(x, add(self.L[k].twist(X[p]), phi_motion(Vp, combine(self.psi[k], rates))))
+                x = add(x, add(self.L[k].twist(X[p]), phi_motion(Vp, self.relative_velocity(k, qd))))
             X.append(x)
         return X
 
@@ -169,13 +213,12 @@ class TreeKinematics:
         """Quasi-accelerations V'_lk of the forward sweep (2.40); ``base`` is the world frame's (e.g. -gravity)."""
         A = []
         for k, p in enumerate(self.tree.parent):
-            rates = self.pair_rates(k, qd)
             own = combine(self.psi[k], [qdd[i] for i in self.tree.coords[k]])
-            a = add(pair_velocity_product(self.bound.bodies[k].codes, rates, self.rotations[k]), own)
+            a = add(self.relative_acceleration(k, qd), own)
             parent_V = ZERO6 if p < 0 else V[p]
             parent_A = base if p < 0 else A[p]
             Vp = self.L[k].twist(parent_V)
-            a = add(a, add(self.L[k].twist(parent_A), phi_motion(Vp, combine(self.psi[k], rates))))
+            a = add(a, add(self.L[k].twist(parent_A), phi_motion(Vp, self.relative_velocity(k, qd))))
             A.append(a)
         return A
 
@@ -212,5 +255,5 @@ def world_frame_vectors(kin, vec_world):
     return out
 
 
-__all__ = ["TreeKinematics", "pair_functional", "pair_velocity_product", "combine", "project",
-           "world_frame_vectors", "generalized", "ZERO6"]
+__all__ = ["TreeKinematics", "pair_functional", "pair_velocity_product", "pair_velocity_bilinear", "combine",
+           "project", "world_frame_vectors", "generalized", "ZERO6"]

@@ -1,6 +1,8 @@
 """The numeric twin: every routine run on floats, the reference the generated C and NumPy are checked against.
 
-``NumericTwin(model).inertia(q, p)`` etc. have the argument order of the generated NumPy module.
+``NumericTwin(model).inertia(q, p)`` etc. have the argument order of the generated NumPy module.  For a model with
+prescribed motions the time t comes after the other inputs (``inertia(q, t)``); the twin also accepts it omitted
+(then the keyword ``t``, default 0).
 """
 from __future__ import annotations
 
@@ -8,7 +10,7 @@ import numpy as np
 
 from .backend import Numeric, bind
 from .model.tree import Tree
-from .routines import ROUTINES, run
+from .routines import ROUTINES, run, signature
 
 
 class NumericTwin:
@@ -20,32 +22,42 @@ class NumericTwin:
         self.backend = Numeric()
         self._bound = {}
 
-    def bound(self, p=None):
-        key = None if p is None else tuple(float(x) for x in np.ravel(p))
+    def bound(self, p=None, t=None):
+        key = (None if p is None else tuple(float(x) for x in np.ravel(p)), None if t is None else float(t))
         if key not in self._bound:
-            self._bound[key] = bind(self.model, self.backend, p=None if p is None else list(key), tree=self.tree)
+            if len(self._bound) > 64:  # a time-dependent model is bound at every t it is called at
+                self._bound.clear()
+            self._bound[key] = bind(self.model, self.backend, p=None if p is None else list(key[0]), tree=self.tree,
+                                    t=key[1])
         return self._bound[key]
 
-    def call(self, role: str, *args, p=None):
-        """Evaluate routine ``role`` with its inputs (q, qd, ...) in order.
+    def call(self, role: str, *args, p=None, t=None):
+        """Evaluate routine ``role`` with its inputs (q, qd, ..., and t for a time-dependent model) in order.
 
         Returns a NumPy array of the output's shape, or a tuple of arrays for a routine with several outputs."""
         routine = ROUTINES[role]
-        names = [n for n in routine.inputs if n != "p"]
+        names = [n for n in signature(routine, self.model) if n != "p"]
+        if "t" in names and len(args) == len(names) - 1:
+            args = args + (0.0 if t is None else t,)
         if len(args) != len(names):
             raise TypeError(f"{role} takes {', '.join(names)}, got {len(args)} arguments")
         inputs = {}
         for name, value in zip(names, args):
             arr = np.asarray(value, dtype=float).reshape(-1)
+            if name == "t":
+                if arr.size != 1:
+                    raise ValueError(f"{role}: t is one number, got {arr.size}")
+                t = float(arr[0])
+                continue
             if arr.size != self.model.nq:
                 raise ValueError(f"{role}: {name} has {arr.size} entries, the model has {self.model.nq} coordinates")
             inputs[name] = [float(x) for x in arr]
-        outs = run(routine, self.bound(p), inputs)
+        outs = run(routine, self.bound(p, t if self.model.time_dependent else None), inputs)
         arrays = tuple(np.array([float(x) for x in flat]).reshape(o.shape(self.model))
                        for o, flat in zip(routine.outputs, outs))
         return arrays[0] if len(arrays) == 1 else arrays
 
     def __getattr__(self, role):
         if role in ROUTINES:
-            return lambda *args, p=None: self.call(role, *args, p=p)
+            return lambda *args, p=None, t=None: self.call(role, *args, p=p, t=t)
         raise AttributeError(role)

@@ -64,9 +64,11 @@ def gravity_base(bound):
 
 
 def gravity_wrenches(bound, kin):
-    """G_lk = Theta_lk (g_lk, 0), the gravity wrench of every body in its frame (2.9); ZERO6 when massless."""
+    """G_lk = Theta_lk (g_lk, 0), the gravity wrench of every body in its frame (2.9); ZERO6 when massless.
+
+    Theta_lk is the body's own Mises matrix: gravity does not act on added masses (Prop. 2.8)."""
     g = world_frame_vectors(kin, bound.gravity)
-    return [ZERO6 if b.mises is None else b.mises.apply(g[k] + ZERO3) for k, b in enumerate(bound.bodies)]
+    return [ZERO6 if b.rigid is None else b.rigid.apply(g[k] + ZERO3) for k, b in enumerate(bound.bodies)]
 
 
 def forward_sweep(kin, qd, qdd, base=ZERO6):
@@ -96,10 +98,9 @@ def origin_sweep(bound, kin, qd, qdd, base=ZERO3):
     out = []
     for k, p in enumerate(kin.tree.parent):
         L = kin.L[k]
-        rates = kin.pair_rates(k, qd)
         own = combine(kin.psi[k], [qdd[i] for i in kin.tree.coords[k]])
-        rel = combine(kin.psi[k], rates)
-        turn = add(own[3:], kin.relative_acceleration(k, qd)[3:])
+        rel = kin.relative_velocity(k, qd)  # M F q' (+ a rotor's prescribed U)
+        turn = add(own[3:], kin.relative_acceleration(k, qd)[3:])  # (M F)' q' (+ U'; rotations only, (v) part 0)
         if p < 0:
             a = L.unrotate_free(base)
             w, wd = rel[3:], turn
@@ -189,7 +190,7 @@ def body_wrenches(bound, kin, qd, qdd, H=None, gravity=True, origins=None, rest=
     Gravity enters as the acceleration -g of E_10 (see the module docstring).  With ``rest`` the part
     Theta (a, 0) of every rigid body is left out (see :func:`generalized_forces_lumped`)."""
     mo = origin_sweep(bound, kin, qd, qdd, _gravity(bound, gravity)) if origins is None else origins
-    spatial = None
+    spatial = weights = None
     Y = []
     for k, body in enumerate(bound.bodies):
         th = body.mises
@@ -197,11 +198,15 @@ def body_wrenches(bound, kin, qd, qdd, H=None, gravity=True, origins=None, rest=
             y = ZERO6
         elif isinstance(th, Rigid):
             y = body_wrench_rest(th, mo[k]) if rest else body_wrench(th, mo[k])
-        else:  # a general aggregate (added masses): the book's form, with the quasi-velocities of (2.39), (2.40)
+        else:  # a general aggregate (Theta + Lambda, added masses (2.8)): the book's form (2.10), (2.13), with
+            # the quasi-velocities of (2.39), (2.40) without gravity, and the weight of Theta alone subtracted
             if spatial is None:
-                spatial = forward_sweep(kin, qd, qdd, _gravity(bound, gravity) + ZERO3)
+                spatial = forward_sweep(kin, qd, qdd)
+                weights = gravity_wrenches(bound, kin) if gravity else None
             V, A = spatial[0][k], spatial[1][k]
             y = add(th.apply(A), phi_force(V, th.apply(V)))
+            if weights is not None:
+                y = sub(y, weights[k])
         Y.append(y if H is None else sub(y, H[k]))
     return Y
 
@@ -389,7 +394,8 @@ def joint_wrench_rows(bound, Z):
 
 FRAME_CONVENTION = (
     "row r: the wrench (fx, fy, fz, mx, my, mz) that the parent exerts on the child body and its subtree through "
-    "the joint (reaction + control + friction, Z = R + U + N of (2.9), (2.42)), moment about the child frame "
+    "the joint (reaction + control + friction + the spring of an elastic pair, Z = R + U + N (+ C) of (2.9), "
+    "(2.42), Prop. 2.13), moment about the child frame "
     "origin, both in the child frame's axes (for URDF models the child link frame); the joint's generalized "
     "forces tau are the projections of this wrench on its axes")
 

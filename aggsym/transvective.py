@@ -641,7 +641,7 @@ def factored_form(model, simplify: bool = False):
     import sympy as sp
 
     from .backend import Symbolic, bind
-    from .equations import coordinate_symbols, to_sympy
+    from .equations import TIME, coordinate_symbols, to_sympy
     from .kinematics import TreeKinematics
     from .model.tree import Tree
 
@@ -658,6 +658,7 @@ def factored_form(model, simplify: bool = False):
     q, _, _ = coordinate_symbols(model)
     symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
     symbols.update({("q", i): s for i, s in enumerate(q)})
+    symbols[("t", 0)] = TIME  # A(q, t) turns with unbalanced rotors of prescribed spin
     args = to_sympy(prog, fac.arguments(), symbols)
     diag = to_sympy(prog, list(fac.diag), symbols)
     if simplify:

@@ -5,6 +5,12 @@ every pair as its elementary motions in the world frame: poses (R, p), angular v
 origin velocity and acceleration, then Newton's and Euler's laws about each centre of mass, and the projection
 of the wrench transmitted into each subtree on the world axis of each coordinate.  ``pair_wrenches`` gives those
 transmitted wrenches themselves, re-expressed in each body's frame about its origin with plain rotation matrices.
+
+The body features of chapter 2 are written the classical way, also in the world frame: a rotor with a prescribed
+spin is a body whose pair rotation, rate and acceleration are known functions of t (evaluated by SymPy, not by
+aggsym); added masses Lambda (about the body origin O, body axes) are Kirchhoff's fluid impulse
+(P, K_O) = X Lambda X^T (v_O, w) with X = diag(R, R), whose reaction on the body is (-dP/dt, -(dK_O/dt + v_O x P))
+(Lamb, Hydrodynamics, ch. VI); an elastic pair adds C (q - q0) to tau and 1/2 (q - q0)^T C (q - q0) to U.
 """
 from __future__ import annotations
 
@@ -23,18 +29,25 @@ def rot(axis: int, a: float) -> np.ndarray:
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
 
 
-class NumericModel:
-    """The model's data as floats at given parameter values."""
+TIME = sp.Symbol("t", real=True)
 
-    def __init__(self, model, p=None):
+
+class NumericModel:
+    """The model's data as floats at given parameter values (and at time t for prescribed motions)."""
+
+    def __init__(self, model, p=None, t=0.0):
         self.model = model
         values = dict(zip(model.parameter_symbols, model.parameter_values if p is None else p))
 
         def f(x):
             return float(sp.N(sp.sympify(x).subs(values)))
 
+        def f_t(x, k):
+            return float(sp.N(sp.diff(sp.sympify(x), TIME, k).subs(values).subs(TIME, t)))
+
         self.gravity = np.array([f(x) for x in model.gravity])
         self.bodies = []
+        stiffness = []
         index = {b.name: k for k, b in enumerate(model.bodies)}
         i = 0
         for b in model.bodies:
@@ -47,15 +60,28 @@ class NumericModel:
             }
             for axis, angle in pair.rotation:
                 entry["R0"] = entry["R0"] @ rot(axis, f(angle))
+            first = i
             for c in pair.coordinates:
                 entry["coords"].append((i, c.axis))
                 i += 1
+            entry["spin"] = [({"theta4": 3, "theta5": 4, "theta6": 5}[code], f_t(e, 0), f_t(e, 1), f_t(e, 2))
+                             for code, e in pair.prescribed]
+            if pair.stiffness is not None:
+                rest = np.array([f(x) for x in pair.rest]) if pair.rest is not None else np.zeros(i - first)
+                stiffness.append((list(range(first, i)), np.array([[f(x) for x in r] for r in pair.stiffness]), rest))
             if b.inertial is not None:
                 entry["m"] = f(b.inertial.mass)
                 entry["c"] = np.array([f(x) for x in b.inertial.com])
                 entry["I"] = np.array([[f(x) for x in row] for row in b.inertial.inertia])
+            if b.added_mass is not None:
+                entry["Lambda"] = np.array([[f(x) for x in row] for row in b.added_mass])
             self.bodies.append(entry)
         self.nq = i
+        self.C = np.zeros((i, i))  # Hooke stiffness (2.27) and rest position
+        self.q0 = np.zeros(i)
+        for idx, K, rest in stiffness:
+            self.C[np.ix_(idx, idx)] = K
+            self.q0[idx] = rest
 
 
 def newton_euler(nm: NumericModel, q, qd, qdd, gravity=True):
@@ -108,6 +134,11 @@ def newton_euler_full(nm: NumericModel, q, qd, qdd, gravity=True):
                 dw = dw + u * qdd[i] + np.cross(w, u * qd[i])
                 w = w + u * qd[i]
                 Rk = Rk @ rot(axis - 2, q[i])
+        for axis, angle, rate, accel in b["spin"]:  # a prescribed rotation: known angle, rate, acceleration
+            u = Rk @ AXIS[axis - 2]
+            dw = dw + u * accel + np.cross(w, u * rate)
+            w = w + u * rate
+            Rk = Rk @ rot(axis - 2, angle)
         R[k], P[k], W[k], DW[k], V[k], A[k] = Rk, pk, w, dw, v, a
     # body wrenches about the world origin
     force = [np.zeros(3) for _ in range(n)]
@@ -117,6 +148,16 @@ def newton_euler_full(nm: NumericModel, q, qd, qdd, gravity=True):
     for b in nm.bodies:
         moves.append(bool(b["coords"]) or (b["parent"] >= 0 and moves[b["parent"]]))
     for k, b in enumerate(nm.bodies):
+        if "Lambda" in b:  # Kirchhoff: the fluid's impulse about the moving origin, and its rate of change
+            X = np.kron(np.eye(2), R[k])
+            Lw = X @ b["Lambda"] @ X.T
+            Om = np.kron(np.eye(2), hat(W[k]))
+            Vw = np.concatenate([V[k], W[k]])
+            imp = Lw @ Vw
+            dimp = (Om @ Lw - Lw @ Om) @ Vw + Lw @ np.concatenate([A[k], DW[k]])
+            force[k] = force[k] + dimp[:3]
+            moment[k] = moment[k] + dimp[3:] + np.cross(V[k], imp[:3]) + np.cross(P[k], dimp[:3])
+            T += 0.5 * Vw @ imp
         if "m" not in b:
             continue
         rc = R[k] @ b["c"]
@@ -126,8 +167,8 @@ def newton_euler_full(nm: NumericModel, q, qd, qdd, gravity=True):
         Iw = R[k] @ b["I"] @ R[k].T
         f = b["m"] * (ac - g)
         nc = Iw @ DW[k] + np.cross(W[k], Iw @ W[k])
-        force[k] = f
-        moment[k] = nc + np.cross(c, f)
+        force[k] = force[k] + f
+        moment[k] = moment[k] + nc + np.cross(c, f)
         T += 0.5 * b["m"] * vc @ vc + 0.5 * W[k] @ Iw @ W[k]
         U += -b["m"] * g @ c if moves[k] else 0.0
     for k in range(n - 1, -1, -1):
@@ -141,6 +182,9 @@ def newton_euler_full(nm: NumericModel, q, qd, qdd, gravity=True):
             tau[i] = u @ force[k]
         else:
             tau[i] = u @ (moment[k] - np.cross(point, force[k]))
+    spring = nm.C @ (q - nm.q0)  # the elastic pairs: the actuators also hold the springs
+    tau = tau + spring
+    U += 0.5 * (q - nm.q0) @ spring
     return {"tau": tau, "T": T, "U": U, "R": R, "P": P, "force": force, "moment": moment}
 
 
@@ -155,7 +199,13 @@ def pair_wrenches(nm: NumericModel, q, qd, qdd, gravity=True):
     return np.array(rows)
 
 
+def hat(x):
+    return np.array([[0, -x[2], x[1]], [x[2], 0, -x[0]], [-x[1], x[0], 0]])
+
+
 def mass_matrix(nm: NumericModel, q):
+    """A(q) column by column: tau(q, 0, e_j) - tau(q, 0, 0) (prescribed spins and springs cancel)."""
     n = nm.nq
     z = np.zeros(n)
-    return np.column_stack([newton_euler(nm, q, z, np.eye(n)[j], gravity=False)[0] for j in range(n)])
+    rest = newton_euler(nm, q, z, z, gravity=False)[0]
+    return np.column_stack([newton_euler(nm, q, z, np.eye(n)[j], gravity=False)[0] - rest for j in range(n)])

@@ -41,12 +41,13 @@ def test_inertia_symmetric_positive_definite(model, rng):
 
 
 def test_equations_equal_independent_newton_euler(model, rng):
-    """A q'' + b + g equals a world-frame Newton-Euler written independently (tests/reference.py)."""
+    """A q'' + b + g + c equals a world-frame Newton-Euler written independently (tests/reference.py), with the
+    rotors' prescribed spins (at t = 0), added masses and springs of the model."""
     twin = aggsym.NumericTwin(model)
     nm = NumericModel(model)
     for q, qd, qdd in states(model, rng):
         tau, T, U = newton_euler(nm, q, qd, qdd)
-        lhs = twin.inertia(q) @ qdd + twin.bias(q, qd) + twin.gravity(q)
+        lhs = twin.inertia(q) @ qdd + twin.bias(q, qd) + twin.gravity(q) + twin.elastic(q)
         scale = max(1.0, np.abs(tau).max())
         assert np.abs(lhs - tau).max() <= 1e-11 * scale
         assert np.abs(twin.inverse_dynamics(q, qd, qdd) - tau).max() <= 1e-11 * scale
@@ -56,22 +57,32 @@ def test_equations_equal_independent_newton_euler(model, rng):
 
 
 def test_kinetic_energy_is_quadratic_form(model, rng):
+    """T = 1/2 q'^T A q' (Def. 2.4); with prescribed spins T also has terms of degree 1 and 0 in q', and its
+    quadratic part T(q') + T(-q') - 2 T(0) is still q'^T A q'."""
     twin = aggsym.NumericTwin(model)
     for q, qd, _ in states(model, rng):
-        assert twin.kinetic_energy(q, qd)[0] == pytest.approx(0.5 * qd @ twin.inertia(q) @ qd, rel=1e-12)
+        if not model.time_dependent:
+            assert twin.kinetic_energy(q, qd)[0] == pytest.approx(0.5 * qd @ twin.inertia(q) @ qd, rel=1e-12)
+        even = twin.kinetic_energy(q, qd)[0] + twin.kinetic_energy(q, -qd)[0] - 2 * twin.kinetic_energy(q, 0 * qd)[0]
+        assert even == pytest.approx(qd @ twin.inertia(q) @ qd, rel=1e-9, abs=1e-12)
 
 
 def test_gravity_is_gradient_of_potential(model, rng):
+    """g + c = dU/dq: gravity and the springs of elastic pairs are the potential forces."""
     twin = aggsym.NumericTwin(model)
     for q, _, _ in states(model, rng, 2):
         h = 1e-6
         grad = np.array([(twin.potential_energy(q + h * e)[0] - twin.potential_energy(q - h * e)[0]) / (2 * h)
                          for e in np.eye(model.nq)])
-        assert np.allclose(twin.gravity(q), grad, rtol=1e-6, atol=1e-6 * max(1.0, np.abs(grad).max()))
+        assert np.allclose(twin.gravity(q) + twin.elastic(q), grad, rtol=1e-6,
+                           atol=1e-6 * max(1.0, np.abs(grad).max()))
 
 
-def test_bias_is_coriolis_of_inertia(model, rng):
-    """b = A' q' - 1/2 d/dq (q'^T A q'), differentiating A(q) numerically along q'."""
+@pytest.mark.parametrize("path", [p for p in MODELS if not aggsym.load(p).time_dependent], ids=lambda p: p.stem)
+def test_bias_is_coriolis_of_inertia(path, rng):
+    """b = A' q' - 1/2 d/dq (q'^T A q'), differentiating A(q) numerically along q' (models without prescribed
+    spins; with them A(q, t) turns with the rotors, see test_bias_is_lagrange_of_kinetic_energy)."""
+    model = aggsym.load(path)
     twin = aggsym.NumericTwin(model)
     for q, qd, _ in states(model, rng, 2):
         h = 1e-6
@@ -80,3 +91,27 @@ def test_bias_is_coriolis_of_inertia(model, rng):
                        for e in np.eye(model.nq)])
         expected = Adot @ qd - 0.5 * dT
         assert np.allclose(twin.bias(q, qd), expected, rtol=1e-6, atol=1e-6 * max(1.0, np.abs(expected).max()))
+
+
+def test_bias_is_lagrange_of_kinetic_energy(model, rng):
+    """b = d/dt dT/dq' - dT/dq at q'' = 0 (Lagrange), from the kinetic_energy routine alone, by finite differences.
+
+    This holds for every model here: the prescribed spins are ideal rheonomic constraints (T = T(q, q', t)) and the
+    body + medium system with added masses is Lagrangian (Kirchhoff).  T is quadratic in q', so dT/dq' by a
+    central difference is exact up to rounding; the time derivative runs along (q', 1) in (q, t)."""
+    twin = aggsym.NumericTwin(model)
+    n = model.nq
+    for q, qd, _ in states(model, rng, 2):
+        t = float(rng.uniform(0, 2))
+
+        def T(q_, qd_, t_):
+            return twin.kinetic_energy(q_, qd_, t=t_)[0]
+
+        def momentum(q_, t_):
+            return np.array([(T(q_, qd + e, t_) - T(q_, qd - e, t_)) / 2 for e in np.eye(n)])
+
+        h = 1e-5
+        dp = (momentum(q + h * qd, t + h) - momentum(q - h * qd, t - h)) / (2 * h)
+        dq = np.array([(T(q + h * e, qd, t) - T(q - h * e, qd, t)) / (2 * h) for e in np.eye(n)])
+        expected = dp - dq
+        assert np.allclose(twin.bias(q, qd, t=t), expected, rtol=1e-6, atol=1e-6 * max(1.0, np.abs(expected).max()))

@@ -10,6 +10,7 @@ import pinocchio as pin
 import pytest
 
 import aggsym
+from aggsym.aggregates import Rigid
 from aggsym.backend import Numeric, Symbolic, bind
 from aggsym.codegen.program import ADD, MUL, NEG, SUB
 from aggsym.group import phi_force
@@ -49,8 +50,9 @@ def close(a, b, rel):
 # tau ----------------------------------------------------------------------------------------------------------
 
 def test_routines_are_the_sweeps(model, rng):
-    """The contract's inverse_dynamics is the sweep (same signature); bias and gravity are its d(q, q') without
-    gravity and at rest (2.44)-(2.46), (2.52), and agree with the O(n) recursion (2.36)-(2.37) and -S G."""
+    """The contract's inverse_dynamics is the sweep (same signature) plus the springs C q of elastic pairs (2.27);
+    bias and gravity are its d(q, q') without gravity and at rest (2.44)-(2.46), (2.52), and agree with the O(n)
+    recursion (2.36)-(2.37) and -S G."""
     from aggsym.bias import bias_vector, gravity_vector
 
     routine = ROUTINES["inverse_dynamics"]
@@ -61,20 +63,20 @@ def test_routines_are_the_sweeps(model, rng):
     for q, qd, qdd in states(model, rng, 2):
         kin = TreeKinematics(bound, list(q))
         sweep = inverse_dynamics(bound, kin, list(qd), list(qdd))
-        assert np.array_equal(twin.inverse_dynamics(q, qd, qdd), np.array(sweep, dtype=float))
+        assert np.array_equal(twin.inverse_dynamics(q, qd, qdd), np.array(sweep, dtype=float) + twin.elastic(q))
         close(twin.bias(q, qd), bias_vector(bound, kin, list(qd)), 1e-10)
         close(twin.gravity(q), gravity_vector(bound, kin), 1e-10)
 
 
 def test_sweep_equals_assembled_equations(model, rng):
-    """u* by the sweeps equals A q'' + b + g (2.38) on random states."""
+    """u* by the sweeps equals A q'' + b + g (2.38) (+ C q on elastic pairs (2.27)) on random states."""
     twin = aggsym.NumericTwin(model)
     bound = bind(model, Numeric())
     for q, qd, qdd in states(model, rng):
         kin = TreeKinematics(bound, list(q))
         expected = inverse_dynamics_by_equations(bound, kin, list(qd), list(qdd))
         close(twin.inverse_dynamics(q, qd, qdd), expected, 1e-10)
-        close(twin.inertia(q) @ qdd + twin.bias(q, qd) + twin.gravity(q), expected, 1e-10)
+        close(twin.inertia(q) @ qdd + twin.bias(q, qd) + twin.gravity(q) + twin.elastic(q), expected, 1e-10)
 
 
 def test_origin_sweep_is_the_forward_sweep(model, rng):
@@ -99,7 +101,7 @@ def test_body_equation_multiplied_out(model, rng):
     V, A = forward_sweep(kin, list(qd), list(qdd), gravity_base(bound))
     origins = origin_sweep(bound, kin, list(qd), list(qdd), gravity_base(bound)[:3])
     for k, body in enumerate(bound.bodies):
-        if body.mises is not None:
+        if isinstance(body.mises, Rigid):  # a General aggregate (added masses) is used in the book's form itself
             th = body.mises
             close(body_wrench(th, origins[k]), np.add(th.apply(A[k]), phi_force(V[k], th.apply(V[k]))), 1e-12)
 
@@ -126,6 +128,7 @@ def test_symbolic_programs_evaluate_like_the_numeric_twin(model, rng):
     twin = aggsym.NumericTwin(model)
     q, qd, qdd = next(states(model, rng, 1))
     values = {("p", i): v for i, v in enumerate(model.parameter_values)}
+    values[("t", 0)] = 0.0  # the time of prescribed spins (the twin's default)
     for name, vec in (("q", q), ("qd", qd), ("qdd", qdd)):
         values.update({(name, i): float(v) for i, v in enumerate(vec)})
     for role in ("inverse_dynamics", "joint_wrenches"):
@@ -186,7 +189,7 @@ def test_tau_is_the_projection_of_the_joint_wrench(model, rng):
     for q, qd, qdd in states(model, rng, 2):
         kin = TreeKinematics(bound, list(q))
         W = twin.joint_wrenches(q, qd, qdd)
-        tau = twin.inverse_dynamics(q, qd, qdd)
+        tau = twin.inverse_dynamics(q, qd, qdd) - twin.elastic(q)  # an elastic pair's spring is in W too
         for row, k in zip(W, pair_bodies(model)):
             for i, col in zip(kin.tree.coords[k], kin.psi[k]):
                 assert row @ np.array(col, dtype=float) == pytest.approx(tau[i], rel=1e-12, abs=1e-12)
@@ -249,7 +252,7 @@ def test_d_by_the_sweep_with_zero_acceleration(model, rng):
     for q, qd, qdd in states(model, rng):
         kin = TreeKinematics(bound, list(q))
         d = np.array(d_vector(bound, kin, list(qd)), dtype=float)
-        close(twin.inertia(q) @ qdd + d, twin.inverse_dynamics(q, qd, qdd), 1e-10)
+        close(twin.inertia(q) @ qdd + d + twin.elastic(q), twin.inverse_dynamics(q, qd, qdd), 1e-10)
         close(d, twin.bias(q, qd) + twin.gravity(q), 1e-10)
 
 

@@ -105,8 +105,8 @@ def test_forward_dynamics_inverts_inverse_dynamics(model, rng):
         tau = twin.inverse_dynamics(q, qd, qdd)
         eps = tol(twin.inertia(q))
         assert rel(twin.forward_dynamics(q, qd, tau), qdd) <= eps
-        # and it is the Cauchy form with F = tau - b - g
-        F = tau - twin.bias(q, qd) - twin.gravity(q)
+        # and it is the Cauchy form with F = tau - b - g - c
+        F = tau - twin.bias(q, qd) - twin.gravity(q) - twin.elastic(q)
         assert rel(twin.forward_dynamics(q, qd, tau), twin.inertia_inverse(q) @ F) <= eps
 
 
@@ -157,6 +157,7 @@ def test_symbolic_programs_equal_numeric_twin(model, rng):
         vals = {n: rng.normal(size=model.nq) for n in names}
         values = {(n, i): float(vals[n][i]) for n in names for i in range(model.nq)}
         values.update({("p", i): v for i, v in enumerate(model.parameter_values)})
+        values[("t", 0)] = 0.0  # the time of prescribed spins (the twin's default)
         ref = twin.call(role, *[vals[n] for n in names])
         ref = ref if isinstance(ref, tuple) else (ref,)
         for out, r in zip(outs, ref):
@@ -349,8 +350,17 @@ def pinocchio_model(model):
     return pm
 
 
-def test_against_pinocchio(model, rng):
-    """forward_dynamics = pin.aba and inertia_inverse = pin.computeMinverse (upper triangle, mirrored)."""
+def rigid_tree(path) -> bool:
+    """A model Pinocchio can hold: no prescribed spins, no added masses (springs are added to tau)."""
+    model = aggsym.load(path)
+    return not model.time_dependent and all(b.added_mass is None for b in model.bodies)
+
+
+@pytest.mark.parametrize("path", [p for p in ALL if rigid_tree(p)], ids=lambda p: p.stem)
+def test_against_pinocchio(path, rng):
+    """forward_dynamics = pin.aba and inertia_inverse = pin.computeMinverse (upper triangle, mirrored); the
+    springs of elastic pairs are the generalized force -C q given to aba."""
+    model = aggsym.load(path)
     twin = aggsym.NumericTwin(model)
     pm = pinocchio_model(model)
     assert pm.nq == model.nq
@@ -360,7 +370,7 @@ def test_against_pinocchio(model, rng):
         M = np.triu(M) + np.triu(M, 1).T
         assert rel(twin.inertia(q), M) <= 1e-10  # the two models are the same system
         eps = tol(M)
-        assert rel(twin.forward_dynamics(q, qd, tau), pin.aba(pm, data, q, qd, tau)) <= eps
+        assert rel(twin.forward_dynamics(q, qd, tau), pin.aba(pm, data, q, qd, tau - twin.elastic(q))) <= eps
         Minv = pin.computeMinverse(pm, data, q)
         Minv = np.triu(Minv) + np.triu(Minv, 1).T
         assert rel(twin.inertia_inverse(q), Minv) <= eps

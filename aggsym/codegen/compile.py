@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import AggsymError
 from ..numeric import NumericTwin
-from ..routines import ROUTINES
+from ..routines import ROUTINES, signature
 
 CFLAGS = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-fPIC", "-shared"]
 
@@ -92,21 +92,24 @@ class CheckResult:
 def random_inputs(model, role, rng):
     routine = ROUTINES[role]
     args = []
-    for name in routine.inputs:
+    for name in signature(routine, model):
         if name == "p":
             continue
         if name == "q":
             args.append(rng.uniform(-np.pi, np.pi, model.nq))
+        elif name == "t":
+            args.append(float(rng.uniform(0, 10)))
         else:
             args.append(rng.normal(size=model.nq))
     return args
 
 
-def relative_error(a, b) -> float:
+def relative_error(a, b, scale=None) -> float:
+    """max |a - b| / max |b| (or / scale when given, e.g. the largest output of a routine with several)."""
     a, b = np.atleast_1d(np.asarray(a, dtype=float)), np.atleast_1d(np.asarray(b, dtype=float))
     if not a.size:
         return 0.0
-    scale = float(np.max(np.abs(b)))
+    scale = float(np.max(np.abs(b))) if scale is None else scale
     return float(np.max(np.abs(a - b)) / (scale if scale > 0 else 1.0))
 
 
@@ -132,8 +135,9 @@ def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir
                 refs = ref if isinstance(ref, tuple) else (ref,)
                 cs = got_c if isinstance(got_c, tuple) else (got_c,)
                 pys = got_py if isinstance(got_py, tuple) else (got_py,)
-                for r, c, p in zip(refs, cs, pys):
-                    worst_c = max(worst_c, relative_error(c, r))
-                    worst_py = max(worst_py, relative_error(p, r))
+                scale = max(float(np.max(np.abs(r))) if np.size(r) else 0.0 for r in refs)
+                for r, c, p in zip(refs, cs, pys):  # relative to the largest value the routine returns
+                    worst_c = max(worst_c, relative_error(c, r, scale))
+                    worst_py = max(worst_py, relative_error(p, r, scale))
             results.append(CheckResult(role, worst_c, worst_py))
         return results

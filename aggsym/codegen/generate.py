@@ -22,16 +22,17 @@ from .. import __version__
 from ..backend import Symbolic, bind
 from ..kinematics import TreeKinematics
 from ..model.tree import Tree
-from ..routines import ROUTINES, Routine
+from ..routines import ROUTINES, Routine, input_length, signature
 from .printing import CPrinter, Converter, NumPyPrinter, count_ops, straight_line
 from .program import Node
 
-INPUT_KINDS = ("q", "qd", "qdd", "tau")
+INPUT_KINDS = ("q", "qd", "qdd", "tau", "t")  # t: the time, one number, for models with prescribed motions
 
 
 @dataclass
 class EmittedRoutine:
     routine: Routine
+    inputs: tuple  # the input names in argument order for this model (routines.signature)
     symbol: str  # C function name
     c_body: list  # C statements
     py_body: list  # Python statements
@@ -47,11 +48,25 @@ class Generated:
     timings: list = field(default_factory=list)  # (stage, seconds)
 
 
-def templates() -> jinja2.Environment:
-    """The Jinja environment over the package's templates (shipped inside the wheel as aggsym/templates)."""
+def template_root():
+    """Where the templates are: ``templates/`` of the source tree this package was imported from (a checkout: the
+    folder holds pyproject.toml naming aggsym), else the installed package data ``aggsym.templates`` (the wheel).
+
+    The check matters when the package is imported from one checkout (PYTHONPATH) while an editable install of
+    another one maps ``aggsym.templates`` there: the code and its templates must come from the same tree."""
     from importlib.resources import files
 
-    root = files("aggsym.templates")
+    tree = Path(__file__).resolve().parents[2]
+    project = tree / "pyproject.toml"
+    if (tree / "templates" / "model.c.j2").is_file() and project.is_file() and \
+            'name = "aggsym"' in project.read_text(encoding="utf-8"):
+        return tree / "templates"
+    return files("aggsym.templates")
+
+
+def templates() -> jinja2.Environment:
+    """The Jinja environment over the package's templates (shipped inside the wheel as aggsym/templates)."""
+    root = template_root()
     return jinja2.Environment(
         loader=jinja2.FunctionLoader(lambda name: (root / name).read_text(encoding="utf-8")),
         undefined=jinja2.StrictUndefined,
@@ -82,13 +97,13 @@ def symbolic_routines(model, tree=None, roles=None):
     prog = backend.program
     tree = tree or Tree(model)
     bound = bind(model, backend, tree=tree)
-    vectors = {k: prog.vector(k, model.nq) for k in INPUT_KINDS}
+    vectors = {k: prog.vector(k, input_length(model, k)) for k in INPUT_KINDS}
     kin = TreeKinematics(bound, vectors["q"])
     outputs = {}
     for role, routine in ROUTINES.items():
         if roles is not None and role not in roles or not routine.exists_for(model):
             continue
-        x = {k: vectors[k] for k in routine.inputs if k != "p"}
+        x = {k: vectors[k] for k in signature(routine, model) if k not in ("p", "t")}
         outputs[role] = [list(o) for o in routine.build(bound, kin, x)]
     return prog, outputs
 
@@ -104,7 +119,8 @@ def _input_symbols(sl, c: bool):
 def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> EmittedRoutine:
     """C and Python statements of one routine, and the operation count of the C."""
     sl = straight_line(prog, outputs)
-    allowed = set(routine.inputs)
+    inputs = signature(routine, model)
+    allowed = set(inputs)
     for kind, _ in sl.inputs:
         if kind not in allowed:
             raise RuntimeError(f"routine {routine.role} depends on input {kind!r} outside its signature")
@@ -114,13 +130,16 @@ def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> Emitted
     py_names = {**_input_symbols(sl, False), **temp_names}
     c_conv, py_conv = Converter(prog, c_names), Converter(prog, py_names)
     c_body, py_body = [], []
-    for kind in routine.inputs:  # every input is read before any output is written: outputs may alias inputs
+    for kind in inputs:  # every input is read before any output is written: outputs may alias inputs
         used = [i for k, i in sl.inputs if k == kind]
         if not used:
             c_body.append(f"(void){kind};")
         for i in used:
             c_body.append(f"const double {kind}_{i} = {kind}[{i}];")
             py_body.append(f"{kind}_{i} = {kind}[..., {i}]")
+    for out, flat in zip(routine.outputs, outputs):
+        if not flat:
+            c_body.append(f"(void){out.name};")
     trig = _trig_pairs(prog, sl.temps)
     done = set()
     shapes = [out.shape(model) for out in routine.outputs]
@@ -150,7 +169,7 @@ def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> Emitted
         c_body.append(f"double {s_name}, {c_name};")
         c_body.append(f"aggsym_sincos({cp._print(c_conv(arg, top=False))}, &{s_name}, &{c_name});")
     ops = count_ops("\n".join(c_body))
-    return EmittedRoutine(routine, f"{prefix}_{routine.role}", c_body, py_body, ops, len(sl.temps))
+    return EmittedRoutine(routine, inputs, f"{prefix}_{routine.role}", c_body, py_body, ops, len(sl.temps))
 
 
 def _trig_pairs(prog, temps) -> dict:
@@ -174,28 +193,67 @@ def _unravel(k, shape):
     return tuple(reversed(out))
 
 
-def manifest(model, emitted, conservative: bool = True) -> dict:
-    """The JSON manifest of the generated-code contract."""
+def manifest(model, emitted, conservative: bool | None = None) -> dict:
+    """The JSON manifest of the generated-code contract; ``conservative`` defaults to the model's (T + U is kept
+    at tau = 0 unless a prescribed motion feeds energy in)."""
     tree = Tree(model)
     layouts = {}
     for e in emitted:
         if e.routine.layout is not None:
             layouts[e.routine.role] = e.routine.layout(model)
-    return {
+    out = {
         "name": model.name,
         "nq": model.nq,
         "coordinates": [{"name": c.name, "joint": c.joint, "kind": c.kind} for c in model.coordinates],
         "parameters": [{"name": p.name, "value": p.value} for p in model.parameters],
         "functions": {e.routine.role: e.symbol for e in emitted},
-        "signatures": {e.routine.role: {"inputs": list(e.routine.inputs),
+        "signatures": {e.routine.role: {"inputs": list(e.inputs),
                                         "outputs": [{"name": o.name, "shape": list(o.shape(model))}
                                                     for o in e.routine.outputs]} for e in emitted},
         "layouts": layouts,
-        "conservative": conservative,
+        "conservative": model.conservative if conservative is None else conservative,
         "ops": {e.routine.role: e.ops for e in emitted},
         "bodies": len(tree),
         "generator": f"aggsym {__version__}",
     }
+    if model.time_dependent:
+        out["time"] = time_entry(model)
+    if any(b.pair.elastic for b in model.bodies):
+        out["elastic"] = elastic_entry(model)
+    return out
+
+
+def time_entry(model) -> dict:
+    """The manifest's description of the time input and of the prescribed motions (rotors, (2.13))."""
+    rotors = []
+    for b in model.bodies:
+        for code, expr in b.pair.prescribed:
+            rotors.append({"body": b.name, "carrier": b.parent, "joint": b.pair.name, "axis": code,
+                           "angle": str(expr)})
+    return {
+        "input": "t",
+        "length": 1,
+        "meaning": ("the time: every routine takes it after its other inputs and before p (C: a pointer to one "
+                    "double; NumPy: a number or an array of the batch shape).  The prescribed angles below and "
+                    "their first and second derivatives (taken symbolically) are evaluated at t; the carrier's "
+                    "motion does not act on them (Prop. 2.7).  bias holds all their rate and acceleration terms."),
+        "prescribed": rotors,
+    }
+
+
+def elastic_entry(model) -> dict:
+    """The manifest's description of the elastic pairs (2.27)."""
+    pairs = []
+    for b in model.bodies:
+        if b.pair.elastic:
+            pairs.append({"joint": b.pair.name, "coordinates": [c.name for c in b.pair.coordinates],
+                          "stiffness": [[str(x) for x in row] for row in b.pair.stiffness],
+                          "rest": [str(x) for x in b.pair.rest] if b.pair.rest is not None
+                          else ["0"] * len(b.pair.coordinates)})
+    return {"equation": "A(q) qdd + b(q, qd) + g(q) + C (q - q0) = tau (2.27); c = C (q - q0) is the routine "
+                        "'elastic', included in inverse_dynamics, nonlinear_effects and forward_dynamics; "
+                        "1/2 (q - q0)^T C (q - q0) is in potential_energy",
+            "pairs": pairs}
 
 
 def generate(model, progress=None, latex: bool = True) -> Generated:
@@ -222,6 +280,8 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
         "parameters": [(p.name, repr(float(p.value))) for p in model.parameters],
         "coordinates": model.coordinates,
         "sincos": any("aggsym_sincos(" in line for r in emitted for line in r.c_body),
+        "time": model.time_dependent,
+        "elastic": any(b.pair.elastic for b in model.bodies),
     }
     gen = Generated(model, emitted)
     gen.files[f"{model.name}.h"] = env.get_template("model.h.j2").render(ctx)

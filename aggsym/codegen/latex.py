@@ -1,6 +1,7 @@
 """The LaTeX document of a model's equations of motion.
 
-Small models (at most :data:`CLOSED_FORM_MAX_NQ` coordinates) get closed forms: every entry of A, b and g
+Small models (at most :data:`CLOSED_FORM_MAX_NQ` coordinates and :data:`CLOSED_FORM_MAX_NODES` program nodes in
+A, b and g) get closed forms: every entry of A, b and g
 simplified by SymPy, written as the scalar equations ``sum_j A_ij q''_j + b_i + g_i = tau_i`` (for the double
 pendulum these are (2.26)).  Larger models get the intermediate-variable form: the straight-line programs of
 A, b and g, one named intermediate per line, as the C code computes them.
@@ -17,6 +18,8 @@ from sympy.printing.latex import LatexPrinter
 from .printing import Converter, LinComb, Num, Prod, _Common, straight_line
 
 CLOSED_FORM_MAX_NQ = 4
+CLOSED_FORM_MAX_NODES = 300  # and at most this many program nodes in A, b, g (SymPy's simplification of the
+# flywheel on a spherical pair, 3 coordinates but ~570 nodes, does not finish in minutes)
 
 
 def _dotted(name_latex: str, accent: str) -> str:
@@ -88,6 +91,9 @@ def closed_form(model):
     sections.append(("Velocity terms $b(q,\\dot q)$", rows))
     rows = [broken(f"g_{{{i + 1}}}", _terms(eq.g[i], names)) for i in range(n) if eq.g[i] != 0]
     sections.append(("Gravity $g(q)$", rows))
+    if any(x != 0 for x in eq.c):
+        rows = [broken(f"c_{{{i + 1}}}", _terms(eq.c[i], names)) for i in range(n) if eq.c[i] != 0]
+        sections.append(("Elastic forces $c(q) = C\\,(q - q_0)$ (2.27)", rows))
     rows = []
     for i in range(n):  # u*_i by the sweeps, its q'' coefficients and the rest d_i (2.45)
         u = sp.expand(eq.u_star[i])
@@ -201,6 +207,8 @@ def intermediate_form(model, prog, outputs, roles=("inertia", "bias", "gravity")
                 sym[node.id] = sp.latex(q[i])
             elif kind == "qd":
                 sym[node.id] = names[qd[i]]
+            elif kind == "t":
+                sym[node.id] = "t"
             else:
                 sym[node.id] = sp.latex(model.parameter_symbols[i])
         for k, i in enumerate(sl.temps):
@@ -232,7 +240,8 @@ def _escape(text: str) -> str:
 
 def latex_document(model, env, prog, outputs) -> str:
     """The standalone LaTeX document (rendered through templates/model.tex.j2)."""
-    small = model.nq <= CLOSED_FORM_MAX_NQ
+    flat = [x for role in ("inertia", "bias", "gravity") if role in outputs for o in outputs[role] for x in o]
+    small = model.nq <= CLOSED_FORM_MAX_NQ and len(prog.reachable(flat)) <= CLOSED_FORM_MAX_NODES
     names = symbol_names(model)
     q, qd, qdd = coordinate_symbols(model)
     ctx = {

@@ -11,7 +11,10 @@ A node is created through :meth:`Program.op`, which
   so the structurally zero blocks of L, Phi and M never reach the output;
 * moves negations outwards and into subtractions (``(-a)*b -> -(a*b)``, ``a + -b -> a - b``);
 * hash-conses (value numbering): the same operation on the same operands is the same node, so common
-  subexpressions, and in particular ``sin``/``cos`` of each angle, exist once per program.
+  subexpressions, and in particular ``sin``/``cos`` of each angle, exist once per program;
+* numbers products modulo commutativity and associativity: a product whose factors (and constant coefficient)
+  are those of an existing product *is* that node, so ``x (k y)`` and ``y (k x)`` are one value and their
+  difference folds to 0.  Only existing nodes are reused; nothing is regrouped.
 
 Constants are plain Python numbers; integral floats are stored as ``int`` so that the zero and one tests
 (``type(x) is int``) are exact.  Node ids grow in creation order, which is a topological order.
@@ -127,6 +130,8 @@ class Program:
         self.ops: list[tuple] = []
         self.nodes: list[Node] = []
         self._table: dict = {}
+        self._products: dict = {}  # product signature -> Node
+        self._signatures: dict = {}  # MUL node id -> (coefficient, sorted factor ids)
         self.inputs: dict = {}  # (kind, index) -> Node
 
     # construction ---------------------------------------------------------------------------------
@@ -278,7 +283,26 @@ class Program:
             entry = self.ops[a.id]
             if entry[0] == MUL and is_const(entry[1]):
                 return self._mul(normalize_const(b * entry[1]), entry[2])
-        return self._make(MUL, a, b)
+        coefficient, factors = self._product_signature(a, b)
+        key = (repr(coefficient), factors)
+        node = self._products.get(key)
+        if node is None:
+            node = self._make(MUL, a, b)
+            self._signatures.setdefault(node.id, (coefficient, factors))
+            self._products.setdefault(key, node)
+        return node
+
+    def _factors(self, x):
+        """(coefficient, factor ids) of a scalar seen as a product."""
+        if not isinstance(x, Node):
+            return x, ()
+        sig = self._signatures.get(x.id)
+        return sig if sig is not None else (1, (x.id,))
+
+    def _product_signature(self, a, b):
+        ca, fa = self._factors(a)
+        cb, fb = self._factors(b)
+        return normalize_const(ca * cb), tuple(sorted(fa + fb))
 
     def _div(self, a, b):
         if is_zero(a):

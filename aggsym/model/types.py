@@ -9,6 +9,16 @@ parent's axes, then constant rotations about the axes ``alpha, beta, gamma`` in 
 ``c = c_alpha(phi_alpha) c_beta(phi_beta) c_gamma(phi_gamma)``), followed by the functional part: translations
 ``o1, o2, o3`` along the constructive frame's axes, then the rotation ``c1(theta4) c2(theta5) c3(theta6)``.
 Coordinates absent from the pair are zero.
+
+Three body features of chapter 2 live here too:
+
+* a pair may be Hooke-elastic: ``stiffness`` C over its coordinates and a ``rest`` position q0, giving the
+  generalized force C (q - q0) on the left of (2.27) and the energy 1/2 (q - q0)^T C (q - q0) (1.32), (2.27);
+* a pair may have a *prescribed* functional motion instead of coordinates (``prescribed``: rotations as
+  functions of the time t): this is how a rotor with a prescribed spin (2.13) is carried, as a body whose
+  relative motion is known and does not depend on the carrier's (Prop. 2.7);
+* a body may carry ``added_mass``, the constant symmetric 6x6 matrix Lambda of the inertial medium about its
+  origin in (v, w) order; its aggregate is Theta + Lambda (Prop. 2.8), gravity acts on Theta only.
 """
 from __future__ import annotations
 
@@ -18,6 +28,7 @@ import sympy as sp
 
 COORDINATE_CODES = ("o1", "o2", "o3", "theta4", "theta5", "theta6")
 WORLD = "world"
+TIME = sp.Symbol("t", real=True)  # the time in prescribed motions (rotor spins)
 
 _SNAP = 1e-14
 
@@ -86,10 +97,16 @@ class Pair:
     rotation: tuple  # ((axis 1..3, angle expression), ...) in order of application
     coordinates: tuple  # Coordinate, ordered by code
     stiffness: tuple | None = None  # k x k expressions over the pair's coordinates (Hooke, (1.32), (2.27))
+    rest: tuple | None = None  # k expressions: the coordinates at which the elastic force vanishes (default 0)
+    prescribed: tuple = ()  # ((code, expression in TIME), ...): known rotations of a pair without coordinates
 
     @property
     def codes(self) -> tuple:
         return tuple(c.code for c in self.coordinates)
+
+    @property
+    def elastic(self) -> bool:
+        return self.stiffness is not None
 
     def constructive_rotation(self) -> sp.Matrix:
         """c^{mu,k-1}_{lkk} = c_alpha c_beta c_gamma (Prop. 1.17), exact where the angles are."""
@@ -126,6 +143,8 @@ class Body:
     inertial: Inertial | None = None
     where: str = ""  # the place in the source file, for messages
     link_rotation: tuple | None = None  # 3x3: axes of the source file's link frame in the body frame (URDF)
+    added_mass: tuple | None = None  # 6x6 symmetric Lambda about the body origin, (v, w) order (Prop. 2.8)
+    carrier: str | None = None  # for a rotor (2.13): the body that carries it (its parent)
 
 
 @dataclass(frozen=True)
@@ -147,6 +166,29 @@ class Model:
     @property
     def nq(self) -> int:
         return len(self.coordinates)
+
+    @property
+    def time_dependent(self) -> bool:
+        """True when some pair moves as a prescribed function of time (a rotor's spin): then every routine takes
+        the time t as an input."""
+        return any(b.pair.prescribed for b in self.bodies)
+
+    @property
+    def elastic_coordinates(self) -> tuple:
+        """Indices (in q order) of the coordinates of the elastic pairs: the 'fast' motions of Prop. 2.14."""
+        out, i = [], 0
+        for b in self.bodies:
+            n = len(b.pair.coordinates)
+            if b.pair.elastic:
+                out.extend(range(i, i + n))
+            i += n
+        return tuple(out)
+
+    @property
+    def conservative(self) -> bool:
+        """True when tau = 0 conserves T + U: no prescribed motion (a prescribed spin injects energy); elastic
+        pairs and added masses keep it (U holds 1/2 q^T C q, T the medium's 1/2 V^T Lambda V)."""
+        return not self.time_dependent
 
     @property
     def parameter_symbols(self) -> tuple:

@@ -14,11 +14,32 @@ The format is documented in README.md ("The model format").  Summary::
           translation: [p1, p2, p3]  # constructive translation, parent axes
           rotation: [[axis, angle], ...]   # constructive rotations in order, axis 1|2|3|x|y|z
           functional: {o1|o2|o3|theta4|theta5|theta6: COORDINATE, ...}
-          stiffness: [[...]] | [k1, ...]   # Hooke stiffness over the pair's coordinates (2.27)
+          stiffness: [[...]] | [k1, ...]   # Hooke stiffness C over the pair's coordinates (1.32), (2.27):
+                                           # C (q - rest) joins the left side, 1/2 (q - rest)^T C (q - rest) U
+          rest: [r1, ...]            # the coordinates where the elastic force vanishes (default 0)
         mass: m                      # omit mass (and inertia) for a massless frame
         com: [x, y, z]               # centre of mass, body axes (default 0)
         inertia: {xx:, yy:, zz:, xy:, xz:, yz:} | [[3x3]]   # about the centre of mass, body axes
         mises: [[6x6]]               # alternatively: the Mises matrix (2.3) at the body origin
+        added_mass: [[6x6]] | [l1, ..., l6]   # the medium's added masses Lambda about the body origin, (v, w)
+                                     # order, symmetric positive semi-definite: Theta -> Theta + Lambda
+                                     # (Prop. 2.8); T gains 1/2 V^T Lambda V, gravity still acts on m only
+        rotors:                      # rotating bodies carried by this one (2.13), Fig. 1.3
+          - name: NAME               # a body name (unique among bodies and rotors)
+            joint: NAME              # the spin pair's name (default: the rotor's name)
+            translation: [p1, p2, p3]      # constructive configuration on the carrier, as in a pair
+            rotation: [[axis, angle], ...]
+            spin: {coordinate: NAME}       # the spin about the rotor's e3 is a generalized coordinate, or
+            spin: {prescribed: "expr in t"}  # the spin angle is a known function of the time t (and the
+                                     # parameters); its rates are derived symbolically, the carrier's motion
+                                     # does not act back on it (Prop. 2.7); every routine then takes t
+            mass: m                  # mass properties as for a body (mass/com/inertia or mises);
+            com: [x, y, z]           # unbalanced (com off the axis) and asymmetric rotors are allowed
+            inertia: ...
+
+A rotor becomes a body of the tree, listed right after its carrier: with ``spin: {coordinate: q}`` its pair is
+an ordinary one-coordinate pair ``theta6: q``, with ``spin: {prescribed: ...}`` its pair has no coordinate and
+turns by the prescribed angle.
 """
 from __future__ import annotations
 
@@ -30,13 +51,16 @@ import yaml
 
 from ..errors import ModelError
 from .expressions import ExpressionError, check_identifier, evaluate, parse_value
-from .types import COORDINATE_CODES, WORLD, Body, Coordinate, Inertial, Model, Parameter, Pair
+from .types import COORDINATE_CODES, TIME, WORLD, Body, Coordinate, Inertial, Model, Parameter, Pair
 from .validate import inertia_problem, mass_problem, order_tree
 
 TOP_KEYS = {"name", "description", "source", "notes", "gravity", "parameters", "bodies", "contacts", "loops"}
 BODY_KEYS = {"name", "parent", "pair", "mass", "com", "inertia", "mises", "rotors", "added_mass", "description",
              "notes"}
-PAIR_KEYS = {"name", "translation", "rotation", "functional", "stiffness", "description"}
+PAIR_KEYS = {"name", "translation", "rotation", "functional", "stiffness", "rest", "description"}
+ROTOR_KEYS = {"name", "joint", "translation", "rotation", "spin", "mass", "com", "inertia", "mises", "description",
+              "notes"}
+SPIN_KEYS = {"coordinate", "prescribed"}
 INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
 AXES = {1: 1, 2: 2, 3: 3, "x": 1, "y": 2, "z": 3, "1": 1, "2": 2, "3": 3}
 CODE_ALIASES = {"θ4": "theta4", "θ5": "theta5", "θ6": "theta6"}
@@ -222,19 +246,120 @@ class _Reader:
             self.fail(path + (where, "parent"), problem)
         joints: dict[str, tuple] = {}
         coordinates: dict[str, tuple] = {}
+        self.body_names = {name: path + (i, "name") for name, i in names.items()}
         bodies = []
         for i in order:
-            bodies.append(self.body(value[i], path + (i,), joints, coordinates))
+            body = self.body(value[i], path + (i,), joints, coordinates)
+            bodies.append(body)
+            bodies.extend(self.rotors(value[i], path + (i,), joints, coordinates))
         return tuple(bodies)
 
     def body(self, entry, path, joints, coordinates) -> Body:
         name = entry["name"]
         pair = self.pair(entry.get("pair", {}), path + ("pair",), name, joints, coordinates)
         inertial = self.inertial(entry, path)
-        for key in ("rotors", "added_mass"):
-            if key in entry:
-                self.fail(path + (key,), f"{key} are not supported yet")
-        return Body(name=name, parent=entry.get("parent", WORLD), pair=pair, inertial=inertial, where=_path(path))
+        added = self.added_mass(entry["added_mass"], path + ("added_mass",)) if "added_mass" in entry else None
+        return Body(name=name, parent=entry.get("parent", WORLD), pair=pair, inertial=inertial, where=_path(path),
+                    added_mass=added)
+
+    def added_mass(self, value, path):
+        """Lambda of Prop. 2.8: a 6x6 matrix or its diagonal, symmetric and positive semi-definite."""
+        if isinstance(value, list) and value and not isinstance(value[0], list):
+            diag = self.vector(value, path, 6)
+            X = tuple(tuple(diag[i] if i == j else sp.Integer(0) for j in range(6)) for i in range(6))
+        else:
+            X = self.matrix(value, path, 6, 6)
+        num = np.array([[self.number(X[i][j], path + (i, j)) for j in range(6)] for i in range(6)])
+        scale = max(1.0, float(np.max(np.abs(num))))
+        bad = np.argwhere(np.abs(num - num.T) > 1e-9 * scale)
+        if len(bad):
+            i, j = bad[0]
+            self.fail(path, f"the added mass matrix is not symmetric: [{i}][{j}] = {num[i, j]:g} but "
+                            f"[{j}][{i}] = {num[j, i]:g}")
+        low = float(np.linalg.eigvalsh(num)[0])
+        if low < -1e-9 * scale:
+            self.fail(path, f"the added mass matrix is not positive semi-definite (smallest eigenvalue {low:g}): "
+                            f"the medium's kinetic energy 1/2 V^T Lambda V must not be negative")
+        return X
+
+    def rotors(self, entry, path, joints, coordinates):
+        """The rotors of a body (2.13) as bodies of the tree, each right after its carrier."""
+        if "rotors" not in entry:
+            return []
+        carrier = entry["name"]
+        out = []
+        for j, rotor in enumerate(self.sequence(entry["rotors"], path + ("rotors",))):
+            p = path + ("rotors", j)
+            self.mapping(rotor, p, ROTOR_KEYS, required=("name", "spin"))
+            name = self.name(rotor["name"], p + ("name",), "rotor name")
+            if name == WORLD:
+                self.fail(p + ("name",), f"{WORLD!r} names the inertial frame; choose another rotor name")
+            if name in self.body_names:
+                self.fail(p + ("name",), f"duplicate body name {name!r} (also {_path(self.body_names[name])})")
+            self.body_names[name] = p + ("name",)
+            jname = self.name(rotor.get("joint", name), p + ("joint",), "joint name")
+            if jname in joints:
+                self.fail(p + ("joint",), f"duplicate joint name {jname!r} (also {_path(joints[jname])})")
+            joints[jname] = p
+            translation = self.vector(rotor["translation"], p + ("translation",)) if "translation" in rotor \
+                else (sp.Integer(0),) * 3
+            rotation = self.rotation(rotor.get("rotation", []), p + ("rotation",))
+            coords, prescribed = self.spin(rotor["spin"], p + ("spin",), jname, coordinates)
+            inertial = self.inertial(rotor, p)
+            if inertial is None:
+                self.fail(p, "a rotor needs mass properties (mass, com, inertia or mises)")
+            pair = Pair(jname, translation, rotation, coords, prescribed=prescribed)
+            out.append(Body(name=name, parent=carrier, pair=pair, inertial=inertial, where=_path(p),
+                            carrier=carrier))
+        return out
+
+    def spin(self, value, path, joint, coordinates):
+        """``{coordinate: NAME}`` (the spin is a generalized coordinate) or ``{prescribed: expr in t}``."""
+        self.mapping(value, path, SPIN_KEYS)
+        if len(value) != 1:
+            self.fail(path, "give exactly one of 'coordinate' (the spin is a generalized coordinate) or "
+                            "'prescribed' (the spin angle as a function of the time t)")
+        if "coordinate" in value:
+            where = path + ("coordinate",)
+            cname = self.name(value["coordinate"], where, "coordinate name")
+            if cname in coordinates:
+                self.fail(where, f"duplicate coordinate name {cname!r} (also {_path(coordinates[cname])})")
+            if cname in self.symbols:
+                self.fail(where, f"coordinate name {cname!r} is also a parameter")
+            coordinates[cname] = where
+            return (Coordinate(cname, "theta6", joint),), ()
+        where = path + ("prescribed",)
+        try:
+            angle = parse_value(value["prescribed"], {**self.symbols, "t": TIME})
+        except ExpressionError as exc:
+            self.fail(where, f"{exc} (the prescribed spin may use the time t)")
+        if not angle.has(TIME):
+            self.fail(where, f"the prescribed spin {angle} does not depend on the time t (a rotor at a fixed angle "
+                             f"is a welded body: give it as a body without pair coordinates)")
+        from ..backend import Numeric, to_scalar
+
+        values = {**self.defaults, TIME: 0.37}
+        for k in range(3):
+            expr = sp.diff(angle, TIME, k)
+            try:
+                x = to_scalar(expr, values, Numeric())
+            except (ValueError, TypeError, ZeroDivisionError) as exc:
+                self.fail(where, f"the prescribed spin cannot be emitted ({'angle, rate, acceleration'.split(', ')[k]}"
+                                 f" {expr}: {exc}); use + - * /, integer powers, sqrt, sin, cos")
+            if not np.isfinite(float(x)):
+                self.fail(where, f"the prescribed spin is not finite at t = 0.37: {expr}")
+        return (), (("theta6", angle),)
+
+    def rotation(self, value, path):
+        rotation = []
+        for i, step in enumerate(self.sequence(value, path)):
+            p = path + (i,)
+            self.sequence(step, p, 2)
+            axis = AXES.get(step[0]) if not isinstance(step[0], bool) else None
+            if axis is None:
+                self.fail(p + (0,), f"rotation axis must be 1, 2, 3 (or x, y, z), got {step[0]!r}")
+            rotation.append((axis, self.expr(step[1], p + (1,))))
+        return tuple(rotation)
 
     def pair(self, value, path, body, joints, coordinates) -> Pair:
         self.mapping(value, path, PAIR_KEYS)
@@ -244,14 +369,7 @@ class _Reader:
         joints[jname] = path
         translation = self.vector(value["translation"], path + ("translation",)) if "translation" in value \
             else (sp.Integer(0),) * 3
-        rotation = []
-        for i, step in enumerate(self.sequence(value.get("rotation", []), path + ("rotation",))):
-            p = path + ("rotation", i)
-            self.sequence(step, p, 2)
-            axis = AXES.get(step[0]) if not isinstance(step[0], bool) else None
-            if axis is None:
-                self.fail(p + (0,), f"rotation axis must be 1, 2, 3 (or x, y, z), got {step[0]!r}")
-            rotation.append((axis, self.expr(step[1], p + (1,))))
+        rotation = self.rotation(value.get("rotation", []), path + ("rotation",))
         functional = value.get("functional", {})
         fpath = path + ("functional",)
         if not isinstance(functional, dict):
@@ -271,10 +389,14 @@ class _Reader:
             coordinates[cname] = fpath + (code,)
             coords.append(Coordinate(cname, code, jname))
         coords.sort(key=lambda c: COORDINATE_CODES.index(c.code))
-        stiffness = None
+        stiffness = rest = None
         if "stiffness" in value:
             stiffness = self.stiffness(value["stiffness"], path + ("stiffness",), len(coords))
-        return Pair(jname, translation, tuple(rotation), tuple(coords), stiffness)
+        if "rest" in value:
+            if stiffness is None:
+                self.fail(path + ("rest",), "a rest position needs a stiffness (the pair is not elastic)")
+            rest = self.vector(value["rest"], path + ("rest",), len(coords))
+        return Pair(jname, translation, rotation, tuple(coords), stiffness, rest)
 
     def stiffness(self, value, path, n):
         if n == 0:

@@ -62,7 +62,7 @@ void double_pendulum_inertia(const double *q, const double *p, double *A)
     A[4] = p_6 + p_0*p_2*p_2 + x1 + x3*x3*(p_8 - x1) + 2*p_4*x4 + p_1*p_4*p_4;
 }
 
-/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
+/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)
  * operations: 29 mul, 14 add, 0 div, 1 call */
 void double_pendulum_bias(const double *q, const double *qd, const double *p, double *b)
 {
@@ -94,7 +94,7 @@ void double_pendulum_bias(const double *q, const double *qd, const double *p, do
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
- * operations: 16 mul, 3 add, 0 div, 2 call */
+ * operations: 11 mul, 2 add, 0 div, 2 call */
 void double_pendulum_gravity(const double *q, const double *p, double *g)
 {
     const double q_1 = q[1];
@@ -105,20 +105,18 @@ void double_pendulum_gravity(const double *q, const double *p, double *g)
     const double p_3 = p[3];
     const double p_4 = p[4];
     const double p_11 = p[11];
+    g[0] = 0;
     const double x0 = p_1*p_3;
     double x2, x1;
     aggsym_sincos(q_1, &x2, &x1);
     double x4, x3;
     aggsym_sincos(q_2, &x4, &x3);
-    const double x5 = p_11*x2;
-    const double x6 = p_11*x1;
-    const double x7 = x4*x5;
-    g[2] = x0*x7;
-    g[0] = x3*p_1*x7 - x4*p_1*x3*x5;
-    g[1] = -(p_4*p_1*x6 + x3*x0*x6 + p_0*p_2*x6);
+    const double x5 = p_11*x1;
+    g[2] = x0*x4*p_11*x2;
+    g[1] = -(p_4*p_1*x5 + x3*x0*x5 + p_0*p_2*x5);
 }
 
-/* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
+/* d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)
  * operations: 35 mul, 18 add, 0 div, 2 call */
 void double_pendulum_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
@@ -156,7 +154,7 @@ void double_pendulum_nonlinear_effects(const double *q, const double *qd, const 
     d[1] = x7*qd_2*x10*(x3 + x8) + x6*(x11*(p_8 - x3) - x2*x11 - x0*x13) - p_4*(x0*(x11 + x11) + p_1*x13) - p_0*p_2*x13;
 }
 
-/* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
+/* tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)
  * operations: 46 mul, 30 add, 0 div, 2 call */
 void double_pendulum_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
@@ -200,7 +198,7 @@ void double_pendulum_inverse_dynamics(const double *q, const double *qd, const d
     tau[0] = x7*(p_1*(qdd_0*x7 - x6*x14) - x0*(x9*x9 + qd_2*qd_2)) + x6*(x0*(qdd_2 + x12) + p_1*x16) + p_0*qdd_0;
 }
 
-/* T = 1/2 qd^T A(q) qd (Def. 2.4)
+/* T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins
  * operations: 31 mul, 14 add, 0 div, 1 call */
 void double_pendulum_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
@@ -229,7 +227,7 @@ void double_pendulum_kinetic_energy(const double *q, const double *qd, const dou
     T[0] = 0.5*(qd_0*p_0*qd_0 + qd_1*(p_6 + p_0*p_2*p_2)*qd_1 + x7*p_1*x7 + x8*(p_1*x8 + x0*qd_2) + x6*(p_1*x6 + x0*x5) + x4*p_8*x4 + x5*(x0*x6 + (p_9 + x1)*x5) + qd_2*(x0*x8 + (p_10 + x1)*qd_2));
 }
 
-/* U(q), the potential energy of gravity
+/* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs
  * operations: 8 mul, 2 add, 0 div, 2 call */
 void double_pendulum_potential_energy(const double *q, const double *p, double *U)
 {
@@ -324,7 +322,7 @@ void double_pendulum_joint_wrenches(const double *q, const double *qd, const dou
     W[5] = x5*x33 - x6*x29;
 }
 
-/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)
+/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
  * operations: 52 mul, 33 add, 3 div, 2 call */
 void double_pendulum_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {

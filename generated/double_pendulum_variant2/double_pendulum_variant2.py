@@ -47,7 +47,7 @@ def inertia(q, p=None):
 
 
 def bias(q, qd, p=None):
-    """b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)"""
+    """b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
@@ -95,22 +95,20 @@ def gravity(q, p=None):
     p_3 = p[..., 3]
     p_4 = p[..., 4]
     p_11 = p[..., 11]
+    g[..., 0] = 0
     x0 = p_1*p_3
     x1 = np.cos(q_1)
     x2 = np.sin(q_1)
     x3 = np.cos(q_2)
     x4 = np.sin(q_2)
-    x5 = p_11*x2
-    x6 = p_11*x1
-    x7 = x4*x5
-    g[..., 2] = x0*x7
-    g[..., 0] = x3*p_1*x7 - x4*p_1*x3*x5
-    g[..., 1] = -(p_4*p_1*x6 + x3*x0*x6 + p_0*p_2*x6)
+    x5 = p_11*x1
+    g[..., 2] = x0*x4*p_11*x2
+    g[..., 1] = -(p_4*p_1*x5 + x3*x0*x5 + p_0*p_2*x5)
     return g
 
 
 def nonlinear_effects(q, qd, p=None):
-    """d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)"""
+    """d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
@@ -152,7 +150,7 @@ def nonlinear_effects(q, qd, p=None):
 
 
 def inverse_dynamics(q, qd, qdd, p=None):
-    """tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)"""
+    """tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     qdd = np.asarray(qdd, dtype=float)
@@ -201,7 +199,7 @@ def inverse_dynamics(q, qd, qdd, p=None):
 
 
 def kinetic_energy(q, qd, p=None):
-    """T = 1/2 qd^T A(q) qd (Def. 2.4)"""
+    """T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
@@ -234,7 +232,7 @@ def kinetic_energy(q, qd, p=None):
 
 
 def potential_energy(q, p=None):
-    """U(q), the potential energy of gravity"""
+    """U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs"""
     q = np.asarray(q, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
     batch = np.broadcast_shapes(q.shape[:-1], )
@@ -323,7 +321,7 @@ def joint_wrenches(q, qd, qdd, p=None):
 
 
 def forward_dynamics(q, qd, tau, p=None):
-    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)"""
+    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     tau = np.asarray(tau, dtype=float)

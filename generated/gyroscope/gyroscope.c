@@ -52,7 +52,7 @@ void gyroscope_inertia(const double *q, const double *p, double *A)
     A[6] = x1;
 }
 
-/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
+/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)
  * operations: 27 mul, 13 add, 0 div, 2 call */
 void gyroscope_bias(const double *q, const double *qd, const double *p, double *b)
 {
@@ -96,7 +96,7 @@ void gyroscope_gravity(const double *q, const double *p, double *g)
     g[1] = -(0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1));
 }
 
-/* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
+/* d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)
  * operations: 38 mul, 18 add, 0 div, 3 call */
 void gyroscope_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
@@ -127,7 +127,7 @@ void gyroscope_nonlinear_effects(const double *q, const double *qd, const double
     d[0] = x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) + x3*(x12 + x12) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
 }
 
-/* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
+/* tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)
  * operations: 46 mul, 26 add, 0 div, 3 call */
 void gyroscope_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
@@ -164,7 +164,7 @@ void gyroscope_inverse_dynamics(const double *q, const double *qd, const double 
     tau[0] = 0.004*qdd_0 + x2*(0.0015*x13 - 0.0005*x8 + x4*x15 - x5*x16) + x3*(0.0015*x14 + 0.0005*x9 + x17) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
 }
 
-/* T = 1/2 qd^T A(q) qd (Def. 2.4)
+/* T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins
  * operations: 21 mul, 9 add, 0 div, 2 call */
 void gyroscope_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
@@ -186,7 +186,7 @@ void gyroscope_kinetic_energy(const double *q, const double *qd, const double *p
     T[0] = 0.5*(qd_0*0.004*qd_0 + x4*0.0015*x4 + qd_1*0.002*qd_1 + x5*0.0015*x5 + x6*0.0011048*x6 + x7*0.0011048*x7 + x8*0.002*x8);
 }
 
-/* U(q), the potential energy of gravity
+/* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs
  * operations: 6 mul, 2 add, 0 div, 2 call */
 void gyroscope_potential_energy(const double *q, const double *p, double *U)
 {
@@ -273,7 +273,7 @@ void gyroscope_joint_wrenches(const double *q, const double *qd, const double *q
     W[3] = 0.004*qdd_0 + x5*x28 + x4*x37;
 }
 
-/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)
+/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
  * operations: 44 mul, 25 add, 1 div, 3 call */
 void gyroscope_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {

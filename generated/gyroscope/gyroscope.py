@@ -35,7 +35,7 @@ def inertia(q, p=None):
 
 
 def bias(q, qd, p=None):
-    """b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)"""
+    """b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
@@ -84,7 +84,7 @@ def gravity(q, p=None):
 
 
 def nonlinear_effects(q, qd, p=None):
-    """d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)"""
+    """d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
@@ -118,7 +118,7 @@ def nonlinear_effects(q, qd, p=None):
 
 
 def inverse_dynamics(q, qd, qdd, p=None):
-    """tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)"""
+    """tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     qdd = np.asarray(qdd, dtype=float)
@@ -159,7 +159,7 @@ def inverse_dynamics(q, qd, qdd, p=None):
 
 
 def kinetic_energy(q, qd, p=None):
-    """T = 1/2 qd^T A(q) qd (Def. 2.4)"""
+    """T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
@@ -184,7 +184,7 @@ def kinetic_energy(q, qd, p=None):
 
 
 def potential_energy(q, p=None):
-    """U(q), the potential energy of gravity"""
+    """U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs"""
     q = np.asarray(q, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
     batch = np.broadcast_shapes(q.shape[:-1], )
@@ -277,7 +277,7 @@ def joint_wrenches(q, qd, qdd, p=None):
 
 
 def forward_dynamics(q, qd, tau, p=None):
-    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)"""
+    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     tau = np.asarray(tau, dtype=float)

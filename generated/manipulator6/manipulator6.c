@@ -133,7 +133,7 @@ void manipulator6_inertia(const double *q, const double *p, double *A)
     A[30] = x53;
 }
 
-/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
+/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)
  * operations: 159 mul, 109 add, 0 div, 5 call */
 void manipulator6_bias(const double *q, const double *qd, const double *p, double *b)
 {
@@ -281,7 +281,7 @@ void manipulator6_gravity(const double *q, const double *p, double *g)
     g[0] = 15.696000000000002*x0 + x2*(0.45*(x5*x24 + x4*x25) + x4*x26 + x5*x28) + x3*(x4*x28 - x5*x26 - 0.45*(x5*x25 - x4*x24));
 }
 
-/* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
+/* d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)
  * operations: 173 mul, 120 add, 0 div, 6 call */
 void manipulator6_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
@@ -392,7 +392,7 @@ void manipulator6_nonlinear_effects(const double *q, const double *qd, const dou
     d[0] = 15.696000000000002*x0 + x2*(0.42000000000000004*x17 - 0.44000000000000006*x17 - 0.001*x15*x16 + 0.45*(x4*x82 - x5*x81) + x4*x83 + x5*x85) + x3*(0.02*x18 + 0.001*(x15*x15 - qd_1*qd_1) + x4*x85 - x5*x83 - 0.45*(x4*x81 + x5*x82));
 }
 
-/* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
+/* tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)
  * operations: 184 mul, 139 add, 0 div, 6 call */
 void manipulator6_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
@@ -516,7 +516,7 @@ void manipulator6_inverse_dynamics(const double *q, const double *qd, const doub
     tau[0] = 15.696000000000002*x0 + 0.1*qdd_0 + x2*(0.42000000000000004*x17 + 0.44000000000000006*x46 + 0.001*(qdd_1 - x15*x16) + 0.45*(x4*x89 - x5*x88) + x4*x90 + x5*x92) + x3*(0.001*(x15*x15 - qd_1*qd_1) + 0.44000000000000006*x47 - 0.42000000000000004*x18 + x4*x92 - x5*x90 - 0.45*(x4*x88 + x5*x89));
 }
 
-/* T = 1/2 qd^T A(q) qd (Def. 2.4)
+/* T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins
  * operations: 113 mul, 68 add, 0 div, 5 call */
 void manipulator6_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
@@ -571,7 +571,7 @@ void manipulator6_kinetic_energy(const double *q, const double *qd, const double
     T[0] = 0.5*(qd_0*0.1*qd_0 + x10*(0.44000000000000006*x10 + 0.001*qd_1) + qd_1*(0.001*x10 + 0.02*qd_1) + x11*0.44000000000000006*x11 + x27*(5*x27 + 0.8999999999999999*x12) - x26*(0.05*x14 - 0.8999999999999999*x13 - 5*x26) + x12*(0.8999999999999999*x27 + 0.2225*x12) + x14*(0.010500000000000015*x14 - 0.009*x13 - 0.05*x26) + x13*(0.8999999999999999*x26 + 0.22199999999999998*x13 - 0.009*x14) + x28*(1.5*x28 + 0.045*x16) + x30*1.5*x30 + x31*(1.5*x31 + 0.045*x17) + x17*(0.045*x31 + 0.00435*x17) + x15*0.002*x15 + x16*(0.045*x28 + 0.00435*x16) + x32*(0.8*x32 + 0.016*x19) + x30*0.8*x30 + x33*(0.8*x33 + 0.016*x18) + x18*(0.016*x33 + 0.00132*x18) + x20*0.0008*x20 + x19*(0.016*x32 + 0.00132*x19) + x34*(0.3*x34 + 0.012*x22) + x35*(0.3*x35 - 0.012*x21) + x33*0.3*x33 + x21*(0.00078*x21 - 0.012*x35) + x22*(0.012*x34 + 0.00078*x22) + x23*0.0002*x23);
 }
 
-/* U(q), the potential energy of gravity
+/* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs
  * operations: 26 mul, 15 add, 0 div, 5 call */
 void manipulator6_potential_energy(const double *q, const double *p, double *U)
 {
@@ -781,7 +781,7 @@ void manipulator6_joint_wrenches(const double *q, const double *qd, const double
     W[5] = 4.905*x1 + x2*x118 - x3*x116;
 }
 
-/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)
+/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
  * operations: 299 mul, 249 add, 3 div, 6 call */
 void manipulator6_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {

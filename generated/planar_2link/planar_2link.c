@@ -53,7 +53,7 @@ void planar_2link_inertia(const double *q, const double *p, double *A)
     A[2] = x4;
 }
 
-/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
+/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)
  * operations: 14 mul, 4 add, 0 div, 1 call */
 void planar_2link_bias(const double *q, const double *qd, const double *p, double *b)
 {
@@ -97,7 +97,7 @@ void planar_2link_gravity(const double *q, const double *p, double *g)
     g[0] = x7 + p_2*(x3*p_1*(x2*x4 + x3*x5) + x2*p_1*x6) + p_0*0.5*p_2*x5;
 }
 
-/* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
+/* d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)
  * operations: 21 mul, 8 add, 0 div, 2 call */
 void planar_2link_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
@@ -124,7 +124,7 @@ void planar_2link_nonlinear_effects(const double *q, const double *qd, const dou
     d[0] = p_0*0.5*p_2*x6 + x9 + p_2*(x4*(p_1*(x4*x6 + x3*x7) - x0*x5*x5) + x3*p_1*x8);
 }
 
-/* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
+/* tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)
  * operations: 31 mul, 13 add, 0 div, 2 call */
 void planar_2link_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
@@ -155,7 +155,7 @@ void planar_2link_inverse_dynamics(const double *q, const double *qd, const doub
     tau[0] = p_0*0.5*p_2*x6 + p_2*p_2*0.3333333333333333*p_0*qdd_0 + x11 + p_2*(x4*(p_1*(x3*x7 + x4*x8) - x0*x5*x5) + x3*(x0*x10 + p_1*x9));
 }
 
-/* T = 1/2 qd^T A(q) qd (Def. 2.4)
+/* T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins
  * operations: 22 mul, 6 add, 0 div, 1 call */
 void planar_2link_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
@@ -176,7 +176,7 @@ void planar_2link_kinetic_energy(const double *q, const double *qd, const double
     T[0] = 0.5*(qd_0*p_2*p_2*0.3333333333333333*p_0*qd_0 + x5*p_1*x5 + x6*(p_1*x6 + x0*x3) + x3*(x0*x6 + p_3*p_3*0.3333333333333333*p_1*x3));
 }
 
-/* U(q), the potential energy of gravity
+/* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs
  * operations: 12 mul, 3 add, 0 div, 2 call */
 void planar_2link_potential_energy(const double *q, const double *p, double *U)
 {
@@ -242,7 +242,7 @@ void planar_2link_joint_wrenches(const double *q, const double *qd, const double
     W[5] = x16 + p_2*x17 + x0*x9 + p_2*p_2*0.3333333333333333*p_0*qdd_0;
 }
 
-/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)
+/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
  * operations: 39 mul, 18 add, 2 div, 2 call */
 void planar_2link_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {

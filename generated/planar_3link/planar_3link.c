@@ -71,7 +71,7 @@ void planar_3link_inertia(const double *q, const double *p, double *A)
     A[6] = x15;
 }
 
-/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
+/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)
  * operations: 31 mul, 15 add, 0 div, 2 call */
 void planar_3link_bias(const double *q, const double *qd, const double *p, double *b)
 {
@@ -144,7 +144,7 @@ void planar_3link_gravity(const double *q, const double *p, double *g)
     g[0] = x15 + p_3*(x3*(x4*x11 - x5*x12 + p_1*x8) + x2*(x14 + p_1*x9)) + p_0*0.5*p_3*x7;
 }
 
-/* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
+/* d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)
  * operations: 38 mul, 19 add, 0 div, 3 call */
 void planar_3link_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
@@ -188,7 +188,7 @@ void planar_3link_nonlinear_effects(const double *q, const double *qd, const dou
     d[0] = p_0*0.5*p_3*x11 + x21 + p_3*(x5*(x6*x18 - x7*x17 - x0*x9 + p_1*x13) + x4*(x20 + p_1*x14));
 }
 
-/* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
+/* tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)
  * operations: 54 mul, 28 add, 0 div, 3 call */
 void planar_3link_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
@@ -239,7 +239,7 @@ void planar_3link_inverse_dynamics(const double *q, const double *qd, const doub
     tau[0] = p_0*0.5*p_3*x11 + p_3*p_3*0.3333333333333333*p_0*qdd_0 + x25 + p_3*(x5*(x6*x21 - x7*x22 - x0*x9 + p_1*x14) + x4*(x0*x16 + x24 + p_1*x15));
 }
 
-/* T = 1/2 qd^T A(q) qd (Def. 2.4)
+/* T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins
  * operations: 40 mul, 15 add, 0 div, 2 call */
 void planar_3link_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
@@ -271,7 +271,7 @@ void planar_3link_kinetic_energy(const double *q, const double *qd, const double
     T[0] = 0.5*(qd_0*p_3*p_3*0.3333333333333333*p_0*qd_0 + x9*p_1*x9 + x10*(p_1*x10 + x0*x6) + x6*(x0*x10 + p_4*p_4*0.3333333333333333*p_1*x6) + x12*p_2*x12 + x13*(p_2*x13 + x1*x7) + x7*(x1*x13 + p_5*p_5*0.3333333333333333*p_2*x7));
 }
 
-/* U(q), the potential energy of gravity
+/* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs
  * operations: 21 mul, 8 add, 0 div, 3 call */
 void planar_3link_potential_energy(const double *q, const double *p, double *U)
 {
@@ -370,7 +370,7 @@ void planar_3link_joint_wrenches(const double *q, const double *qd, const double
     W[5] = x0*x14 + p_3*p_3*0.3333333333333333*p_0*qdd_0 + x30 + p_3*x31;
 }
 
-/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)
+/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
  * operations: 82 mul, 51 add, 3 div, 3 call */
 void planar_3link_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {

@@ -3924,7 +3924,7 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     A[2258] = x1535;
 }
 
-/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)
+/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)
  * operations: 1385 mul, 1039 add, 0 div, 39 call */
 void test_bench_bias(const double *q, const double *qd, const double *p, double *b)
 {
@@ -4833,7 +4833,7 @@ void test_bench_bias(const double *q, const double *qd, const double *p, double 
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
- * operations: 634 mul, 412 add, 0 div, 39 call */
+ * operations: 632 mul, 412 add, 0 div, 39 call */
 void test_bench_gravity(const double *q, const double *p, double *g)
 {
     const double q_3 = q[3];
@@ -5294,16 +5294,16 @@ void test_bench_gravity(const double *q, const double *p, double *g)
     g[5] = x366;
     const double x367 = x4*x361 - x5*x362;
     const double x368 = x5*x361 + x4*x362;
-    g[4] = x5*x364 + x4*x365 - 6*x3*x85;
+    g[4] = x5*x364 + x4*x365 - 6*x86;
     g[0] = x2*x367 + x3*x363;
     const double x369 = x2*x363 - x3*x367;
-    g[3] = x2*(x4*x364 - x5*x365) + x3*x366 - 9.81*x1*6*x2;
+    g[3] = x2*(x4*x364 - x5*x365) + x3*x366 - 6*x2*x84;
     g[1] = x0*x368 - x1*x369;
     g[2] = 1177.2 + x1*x368 + x0*x369;
 }
 
-/* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)
- * operations: 1398 mul, 1062 add, 0 div, 39 call */
+/* d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)
+ * operations: 1396 mul, 1062 add, 0 div, 39 call */
 void test_bench_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
     const double q_3 = q[3];
@@ -6208,15 +6208,15 @@ void test_bench_nonlinear_effects(const double *q, const double *qd, const doubl
     d[5] = x765;
     const double x766 = x4*x760 - x5*x761;
     const double x767 = x5*x760 + x4*x761;
-    d[4] = x5*x763 + x4*x764 - 6*x3*x413;
+    d[4] = x5*x763 + x4*x764 - 6*x414;
     d[0] = x2*x766 + x3*x762;
     const double x768 = x2*x762 - x3*x766;
-    d[3] = x2*(x4*x763 - x5*x764) + x3*x765 - 9.81*x1*6*x2;
+    d[3] = x2*(x4*x763 - x5*x764) + x3*x765 - 6*x2*x412;
     d[1] = x0*x767 - x1*x768;
     d[2] = 1177.2 + x1*x767 + x0*x768;
 }
 
-/* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)
+/* tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)
  * operations: 1411 mul, 1110 add, 0 div, 39 call */
 void test_bench_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
@@ -7182,7 +7182,7 @@ void test_bench_inverse_dynamics(const double *q, const double *qd, const double
     tau[2] = 120*x263 + x1*x771 + x0*x772;
 }
 
-/* T = 1/2 qd^T A(q) qd (Def. 2.4)
+/* T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins
  * operations: 751 mul, 508 add, 0 div, 39 call */
 void test_bench_kinetic_energy(const double *q, const double *qd, const double *p, double *T)
 {
@@ -7603,7 +7603,7 @@ void test_bench_kinetic_energy(const double *q, const double *qd, const double *
     T[0] = 0.5*(x182*(120*x182 + 6*x86) + x183*(120*x183 - 6*x85) + x181*120*x181 + x85*(20.3*x85 - 6*x183) + x86*(6*x182 + 30.3*x86) + x87*45*x87 + x193*(6*x193 - 1.5*x92) + x194*6*x194 + x192*(6*x192 + 1.5*x90) + x90*(1.5*x192 + 0.425*x90) + x91*0.01*x91 + x92*(0.425*x92 - 1.5*x193) + x201*(4*x201 - 0.8*x99) + x202*4*x202 + x200*(4*x200 + 0.8*x97) + x97*(0.8*x200 + 0.19000000000000003*x97) + x98*0.005*x98 + x99*(0.19000000000000003*x99 - 0.8*x201) + x205*(3*x205 - 0.44999999999999996*x102) + x206*3*x206 + x204*(3*x204 + 0.44999999999999996*x100) + x100*(0.44999999999999996*x204 + 0.08750000000000001*x100) + x101*0.004*x101 + x102*(0.08750000000000001*x102 - 0.44999999999999996*x205) + x207*(2*x207 - 0.2*x102) + x209*2*x209 + x208*(2*x208 + 0.2*x100) + x100*(0.2*x208 + 0.030000000000000006*x100) + x101*0.002*x101 + x102*(0.030000000000000006*x102 - 0.2*x207) + x219*(6*x219 - 1.5*x107) + x220*6*x220 + x218*(6*x218 + 1.5*x105) + x105*(1.5*x218 + 0.425*x105) + x106*0.01*x106 + x107*(0.425*x107 - 1.5*x219) + x227*(4*x227 - 0.8*x114) + x228*4*x228 + x226*(4*x226 + 0.8*x112) + x112*(0.8*x226 + 0.19000000000000003*x112) + x113*0.005*x113 + x114*(0.19000000000000003*x114 - 0.8*x227) + x231*(3*x231 - 0.44999999999999996*x117) + x232*3*x232 + x230*(3*x230 + 0.44999999999999996*x115) + x115*(0.44999999999999996*x230 + 0.08750000000000001*x115) + x116*0.004*x116 + x117*(0.08750000000000001*x117 - 0.44999999999999996*x231) + x233*(2*x233 - 0.2*x117) + x235*2*x235 + x234*(2*x234 + 0.2*x115) + x115*(0.2*x234 + 0.030000000000000006*x115) + x116*0.002*x116 + x117*(0.030000000000000006*x117 - 0.2*x233) + x241*(6*x241 - 1.5*x122) + x242*6*x242 + x240*(6*x240 + 1.5*x120) + x120*(1.5*x240 + 0.425*x120) + x121*0.01*x121 + x122*(0.425*x122 - 1.5*x241) + x249*(4*x249 - 0.8*x129) + x250*4*x250 + x248*(4*x248 + 0.8*x127) + x127*(0.8*x248 + 0.19000000000000003*x127) + x128*0.005*x128 + x129*(0.19000000000000003*x129 - 0.8*x249) + x253*(3*x253 - 0.44999999999999996*x132) + x254*3*x254 + x252*(3*x252 + 0.44999999999999996*x130) + x130*(0.44999999999999996*x252 + 0.08750000000000001*x130) + x131*0.004*x131 + x132*(0.08750000000000001*x132 - 0.44999999999999996*x253) + x255*(2*x255 - 0.2*x132) + x257*2*x257 + x256*(2*x256 + 0.2*x130) + x130*(0.2*x256 + 0.030000000000000006*x130) + x131*0.002*x131 + x132*(0.030000000000000006*x132 - 0.2*x255) + x262*(6*x262 - 1.5*x137) + x263*6*x263 + x261*(6*x261 + 1.5*x135) + x135*(1.5*x261 + 0.425*x135) + x136*0.01*x136 + x137*(0.425*x137 - 1.5*x262) + x270*(4*x270 - 0.8*x144) + x271*4*x271 + x269*(4*x269 + 0.8*x142) + x142*(0.8*x269 + 0.19000000000000003*x142) + x143*0.005*x143 + x144*(0.19000000000000003*x144 - 0.8*x270) + x274*(3*x274 - 0.44999999999999996*x147) + x275*3*x275 + x273*(3*x273 + 0.44999999999999996*x145) + x145*(0.44999999999999996*x273 + 0.08750000000000001*x145) + x146*0.004*x146 + x147*(0.08750000000000001*x147 - 0.44999999999999996*x274) + x276*(2*x276 - 0.2*x147) + x278*2*x278 + x277*(2*x277 + 0.2*x145) + x145*(0.2*x277 + 0.030000000000000006*x145) + x146*0.002*x146 + x147*(0.030000000000000006*x147 - 0.2*x276) + x283*(6*x283 - 1.5*x152) + x284*6*x284 + x282*(6*x282 + 1.5*x150) + x150*(1.5*x282 + 0.425*x150) + x151*0.01*x151 + x152*(0.425*x152 - 1.5*x283) + x291*(4*x291 - 0.8*x159) + x292*4*x292 + x290*(4*x290 + 0.8*x157) + x157*(0.8*x290 + 0.19000000000000003*x157) + x158*0.005*x158 + x159*(0.19000000000000003*x159 - 0.8*x291) + x295*(3*x295 - 0.44999999999999996*x162) + x296*3*x296 + x294*(3*x294 + 0.44999999999999996*x160) + x160*(0.44999999999999996*x294 + 0.08750000000000001*x160) + x161*0.004*x161 + x162*(0.08750000000000001*x162 - 0.44999999999999996*x295) + x297*(2*x297 - 0.2*x162) + x299*2*x299 + x298*(2*x298 + 0.2*x160) + x160*(0.2*x298 + 0.030000000000000006*x160) + x161*0.002*x161 + x162*(0.030000000000000006*x162 - 0.2*x297) + x303*(6*x303 - 1.5*x167) + x304*6*x304 + x302*(6*x302 + 1.5*x165) + x165*(1.5*x302 + 0.425*x165) + x166*0.01*x166 + x167*(0.425*x167 - 1.5*x303) + x311*(4*x311 - 0.8*x174) + x312*4*x312 + x310*(4*x310 + 0.8*x172) + x172*(0.8*x310 + 0.19000000000000003*x172) + x173*0.005*x173 + x174*(0.19000000000000003*x174 - 0.8*x311) + x315*(3*x315 - 0.44999999999999996*x177) + x316*3*x316 + x314*(3*x314 + 0.44999999999999996*x175) + x175*(0.44999999999999996*x314 + 0.08750000000000001*x175) + x176*0.004*x176 + x177*(0.08750000000000001*x177 - 0.44999999999999996*x315) + x317*(2*x317 - 0.2*x177) + x319*2*x319 + x318*(2*x318 + 0.2*x175) + x175*(0.2*x318 + 0.030000000000000006*x175) + x176*0.002*x176 + x177*(0.030000000000000006*x177 - 0.2*x317));
 }
 
-/* U(q), the potential energy of gravity
+/* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs
  * operations: 201 mul, 150 add, 0 div, 39 call */
 void test_bench_potential_energy(const double *q, const double *p, double *U)
 {
@@ -9063,8 +9063,8 @@ void test_bench_joint_wrenches(const double *q, const double *qd, const double *
     W[5] = x818 - q_1*x811;
 }
 
-/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 3246 mul, 2926 add, 42 div, 39 call */
+/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
+ * operations: 3244 mul, 2926 add, 42 div, 39 call */
 void test_bench_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_3 = q[3];
@@ -11185,10 +11185,10 @@ void test_bench_forward_dynamics(const double *q, const double *qd, const double
     const double x1976 = 6*(x178 + x390) + x1786 + x1823 + x1860 + x1897 + x1934 + x1971 + x1677*x1974;
     const double x1977 = 20.3*x174 + 14.7*x178 + x1780 + x1781 + 0.1*x1786 - 0.7794*x1787 + x1817 + x1818 + 0.1*x1823 - 0.7794*x1824 + x1854 + x1855 + 0.1*x1860 + x1891 + x1892 + 0.7794*x1898 + 0.1*x1897 + x1928 + x1929 + 0.7794*x1935 + 0.1*x1934 + x1965 + x1966 + 0.1*x1971 + x1679*x1974;
     const double x1978 = 30.3*x175 - 24.7*x177 + x71*x1785 - x72*x1779 - 0.1*x1782 - 0.45*x1787 + 0.45*x1824 - 0.1*x1819 + x58*x1822 - x59*x1816 + 0.9*x1861 - 0.1*x1856 + x45*x1859 - x46*x1853 + 0.45*x1898 - 0.1*x1893 + x32*x1896 - x33*x1890 + x19*x1933 - x20*x1927 - 0.1*x1930 - 0.45*x1935 + x6*x1970 - x7*x1964 - 0.1*x1967 - 0.9*x1972 + x1680*x1974;
-    const double x1979 = tau_4 - x5*x1977 - x4*x1978 + 6*x3*x491;
+    const double x1979 = tau_4 - x5*x1977 - x4*x1978 + 6*x492;
     const double x1980 = x4*x1975 - x5*x1976 + x1712*x1979;
     const double x1981 = x1787 - 6*x166 + x1824 + x1861 + x1898 + x1935 + x1972 + x1678*x1974 + x1714*x1979;
-    const double x1982 = tau_3 - x2*(x4*x1977 - x5*x1978 + x1715*x1979) - x3*(x1973 + x1974) + 9.81*x1*6*x2;
+    const double x1982 = tau_3 - x2*(x4*x1977 - x5*x1978 + x1715*x1979) - x3*(x1973 + x1974) + 6*x2*x490;
     const double x1983 = x5*x1975 + x4*x1976 + x1713*x1979 + x1733*x1982;
     const double x1984 = x2*x1981 - x3*x1980 + x1734*x1982;
     const double x1985 = tau_2 - 1177.2 - x1*x1983 - x0*x1984;

@@ -3908,7 +3908,7 @@ def inertia(q, p=None):
 
 
 def bias(q, qd, p=None):
-    """b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52)"""
+    """b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
@@ -5281,17 +5281,17 @@ def gravity(q, p=None):
     g[..., 5] = x366
     x367 = x4*x361 - x5*x362
     x368 = x5*x361 + x4*x362
-    g[..., 4] = x5*x364 + x4*x365 - 6*x3*x85
+    g[..., 4] = x5*x364 + x4*x365 - 6*x86
     g[..., 0] = x2*x367 + x3*x363
     x369 = x2*x363 - x3*x367
-    g[..., 3] = x2*(x4*x364 - x5*x365) + x3*x366 - 9.81*x1*6*x2
+    g[..., 3] = x2*(x4*x364 - x5*x365) + x3*x366 - 6*x2*x84
     g[..., 1] = x0*x368 - x1*x369
     g[..., 2] = 1177.2 + x1*x368 + x0*x369
     return g
 
 
 def nonlinear_effects(q, qd, p=None):
-    """d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52)"""
+    """d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
@@ -6198,17 +6198,17 @@ def nonlinear_effects(q, qd, p=None):
     d[..., 5] = x765
     x766 = x4*x760 - x5*x761
     x767 = x5*x760 + x4*x761
-    d[..., 4] = x5*x763 + x4*x764 - 6*x3*x413
+    d[..., 4] = x5*x763 + x4*x764 - 6*x414
     d[..., 0] = x2*x766 + x3*x762
     x768 = x2*x762 - x3*x766
-    d[..., 3] = x2*(x4*x763 - x5*x764) + x3*x765 - 9.81*x1*6*x2
+    d[..., 3] = x2*(x4*x763 - x5*x764) + x3*x765 - 6*x2*x412
     d[..., 1] = x0*x767 - x1*x768
     d[..., 2] = 1177.2 + x1*x767 + x0*x768
     return d
 
 
 def inverse_dynamics(q, qd, qdd, p=None):
-    """tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q)"""
+    """tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     qdd = np.asarray(qdd, dtype=float)
@@ -7178,7 +7178,7 @@ def inverse_dynamics(q, qd, qdd, p=None):
 
 
 def kinetic_energy(q, qd, p=None):
-    """T = 1/2 qd^T A(q) qd (Def. 2.4)"""
+    """T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
@@ -7602,7 +7602,7 @@ def kinetic_energy(q, qd, p=None):
 
 
 def potential_energy(q, p=None):
-    """U(q), the potential energy of gravity"""
+    """U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs"""
     q = np.asarray(q, dtype=float)
     p = PARAMETERS if p is None else np.asarray(p, dtype=float)
     batch = np.broadcast_shapes(q.shape[:-1], )
@@ -9068,7 +9068,7 @@ def joint_wrenches(q, qd, qdd, p=None):
 
 
 def forward_dynamics(q, qd, tau, p=None):
-    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n)"""
+    """qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     tau = np.asarray(tau, dtype=float)
@@ -11192,10 +11192,10 @@ def forward_dynamics(q, qd, tau, p=None):
     x1976 = 6*(x178 + x390) + x1786 + x1823 + x1860 + x1897 + x1934 + x1971 + x1677*x1974
     x1977 = 20.3*x174 + 14.7*x178 + x1780 + x1781 + 0.1*x1786 - 0.7794*x1787 + x1817 + x1818 + 0.1*x1823 - 0.7794*x1824 + x1854 + x1855 + 0.1*x1860 + x1891 + x1892 + 0.7794*x1898 + 0.1*x1897 + x1928 + x1929 + 0.7794*x1935 + 0.1*x1934 + x1965 + x1966 + 0.1*x1971 + x1679*x1974
     x1978 = 30.3*x175 - 24.7*x177 + x71*x1785 - x72*x1779 - 0.1*x1782 - 0.45*x1787 + 0.45*x1824 - 0.1*x1819 + x58*x1822 - x59*x1816 + 0.9*x1861 - 0.1*x1856 + x45*x1859 - x46*x1853 + 0.45*x1898 - 0.1*x1893 + x32*x1896 - x33*x1890 + x19*x1933 - x20*x1927 - 0.1*x1930 - 0.45*x1935 + x6*x1970 - x7*x1964 - 0.1*x1967 - 0.9*x1972 + x1680*x1974
-    x1979 = tau_4 - x5*x1977 - x4*x1978 + 6*x3*x491
+    x1979 = tau_4 - x5*x1977 - x4*x1978 + 6*x492
     x1980 = x4*x1975 - x5*x1976 + x1712*x1979
     x1981 = x1787 - 6*x166 + x1824 + x1861 + x1898 + x1935 + x1972 + x1678*x1974 + x1714*x1979
-    x1982 = tau_3 - x2*(x4*x1977 - x5*x1978 + x1715*x1979) - x3*(x1973 + x1974) + 9.81*x1*6*x2
+    x1982 = tau_3 - x2*(x4*x1977 - x5*x1978 + x1715*x1979) - x3*(x1973 + x1974) + 6*x2*x490
     x1983 = x5*x1975 + x4*x1976 + x1713*x1979 + x1733*x1982
     x1984 = x2*x1981 - x3*x1980 + x1734*x1982
     x1985 = tau_2 - 1177.2 - x1*x1983 - x0*x1984

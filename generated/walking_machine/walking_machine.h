@@ -43,21 +43,21 @@ extern "C" {
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void walking_machine_inertia(const double *q, const double *p, double *A);
-/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) */
+/* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too) */
 void walking_machine_bias(const double *q, const double *qd, const double *p, double *b);
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest) */
 void walking_machine_gravity(const double *q, const double *p, double *g);
-/* d(q, qd) = b(q, qd) + g(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52) */
+/* d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27) */
 void walking_machine_nonlinear_effects(const double *q, const double *qd, const double *p, double *d);
-/* tau = u* by the forward and backward sweeps (2.39)-(2.42); equals A(q) qdd + b(q, qd) + g(q) */
+/* tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q) */
 void walking_machine_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau);
-/* T = 1/2 qd^T A(q) qd (Def. 2.4) */
+/* T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins */
 void walking_machine_kinetic_energy(const double *q, const double *qd, const double *p, double *T);
-/* U(q), the potential energy of gravity */
+/* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs */
 void walking_machine_potential_energy(const double *q, const double *p, double *U);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void walking_machine_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
-/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g), the transvective Cauchy form (3.20), evaluated in O(n) */
+/* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */
 void walking_machine_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd);
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19) */
 void walking_machine_inertia_inverse(const double *q, const double *p, double *Ainv);
