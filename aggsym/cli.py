@@ -42,6 +42,8 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("model", metavar="MODEL", help="a .yaml model or a .urdf robot")
         p.add_argument("--floating-base", action="store_true",
                        help="URDF only: give the root a free 6-coordinate pair (o1 o2 o3 theta4 theta5 theta6)")
+        p.add_argument("--mimic", choices=["independent", "couple"], default="independent",
+                       help="URDF only: <mimic> joints keep their own coordinate (default) or follow their master")
         return p
 
     g = command("generate", "write NAME.h, NAME.c, NAME.py, NAME.tex and NAME.json")
@@ -63,8 +65,10 @@ def _load(args):
 
     path = Path(args.model)
     options = {"floating_base": True} if args.floating_base else {}
+    if args.mimic != "independent":
+        options["mimic"] = args.mimic
     if options and path.suffix.lower() != ".urdf":
-        raise AggsymError(f"{path}: --floating-base applies to URDF models only")
+        raise AggsymError(f"{path}: --floating-base and --mimic apply to URDF models only")
     return load(path, **options)
 
 

@@ -63,6 +63,11 @@ class Equations:
     """SymPy form of a model's equations: ``S``, ``A``, ``b``, ``g``, coordinate symbols ``q``, ``qd``."""
 
     def __init__(self, model, simplify: bool = False):
+        if model.couplings:
+            from .errors import AggsymError
+
+            raise AggsymError(f"{model.name}: the SymPy equations of a model with coupled coordinates are not "
+                              f"built; use the numeric twin or the generated code")
         self.model = model
         self.tree = Tree(model)
         self.simplify = simplify

@@ -48,8 +48,13 @@ class Routine:
     doc: str
     layout: Callable | None = None  # model -> JSON-able description of the outputs' layout (manifest)
     applies: Callable | None = None  # model -> bool; None means every model has this routine
+    # with coupled coordinates (aggsym.coupling): "force" (outputs reduce by J^T), "matrix" (J^T X J), "tree"
+    # (the tree's own outputs), "forward" / "inverse" (q'' and A^-1 under the coupling), None (not emitted)
+    coupled: str | None = "force"
 
     def exists_for(self, model) -> bool:
+        if model.couplings and self.coupled is None:
+            return False
         return self.applies is None or bool(self.applies(model))
 
 
@@ -113,7 +118,8 @@ def _zeros(kin):
 
 register(Routine("inertia", ("q", "p"), (Output("A", nq_square, symmetric=True),),
                  lambda bound, kin, x: (_flat(inertia_matrix(bound, kin)),),
-                 "A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)"))
+                 "A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)",
+                 coupled="matrix"))
 register(Routine("bias", ("q", "qd", "p"), (Output("b", nq_vector),),
                  lambda bound, kin, x: (sweeps.d_vector(bound, kin, x["qd"], gravity=False),),
                  "b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) "
@@ -147,29 +153,30 @@ register(Routine("elastic", ("q", "p"), (Output("c", nq_vector),),
 register(Routine("kinetic_energy", ("q", "qd", "p"), (Output("T", scalar),),
                  lambda bound, kin, x: ([kinetic_energy(bound, kin, x["qd"])],),
                  "T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, "
-                 "Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins"))
+                 "Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins", coupled="tree"))
 register(Routine("potential_energy", ("q", "p"), (Output("U", scalar),),
                  lambda bound, kin, x: ([potential_energy(bound, kin) + elastic.elastic_energy(bound, kin.q)],),
-                 "U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs"))
+                 "U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs",
+                 coupled="tree"))
 register(Routine("joint_wrenches", ("q", "qd", "qdd", "p"),
                  (Output("W", lambda model: (len(sweeps.pair_bodies(model)), 6)),),
                  lambda bound, kin, x: ([v for row in sweeps.joint_wrench_rows(
                      bound, sweeps.transmitted_wrenches(bound, kin, x["qd"], x["qdd"])) for v in row],),
                  "W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)",
-                 layout=sweeps.joint_wrench_layout))
+                 layout=sweeps.joint_wrench_layout, coupled="tree"))
 register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_vector),),
                  lambda bound, kin, x: (transvective.forward_dynamics(
                      bound, kin, _minus(x["tau"], elastic.elastic_forces(bound, kin.q)), x["qd"]),),
                  "qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), "
-                 "evaluated in O(n)"))
+                 "evaluated in O(n)", coupled="forward"))
 register(Routine("inertia_inverse", ("q", "p"), (Output("Ainv", nq_square, symmetric=True),),
                  lambda bound, kin, x: (_flat(transvective.inertia_inverse(bound, kin)),),
-                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)"))
+                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)", coupled="inverse"))
 register(Routine("transvective_factors", ("q", "p"),
                  (Output("targs", transvective.number_of_transvections), Output("diag", nq_vector)),
                  lambda bound, kin, x: transvective.factor_outputs(bound, kin),
                  "the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k "
-                 "of T A(q) T^T = diag (3.11)", layout=transvective.layout))
+                 "of T A(q) T^T = diag (3.11)", layout=transvective.layout, coupled=None))
 
 
 register(Routine("elastic_partition", ("q", "qd", "p"),
@@ -178,14 +185,20 @@ register(Routine("elastic_partition", ("q", "qd", "p"),
                  "the slow/fast partition of Prop. 2.14: blocks of A(q), B(q, qd) (b = B qd) and C, slow (+) "
                  "and fast (-, elastic) coordinates, see the manifest's layout",
                  layout=elastic.partition_layout,
-                 applies=lambda model: elastic.is_elastic(model) and not model.time_dependent))
+                 applies=lambda model: elastic.is_elastic(model) and not model.time_dependent, coupled=None))
 
 
-def run(routine: Routine, bound, inputs: dict) -> tuple:
-    """Evaluate a routine on a bound model; ``inputs`` maps vector names (without p) to lists of scalars.
+def run(routine: Routine, bound, inputs: dict, kin=None) -> tuple:
+    """Evaluate a routine on a bound model; ``inputs`` maps vector names (without p) to lists of scalars of q's
+    length (``kin``: the kinematics of ``inputs["q"]`` when already built).  Models with coupled coordinates go
+    through :mod:`aggsym.coupling`.
 
     Returns one flat list of scalars per output."""
-    kin = TreeKinematics(bound, inputs["q"])
+    if bound.model.couplings:
+        from .coupling import coupled_outputs
+
+        return coupled_outputs(routine, bound, inputs)
+    kin = kin or TreeKinematics(bound, inputs["q"])
     return routine.build(bound, kin, inputs)
 
 

@@ -295,10 +295,15 @@ def test_mimic_is_independent_and_recorded(write):
     assert model.meta["mimic"] == [{"joint": "slide", "master": "shoulder", "multiplier": -2.0, "offset": 0.5}]
 
 
-def test_mimic_couple_is_refused(write):
-    text = mimic_arm()
-    check(error(write(text), mimic="couple"), '<joint name="slide"> <mimic>', line_of(text, "<mimic"),
-          "mimic='couple'", "not implemented")
+def test_mimic_couple_ties_the_coordinate(write):
+    """mimic="couple": the mimic joint's coordinate leaves q and is recorded as a coupling (tests/test_mimic.py
+    checks the equations against Pinocchio)."""
+    import aggsym
+
+    model = aggsym.load(write(mimic_arm()), mimic="couple")
+    (coupling,) = model.couplings
+    assert coupling.coordinate == "slide" and coupling.coordinate not in [c.name for c in model.coordinates]
+    assert model.nq == len(model.pair_coordinates) - 1
 
 
 def test_mimic_of_missing_joint(write):

@@ -22,7 +22,7 @@ from .. import __version__
 from ..backend import Symbolic, bind
 from ..kinematics import TreeKinematics
 from ..model.tree import Tree
-from ..routines import ROUTINES, Routine, input_length, signature
+from ..routines import run, ROUTINES, Routine, input_length, signature
 from .printing import CPrinter, Converter, NumPyPrinter, count_ops, straight_line
 from .program import Node
 
@@ -98,13 +98,13 @@ def symbolic_routines(model, tree=None, roles=None):
     tree = tree or Tree(model)
     bound = bind(model, backend, tree=tree)
     vectors = {k: prog.vector(k, input_length(model, k)) for k in INPUT_KINDS}
-    kin = TreeKinematics(bound, vectors["q"])
+    kin = None if model.couplings else TreeKinematics(bound, vectors["q"])  # coupled: run() expands q first
     outputs = {}
     for role, routine in ROUTINES.items():
         if roles is not None and role not in roles or not routine.exists_for(model):
             continue
         x = {k: vectors[k] for k in signature(routine, model) if k not in ("p", "t")}
-        outputs[role] = [list(o) for o in routine.build(bound, kin, x)]
+        outputs[role] = [list(o) for o in run(routine, bound, x, kin)]
     return prog, outputs
 
 
@@ -211,6 +211,8 @@ def manifest(model, emitted, conservative: bool | None = None) -> dict:
                                         "outputs": [{"name": o.name, "shape": list(o.shape(model))}
                                                     for o in e.routine.outputs]} for e in emitted},
         "layouts": layouts,
+        "couplings": [{"coordinate": c.coordinate, "master": c.master, "multiplier": c.multiplier,
+                       "offset": c.offset} for c in model.couplings],
         "conservative": model.conservative if conservative is None else conservative,
         "ops": {e.routine.role: e.ops for e in emitted},
         "bodies": len(tree),

@@ -241,7 +241,7 @@ def _escape(text: str) -> str:
 def latex_document(model, env, prog, outputs) -> str:
     """The standalone LaTeX document (rendered through templates/model.tex.j2)."""
     flat = [x for role in ("inertia", "bias", "gravity") if role in outputs for o in outputs[role] for x in o]
-    small = model.nq <= CLOSED_FORM_MAX_NQ and len(prog.reachable(flat)) <= CLOSED_FORM_MAX_NODES
+    small = not model.couplings and model.nq <= CLOSED_FORM_MAX_NQ and len(prog.reachable(flat)) <= CLOSED_FORM_MAX_NODES
     names = symbol_names(model)
     q, qd, qdd = coordinate_symbols(model)
     ctx = {

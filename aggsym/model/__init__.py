@@ -5,7 +5,7 @@ from pathlib import Path
 
 from ..errors import ModelError
 from .tree import Tree
-from .types import COORDINATE_CODES, WORLD, Body, Coordinate, Inertial, Model, Pair, Parameter
+from .types import COORDINATE_CODES, WORLD, Body, Coordinate, Coupling, Inertial, Model, Pair, Parameter
 from .urdf_reader import load_urdf
 from .yaml_reader import load_yaml
 
@@ -23,5 +23,6 @@ def load(path, **options) -> Model:
     raise ModelError(path, "", f"unknown model type {suffix!r}: expected .yaml, .yml or .urdf")
 
 
-__all__ = ["load", "load_urdf", "load_yaml", "Model", "Body", "Pair", "Coordinate", "Inertial", "Parameter", "Tree", "COORDINATE_CODES",
+__all__ = ["load", "load_urdf", "load_yaml", "Model", "Body", "Pair", "Coordinate", "Coupling", "Inertial", "Parameter",
+           "Tree", "COORDINATE_CODES",
            "WORLD", "ModelError"]

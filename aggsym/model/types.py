@@ -134,6 +134,17 @@ class Inertial:
 
 
 @dataclass(frozen=True)
+class Coupling:
+    """A coordinate tied to another: ``coordinate = multiplier * master + offset`` (a URDF ``<mimic>`` joint loaded
+    with ``mimic="couple"``).  The coupled coordinate leaves q; the tree still moves it."""
+
+    coordinate: str
+    master: str
+    multiplier: float
+    offset: float = 0.0
+
+
+@dataclass(frozen=True)
 class Body:
     """A rigid body (or a massless frame when ``inertial`` is None) and the pair joining it to its parent."""
 
@@ -158,10 +169,18 @@ class Model:
     source: str = ""
     description: str = ""
     meta: dict = field(default_factory=dict, compare=False, hash=False)
+    couplings: tuple = ()  # Coupling: coordinates tied to others, not in q
+
+    @property
+    def pair_coordinates(self) -> tuple:
+        """Every coordinate of every pair, in tree order (the coordinates the recursions move)."""
+        return tuple(c for b in self.bodies for c in b.pair.coordinates)
 
     @property
     def coordinates(self) -> tuple:
-        return tuple(c for b in self.bodies for c in b.pair.coordinates)
+        """The coordinates of q: the pairs' coordinates less those coupled to others."""
+        coupled = {c.coordinate for c in self.couplings}
+        return tuple(c for c in self.pair_coordinates if c.name not in coupled)
 
     @property
     def nq(self) -> int:

@@ -32,8 +32,10 @@ The mapping
 * Bodies and coordinates are ordered as Pinocchio orders its joints for the same file: depth first from the
   root, the joints leaving a link in the byte order of their names (urdfdom keeps them in a ``std::map``),
   fixed joints walked through in place.  So q maps one-to-one onto Pinocchio's fixed-base model.
-* ``<mimic>``: the joint keeps an independent coordinate; the relation is recorded in
-  ``model.meta["mimic"]``.  Coupling (``mimic="couple"``) is not implemented yet and is refused.
+* ``<mimic>``: by default the joint keeps an independent coordinate and the relation is only recorded in
+  ``model.meta["mimic"]``; with ``mimic="couple"`` the joint's coordinate becomes
+  ``multiplier * master + offset`` (``Model.couplings``): it leaves q, and the generated routines take and
+  return the remaining coordinates (:mod:`aggsym.coupling`), as Pinocchio's ``mimic=True`` models do.
 * Coordinate names are the joint names made identifiers (``Coordinate.joint`` keeps the URDF name); body names
   are the link names made identifiers; the model name is the robot's.  Gravity is (0, 0, -9.81) in the root
   frame.  No parameters: every number is folded.  Visuals, collisions, meshes, transmissions, gazebo tags and
@@ -58,7 +60,7 @@ import sympy as sp
 from ..errors import ModelError, ModelWarning
 from .expressions import check_identifier
 from .types import _snap as snap
-from .types import WORLD, Body, Coordinate, Inertial, Model, Pair, elementary_rotation
+from .types import WORLD, Body, Coordinate, Coupling, Inertial, Model, Pair, elementary_rotation
 from .validate import inertia_problem
 
 GRAVITY = (sp.Integer(0), sp.Integer(0), sp.Float(-9.81))
@@ -425,9 +427,11 @@ class _Reader:
                 self.warn(el, f"ignored: joint {which.name!r} is fixed, so there is nothing to couple")
                 joint.mimic = None
                 continue
-            if self.mimic == "couple":
-                self.fail(el, "coupling mimic joints (mimic='couple') is not implemented yet; load with "
-                              "mimic='independent' to keep the joint's own coordinate")
+        if self.mimic == "couple":
+            for joint in joints.values():
+                if joint.mimic is not None and joints[joint.mimic["master"]].mimic is not None:
+                    self.fail(joint.mimic["el"], f"mimics joint {joint.mimic['master']!r}, which mimics another "
+                                                 f"joint itself; couple to the primary joint")
         return joints
 
     def tree(self, robot, link_el, joints):
@@ -526,7 +530,11 @@ class _Reader:
                             where=_where(link_el[row["link"]]), link_rotation=row["link_rotation"])
                        for row in rows)
         name = _identifier(robot_name, set(), "robot")
-        model = Model(name=name, bodies=bodies, gravity=GRAVITY, parameters=(), source=str(self.file),
+        coordinate_of = {c.joint: c.name for row in rows for c in row["pair"].coordinates}
+        couplings = tuple(Coupling(coordinate_of[j.name], coordinate_of[j.mimic["master"]],
+                                   float(j.mimic["multiplier"]), float(j.mimic["offset"]))
+                          for j in joints.values() if j.mimic is not None) if self.mimic == "couple" else ()
+        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY, parameters=(), source=str(self.file),
                       description=f"URDF robot {robot_name!r}",
                       meta={"mimic": [{k: j.mimic[k] for k in ("joint", "master", "multiplier", "offset")}
                                       for j in joints.values() if j.mimic is not None],

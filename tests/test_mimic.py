@@ -1,0 +1,179 @@
+"""URDF <mimic> joints coupled to their masters (mimic="couple") against Pinocchio's models with mimic=True:
+A vs crba, tau vs rnea, d vs nonLinearEffects, g vs computeGeneralizedGravity; q'' against A_q q'' = tau - d
+(Pinocchio's aba does not take mimic joints) and A_q^-1 against inv(crba); through the numeric twin, the
+generated C and the NumPy module."""
+import json
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import aggsym
+from aggsym import cli
+from aggsym.codegen.compile import CLibrary, compile_shared, import_module
+from aggsym.codegen.generate import generate, write
+from aggsym.errors import ModelError
+from pinocchio_reference import pinocchio_q, relative_error
+from random_trees import random_urdf
+
+TOLERANCE = 1e-9
+
+GRIPPER = """<robot name="gripper">
+  <link name="base"/>
+  <link name="arm"><inertial><origin xyz="0.2 0 0.01" rpy="0.1 0 0"/><mass value="2"/>
+    <inertia ixx="0.01" iyy="0.05" izz="0.05" ixy="0.001" ixz="0" iyz="0"/></inertial></link>
+  <link name="palm"><inertial><origin xyz="0.05 0 0"/><mass value="0.6"/>
+    <inertia ixx="0.002" iyy="0.003" izz="0.003" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="left"><inertial><origin xyz="0.02 0.01 0"/><mass value="0.1"/>
+    <inertia ixx="0.0001" iyy="0.0002" izz="0.0002" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="right"><inertial><origin xyz="0.02 -0.01 0"/><mass value="0.1"/>
+    <inertia ixx="0.0001" iyy="0.0002" izz="0.0002" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="tip"><inertial><origin xyz="0.01 0 0"/><mass value="0.05"/>
+    <inertia ixx="0.00001" iyy="0.00002" izz="0.00002" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="wrist" type="revolute"><parent link="arm"/><child link="palm"/><origin xyz="0.4 0 0" rpy="0 0.3 0"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="finger_left" type="prismatic"><parent link="palm"/><child link="left"/><origin xyz="0.1 0.02 0"/>
+    <axis xyz="0 1 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/></joint>
+  <joint name="finger_right" type="prismatic"><parent link="palm"/><child link="right"/><origin xyz="0.1 -0.02 0"/>
+    <axis xyz="0 -1 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/>
+    <mimic joint="finger_left" multiplier="1" offset="0"/></joint>
+  <joint name="tip_joint" type="revolute"><parent link="left"/><child link="tip"/><origin xyz="0.03 0 0"/>
+    <axis xyz="0.6 0 0.8"/><limit lower="-1" upper="1" effort="1" velocity="1"/>
+    <mimic joint="wrist" multiplier="-0.7" offset="0.2"/></joint>
+</robot>
+"""
+
+
+def with_mimics(seed: int) -> str:
+    """A random tree of tests/random_trees.py with two of its revolute or prismatic joints made to mimic a third
+    that comes before them in Pinocchio's order (Pinocchio's requirements: a mimicked joint already in the tree,
+    and configuration spaces of one size, so no continuous joint)."""
+    root = ET.fromstring(random_urdf(seed))
+    pm = pin.buildModelFromXML(ET.tostring(root, encoding="unicode"))
+    joints = {j.get("name"): j for j in root.iter("joint")}
+    movable = [pm.names[j] for j in range(1, pm.njoints) if joints[pm.names[j]].get("type") in ("revolute", "prismatic")]
+    rng = np.random.default_rng(seed)
+    master, *followers = [movable[i] for i in sorted(rng.choice(len(movable), size=3, replace=False))]
+    for follower in followers:
+        ET.SubElement(joints[follower], "mimic", joint=master, multiplier=f"{rng.uniform(-2, 2):.6f}",
+                      offset=f"{rng.uniform(-1, 1):.6f}")
+    return ET.tostring(root, encoding="unicode")
+
+
+def reduction(model):
+    """J and o of q_tree = J q + o for a coupled model (tree order = Pinocchio's order of the full model)."""
+    index = {c.name: i for i, c in enumerate(model.pair_coordinates)}
+    free = [index[c.name] for c in model.coordinates]
+    J = np.zeros((len(index), len(free)))
+    o = np.zeros(len(index))
+    for j, t in enumerate(free):
+        J[t, j] = 1
+    for c in model.couplings:
+        J[index[c.coordinate], free.index(index[c.master])] = c.multiplier
+        o[index[c.coordinate]] = c.offset
+    return J, o
+
+
+def references(model, path, q, qd, qdd):
+    """The reduced equations from Pinocchio's standard algorithms on the full (mimic=False) model of the same
+    file: A_q = J^T M J, tau = J^T rnea(J q + o, J qd, J qdd), d = J^T nle, g = J^T g_full; q'' and A_q^-1 from
+    them.  (J is constant, so q''_tree = J q''.)"""
+    pm = pin.buildModelFromUrdf(str(path))
+    J, o = reduction(model)
+    Q = pinocchio_q(pm, J @ q + o)
+    M = pin.crba(pm, pm.createData(), Q)
+    A = J.T @ (np.triu(M) + np.triu(M, 1).T) @ J
+    tau = J.T @ pin.rnea(pm, pm.createData(), Q, J @ qd, J @ qdd)
+    nle = J.T @ pin.nonLinearEffects(pm, pm.createData(), Q, J @ qd)
+    g = J.T @ pin.computeGeneralizedGravity(pm, pm.createData(), Q)
+    return [("inertia", (q,), A), ("inverse_dynamics", (q, qd, qdd), tau), ("nonlinear_effects", (q, qd), nle),
+            ("gravity", (q,), g), ("forward_dynamics", (q, qd, tau), qdd), ("inertia_inverse", (q,), np.linalg.inv(A))]
+
+
+def compare(model, path, call, states=3):
+    """Every routine through ``call(role, *args)`` against :func:`references`."""
+    rng = np.random.default_rng(3)
+    for _ in range(states):
+        q = rng.uniform(-1.5, 1.5, model.nq)
+        qd, qdd = rng.normal(size=model.nq), rng.normal(size=model.nq)
+        checks = references(model, path, q, qd, qdd)
+        for role, args, ref in checks:
+            got = call(role, *args)
+            assert relative_error(got, ref) <= TOLERANCE, (role, relative_error(got, ref))
+        nle = checks[2][2]
+        assert relative_error(call("bias", q, qd) + call("gravity", q), nle) <= TOLERANCE
+
+
+def test_gripper_equals_pinocchios_mimic_model(tmp_path):
+    """The same against Pinocchio's own mimic joints (mimic=True), a fresh Data for every call: Pinocchio 4.1's
+    crba on a model with mimic joints returns wrong entries when a Data is reused, and differs from J^T M J when a
+    mimic joint carries a subtree (neither is the case here)."""
+    path = tmp_path / "gripper.urdf"
+    path.write_text(GRIPPER)
+    model = aggsym.load(path, mimic="couple")
+    pm = pin.buildModelFromUrdf(str(path), mimic=True)
+    twin = aggsym.NumericTwin(model)
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        q, qd, qdd = rng.uniform(-1.5, 1.5, model.nq), rng.normal(size=model.nq), rng.normal(size=model.nq)
+        Q = pinocchio_q(pm, q)
+        M = pin.crba(pm, pm.createData(), Q)
+        assert relative_error(twin.inertia(q), np.triu(M) + np.triu(M, 1).T) <= TOLERANCE
+        assert relative_error(twin.inverse_dynamics(q, qd, qdd), pin.rnea(pm, pm.createData(), Q, qd, qdd)) <= TOLERANCE
+        assert relative_error(twin.nonlinear_effects(q, qd), pin.nonLinearEffects(pm, pm.createData(), Q, qd)) <= TOLERANCE
+
+
+def test_gripper_twin_c_and_numpy_equal_the_reduced_pinocchio_model(tmp_path):
+    path = tmp_path / "gripper.urdf"
+    path.write_text(GRIPPER)
+    model = aggsym.load(path, mimic="couple")
+    assert [c.name for c in model.coordinates] == ["shoulder", "wrist", "finger_left"]
+    assert len(model.pair_coordinates) == 5
+    twin = aggsym.NumericTwin(model)
+    compare(model, path, lambda role, *a: twin.call(role, *a))
+    gen = generate(model, latex=True)
+    write(gen, tmp_path / "out")
+    manifest = json.loads((tmp_path / "out" / "gripper.json").read_text())
+    assert manifest["nq"] == 3 and len(manifest["couplings"]) == 2
+    assert "transvective_factors" not in manifest["functions"]
+    lib = CLibrary(compile_shared(tmp_path / "out" / "gripper.c", tmp_path / "lib.so"), manifest)
+    module = import_module(tmp_path / "out" / "gripper.py")
+    compare(model, path, lambda role, *a: lib.call(role, *a))
+    compare(model, path, lambda role, *a: getattr(module, role)(*a))
+
+
+@pytest.mark.parametrize("seed", [1, 4, 6, 7, 8, 9, 10, 12, 14, 16, 17, 20])  # trees whose A(q) is regular
+def test_random_trees_with_mimics_equal_the_reduced_pinocchio_model(seed, tmp_path):
+    path = tmp_path / "tree.urdf"
+    path.write_text(with_mimics(seed))
+    model = aggsym.load(path, mimic="couple")
+    assert len(model.couplings) == 2
+    twin = aggsym.NumericTwin(model)
+    compare(model, path, lambda role, *a: twin.call(role, *a))
+
+
+def test_independent_mimics_keep_their_coordinates(tmp_path):
+    path = tmp_path / "gripper.urdf"
+    path.write_text(GRIPPER)
+    model = aggsym.load(path)
+    assert model.nq == 5 and not model.couplings and len(model.meta["mimic"]) == 2
+
+
+def test_chained_mimic_is_refused(tmp_path):
+    path = tmp_path / "chain.urdf"
+    path.write_text(GRIPPER.replace('<mimic joint="wrist"', '<mimic joint="finger_right"'))
+    with pytest.raises(ModelError, match="mimics another joint itself"):
+        aggsym.load(path, mimic="couple")
+
+
+def test_cli_couples_mimics(tmp_path, capsys):
+    path = tmp_path / "gripper.urdf"
+    path.write_text(GRIPPER)
+    assert cli.main(["check", str(path), "--mimic", "couple", "--trials", "3", "--opt=-O0"]) == 0
+    assert "ok: every routine" in capsys.readouterr().out
+    yaml_model = tmp_path / "x.yaml"
+    yaml_model.write_text("name: x\nbodies:\n  - name: a\n    pair: {functional: {theta6: q}}\n    mass: 1\n")
+    assert cli.main(["generate", str(yaml_model), "--mimic", "couple"]) == 2
