@@ -170,6 +170,12 @@ def plot_generation(results, path: Path) -> bool:
     if not chains and not kane:
         return False
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    failed = [r for r in results.get("generation", {}).get("runs", []) if r.get("kind") == "chain"
+              and not r.get("ok")]
+    for r in failed:
+        ax.plot([r["n"]], [r["wall_seconds"]], "x", color="C0", markersize=10, mew=2)
+        ax.annotate(f"aggsym > {r['wall_seconds']:.0f} s (killed)", (r["n"], r["wall_seconds"]),
+                    textcoords="offset points", xytext=(6, 4), color="C0", fontsize=8)
     if chains:
         ax.plot([r["n"] for r in chains], [r["wall_seconds"] for r in chains], "o-", label="aggsym generate (all routines, C + NumPy + LaTeX)")
         ax2.plot([r["n"] for r in chains], [r["maxrss_kib"] / 1024 for r in chains], "o-", label="aggsym generate")
@@ -311,11 +317,15 @@ def _generation(results) -> str:
               "offsets with three non-zero components, full inertia tensors).", ""]
     rows = []
     for r in runs:
-        if not r.get("ok"):
-            rows.append((r["label"], r.get("kind", ""), "—", "failed" if not r.get("timed_out") else "timed out",
-                         "", "", "", "", "", "", ""))
-            continue
         s = r.get("stages", {})
+        if not r.get("ok"):
+            stage = next((k for k in ("recursions", "printing", "templates", "latex") if k not in s), "")
+            status = (f"> {r['wall_seconds']:.0f} (timed out in {stage})" if r.get("timed_out")
+                      else f"failed (exit {r.get('returncode')})")
+            rows.append((r["label"], r.get("kind", ""), str(r.get("n") or "—"), status, f"{r['cpu_seconds']:.0f}",
+                         f"{_mib(r['maxrss_kib']):.0f}", _fmt(s.get("recursions")), _fmt(s.get("printing")),
+                         _fmt(s.get("templates")), _fmt(s.get("latex")), "—"))
+            continue
         rows.append((r["label"], r.get("kind", ""), r["nq"], f"{r['wall_seconds']:.2f}", f"{r['cpu_seconds']:.2f}",
                      f"{_mib(r['maxrss_kib']):.0f}", _fmt(s.get("recursions")), _fmt(s.get("printing")),
                      _fmt(s.get("templates")), _fmt(s.get("latex")), f"{r['c_bytes'] / 1024:.0f}"))
@@ -337,6 +347,12 @@ def _generation(results) -> str:
                   "twin (A, −(b + g)) on a random state.  Beside it, aggsym's generation of the same chain (all "
                   "routines) and the count of its `inertia` + `nonlinear_effects` (the same two quantities).", ""]
         rows = []
+
+        def wall(r):
+            if not r:
+                return "—"
+            return f"{r['wall_seconds']:.2f}" if r.get("ok") else f"> {r['wall_seconds']:.0f} (killed)"
+
         for k in kruns:
             ours = by_label.get(f"chain{k['n']}", {})
             ours_ops = None
@@ -348,14 +364,14 @@ def _generation(results) -> str:
                 rows.append((k["n"], f"{k['kane_seconds']:.1f}", f"{k['cse_seconds']:.1f}", f"{k['seconds']:.1f}",
                              f"{_mib(k['maxrss_kib']):.0f}", str(o["mul"] + o["add"] + o["div"]) if o else "—",
                              f"{k['relative_error_vs_aggsym']:.1e}" if k.get("relative_error_vs_aggsym") is not None
-                             else "—", _fmt(ours.get("wall_seconds")), str(ours_ops) if ours_ops else "—"))
+                             else "—", wall(ours), str(ours_ops) if ours_ops else "—"))
             elif k.get("skipped"):
-                rows.append((k["n"], "not run", "", k["skipped"], "", "", "", _fmt(ours.get("wall_seconds")),
+                rows.append((k["n"], "not run", "", k["skipped"], "", "", "", wall(ours),
                              str(ours_ops) if ours_ops else "—"))
             else:
                 rows.append((k["n"], f"> {k['timeout']:g} s: killed", "", "timed out",
                              f"{_mib(k.get('process_maxrss_kib')):.0f} (at kill)" if k.get("process_maxrss_kib")
-                             else "—", "", "", _fmt(ours.get("wall_seconds")), str(ours_ops) if ours_ops else "—"))
+                             else "—", "", "", wall(ours), str(ours_ops) if ours_ops else "—"))
         lines += [table(("n", "Kane s", "cse s", "total s", "peak MiB", "ops (M, f)", "check",
                          "aggsym wall s", "aggsym ops (A, b+g)"), rows), ""]
         at = kane.get("timed_out_at")

@@ -8,7 +8,7 @@ Settings (environment variables; defaults in brackets):
     AGGSYM_BENCH_KANE_TIMEOUT      seconds allowed to one KanesMethod + cse run          [600]
     AGGSYM_BENCH_KANE_MAX_N        largest chain given to KanesMethod                    [32]
                                    (n goes up through AGGSYM_BENCH_CHAINS until one run exceeds the timeout)
-    AGGSYM_BENCH_GEN_TIMEOUT       seconds allowed to one aggsym generate               [600]
+    AGGSYM_BENCH_GEN_TIMEOUT       seconds allowed to one aggsym generate               [300]
     AGGSYM_BENCH_RUNTIME_SECONDS   timing budget per routine pair and robot             [0.5]
     AGGSYM_BENCH_STATES            precomputed random states per robot                  [1000]
     AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane             [all]
@@ -49,7 +49,7 @@ def config() -> dict:
         "AGGSYM_BENCH_CHAINS": env.get("AGGSYM_BENCH_CHAINS", "4,8,12,16,24,32"),
         "AGGSYM_BENCH_KANE_TIMEOUT": float(env.get("AGGSYM_BENCH_KANE_TIMEOUT", "600")),
         "AGGSYM_BENCH_KANE_MAX_N": int(env.get("AGGSYM_BENCH_KANE_MAX_N", "32")),
-        "AGGSYM_BENCH_GEN_TIMEOUT": float(env.get("AGGSYM_BENCH_GEN_TIMEOUT", "600")),
+        "AGGSYM_BENCH_GEN_TIMEOUT": float(env.get("AGGSYM_BENCH_GEN_TIMEOUT", "300")),
         "AGGSYM_BENCH_RUNTIME_SECONDS": float(env.get("AGGSYM_BENCH_RUNTIME_SECONDS", "0.5")),
         "AGGSYM_BENCH_STATES": int(env.get("AGGSYM_BENCH_STATES", "1000")),
         "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS", "generation,runtime,kane"),
