@@ -2,8 +2,10 @@
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
+MODELS := $(wildcard models/*.yaml)
+SUDO   := $(shell [ "$$(id -u)" = 0 ] || command -v sudo)
 
-.PHONY: install test clean
+.PHONY: install demo test tex generate clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -14,15 +16,33 @@ $(VENV)/.runtime: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e .
 	touch $@
 
-# runtime + test extras (pytest, pin, example-robot-data, scipy)
+# runtime + test extras (pytest, pin, example-robot-data, scipy, setuptools)
 $(VENV)/.test: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	touch $@ $(VENV)/.runtime
 
 install: $(VENV)/.runtime
 
-test: $(VENV)/.test
+# the main job on a bundled model: generate C, NumPy, LaTeX and the manifest, then compile and check the C
+demo: $(VENV)/.runtime
+	$(BIN)/aggsym generate models/double_pendulum.yaml -o build/demo/double_pendulum
+	$(BIN)/aggsym check models/double_pendulum.yaml
+
+# pdflatex, for the tests that compile the generated .tex (Debian's texlive-latex-base)
+tex:
+	@command -v pdflatex >/dev/null 2>&1 || { \
+	  echo "installing pdflatex (Debian package texlive-latex-base) for the LaTeX tests"; \
+	  $(SUDO) apt-get update -qq && \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends texlive-latex-base \
+	    > /dev/null; }
+
+test: $(VENV)/.test tex
 	$(BIN)/python -m pytest -q
+
+# the committed outputs of every model in models/ (reproducible: make generate && git diff --exit-code generated/)
+generate: $(VENV)/.runtime
+	rm -rf generated
+	for m in $(MODELS); do $(BIN)/aggsym generate $$m -q > /dev/null || exit 1; done
 
 clean:
 	rm -rf $(VENV) build *.egg-info

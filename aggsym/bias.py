@@ -9,7 +9,7 @@ body's axes, ``g = F^T M^T L Y_g`` with ``Y_g = Theta (-g_lk, 0)``: the same bac
 """
 from __future__ import annotations
 
-from .kinematics import ZERO6, project, world_frame_vectors
+from .kinematics import ZERO6, generalized, world_frame_vectors
 from .linalg import neg
 
 
@@ -34,12 +34,3 @@ def gravity_vector(bound, kin):
     gam = gravity_accelerations(bound, kin)
     Y = [ZERO6 if b.mises is None else b.mises.apply(gam[k]) for k, b in enumerate(bound.bodies)]
     return generalized(kin, kin.backward(Y))
-
-
-def generalized(kin, Z):
-    """F^T M^T Z: one entry per coordinate, in coordinate order (2.46)."""
-    out = [0] * kin.tree.nq
-    for k in range(len(kin.tree)):
-        for i, x in zip(kin.tree.coords[k], project(kin.psi[k], Z[k])):
-            out[i] = x
-    return out

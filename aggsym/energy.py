@@ -2,8 +2,10 @@
 
 ``T = 1/2 V^T A V`` summed over bodies with the body quasi-velocities V of (1.41), and
 ``U = sum_k m_k (-g . o_k) + (-g_k) . h_k`` with o_k the body origin in the world frame, g_k gravity in the body's
-axes and h_k = m_k r_ck the first moment: the work against gravity of lifting every centre of mass.  The heights
-``-g . o_k`` are carried from the root: ``-g . o_k = -g . o_parent + (-g_parent) . o^{parent}_{k}``.
+axes and h_k = m_k r_ck the first moment: the work against gravity of lifting every centre of mass, from the world
+origin.  The heights ``-g . o_k`` are carried from the root: ``-g . o_k = -g . o_parent + (-g_parent) . o^{parent}_{k}``.
+Bodies welded to the world (no coordinate on their path from the root) are left out of U: their potential is a
+constant, and Pinocchio's computePotentialEnergy leaves them out too.
 """
 from __future__ import annotations
 
@@ -24,13 +26,14 @@ def potential_energy(bound, kin):
     gam = [g[:3] for g in gravity_accelerations(bound, kin)]  # -g in each body's axes
     minus_g = tuple(-x for x in bound.gravity)
     height = []
+    moves = []
     acc = 0
     for k, p in enumerate(kin.tree.parent):
         up = minus_g if p < 0 else gam[p]
         h = dot(up, kin.L[k].o)
         height.append(h if p < 0 else height[p] + h)
-        h = height[-1]
+        moves.append(bool(kin.tree.coords[k]) or (p >= 0 and moves[p]))
         th = bound.bodies[k].mises
-        if th is not None:
-            acc = acc + th.m * h + dot(gam[k], th.h)
+        if th is not None and moves[k]:
+            acc = acc + th.m * height[k] + dot(gam[k], th.h)
     return acc

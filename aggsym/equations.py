@@ -74,11 +74,13 @@ class Equations:
         self._bound = bind(model, self._backend, tree=self.tree)
         self._q = prog.vector("q", model.nq)
         self._qd = prog.vector("qd", model.nq)
+        self._qdd = prog.vector("qdd", model.nq)
         self._kin = TreeKinematics(self._bound, self._q)
         self._symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
         for i in range(model.nq):
             self._symbols[("q", i)] = q[i]
             self._symbols[("qd", i)] = qd[i]
+            self._symbols[("qdd", i)] = qdd[i]
 
     def _matrix(self, values, rows, cols):
         exprs = to_sympy(self._backend.program, values, self._symbols)
@@ -124,6 +126,14 @@ class Equations:
     @cached_property
     def g(self) -> sp.Matrix:
         return self._matrix(gravity_vector(self._bound, self._kin), self.model.nq, 1)
+
+    @cached_property
+    def u_star(self) -> sp.Matrix:
+        """The preplanned control u* = tau for the motion (q, q', q'') by the forward and backward sweeps
+        (2.39)-(2.42), without assembling A, b, g."""
+        from .sweeps import inverse_dynamics
+
+        return self._matrix(inverse_dynamics(self._bound, self._kin, self._qd, self._qdd), self.model.nq, 1)
 
     def lhs(self) -> sp.Matrix:
         """A q'' + b + g."""

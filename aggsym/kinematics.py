@@ -96,6 +96,15 @@ def project(psi, F):
     return [dot(col, F) for col in psi]
 
 
+def generalized(kin, Z):
+    """F^T M^T Z: the projection of every body's wrench on its pair's axes, in coordinate order (2.15), (2.46)."""
+    out = [0] * kin.tree.nq
+    for k in range(len(kin.tree)):
+        for i, x in zip(kin.tree.coords[k], project(kin.psi[k], Z[k])):
+            out[i] = x
+    return out
+
+
 class TreeKinematics:
     """Configuration-dependent kinematics of every pair: L^{parent}_{k}, Psi_k = M_k F_k."""
 
@@ -188,4 +197,4 @@ def world_frame_vectors(kin, vec_world):
 
 
 __all__ = ["TreeKinematics", "pair_functional", "pair_velocity_product", "combine", "project",
-           "world_frame_vectors", "ZERO6"]
+           "world_frame_vectors", "generalized", "ZERO6"]

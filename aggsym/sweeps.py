@@ -54,7 +54,7 @@ from .model.types import code_index
 
 __all__ = ["gravity_base", "gravity_wrenches", "forward_sweep", "Origin", "origin_sweep", "transport",
            "body_wrench", "body_wrench_rest", "body_wrenches", "backward_sweep", "transmitted_wrenches",
-           "keeps_origin", "generalized_forces_lumped", "inverse_dynamics", "d_vector", "generalized_forces",
+           "keeps_origin", "generalized_forces_lumped", "inverse_dynamics", "d_vector",
            "pair_bodies", "link_rotation", "joint_wrench_rows", "joint_wrench_layout", "lincomb"]
 
 
@@ -276,15 +276,6 @@ def inverse_dynamics(bound, kin, qd, qdd, H=None, gravity=True):
 def d_vector(bound, kin, qd, H=None, gravity=True):
     """d(q, q') = F^T M^T Z_o by the sweeps with q'' = 0 (2.44)-(2.46); with gravity only, d = b + g (2.52)."""
     return inverse_dynamics(bound, kin, qd, [0] * kin.tree.nq, H, gravity)
-
-
-def generalized_forces(kin, Z):
-    """Psi_k^T Z_k for every pair, in coordinate order (2.15), (2.46)."""
-    out = [0] * kin.tree.nq
-    for k in range(len(kin.tree)):
-        for i, x in zip(kin.tree.coords[k], project(kin.psi[k], Z[k])):
-            out[i] = x
-    return out
 
 
 # scalar helpers -------------------------------------------------------------------------------------------

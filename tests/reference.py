@@ -113,6 +113,9 @@ def newton_euler_full(nm: NumericModel, q, qd, qdd, gravity=True):
     force = [np.zeros(3) for _ in range(n)]
     moment = [np.zeros(3) for _ in range(n)]
     T = U = 0.0
+    moves = []  # a body welded to the world has a constant potential, left out of U (as Pinocchio does)
+    for b in nm.bodies:
+        moves.append(bool(b["coords"]) or (b["parent"] >= 0 and moves[b["parent"]]))
     for k, b in enumerate(nm.bodies):
         if "m" not in b:
             continue
@@ -126,7 +129,7 @@ def newton_euler_full(nm: NumericModel, q, qd, qdd, gravity=True):
         force[k] = f
         moment[k] = nc + np.cross(c, f)
         T += 0.5 * b["m"] * vc @ vc + 0.5 * W[k] @ Iw @ W[k]
-        U += -b["m"] * g @ c
+        U += -b["m"] * g @ c if moves[k] else 0.0
     for k in range(n - 1, -1, -1):
         j = nm.bodies[k]["parent"]
         if j >= 0:

@@ -13,11 +13,11 @@ import aggsym
 from aggsym.backend import Numeric, Symbolic, bind
 from aggsym.codegen.program import ADD, MUL, NEG, SUB
 from aggsym.group import phi_force
-from aggsym.kinematics import TreeKinematics, world_frame_vectors
+from aggsym.kinematics import TreeKinematics, generalized, world_frame_vectors
 from aggsym.linalg import cross
 from aggsym.routines import ROUTINES, inverse_dynamics_by_equations, run
 from aggsym.sweeps import (
-    body_wrench, d_vector, forward_sweep, generalized_forces, gravity_base, gravity_wrenches, inverse_dynamics,
+    body_wrench, d_vector, forward_sweep, gravity_base, gravity_wrenches, inverse_dynamics,
     joint_wrench_layout, keeps_origin, origin_sweep, pair_bodies, transmitted_wrenches,
 )
 from conftest import MODELS, ROOT, model_path
@@ -112,7 +112,7 @@ def test_lumped_projection_equals_plain_backward_sweep(model, rng):
         kin = TreeKinematics(bound, list(q))
         H = [tuple(x) for x in rng.normal(size=(len(model.bodies), 6))]
         for gravity, h in ((True, None), (False, H)):
-            plain = generalized_forces(kin, transmitted_wrenches(bound, kin, list(qd), list(qdd), h, gravity))
+            plain = generalized(kin, transmitted_wrenches(bound, kin, list(qd), list(qdd), h, gravity))
             close(inverse_dynamics(bound, kin, list(qd), list(qdd), h, gravity), plain, 1e-12)
 
 

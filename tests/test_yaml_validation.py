@@ -137,3 +137,24 @@ def test_good_model_loads(tmp_path):
     assert model.nq == 1 and model.parameters[0].name == "L"
     c = model.bodies[0].pair.constructive_rotation()
     assert all(x in (0, 1, -1) for x in c)  # exact right angles fold to exact zeros and ones
+
+
+def test_readme_example_is_a_valid_model(tmp_path):
+    """The annotated example of README.md loads, and gives the equations of models/double_pendulum.yaml."""
+    import re
+
+    from conftest import ROOT, model_path
+
+    text = (ROOT / "README.md").read_text()
+    block = re.search(r"## The model format.*?```yaml\n(.*?)```", text, re.S).group(1)
+    path = tmp_path / "example.yaml"
+    path.write_text(block)
+    model = aggsym.load(path)
+    assert model.name == "double_pendulum_example" and model.nq == 3
+    reference = aggsym.load(model_path("double_pendulum"))
+    import numpy as np
+
+    ours, theirs = aggsym.NumericTwin(model), aggsym.NumericTwin(reference)
+    q, qd = np.array([0.1, -0.4, 0.7]), np.array([0.3, 0.2, -0.5])
+    assert np.allclose(ours.inertia(q), theirs.inertia(q), rtol=1e-14)
+    assert np.allclose(ours.bias(q, qd), theirs.bias(q, qd), rtol=1e-14)

@@ -120,20 +120,49 @@ def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> Emitted
             c_body.append(f"(void){kind};")
         for i in used:
             py_body.append(f"{kind}_{i} = {kind}[..., {i}]")
-    for i in sl.temps:
-        node = prog.nodes[i]
-        c_body.append(f"const double {c_names[i]} = {cp._print(c_conv(node))};")
-        py_body.append(f"{py_names[i]} = {pp._print(py_conv(node))}")
-    for out, flat in zip(routine.outputs, outputs):
-        shape = out.shape(model)
-        for k, x in enumerate(flat):
+    trig = _trig_pairs(prog, sl.temps)
+    done = set()
+    shapes = [out.shape(model) for out in routine.outputs]
+    for step in sl.steps:
+        if step[0] == "out":
+            _, o, k = step
+            x = outputs[o][k]
+            name = routine.outputs[o].name
             rhs_c = cp._print(c_conv(x, top=not (isinstance(x, Node) and x.id in c_names)))
             rhs_py = pp._print(py_conv(x, top=not (isinstance(x, Node) and x.id in py_names)))
-            c_body.append(f"{out.name}[{k}] = {rhs_c};")
-            idx = ", ".join(str(j) for j in _unravel(k, shape))
-            py_body.append(f"{out.name}[..., {idx}] = {rhs_py}")
+            c_body.append(f"{name}[{k}] = {rhs_c};")
+            idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
+            py_body.append(f"{name}[..., {idx}] = {rhs_py}")
+            continue
+        i = step[1]
+        node = prog.nodes[i]
+        py_body.append(f"{py_names[i]} = {pp._print(py_conv(node))}")
+        if i not in trig:
+            c_body.append(f"const double {c_names[i]} = {cp._print(c_conv(node))};")
+            continue
+        sin_id, cos_id, arg = trig[i]
+        if (sin_id, cos_id) in done:
+            continue
+        done.add((sin_id, cos_id))
+        s_name = c_names[sin_id] if sin_id is not None else c_names[cos_id] + "_sin"
+        c_name = c_names[cos_id] if cos_id is not None else c_names[sin_id] + "_cos"
+        c_body.append(f"double {s_name}, {c_name};")
+        c_body.append(f"aggsym_sincos({cp._print(c_conv(arg, top=False))}, &{s_name}, &{c_name});")
     ops = count_ops("\n".join(c_body))
     return EmittedRoutine(routine, f"{prefix}_{routine.role}", c_body, py_body, ops, len(sl.temps))
+
+
+def _trig_pairs(prog, temps) -> dict:
+    """For every sin or cos temp: (sin id or None, cos id or None, argument), so that C computes both at once."""
+    from .program import COS, SIN, _key
+
+    by_arg = {}
+    for i in temps:
+        entry = prog.ops[i]
+        if entry[0] in (SIN, COS):
+            pair = by_arg.setdefault(_key(entry[1]), [None, None, entry[1]])
+            pair[0 if entry[0] == SIN else 1] = i
+    return {i: tuple(pair) for pair in by_arg.values() for i in pair[:2] if i is not None}
 
 
 def _unravel(k, shape):
@@ -191,6 +220,7 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
         "version": __version__,
         "parameters": [(p.name, repr(float(p.value))) for p in model.parameters],
         "coordinates": model.coordinates,
+        "sincos": any("aggsym_sincos(" in line for r in emitted for line in r.c_body),
     }
     gen = Generated(model, emitted)
     gen.files[f"{model.name}.h"] = env.get_template("model.h.j2").render(ctx)

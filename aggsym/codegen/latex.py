@@ -89,10 +89,11 @@ def closed_form(model):
     rows = [broken(f"g_{{{i + 1}}}", _terms(eq.g[i], names)) for i in range(n) if eq.g[i] != 0]
     sections.append(("Gravity $g(q)$", rows))
     rows = []
-    for i, c in enumerate(model.coordinates):
+    for i in range(n):  # u*_i by the sweeps, its q'' coefficients and the rest d_i (2.45)
+        u = sp.expand(eq.u_star[i])
         terms = []
         for j in range(n):
-            a = eq.A[i, j]
+            a = eq.closed_form(u.coeff(eq.qdd[j]))
             if a == 0:
                 continue
             if a.is_Add:
@@ -100,10 +101,57 @@ def closed_form(model):
             else:
                 (sign, text), = [(t[0], t[2:]) for t in _terms(a, names)]
                 terms.append(f"{sign} {text} {names[eq.qdd[j]]}" if text != "1" else f"{sign} {names[eq.qdd[j]]}")
-        terms += _terms(eq.closed_form(eq.b[i] + eq.g[i]), names) if eq.b[i] + eq.g[i] != 0 else []
-        rows.append(broken("", terms, rhs=f"\\tau_{{{i + 1}}}"))
-    sections.append(("The equations, one per coordinate (for the double pendulum: (2.26))", rows))
+        rest = eq.closed_form(u.subs({x: 0 for x in eq.qdd}))
+        terms += _terms(rest, names) if rest != 0 else []
+        rows.append(broken("", terms, rhs=f"u^*_{{{i + 1}}}"))
+    sections.append(("The preplanned control $u^* = \\tau$ by the forward and backward sweeps (2.39)-(2.42), "
+                     "one equation per coordinate (for the double pendulum: (2.26))", rows))
     return sections
+
+
+def cauchy_form(model):
+    """The transvective Cauchy form (3.20) in the book's matrix-product form: the arguments <t,k>, the pivots
+    (beta,beta)_k, and q'' = T^T diag(1/(beta,beta)) T F with T the product of the transvections (3.9)."""
+    from ..transvective import factored_form
+
+    eq = Equations(model)
+    names = symbol_names(model)
+    n = model.nq
+    factors, diag = factored_form(model, simplify=False)
+
+    def readable(x):
+        num, den = sp.fraction(sp.together(x))
+        return eq.closed_form(num) / eq.closed_form(den) if den != 1 else eq.closed_form(num)
+
+    rows, args = [], []
+    for f in factors:
+        (t, k), = [(i, j) for i in range(n) for j in range(n) if i != j and f[i, j] != 0]
+        value = readable(-f[t, k])
+        if value == 0:
+            continue
+        args.append((t, k))
+        rows.append(broken(f"\\langle {t + 1},{k + 1}\\rangle", _terms(value, names)))
+    for k in range(n):
+        rows.append(broken(f"(\\beta,\\beta)_{{{k + 1}}}", _terms(readable(diag[k, k]), names)))
+
+    def matrix(entries):
+        body = " \\\\ ".join(" & ".join(entries(i, j) for j in range(n)) for i in range(n))
+        return f"\\begin{{pmatrix}} {body} \\end{{pmatrix}}"
+
+    def factor(t, k, transpose=False):
+        def entry(i, j):
+            if i == j:
+                return "1"
+            if (i, j) == ((k, t) if transpose else (t, k)):
+                return f"-\\langle {t + 1},{k + 1}\\rangle"
+            return "0"
+        return matrix(entry)
+
+    inv_diag = matrix(lambda i, j: f"\\frac{{1}}{{(\\beta,\\beta)_{{{i + 1}}}}}" if i == j else "0")
+    T = " ".join(factor(t, k) for t, k in args) or "E"
+    Tt = " ".join(factor(t, k, True) for t, k in reversed(args)) or "E"
+    product = f"\\ddot q = {Tt} \\, {inv_diag} \\, {T} \\, F, \\qquad F = \\tau - b(q,\\dot q) - g(q)"
+    return rows, product
 
 
 class IntermediatePrinter(_Common, LatexPrinter):
@@ -194,6 +242,7 @@ def latex_document(model, env, prog, outputs) -> str:
         "parameters": [(sp.latex(p.symbol), repr(p.value)) for p in model.parameters],
         "gravity": ", ".join(sp.latex(g) for g in model.gravity),
         "closed": closed_form(model) if small else None,
+        "cauchy": cauchy_form(model) if small else None,
         "blocks": None if small else intermediate_form(model, prog, outputs),
         "nq": model.nq,
         "qdd": [names[s] for s in qdd],

@@ -35,6 +35,7 @@ class StraightLine:
     temps: list
     outputs: list  # list (per output argument) of flat lists of scalars
     inputs: list  # (kind, index) used, sorted
+    steps: list  # ("temp", node id) and ("out", output index, entry index), in emission order
 
 
 def straight_line(program, outputs) -> StraightLine:
@@ -49,14 +50,44 @@ def straight_line(program, outputs) -> StraightLine:
     for x in flat:
         if isinstance(x, Node):
             uses[x.id] += 1
-    temps, inputs = [], []
+    inputs = [program.ops[i][1:] for i in ids if program.ops[i][0] == INPUT]
+    named = {i for i in ids if program.ops[i][0] != INPUT and (uses[i] >= 2 or program.ops[i][0] in FUNCTIONS)}
+    temps = [i for i in ids if i in named]
+    # creation order (the recursions' own, which keeps a body's work together), each output stored as soon as its
+    # value exists so that it does not stay live to the end
+    at = {}
+    for o, out in enumerate(outputs):
+        for k, x in enumerate(out):
+            at.setdefault(x.id if isinstance(x, Node) else -1, []).append(("out", o, k))
+    steps = list(at.get(-1, []))
     for i in ids:
-        code = program.ops[i][0]
-        if code == INPUT:
-            inputs.append(program.ops[i][1:])
-        elif uses[i] >= 2 or code in FUNCTIONS:
-            temps.append(i)
-    return StraightLine(program, temps, outputs, sorted(inputs))
+        if i in named:
+            steps.append(("temp", i))
+        steps.extend(at.get(i, []))
+    return StraightLine(program, temps, outputs, sorted(inputs), steps)
+
+
+def _post_order(program, roots, seen) -> list:
+    """Node ids in depth-first post-order from the roots, skipping (and extending) ``seen``: each value right
+    before its first use."""
+    order = []
+    for root in roots:
+        if not isinstance(root, Node) or root.id in seen:
+            continue
+        stack = [(root.id, False)]
+        while stack:
+            i, expanded = stack.pop()
+            if expanded:
+                order.append(i)
+                continue
+            if i in seen:
+                continue
+            seen.add(i)
+            stack.append((i, True))
+            for a in reversed(program.operands(i)):
+                if isinstance(a, Node) and a.id not in seen:
+                    stack.append((a.id, False))
+    return order
 
 
 class Num:
