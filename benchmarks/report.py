@@ -312,7 +312,9 @@ def _generation(results) -> str:
     lines += ["Each row is one full `aggsym generate MODEL -o benchmarks/build/gen/LABEL` (every routine of the "
               "manifest; C, NumPy, LaTeX, JSON) in a fresh `python -m aggsym` process.  *wall* includes the "
               "interpreter's start and the imports (about 1–2 s); *CPU* is user + system time of that process; "
-              "*peak* its maximum resident set (`os.wait4`, so per run).  The stage columns are what `aggsym "
+              "*peak* its maximum resident set (`os.wait4`, so per run).  Each model is generated "
+              f"{results.get('config', {}).get('AGGSYM_BENCH_GEN_REPEATS', 1)} times and the run of median wall "
+              "time is shown (*all wall s*: every run).  The stage columns are what `aggsym "
               "generate` reports itself.  Chains: `benchmarks/chain.py` (3-D serial arm, joint axes z, y, x, …, "
               "offsets with three non-zero components, full inertia tensors).", ""]
     rows = []
@@ -324,13 +326,14 @@ def _generation(results) -> str:
                       else f"failed (exit {r.get('returncode')})")
             rows.append((r["label"], r.get("kind", ""), str(r.get("n") or "—"), status, f"{r['cpu_seconds']:.0f}",
                          f"{_mib(r['maxrss_kib']):.0f}", _fmt(s.get("recursions")), _fmt(s.get("printing")),
-                         _fmt(s.get("templates")), _fmt(s.get("latex")), "—"))
+                         _fmt(s.get("templates")), _fmt(s.get("latex")), "—", ""))
             continue
         rows.append((r["label"], r.get("kind", ""), r["nq"], f"{r['wall_seconds']:.2f}", f"{r['cpu_seconds']:.2f}",
                      f"{_mib(r['maxrss_kib']):.0f}", _fmt(s.get("recursions")), _fmt(s.get("printing")),
-                     _fmt(s.get("templates")), _fmt(s.get("latex")), f"{r['c_bytes'] / 1024:.0f}"))
+                     _fmt(s.get("templates")), _fmt(s.get("latex")), f"{r['c_bytes'] / 1024:.0f}",
+                     " ".join(f"{w:.1f}" for w in r.get("all_wall_seconds", [r["wall_seconds"]]))))
     lines += [table(("model", "kind", "n", "wall s", "CPU s", "peak MiB", "recursions s", "printing s",
-                     "templates s", "latex s", "C KiB"), rows), ""]
+                     "templates s", "latex s", "C KiB", "all wall s"), rows), ""]
     kane = results.get("kane", {})
     kruns = kane.get("runs", [])
     lines += ["### KanesMethod on the same chains", ""]
@@ -442,10 +445,14 @@ def _runtime(results) -> str:
               "through a shared library.  The harness checks that the generated coordinates are Pinocchio's joints "
               f"in the same order, precomputes {rt.get('states', '—')} random states (q uniform in [−π, π], q̇, q̈, τ "
               "standard normal; continuous joints get (cos, sin) in Pinocchio's q), then per pair alternates one "
-              "batch of the generated routine and one of Pinocchio's (a batch = every state once, each output read "
-              "into a volatile sink), for about "
+              f"batch of the generated routine and one of Pinocchio's on the same states (a batch = "
+              f"{rt.get('calls_per_batch', '—')} calls on consecutive states, cycling through all of them; each "
+              "output read into a volatile sink), for about "
               f"{rt.get('seconds_per_pair', '—')} s per pair, and reports the **median of the per-batch means** "
-              "(q10–q90 of the batch means in brackets).  Before timing, both sides are evaluated on the first "
+              "(q10–q90 of the batch means in brackets).  Batches are short (tens of µs) so that on a shared "
+              "machine most of them hold no preemption and the median leaves out those that do; the ratio of the "
+              "medians of thread CPU time (`CLOCK_THREAD_CPUTIME_ID`, which excludes preemption) is given beside "
+              "as a cross-check.  Before timing, both sides are evaluated on the first "
               "states and compared (*rel. error*: max |ours − theirs| / max |theirs|).", "",
               "Pairing: A(q) ↔ `crba` (Pinocchio fills the **upper triangle only**; the generated code writes the "
               "full n×n matrix), b+g (`nonlinear_effects`) ↔ `nonLinearEffects`, `inverse_dynamics` ↔ `rnea`, "
@@ -457,9 +464,11 @@ def _runtime(results) -> str:
             rows.append((RUNTIME_LABELS.get(p["role"], p["role"]),
                          f"{p['generated_ns']:.0f} [{p['generated_ns_q10']:.0f}–{p['generated_ns_q90']:.0f}]",
                          f"{p['pinocchio_ns']:.0f} [{p['pinocchio_ns_q10']:.0f}–{p['pinocchio_ns_q90']:.0f}]",
-                         f"{p['ratio']:.3f}", f"{p['relative_error']:.1e}", str(p["batches"])))
+                         f"{p['ratio']:.3f}", _fmt(p.get("cpu_ratio"), 3), f"{p['relative_error']:.1e}",
+                         str(p["batches"])))
         lines += [f"### {robot['name']} (n = {robot['nq']}, Pinocchio nq = {robot['pinocchio_nq']})", "",
-                  table(("pair", "generated ns", "Pinocchio ns", "ratio", "rel. error", "batches"), rows), ""]
+                  table(("pair", "generated ns", "Pinocchio ns", "ratio", "CPU-time ratio", "rel. error", "batches"),
+                        rows), ""]
     comp = rt.get("compile_seconds", {})
     if comp:
         lines += ["Compile times in this run: " + ", ".join(f"{k}: {v:.1f} s" for k, v in comp.items()) + ".", ""]

@@ -145,6 +145,9 @@ def bench_models_source(manifests: list) -> str:
     lines += [f'#include "{m["name"]}.h"' for m in manifests]
     lines += ["", "volatile double bench_sink = 0.0;", "",
               "double bench_now_ns(void) {", "    struct timespec t;", "    clock_gettime(CLOCK_MONOTONIC, &t);",
+              "    return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;", "}", "",
+              "double bench_cpu_now_ns(void) {", "    struct timespec t;",
+              "    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);",
               "    return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;", "}", ""]
     for m in manifests:
         name = m["name"]
@@ -209,10 +212,10 @@ def build_generated_only(build: Path, generated: dict, log=print) -> Path:
     return exe
 
 
-def run_harness(exe: Path, robots: dict, out_json: Path, seconds: float = 0.4, states: int = 1000,
-                log=print) -> dict:
+def run_harness(exe: Path, robots: dict, out_json: Path, seconds: float = 0.5, states: int = 1000,
+                calls: int = 100, log=print) -> dict:
     """Run the harness on ``robots`` (name -> URDF path); returns its JSON."""
-    cmd = [exe, str(seconds), str(states), out_json]
+    cmd = [exe, str(seconds), str(states), str(calls), out_json]
     for name, path in robots.items():
         cmd += [name, path]
     log(" ".join(shlex.quote(str(c)) for c in cmd))
@@ -224,7 +227,7 @@ def run_harness(exe: Path, robots: dict, out_json: Path, seconds: float = 0.4, s
     return json.loads(Path(out_json).read_text())
 
 
-def run_generated_only(exe: Path, out_json: Path, seconds: float = 0.05, states: int = 100) -> dict:
+def run_generated_only(exe: Path, out_json: Path, seconds: float = 0.05, states: int = 100, calls: int = 100) -> dict:
     """Run harness/generated_only.c; returns its JSON."""
-    subprocess.run([str(exe), str(seconds), str(states), str(out_json)], check=True)
+    subprocess.run([str(exe), str(seconds), str(states), str(calls), str(out_json)], check=True)
     return json.loads(Path(out_json).read_text())

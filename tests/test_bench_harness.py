@@ -117,7 +117,7 @@ def _fake_results():
                     run("chain4", "chain", 4, 2.0), run("chain12", "chain", 12, 8.0)]}
     pairs = [{"role": role, "pinocchio": pin, "batches": 21, "generated_ns": 100.0, "pinocchio_ns": 300.0,
               "ratio": 1 / 3, "generated_ns_q10": 90.0, "generated_ns_q90": 110.0, "pinocchio_ns_q10": 290.0,
-              "pinocchio_ns_q90": 310.0, "relative_error": 1e-15} for role, pin, _ in runtime.PAIRS]
+              "pinocchio_ns_q90": 310.0, "cpu_ratio": 0.34, "relative_error": 1e-15} for role, pin, _ in runtime.PAIRS]
     robots = [{"name": r, "nq": 6, "pinocchio_nq": 6, "pairs": [dict(p) for p in pairs]} for r in report.ROBOTS]
     robots[1]["pairs"][3]["ratio"] = 0.8  # panda forward dynamics misses the target
     kruns = [{"n": 4, "finished": True, "seconds": 20.0, "kane_seconds": 15.0, "cse_seconds": 5.0,

@@ -22,8 +22,10 @@ typedef struct {
 typedef void (*bench_fn_q)(const double *q, const double *p, double *out);
 typedef void (*bench_fn_qv)(const double *q, const double *qd, const double *p, double *out);
 typedef void (*bench_fn_qvx)(const double *q, const double *qd, const double *x, const double *p, double *out);
-/* one batch over all states; returns the mean ns per call of that batch */
-typedef double (*bench_timer)(const bench_states *s, double *out);
+/* One batch: `calls` calls on the states first, first+1, ... (cycling through the `count` states); returns the
+   batch's mean wall-clock ns per call (CLOCK_MONOTONIC) and stores its mean thread-CPU ns per call
+   (CLOCK_THREAD_CPUTIME_ID, which leaves out time the thread was preempted) in *cpu_ns. */
+typedef double (*bench_timer)(const bench_states *s, int first, int calls, double *out, double *cpu_ns);
 
 typedef struct {
     const char *name;
@@ -45,56 +47,37 @@ typedef struct {
 
 extern const bench_model *const bench_models[]; /* NULL-terminated, bench_models.c */
 extern volatile double bench_sink;
-double bench_now_ns(void);
+double bench_now_ns(void);      /* CLOCK_MONOTONIC */
+double bench_cpu_now_ns(void);  /* CLOCK_THREAD_CPUTIME_ID */
 
 #ifdef __cplusplus
 }
 #endif
 
-/* Timers with direct calls (C only): BENCH_TIMER_Q(timer name, function, input array) etc. */
+/* Timers with direct calls (C only): BENCH_TIMER(timer name, the call on state i) */
 #ifndef __cplusplus
-#define BENCH_TIMER_Q(T, F)                                                                     \
-    static double T(const bench_states *s, double *out) {                                      \
-        double acc = 0.0, t0, t1;                                                               \
-        int k;                                                                                  \
+#define BENCH_TIMER(T, CALL)                                                                    \
+    static double T(const bench_states *s, int first, int calls, double *out, double *cpu_ns) { \
+        double acc = 0.0, t0, t1, c0, c1;                                                       \
+        int k, i = first;                                                                       \
         const size_t n = (size_t)s->nq;                                                         \
+        c0 = bench_cpu_now_ns();                                                                \
         t0 = bench_now_ns();                                                                    \
-        for (k = 0; k < s->count; ++k) {                                                        \
-            F(s->q + k * n, s->p, out);                                                         \
+        for (k = 0; k < calls; ++k) {                                                           \
+            const size_t at = (size_t)i * n;                                                    \
+            CALL;                                                                               \
             acc += out[0];                                                                      \
+            if (++i == s->count) i = 0;                                                         \
         }                                                                                       \
         t1 = bench_now_ns();                                                                    \
+        c1 = bench_cpu_now_ns();                                                                \
         bench_sink += acc;                                                                      \
-        return (t1 - t0) / s->count;                                                            \
+        *cpu_ns = (c1 - c0) / calls;                                                            \
+        return (t1 - t0) / calls;                                                               \
     }
-#define BENCH_TIMER_QV(T, F)                                                                    \
-    static double T(const bench_states *s, double *out) {                                      \
-        double acc = 0.0, t0, t1;                                                               \
-        int k;                                                                                  \
-        const size_t n = (size_t)s->nq;                                                         \
-        t0 = bench_now_ns();                                                                    \
-        for (k = 0; k < s->count; ++k) {                                                        \
-            F(s->q + k * n, s->qd + k * n, s->p, out);                                          \
-            acc += out[0];                                                                      \
-        }                                                                                       \
-        t1 = bench_now_ns();                                                                    \
-        bench_sink += acc;                                                                      \
-        return (t1 - t0) / s->count;                                                            \
-    }
-#define BENCH_TIMER_QVX(T, F, X)                                                                \
-    static double T(const bench_states *s, double *out) {                                      \
-        double acc = 0.0, t0, t1;                                                               \
-        int k;                                                                                  \
-        const size_t n = (size_t)s->nq;                                                         \
-        t0 = bench_now_ns();                                                                    \
-        for (k = 0; k < s->count; ++k) {                                                        \
-            F(s->q + k * n, s->qd + k * n, s->X + k * n, s->p, out);                            \
-            acc += out[0];                                                                      \
-        }                                                                                       \
-        t1 = bench_now_ns();                                                                    \
-        bench_sink += acc;                                                                      \
-        return (t1 - t0) / s->count;                                                            \
-    }
+#define BENCH_TIMER_Q(T, F) BENCH_TIMER(T, F(s->q + at, s->p, out))
+#define BENCH_TIMER_QV(T, F) BENCH_TIMER(T, F(s->q + at, s->qd + at, s->p, out))
+#define BENCH_TIMER_QVX(T, F, X) BENCH_TIMER(T, F(s->q + at, s->qd + at, s->X + at, s->p, out))
 /* Everything one model contributes: five timers and its bench_model record. */
 #define BENCH_MODEL(NAME, NQ, NP, P, JOINTS)                                                    \
     BENCH_TIMER_Q(NAME##_t_inertia, NAME##_inertia)                                             \

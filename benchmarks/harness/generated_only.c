@@ -2,7 +2,7 @@
    model the way pinocchio_bench.cpp does (batches over precomputed random states, median of per-batch means)
    and writes JSON.  Used by tests/test_bench_harness.py, which cannot wait for the C++ build.
 
-     generated_only SECONDS STATES OUT.json */
+     generated_only SECONDS STATES CALLS OUT.json */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,16 +37,17 @@ int main(int argc, char **argv) {
     static const char *const roles[] = {"inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics",
                                         "inertia_inverse"};
     double seconds;
-    int nstates, m, k, b, i;
+    int nstates, calls, m, k, b, i;
     FILE *out;
-    if (argc != 4) {
-        fprintf(stderr, "usage: %s SECONDS STATES OUT.json\n", argv[0]);
+    if (argc != 5) {
+        fprintf(stderr, "usage: %s SECONDS STATES CALLS OUT.json\n", argv[0]);
         return 2;
     }
     seconds = atof(argv[1]);
     nstates = atoi(argv[2]);
-    out = fopen(argv[3], "w");
-    if (!out || nstates < 1) return 2;
+    calls = atoi(argv[3]);
+    out = fopen(argv[4], "w");
+    if (!out || nstates < 1 || calls < 1) return 2;
     fprintf(out, "{\"states\": %d, \"robots\": [", nstates);
     for (m = 0; bench_models[m]; ++m) {
         const bench_model *bm = bench_models[m];
@@ -76,17 +77,20 @@ int main(int argc, char **argv) {
         s.p = bm->p;
         fprintf(out, "%s{\"name\": \"%s\", \"nq\": %d, \"pairs\": [", m ? ", " : "", bm->name, n);
         for (k = 0; k < 5; ++k) {
-            double t = timers[k](&s, buf) * nstates;
-            int batches;
-            double *g;
-            t = timers[k](&s, buf) * nstates;
-            batches = (int)ceil(seconds * 1e9 / (t > 1.0 ? t : 1.0));
-            batches = batches < 15 ? 15 : (batches > 20001 ? 20001 : batches);
+            double cpu, t = 0.0;
+            int batches, first;
+            double *g, *c;
+            for (first = 0; first < nstates; first += calls) t += timers[k](&s, first, calls, buf, &cpu) * calls;
+            batches = (int)ceil(seconds * 1e9 / (t > 1.0 ? t : 1.0) * nstates / calls);
+            batches = batches < 51 ? 51 : (batches > 400001 ? 400001 : batches);
             g = malloc((size_t)batches * sizeof *g);
-            for (b = 0; b < batches; ++b) g[b] = timers[k](&s, buf);
-            fprintf(out, "%s{\"role\": \"%s\", \"batches\": %d, \"generated_ns\": %.3f}", k ? ", " : "", roles[k],
-                    batches, median(g, batches));
+            c = malloc((size_t)batches * sizeof *c);
+            for (b = 0; b < batches; ++b)
+                g[b] = timers[k](&s, (int)(((long long)b * calls) % nstates), calls, buf, &c[b]);
+            fprintf(out, "%s{\"role\": \"%s\", \"batches\": %d, \"generated_ns\": %.3f, \"generated_cpu_ns\": %.3f}",
+                    k ? ", " : "", roles[k], batches, median(g, batches), median(c, batches));
             free(g);
+            free(c);
         }
         fprintf(out, "]}");
         free(q);

@@ -1,19 +1,21 @@
 // Runtime benchmark: aggsym's generated C against Pinocchio C++ (the `pin` wheel), same states, same process.
 //
-//   pinocchio_bench SECONDS STATES OUT.json NAME URDF [NAME URDF ...]
+//   pinocchio_bench SECONDS STATES CALLS OUT.json NAME URDF [NAME URDF ...]
 //
 // For each robot: the Pinocchio fixed-base model of the URDF (pinocchio::urdf::buildModel(path, model)); the
 // joint order is checked against the generated code's coordinates; STATES random states (q uniform in
 // [-pi, pi], qd, qdd, tau standard normal; continuous joints get (cos, sin) in Pinocchio's q) are precomputed.
 // First both sides are evaluated on the first few states and compared (relative error per pair); then each
-// pair is timed in interleaved batches (one batch = every state once; generated batch, then Pinocchio batch,
-// repeated), and the median of the per-batch means is reported in ns per call.
+// pair is timed in interleaved batches (one batch = CALLS calls on consecutive states, cycling through the
+// STATES; a generated batch, then a Pinocchio batch on the same states, repeated for about SECONDS), and the
+// median of the per-batch means is reported in ns per call, wall clock and thread CPU time.  Batches are short
+// (tens of microseconds) so that most hold no preemption on a shared machine and the median ignores those that
+// do.
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody.hpp>
 #include <pinocchio/parsers/urdf.hpp>
-#include <pinocchio/algorithm/joint-configuration.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -37,8 +39,8 @@ const int NPAIRS = 5;
 
 struct States {
   int count = 0, nq = 0;
-  std::vector<double> q, qd, qdd, tau;           // ours, count x nq
-  std::vector<Eigen::VectorXd> Q, V, Vd, T;      // Pinocchio's
+  std::vector<double> q, qd, qdd, tau;       // ours, count x nq
+  std::vector<Eigen::VectorXd> Q, V, Vd, T;  // Pinocchio's
 };
 
 double median(std::vector<double> v) {
@@ -83,19 +85,21 @@ std::string json_escape(const std::string &s) {
 }  // namespace
 
 int main(int argc, char **argv) {
-  if (argc < 6 || (argc - 4) % 2) {
-    std::fprintf(stderr, "usage: %s SECONDS STATES OUT.json NAME URDF [NAME URDF ...]\n", argv[0]);
+  if (argc < 7 || (argc - 5) % 2) {
+    std::fprintf(stderr, "usage: %s SECONDS STATES CALLS OUT.json NAME URDF [NAME URDF ...]\n", argv[0]);
     return 2;
   }
   const double seconds = std::atof(argv[1]);
   const int nstates = std::atoi(argv[2]);
-  FILE *out = std::fopen(argv[3], "w");
-  if (!out) {
-    std::perror(argv[3]);
+  const int calls = std::atoi(argv[3]);
+  FILE *out = std::fopen(argv[4], "w");
+  if (!out || nstates < 1 || calls < 1) {
+    std::fprintf(stderr, "cannot write %s, or STATES/CALLS < 1\n", argv[4]);
     return 2;
   }
-  std::fprintf(out, "{\"seconds_per_pair\": %g, \"states\": %d, \"robots\": [", seconds, nstates);
-  for (int r = 4; r < argc; r += 2) {
+  std::fprintf(out, "{\"seconds_per_pair\": %g, \"states\": %d, \"calls_per_batch\": %d, \"robots\": [", seconds,
+               nstates, calls);
+  for (int r = 5; r < argc; r += 2) {
     const std::string name = argv[r], path = argv[r + 1];
     const bench_model *bm = nullptr;
     for (int k = 0; bench_models[k]; ++k)
@@ -124,8 +128,9 @@ int main(int argc, char **argv) {
           return 1;
         }
       }
-      if (joint.nq() == 2 && joint.nv() == 1) continuous[joint.idx_v()] = 1;
-      else if (joint.nq() != joint.nv()) {
+      if (joint.nq() == 2 && joint.nv() == 1) {
+        continuous[joint.idx_v()] = 1;
+      } else if (joint.nq() != joint.nv()) {
         std::fprintf(stderr, "%s: joint %s has nq %d, nv %d\n", name.c_str(), model.names[j].c_str(), joint.nq(),
                      joint.nv());
         return 1;
@@ -141,8 +146,7 @@ int main(int argc, char **argv) {
     for (int k = 0; k < nstates; ++k) {
       Eigen::VectorXd Q(model.nq), V(n), Vd(n), T(n);
       for (int i = 0; i < n; ++i) {
-        const double qi = angle(rng);
-        s.q.push_back(qi);
+        s.q.push_back(angle(rng));
         s.qd.push_back(V[i] = normal(rng));
         s.qdd.push_back(Vd[i] = normal(rng));
         s.tau.push_back(T[i] = normal(rng));
@@ -188,85 +192,85 @@ int main(int argc, char **argv) {
     }
 
     // Pinocchio's batch timers: the same loop shape as the C ones (bench.h).
-    std::function<double()> pin_timer[NPAIRS] = {
-        [&] {
-          double acc = 0.0, t0 = bench_now_ns();
-          for (int k = 0; k < s.count; ++k) {
-            pinocchio::crba(model, data, s.Q[k], pinocchio::Convention::LOCAL);
-            acc += data.M(0, 0);
-          }
-          double t1 = bench_now_ns();
-          bench_sink += acc;
-          return (t1 - t0) / s.count;
+    auto batch = [&](int first, double *cpu_ns, auto &&call) {
+      double acc = 0.0;
+      int i = first;
+      const double c0 = bench_cpu_now_ns(), t0 = bench_now_ns();
+      for (int k = 0; k < calls; ++k) {
+        acc += call(i);
+        if (++i == s.count) i = 0;
+      }
+      const double t1 = bench_now_ns(), c1 = bench_cpu_now_ns();
+      bench_sink += acc;
+      *cpu_ns = (c1 - c0) / calls;
+      return (t1 - t0) / calls;
+    };
+    std::function<double(int, double *)> pin_timer[NPAIRS] = {
+        [&](int first, double *cpu) {
+          return batch(first, cpu, [&](int i) {
+            pinocchio::crba(model, data, s.Q[i], pinocchio::Convention::LOCAL);
+            return data.M(0, 0);
+          });
         },
-        [&] {
-          double acc = 0.0, t0 = bench_now_ns();
-          for (int k = 0; k < s.count; ++k) {
-            pinocchio::nonLinearEffects(model, data, s.Q[k], s.V[k]);
-            acc += data.nle[0];
-          }
-          double t1 = bench_now_ns();
-          bench_sink += acc;
-          return (t1 - t0) / s.count;
+        [&](int first, double *cpu) {
+          return batch(first, cpu, [&](int i) {
+            pinocchio::nonLinearEffects(model, data, s.Q[i], s.V[i]);
+            return data.nle[0];
+          });
         },
-        [&] {
-          double acc = 0.0, t0 = bench_now_ns();
-          for (int k = 0; k < s.count; ++k) {
-            pinocchio::rnea(model, data, s.Q[k], s.V[k], s.Vd[k]);
-            acc += data.tau[0];
-          }
-          double t1 = bench_now_ns();
-          bench_sink += acc;
-          return (t1 - t0) / s.count;
+        [&](int first, double *cpu) {
+          return batch(first, cpu, [&](int i) {
+            pinocchio::rnea(model, data, s.Q[i], s.V[i], s.Vd[i]);
+            return data.tau[0];
+          });
         },
-        [&] {
-          double acc = 0.0, t0 = bench_now_ns();
-          for (int k = 0; k < s.count; ++k) {
-            pinocchio::aba(model, data, s.Q[k], s.V[k], s.T[k], pinocchio::Convention::LOCAL);
-            acc += data.ddq[0];
-          }
-          double t1 = bench_now_ns();
-          bench_sink += acc;
-          return (t1 - t0) / s.count;
+        [&](int first, double *cpu) {
+          return batch(first, cpu, [&](int i) {
+            pinocchio::aba(model, data, s.Q[i], s.V[i], s.T[i], pinocchio::Convention::LOCAL);
+            return data.ddq[0];
+          });
         },
-        [&] {
-          double acc = 0.0, t0 = bench_now_ns();
-          for (int k = 0; k < s.count; ++k) {
-            pinocchio::computeMinverse(model, data, s.Q[k]);
-            acc += data.Minv(0, 0);
-          }
-          double t1 = bench_now_ns();
-          bench_sink += acc;
-          return (t1 - t0) / s.count;
+        [&](int first, double *cpu) {
+          return batch(first, cpu, [&](int i) {
+            pinocchio::computeMinverse(model, data, s.Q[i]);
+            return data.Minv(0, 0);
+          });
         },
     };
     bench_timer ours_timer[NPAIRS] = {bm->t_inertia, bm->t_nonlinear_effects, bm->t_inverse_dynamics,
                                       bm->t_forward_dynamics, bm->t_inertia_inverse};
 
     std::fprintf(out, "%s{\"name\": \"%s\", \"urdf\": \"%s\", \"nq\": %d, \"pinocchio_nq\": %d, \"pairs\": [",
-                 r == 4 ? "" : ", ", json_escape(name).c_str(), json_escape(path).c_str(), n, (int)model.nq);
+                 r == 5 ? "" : ", ", json_escape(name).c_str(), json_escape(path).c_str(), n, (int)model.nq);
     for (int k = 0; k < NPAIRS; ++k) {
-      // warm-up and calibration: one batch each
-      double tg = ours_timer[k](&cs, buf.data()) * nstates, tp = pin_timer[k]() * nstates;
-      tg = ours_timer[k](&cs, buf.data()) * nstates;
-      tp = pin_timer[k]() * nstates;
-      int batches = (int)std::ceil(seconds * 1e9 / (tg + tp));
-      batches = std::max(15, std::min(batches, 20001));
-      std::vector<double> g(batches), p(batches);
-      for (int b = 0; b < batches; ++b) {
-        g[b] = ours_timer[k](&cs, buf.data());
-        p[b] = pin_timer[k]();
+      // warm-up and calibration: once through all states on each side
+      double cpu = 0.0, tg = 0.0, tp = 0.0;
+      for (int first = 0; first < nstates; first += calls) {
+        tg += ours_timer[k](&cs, first, calls, buf.data(), &cpu) * calls;
+        tp += pin_timer[k](first, &cpu) * calls;
       }
-      const double mg = median(g), mp = median(p);
+      const double per_batch = (tg + tp) / nstates * calls;  // ns for one generated + one Pinocchio batch
+      int batches = (int)std::ceil(seconds * 1e9 / per_batch);
+      batches = std::max(51, std::min(batches, 400001));
+      std::vector<double> g(batches), p(batches), gc(batches), pc(batches);
+      for (int b = 0; b < batches; ++b) {
+        const int first = (int)(((long long)b * calls) % nstates);
+        g[b] = ours_timer[k](&cs, first, calls, buf.data(), &gc[b]);
+        p[b] = pin_timer[k](first, &pc[b]);
+      }
+      const double mg = median(g), mp = median(p), mgc = median(gc), mpc = median(pc);
       std::fprintf(out,
                    "%s{\"role\": \"%s\", \"pinocchio\": \"%s\", \"batches\": %d, \"generated_ns\": %.3f, "
                    "\"pinocchio_ns\": %.3f, \"ratio\": %.5f, \"generated_ns_q10\": %.3f, \"generated_ns_q90\": %.3f, "
-                   "\"pinocchio_ns_q10\": %.3f, \"pinocchio_ns_q90\": %.3f, \"check_states\": %d, "
-                   "\"relative_error\": %.3e}",
+                   "\"pinocchio_ns_q10\": %.3f, \"pinocchio_ns_q90\": %.3f, \"generated_cpu_ns\": %.3f, "
+                   "\"pinocchio_cpu_ns\": %.3f, \"cpu_ratio\": %.5f, \"check_states\": %d, \"relative_error\": %.3e}",
                    k ? ", " : "", PAIRS[k], PINOCCHIO[k], batches, mg, mp, mg / mp, quantile(g, 0.1),
-                   quantile(g, 0.9), quantile(p, 0.1), quantile(p, 0.9), std::min(CHECK_STATES, nstates), err[k]);
-      std::fprintf(stderr, "%s %-18s generated %9.1f ns  Pinocchio %-17s %9.1f ns  ratio %.3f  (err %.1e, %d batches)\n",
-                   name.c_str(), PAIRS[k], mg, PINOCCHIO[k], mp, mg / mp, err[k], batches);
+                   quantile(g, 0.9), quantile(p, 0.1), quantile(p, 0.9), mgc, mpc, mgc / mpc,
+                   std::min(CHECK_STATES, nstates), err[k]);
+      std::fprintf(stderr,
+                   "%s %-18s generated %9.1f ns  Pinocchio %-17s %9.1f ns  ratio %.3f  (CPU-time ratio %.3f, "
+                   "err %.1e, %d batches of %d)\n",
+                   name.c_str(), PAIRS[k], mg, PINOCCHIO[k], mp, mg / mp, mgc / mpc, err[k], batches, calls);
     }
     std::fprintf(out, "]}");
     std::fflush(out);
