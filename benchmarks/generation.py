@@ -52,6 +52,7 @@ def kane_measured(model_path, out_json, timeout: float, hard_timeout: float | No
     The timeout applies to the timed part (equations and CSE); once the child has written its timing, the
     untimed operation count and check may go on until ``hard_timeout``."""
     out_json = Path(out_json)
+    out_json.parent.mkdir(parents=True, exist_ok=True)
     out_json.unlink(missing_ok=True)
 
     def timed_part_done(_elapsed):
@@ -68,11 +69,13 @@ def kane_measured(model_path, out_json, timeout: float, hard_timeout: float | No
     except (OSError, ValueError):
         data = {}
     finished = "seconds" in data and data["seconds"] <= timeout
+    crashed = not data and not run.timed_out  # ended without a timing: an error, not the timeout
     result = {"model": str(model_path), "finished": finished, "wall_seconds": run.wall_seconds,
               "cpu_seconds": run.cpu_seconds, "process_maxrss_kib": run.maxrss_kib, "timeout": timeout,
               "killed": run.timed_out, **data}
     if not finished:
-        result["exceeded"] = True
+        result["exceeded"] = not crashed
+        result["failed"] = crashed
         if not data:
             result["seconds"] = None
     if run.returncode not in (0, None) and not run.timed_out:

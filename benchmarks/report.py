@@ -199,7 +199,7 @@ def plot_generation(results, path: Path) -> bool:
         ax.plot([k["n"] for k in done], [k["seconds"] for k in done], "s-", color="C3",
                 label="KanesMethod (M, forcing) + sympy.cse")
         ax2.plot([k["n"] for k in done], [k["maxrss_kib"] / 1024 for k in done], "s-", color="C3", label="KanesMethod + cse")
-    over = [k for k in kane if not k.get("finished") and not k.get("skipped")]
+    over = [k for k in kane if not k.get("finished") and not k.get("skipped") and not k.get("failed")]
     for k in over:
         ax.plot([k["n"]], [k["timeout"]], "x", color="C3", markersize=10, mew=2)
         ax.annotate(f"> {k['timeout']:g} s (killed)", (k["n"], k["timeout"]), textcoords="offset points",
@@ -383,6 +383,9 @@ def _generation(results) -> str:
                              f"{_mib(k['maxrss_kib']):.0f}", str(o["mul"] + o["add"] + o["div"]) if o else "—",
                              f"{k['relative_error_vs_aggsym']:.1e}" if k.get("relative_error_vs_aggsym") is not None
                              else "—", wall(ours), str(ours_ops) if ours_ops else "—"))
+            elif k.get("failed"):
+                rows.append((k["n"], "failed", "", "error (see kane.json)", "", "", "", wall(ours),
+                             str(ours_ops) if ours_ops else "—"))
             elif k.get("skipped"):
                 rows.append((k["n"], "not run", "", k["skipped"], "", "", "", wall(ours),
                              str(ours_ops) if ours_ops else "—"))

@@ -130,13 +130,16 @@ def section_kane(cfg) -> dict:
     from .generation import kane_measured
 
     timeout = cfg["AGGSYM_BENCH_KANE_TIMEOUT"]
-    runs, timed_out_at = [], None
+    runs, timed_out_at, failed_at = [], None, None
     for n in chain_lengths(cfg):
         if n > cfg["AGGSYM_BENCH_KANE_MAX_N"]:
             runs.append({"n": n, "skipped": f"n > AGGSYM_BENCH_KANE_MAX_N = {cfg['AGGSYM_BENCH_KANE_MAX_N']}"})
             continue
         if timed_out_at is not None:
             runs.append({"n": n, "skipped": f"n = {timed_out_at} already exceeded {timeout:g} s"})
+            continue
+        if failed_at is not None:
+            runs.append({"n": n, "skipped": f"the run at n = {failed_at} failed"})
             continue
         log(f"KanesMethod + cse on chain{n} (timeout {timeout:g} s) ...")
         r = kane_measured(write_chain(n, BUILD / "chains"), BUILD / "kane" / f"chain{n}.json", timeout)
@@ -145,6 +148,9 @@ def section_kane(cfg) -> dict:
         if r["finished"]:
             log(f"kane chain{n}: {r['seconds']:.1f} s (equations {r['kane_seconds']:.1f} s, cse {r['cse_seconds']:.1f} s), "
                 f"{r['maxrss_kib'] / 1024:.0f} MiB, ops {r.get('ops')}, check {r.get('relative_error_vs_aggsym')}")
+        elif r.get("failed"):
+            failed_at = n
+            log(f"kane chain{n}: FAILED\n{r.get('stderr', '')}")
         else:
             timed_out_at = n
             log(f"kane chain{n}: exceeded {timeout:g} s")
