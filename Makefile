@@ -46,3 +46,13 @@ generate: $(VENV)/.runtime
 
 clean:
 	rm -rf $(VENV) build *.egg-info
+
+# benchmark: runtime + test + bench extras (matplotlib, Eigen and URDF headers for the Pinocchio C++ harness);
+# writes benchmarks/REPORT.md, benchmarks/*.json and the plots (see benchmarks/run.py for the settings)
+$(VENV)/.bench: pyproject.toml $(VENV)/.test
+	$(BIN)/python -m pip install --quiet -e '.[test,bench]'
+	touch $@
+
+.PHONY: bench
+bench: $(VENV)/.bench
+	$(BIN)/python -m benchmarks.run

@@ -1,0 +1,88 @@
+"""The machine, OS, compilers and library versions a benchmark ran with (for the report's header)."""
+from __future__ import annotations
+
+import datetime
+import os
+import platform
+import subprocess
+from importlib import metadata
+from pathlib import Path
+
+PACKAGES = ("aggsym", "sympy", "numpy", "pin", "example-robot-data", "cmeel-eigen", "cmeel-urdfdom-headers",
+            "cmeel-urdfdom", "matplotlib", "jinja2")
+
+
+def _read(path) -> str:
+    try:
+        return Path(path).read_text()
+    except OSError:
+        return ""
+
+
+def cpu_model() -> str:
+    for line in _read("/proc/cpuinfo").splitlines():
+        if line.lower().startswith("model name"):
+            return line.split(":", 1)[1].strip()
+    return platform.processor() or "unknown"
+
+
+def memory_gib() -> float | None:
+    for line in _read("/proc/meminfo").splitlines():
+        if line.startswith("MemTotal:"):
+            return int(line.split()[1]) / 2 ** 20
+    return None
+
+
+def os_name() -> str:
+    pretty = ""
+    for line in _read("/etc/os-release").splitlines():
+        if line.startswith("PRETTY_NAME="):
+            pretty = line.split("=", 1)[1].strip().strip('"')
+    return f"{pretty or platform.system()} (Linux {platform.release()})"
+
+
+def load_average() -> list:
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except OSError:
+        return []
+
+
+def versions() -> dict:
+    out = {}
+    for name in PACKAGES:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = None
+    return out
+
+
+def git_commit() -> str | None:
+    root = Path(__file__).resolve().parents[1]
+    try:
+        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True)
+        dirty = subprocess.run(["git", "status", "--porcelain", "--", "aggsym", "templates"], cwd=root,
+                               capture_output=True, text=True)
+    except OSError:
+        return None
+    if rev.returncode:
+        return None
+    return rev.stdout.strip() + (" (aggsym/ or templates/ modified)" if dirty.stdout.strip() else "")
+
+
+def environment() -> dict:
+    from .runtime import compiler_versions
+
+    return {
+        "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "cpu": cpu_model(),
+        "logical_cpus": os.cpu_count(),
+        "memory_gib": memory_gib(),
+        "os": os_name(),
+        "python": platform.python_version(),
+        "compilers": compiler_versions(),
+        "versions": versions(),
+        "commit": git_commit(),
+        "load_average_start": load_average(),
+    }

@@ -1,0 +1,96 @@
+/* The runtime benchmark's interface between the generated C (timed from C, bench_models.c) and the
+   Pinocchio side (pinocchio_bench.cpp).  Each timer runs one batch: every precomputed state once, each call's
+   output read into an accumulator that ends in a volatile sink, so no call can be optimised away (the
+   generated functions live in another translation unit and a shared library anyway). */
+#ifndef AGGSYM_BENCH_H
+#define AGGSYM_BENCH_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    int count;          /* number of states */
+    int nq;
+    const double *q;    /* count x nq, row-major: our coordinates */
+    const double *qd;
+    const double *qdd;
+    const double *tau;
+    const double *p;    /* parameter vector (NULL when the model has none) */
+} bench_states;
+
+typedef void (*bench_fn_q)(const double *q, const double *p, double *out);
+typedef void (*bench_fn_qv)(const double *q, const double *qd, const double *p, double *out);
+typedef void (*bench_fn_qvx)(const double *q, const double *qd, const double *x, const double *p, double *out);
+/* One batch: `calls` calls on the states first, first+1, ... (cycling through the `count` states); returns the
+   batch's mean wall-clock ns per call (CLOCK_MONOTONIC) and stores its mean thread-CPU ns per call
+   (CLOCK_THREAD_CPUTIME_ID, which leaves out time the thread was preempted) in *cpu_ns. */
+typedef double (*bench_timer)(const bench_states *s, int first, int calls, double *out, double *cpu_ns);
+
+typedef struct {
+    const char *name;
+    int nq;
+    int np;
+    const double *p;            /* default parameters or NULL */
+    const char *const *joints;  /* the joint name of each coordinate, in q order */
+    bench_fn_q inertia;         /* A(q), n*n row-major */
+    bench_fn_qv nonlinear_effects; /* b + g */
+    bench_fn_qvx inverse_dynamics; /* (q, qd, qdd) -> tau */
+    bench_fn_qvx forward_dynamics; /* (q, qd, tau) -> qdd */
+    bench_fn_q inertia_inverse;  /* A^-1, n*n row-major */
+    bench_timer t_inertia;
+    bench_timer t_nonlinear_effects;
+    bench_timer t_inverse_dynamics;
+    bench_timer t_forward_dynamics;
+    bench_timer t_inertia_inverse;
+} bench_model;
+
+extern const bench_model *const bench_models[]; /* NULL-terminated, bench_models.c */
+extern volatile double bench_sink;
+double bench_now_ns(void);      /* CLOCK_MONOTONIC */
+double bench_cpu_now_ns(void);  /* CLOCK_THREAD_CPUTIME_ID */
+
+#ifdef __cplusplus
+}
+#endif
+
+/* Timers with direct calls (C only): BENCH_TIMER(timer name, the call on state i) */
+#ifndef __cplusplus
+#define BENCH_TIMER(T, CALL)                                                                    \
+    static double T(const bench_states *s, int first, int calls, double *out, double *cpu_ns) { \
+        double acc = 0.0, t0, t1, c0, c1;                                                       \
+        int k, i = first;                                                                       \
+        const size_t n = (size_t)s->nq;                                                         \
+        c0 = bench_cpu_now_ns();                                                                \
+        t0 = bench_now_ns();                                                                    \
+        for (k = 0; k < calls; ++k) {                                                           \
+            const size_t at = (size_t)i * n;                                                    \
+            CALL;                                                                               \
+            acc += out[0];                                                                      \
+            if (++i == s->count) i = 0;                                                         \
+        }                                                                                       \
+        t1 = bench_now_ns();                                                                    \
+        c1 = bench_cpu_now_ns();                                                                \
+        bench_sink += acc;                                                                      \
+        *cpu_ns = (c1 - c0) / calls;                                                            \
+        return (t1 - t0) / calls;                                                               \
+    }
+#define BENCH_TIMER_Q(T, F) BENCH_TIMER(T, F(s->q + at, s->p, out))
+#define BENCH_TIMER_QV(T, F) BENCH_TIMER(T, F(s->q + at, s->qd + at, s->p, out))
+#define BENCH_TIMER_QVX(T, F, X) BENCH_TIMER(T, F(s->q + at, s->qd + at, s->X + at, s->p, out))
+/* Everything one model contributes: five timers and its bench_model record. */
+#define BENCH_MODEL(NAME, NQ, NP, P, JOINTS)                                                    \
+    BENCH_TIMER_Q(NAME##_t_inertia, NAME##_inertia)                                             \
+    BENCH_TIMER_QV(NAME##_t_nonlinear_effects, NAME##_nonlinear_effects)                        \
+    BENCH_TIMER_QVX(NAME##_t_inverse_dynamics, NAME##_inverse_dynamics, qdd)                    \
+    BENCH_TIMER_QVX(NAME##_t_forward_dynamics, NAME##_forward_dynamics, tau)                    \
+    BENCH_TIMER_Q(NAME##_t_inertia_inverse, NAME##_inertia_inverse)                             \
+    static const bench_model NAME##_bench = {                                                   \
+        #NAME, NQ, NP, P, JOINTS,                                                               \
+        NAME##_inertia, NAME##_nonlinear_effects, NAME##_inverse_dynamics,                      \
+        NAME##_forward_dynamics, NAME##_inertia_inverse,                                        \
+        NAME##_t_inertia, NAME##_t_nonlinear_effects, NAME##_t_inverse_dynamics,                \
+        NAME##_t_forward_dynamics, NAME##_t_inertia_inverse};
+#endif
+
+#endif

@@ -1,0 +1,105 @@
+/* The generated side of the runtime harness alone (no Pinocchio): times the five routines of every linked
+   model the way pinocchio_bench.cpp does (batches over precomputed random states, median of per-batch means)
+   and writes JSON.  Used by tests/test_bench_harness.py, which cannot wait for the C++ build.
+
+     generated_only SECONDS STATES CALLS OUT.json */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench.h"
+
+static unsigned long long rng_state = 88172645463325252ULL;
+
+static double uniform01(void) {
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return ((double)(rng_state >> 11) + 0.5) / 9007199254740992.0;
+}
+
+static double normal01(void) {
+    return sqrt(-2.0 * log(uniform01())) * cos(6.283185307179586 * uniform01());
+}
+
+static int cmp(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, int n) {
+    qsort(v, (size_t)n, sizeof *v, cmp);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+int main(int argc, char **argv) {
+    static const char *const roles[] = {"inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics",
+                                        "inertia_inverse"};
+    double seconds;
+    int nstates, calls, m, k, b, i;
+    FILE *out;
+    if (argc != 5) {
+        fprintf(stderr, "usage: %s SECONDS STATES CALLS OUT.json\n", argv[0]);
+        return 2;
+    }
+    seconds = atof(argv[1]);
+    nstates = atoi(argv[2]);
+    calls = atoi(argv[3]);
+    out = fopen(argv[4], "w");
+    if (!out || nstates < 1 || calls < 1) return 2;
+    fprintf(out, "{\"states\": %d, \"robots\": [", nstates);
+    for (m = 0; bench_models[m]; ++m) {
+        const bench_model *bm = bench_models[m];
+        const int n = bm->nq;
+        const size_t size = (size_t)nstates * (size_t)n;
+        double *q = malloc(size * sizeof *q), *qd = malloc(size * sizeof *q), *qdd = malloc(size * sizeof *q);
+        double *tau = malloc(size * sizeof *q), *buf = malloc((size_t)n * (size_t)n * sizeof *q);
+        bench_timer timers[5];
+        bench_states s;
+        timers[0] = bm->t_inertia;
+        timers[1] = bm->t_nonlinear_effects;
+        timers[2] = bm->t_inverse_dynamics;
+        timers[3] = bm->t_forward_dynamics;
+        timers[4] = bm->t_inertia_inverse;
+        for (i = 0; i < (int)size; ++i) {
+            q[i] = -3.141592653589793 + 6.283185307179586 * uniform01();
+            qd[i] = normal01();
+            qdd[i] = normal01();
+            tau[i] = normal01();
+        }
+        s.count = nstates;
+        s.nq = n;
+        s.q = q;
+        s.qd = qd;
+        s.qdd = qdd;
+        s.tau = tau;
+        s.p = bm->p;
+        fprintf(out, "%s{\"name\": \"%s\", \"nq\": %d, \"pairs\": [", m ? ", " : "", bm->name, n);
+        for (k = 0; k < 5; ++k) {
+            double cpu, t = 0.0;
+            int batches, first;
+            double *g, *c;
+            for (first = 0; first < nstates; first += calls) t += timers[k](&s, first, calls, buf, &cpu) * calls;
+            batches = (int)ceil(seconds * 1e9 / (t > 1.0 ? t : 1.0) * nstates / calls);
+            batches = batches < 51 ? 51 : (batches > 400001 ? 400001 : batches);
+            g = malloc((size_t)batches * sizeof *g);
+            c = malloc((size_t)batches * sizeof *c);
+            for (b = 0; b < batches; ++b)
+                g[b] = timers[k](&s, (int)(((long long)b * calls) % nstates), calls, buf, &c[b]);
+            fprintf(out, "%s{\"role\": \"%s\", \"batches\": %d, \"generated_ns\": %.3f, \"generated_cpu_ns\": %.3f}",
+                    k ? ", " : "", roles[k], batches, median(g, batches), median(c, batches));
+            free(g);
+            free(c);
+        }
+        fprintf(out, "]}");
+        free(q);
+        free(qd);
+        free(qdd);
+        free(tau);
+        free(buf);
+    }
+    fprintf(out, "], \"sink\": %g}\n", (double)bench_sink);
+    fclose(out);
+    return 0;
+}

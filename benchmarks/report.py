@@ -1,0 +1,546 @@
+"""REPORT.md, the plots, and the targets table of ``make bench`` from the collected results.
+
+``results`` is a dict: ``environment``, ``config``, ``generation`` ({runs}), ``kane`` ({runs, timed_out_at}),
+``opcounts`` (label -> {name, nq, rows}), ``runtime`` (the harness JSON plus compile times).  Every section
+is optional; a missing one is reported as not run.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+ROBOTS = ("ur5", "panda", "hyq", "talos")
+RUNTIME_TARGET_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics")
+RUNTIME_LABELS = {"inertia": "A(q) ↔ crba", "nonlinear_effects": "b+g ↔ nonLinearEffects",
+                  "inverse_dynamics": "inverse dynamics ↔ rnea", "forward_dynamics": "forward dynamics ↔ aba",
+                  "inertia_inverse": "A⁻¹ ↔ computeMinverse"}
+# Pinocchio 4.1 figures quoted in DESIGN.md ("Performance"), ns per call: crba / nonLinearEffects / aba
+DESIGN_PINOCCHIO_NS = {"ur5": {"inertia": 300, "nonlinear_effects": 660, "forward_dynamics": 1360},
+                       "panda": {"inertia": 480, "nonlinear_effects": 970, "forward_dynamics": 2050},
+                       "talos": {"inertia": 1800, "nonlinear_effects": 3600, "forward_dynamics": 7500}}
+GEN_TARGETS = (("panda", 5.0, None), ("chain12", 10.0, None), ("talos", 60.0, 2 * 2 ** 20))  # label, s, KiB
+RUNTIME_RATIO_TARGET = 0.5
+OPS_TARGET_MODEL = "manipulator6"
+
+
+# ---------------------------------------------------------------------------------------------- helpers
+def _fmt(x, digits=2):
+    if x is None:
+        return "—"
+    if isinstance(x, float):
+        if math.isnan(x):
+            return "—"
+        return f"{x:.{digits}f}"
+    return str(x)
+
+
+def _mib(kib):
+    return None if kib is None else kib / 1024
+
+
+def table(header, rows, align=None) -> str:
+    """A Markdown table; ``align`` is a string of 'l'/'r' per column (default: first left, rest right)."""
+    align = align or "l" + "r" * (len(header) - 1)
+    sep = ["---:" if a == "r" else "---" for a in align]
+    lines = ["| " + " | ".join(map(str, header)) + " |", "| " + " | ".join(sep) + " |"]
+    lines += ["| " + " | ".join(_fmt(c) if not isinstance(c, str) else c for c in r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def text_table(header, rows) -> str:
+    """A plain-text table for stdout."""
+    cells = [list(map(str, header))] + [[c if isinstance(c, str) else _fmt(c) for c in r] for r in rows]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(header))]
+    out = []
+    for k, r in enumerate(cells):
+        out.append("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
+        if k == 0:
+            out.append("  ".join("-" * w for w in widths))
+    return "\n".join(out)
+
+
+def _gen_runs(results) -> dict:
+    return {r["label"]: r for r in results.get("generation", {}).get("runs", [])}
+
+
+def _runtime_pairs(results) -> dict:
+    """(robot, role) -> pair dict."""
+    out = {}
+    for robot in results.get("runtime", {}).get("robots", []):
+        for pair in robot["pairs"]:
+            out[(robot["name"], pair["role"])] = pair
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- targets
+def targets(results) -> list:
+    """Rows (target, measured, met) where met is True, False or None (not measured)."""
+    rows = []
+    runs = _gen_runs(results)
+    for label, limit, mem in GEN_TARGETS:
+        r = runs.get(label)
+        what = f"full generation {label} ≤ {limit:g} s" + (f", peak memory ≤ {mem / 2 ** 20:g} GiB" if mem else "")
+        if not r or not r.get("ok"):
+            rows.append((what, "not measured" if not r else "generation failed", None))
+            continue
+        met = r["wall_seconds"] <= limit and (mem is None or r["maxrss_kib"] <= mem)
+        measured = f"{r['wall_seconds']:.2f} s wall ({r['cpu_seconds']:.2f} s CPU)"
+        if mem:
+            measured += f", {r['maxrss_kib'] / 2 ** 20:.2f} GiB"
+        rows.append((what, measured, met))
+    pairs = _runtime_pairs(results)
+    for role in RUNTIME_TARGET_ROLES:
+        what = f"runtime {RUNTIME_LABELS[role]}: generated/Pinocchio ≤ {RUNTIME_RATIO_TARGET:g} on all four robots"
+        got = [(robot, pairs.get((robot, role))) for robot in ROBOTS]
+        if any(p is None for _, p in got):
+            rows.append((what, "not measured", None))
+            continue
+        measured = ", ".join(f"{robot} {p['ratio']:.2f}" for robot, p in got)
+        rows.append((what, measured, all(p["ratio"] <= RUNTIME_RATIO_TARGET for _, p in got)))
+    ops = results.get("opcounts", {}).get(OPS_TARGET_MODEL)
+    if not ops:
+        rows.append((f"op counts at n = 6 ({OPS_TARGET_MODEL}) below the book's and Featherstone's", "not measured",
+                     None))
+    else:
+        by_routine = {}
+        for row in ops["rows"]:
+            if row.get("reference") and row.get("target"):
+                by_routine.setdefault(row["routine"], []).append(row)
+        for routine, rs in by_routine.items():
+            what = f"op count {routine} at n = {ops['nq']} ({OPS_TARGET_MODEL}) below " + \
+                   ", ".join(_short(r["reference"]) for r in rs)
+            measured = f"{rs[0]['ours']} vs " + ", ".join(str(r["ref_total"]) for r in rs)
+            rows.append((what, measured, all(r["ours"] < r["ref_total"] for r in rs)))
+    return rows
+
+
+def _short(label: str) -> str:
+    return label.replace("book ", "").replace(" total", "").replace("Featherstone ", "")
+
+
+def diagnose(results) -> list:
+    """For each missed target, where the time or the operations go (one line each)."""
+    notes = []
+    runs = _gen_runs(results)
+    for label, limit, mem in GEN_TARGETS:
+        r = runs.get(label)
+        if not r or not r.get("ok"):
+            continue
+        if r["wall_seconds"] > limit or (mem and r["maxrss_kib"] > mem):
+            s = r.get("stages", {})
+            inside = r.get("internal_seconds") or sum(s.values())
+            parts = ", ".join(f"{k} {v:.2f} s" for k, v in sorted(s.items(), key=lambda kv: -kv[1]))
+            notes.append(f"generation of {label}: {r['wall_seconds']:.2f} s wall ({r['cpu_seconds']:.2f} s CPU) = "
+                         f"{r['wall_seconds'] - inside:.2f} s interpreter start, imports and reading the model + "
+                         f"{inside:.2f} s inside `generate` ({parts}); peak {r['maxrss_kib'] / 1024:.0f} MiB")
+    for r in results.get("generation", {}).get("runs", []):
+        if not r.get("ok"):
+            s = r.get("stages", {})
+            stage = next((k for k in ("recursions", "printing", "templates", "latex") if k not in s), "?")
+            done = ", ".join(f"{k} {v:.2f} s" for k, v in s.items())
+            what = f"killed after {r['wall_seconds']:.0f} s" if r.get("timed_out") else f"failed ({r.get('returncode')})"
+            notes.append(f"generation of {r['label']} (not a target): {what} in the {stage} stage"
+                         + (f" (finished before it: {done})" if done else "")
+                         + (" — models with at most 4 coordinates get closed forms in the LaTeX "
+                            "(aggsym/codegen/latex.py, CLOSED_FORM_MAX_NQ), simplified symbolically"
+                            if stage == "latex" and r.get("n") is not None and r["n"] <= 4 else ""))
+    pairs = _runtime_pairs(results)
+    for role in RUNTIME_TARGET_ROLES:
+        for robot in ROBOTS:
+            p = pairs.get((robot, role))
+            if p is None or p["ratio"] <= RUNTIME_RATIO_TARGET:
+                continue
+            g = runs.get(robot, {})
+            o = g.get("ops", {}).get(role)
+            ops = f"; the routine's C has {o['mul']} mul + {o['add']} add + {o['div']} div, {o['call']} calls" \
+                if o else ""
+            notes.append(f"runtime {robot} {role}: {p['generated_ns']:.0f} ns against {p['pinocchio']} "
+                         f"{p['pinocchio_ns']:.0f} ns (ratio {p['ratio']:.2f}, target {RUNTIME_RATIO_TARGET:g}){ops}")
+    ops = results.get("opcounts", {}).get(OPS_TARGET_MODEL)
+    for row in (ops or {}).get("rows", []):
+        if row.get("reference") and row.get("target") and row["ours"] >= row["ref_total"]:
+            notes.append(f"op count {row['routine']} ({OPS_TARGET_MODEL}): {row['ours']} (mul {row['mul']}, add "
+                         f"{row['add']}, div {row['div']}) against {row['reference']} {row['ref_total']}")
+    return notes
+
+
+def summary_text(results) -> str:
+    rows = targets(results)
+    met = sum(1 for r in rows if r[2] is True)
+    body = text_table(("target", "measured", "met"),
+                      [(w, m, {True: "yes", False: "NO", None: "not measured"}[ok]) for w, m, ok in rows])
+    return f"aggsym benchmark targets: {met} of {len(rows)} met\n{body}"
+
+
+# ---------------------------------------------------------------------------------------------- plots
+def plot_generation(results, path: Path) -> bool:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    chains = sorted((r for r in results.get("generation", {}).get("runs", []) if r.get("kind") == "chain"
+                     and r.get("ok")), key=lambda r: r["n"])
+    kane = results.get("kane", {}).get("runs", [])
+    if not chains and not kane:
+        return False
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    failed = [r for r in results.get("generation", {}).get("runs", []) if r.get("kind") == "chain"
+              and not r.get("ok")]
+    for r in failed:
+        ax.plot([r["n"]], [r["wall_seconds"]], "x", color="C0", markersize=10, mew=2)
+        ax.annotate(f"aggsym > {r['wall_seconds']:.0f} s (killed)", (r["n"], r["wall_seconds"]),
+                    textcoords="offset points", xytext=(6, 4), color="C0", fontsize=8)
+    if chains:
+        ax.plot([r["n"] for r in chains], [r["wall_seconds"] for r in chains], "o-", label="aggsym generate (all routines, C + NumPy + LaTeX)")
+        ax2.plot([r["n"] for r in chains], [r["maxrss_kib"] / 1024 for r in chains], "o-", label="aggsym generate")
+    done = [k for k in kane if k.get("finished")]
+    if done:
+        ax.plot([k["n"] for k in done], [k["seconds"] for k in done], "s-", color="C3",
+                label="KanesMethod (M, forcing) + sympy.cse")
+        ax2.plot([k["n"] for k in done], [k["maxrss_kib"] / 1024 for k in done], "s-", color="C3", label="KanesMethod + cse")
+    over = [k for k in kane if not k.get("finished") and not k.get("skipped") and not k.get("failed")]
+    for k in over:
+        ax.plot([k["n"]], [k["timeout"]], "x", color="C3", markersize=10, mew=2)
+        ax.annotate(f"> {k['timeout']:g} s (killed)", (k["n"], k["timeout"]), textcoords="offset points",
+                    xytext=(6, -12), color="C3", fontsize=8)
+    ax.set_yscale("log")
+    ax.set_xlabel("links n (3-D chain)")
+    ax.set_ylabel("wall time, s (log)")
+    ax.set_title("Generation time")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    ax2.set_xlabel("links n (3-D chain)")
+    ax2.set_ylabel("peak resident memory, MiB")
+    ax2.set_title("Peak memory of the process")
+    ax2.grid(True, alpha=0.3)
+    ax2.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
+
+
+def plot_runtime(results, path: Path) -> bool:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    robots = results.get("runtime", {}).get("robots", [])
+    if not robots:
+        return False
+    roles = [p["role"] for p in robots[0]["pairs"]]
+    fig, ax = plt.subplots(figsize=(10, 4.2))
+    width = 0.8 / len(roles)
+    for k, role in enumerate(roles):
+        xs = [i + (k - (len(roles) - 1) / 2) * width for i in range(len(robots))]
+        ys = [next(p["ratio"] for p in r["pairs"] if p["role"] == role) for r in robots]
+        ax.bar(xs, ys, width, label=RUNTIME_LABELS.get(role, role))
+        for x, y in zip(xs, ys):
+            ax.text(x, y, f"{y:.2f}", ha="center", va="bottom", fontsize=7)
+    ax.axhline(1.0, color="k", lw=0.8)
+    ax.axhline(RUNTIME_RATIO_TARGET, color="C3", ls="--", lw=1, label=f"target {RUNTIME_RATIO_TARGET:g}")
+    ax.set_xticks(range(len(robots)))
+    ax.set_xticklabels([f"{r['name']} (n = {r['nq']})" for r in robots])
+    ax.set_ylabel("time generated / time Pinocchio")
+    ax.set_title("Runtime ratio, ns per call (median of batch means); below 1 the generated C is faster")
+    ax.legend(fontsize=8, ncol=2)
+    ax.grid(True, axis="y", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
+
+
+def plot_opcounts(results, path: Path) -> bool:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from aggsym.codegen.ops import BOOK_TABLE_32, FEATHERSTONE_ABA, FEATHERSTONE_CRBA, FEATHERSTONE_RNEA
+
+    runs = sorted((r for r in results.get("generation", {}).get("runs", []) if r.get("kind") == "chain" and r.get("ok")),
+                  key=lambda r: r["n"])
+    if not runs:
+        return False
+    ns = [r["n"] for r in runs]
+    fig, ax = plt.subplots(figsize=(7.5, 4.5))
+    for k, (role, ref) in enumerate((("inertia", FEATHERSTONE_CRBA), ("inverse_dynamics", FEATHERSTONE_RNEA),
+                                     ("forward_dynamics", FEATHERSTONE_ABA))):
+        ours = [r["ops"][role]["mul"] + r["ops"][role]["add"] + r["ops"][role]["div"] for r in runs]
+        ax.plot(ns, ours, "o-", color=f"C{k}", label=f"aggsym {role}")
+        ax.plot(ns, [sum(ref.at(n)) for n in ns], "--", color=f"C{k}", label=ref.label)
+    ax.plot(ns, [sum(BOOK_TABLE_32.at(n)) for n in ns], ":", color="C2", label=BOOK_TABLE_32.label)
+    ax.set_xlabel("links n (3-D chain)")
+    ax.set_ylabel("mul + add + div")
+    ax.set_yscale("log")
+    ax.set_title("Operation counts of the emitted C vs the references")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
+
+
+# ---------------------------------------------------------------------------------------------- the report
+def _environment(results) -> str:
+    env = results.get("environment", {})
+    cfg = results.get("config", {})
+    v = env.get("versions", {})
+    comp = env.get("compilers", {})
+    lines = ["## Machine and software", "",
+             table(("", ""), [
+                 ("date", env.get("date", "—")),
+                 ("CPU", env.get("cpu", "—")),
+                 ("logical CPUs", str(env.get("logical_cpus", "—"))),
+                 ("memory", f"{env['memory_gib']:.1f} GiB" if env.get("memory_gib") else "—"),
+                 ("OS", env.get("os", "—")),
+                 ("load average (1, 5, 15 min) at start / end",
+                  f"{env.get('load_average_start', '—')} / {env.get('load_average_end', '—')}"),
+                 ("C compiler", comp.get("cc", "—")),
+                 ("C++ compiler", comp.get("c++", "—")),
+                 ("Python", env.get("python", "—")),
+                 ("aggsym", f"{v.get('aggsym')} (commit {env.get('commit')})"),
+                 *[(name, str(v.get(name))) for name in ("sympy", "numpy", "pin", "example-robot-data",
+                                                          "cmeel-eigen", "cmeel-urdfdom-headers", "matplotlib")],
+             ], "ll"), "",
+             "Settings (environment variables of `make bench`, see `benchmarks/run.py`): " +
+             ", ".join(f"`{k}={v}`" for k, v in cfg.items()) + ".", ""]
+    load = env.get("load_average_start") or []
+    if load and env.get("logical_cpus") and max(load) > 0.5 * env["logical_cpus"]:
+        lines += [f"**The machine was shared while this ran** (load average {load} at the start on "
+                  f"{env['logical_cpus']} CPUs): wall times of section 1 are inflated by other processes; CPU times "
+                  "are given beside them.  The runtime ratios of section 3 interleave the two sides batch by batch, "
+                  "so both see the same conditions.", ""]
+    return "\n".join(lines)
+
+
+def _generation(results) -> str:
+    gen = results.get("generation", {})
+    runs = gen.get("runs", [])
+    lines = ["## 1. Generation time and peak memory", ""]
+    if not runs:
+        return "\n".join(lines + ["Not run.", ""])
+    lines += ["Each row is one full `aggsym generate MODEL -o benchmarks/build/gen/LABEL` (every routine of the "
+              "manifest; C, NumPy, LaTeX, JSON) in a fresh `python -m aggsym` process.  *wall* includes the "
+              "interpreter's start and the imports (about 1–2 s); *CPU* is user + system time of that process; "
+              "*peak* its maximum resident set (`os.wait4`, so per run).  Each model is generated "
+              f"{results.get('config', {}).get('AGGSYM_BENCH_GEN_REPEATS', 1)} times and the run of median wall "
+              "time is shown (*all wall s*: every run).  The stage columns are what `aggsym "
+              "generate` reports itself.  Chains: `benchmarks/chain.py` (3-D serial arm, joint axes z, y, x, …, "
+              "offsets with three non-zero components, full inertia tensors).", ""]
+    rows = []
+    for r in runs:
+        s = r.get("stages", {})
+        if not r.get("ok"):
+            stage = next((k for k in ("recursions", "printing", "templates", "latex") if k not in s), "")
+            status = (f"> {r['wall_seconds']:.0f} (timed out in {stage})" if r.get("timed_out")
+                      else f"failed (exit {r.get('returncode')})")
+            rows.append((r["label"], r.get("kind", ""), str(r.get("n") or "—"), status, f"{r['cpu_seconds']:.0f}",
+                         f"{_mib(r['maxrss_kib']):.0f}", _fmt(s.get("recursions")), _fmt(s.get("printing")),
+                         _fmt(s.get("templates")), _fmt(s.get("latex")), "—", ""))
+            continue
+        rows.append((r["label"], r.get("kind", ""), r["nq"], f"{r['wall_seconds']:.2f}", f"{r['cpu_seconds']:.2f}",
+                     f"{_mib(r['maxrss_kib']):.0f}", _fmt(s.get("recursions")), _fmt(s.get("printing")),
+                     _fmt(s.get("templates")), _fmt(s.get("latex")), f"{r['c_bytes'] / 1024:.0f}",
+                     " ".join(f"{w:.1f}" for w in r.get("all_wall_seconds", [r["wall_seconds"]]))))
+    lines += [table(("model", "kind", "n", "wall s", "CPU s", "peak MiB", "recursions s", "printing s",
+                     "templates s", "latex s", "C KiB", "all wall s"), rows), ""]
+    kane = results.get("kane", {})
+    kruns = kane.get("runs", [])
+    lines += ["### KanesMethod on the same chains", ""]
+    if not kruns:
+        lines += ["Not run.", ""]
+    else:
+        by_label = _gen_runs(results)
+        lines += ["`python -m benchmarks.kane chainN.yaml` in a fresh process: sympy.physics.mechanics "
+                  "`KanesMethod.kanes_equations` (textbook construction: `orient_axis`, `locatenew`, `v2pt_theory`, "
+                  "numbers as SymPy Floats) for the mass matrix M and the forcing f, then `sympy.cse([M, f])`.  "
+                  f"Timeout {kane.get('timeout', '—')} s per n on the timed part; n goes up until one exceeds it.  "
+                  "*ops* counts the CSE'd M and f printed as C with aggsym's own counter (mul + add + div; integer "
+                  "powers as products); *check* is the largest relative difference of (M, f) from aggsym's numeric "
+                  "twin (A, −(b + g)) on a random state.  Beside it, aggsym's generation of the same chain (all "
+                  "routines) and the count of its `inertia` + `nonlinear_effects` (the same two quantities).", ""]
+        rows = []
+
+        def wall(r):
+            if not r:
+                return "—"
+            return f"{r['wall_seconds']:.2f}" if r.get("ok") else f"> {r['wall_seconds']:.0f} (killed)"
+
+        for k in kruns:
+            ours = by_label.get(f"chain{k['n']}", {})
+            ours_ops = None
+            if ours.get("ok"):
+                ours_ops = sum(ours["ops"][role][x] for role in ("inertia", "nonlinear_effects")
+                               for x in ("mul", "add", "div"))
+            if k.get("finished"):
+                o = k.get("ops")
+                rows.append((k["n"], f"{k['kane_seconds']:.1f}", f"{k['cse_seconds']:.1f}", f"{k['seconds']:.1f}",
+                             f"{_mib(k['maxrss_kib']):.0f}", str(o["mul"] + o["add"] + o["div"]) if o else "—",
+                             f"{k['relative_error_vs_aggsym']:.1e}" if k.get("relative_error_vs_aggsym") is not None
+                             else "—", wall(ours), str(ours_ops) if ours_ops else "—"))
+            elif k.get("failed"):
+                rows.append((k["n"], "failed", "", "error (see kane.json)", "", "", "", wall(ours),
+                             str(ours_ops) if ours_ops else "—"))
+            elif k.get("skipped"):
+                rows.append((k["n"], "not run", "", k["skipped"], "", "", "", wall(ours),
+                             str(ours_ops) if ours_ops else "—"))
+            else:
+                rows.append((k["n"], f"> {k['timeout']:g} s: killed", "", "timed out",
+                             f"{_mib(k.get('process_maxrss_kib')):.0f} (at kill)" if k.get("process_maxrss_kib")
+                             else "—", "", "", wall(ours), str(ours_ops) if ours_ops else "—"))
+        lines += [table(("n", "Kane s", "cse s", "total s", "peak MiB", "ops (M, f)", "check",
+                         "aggsym wall s", "aggsym ops (A, b+g)"), rows), ""]
+        at = kane.get("timed_out_at")
+        lines += [f"KanesMethod exceeded the timeout first at **n = {at}**." if at is not None else
+                  "KanesMethod finished every n it was given.", ""]
+    lines += ["![generation time](generation.png)", ""]
+    return "\n".join(lines)
+
+
+def _opcounts(results) -> str:
+    ops = results.get("opcounts", {})
+    lines = ["## 2. Operation counts", ""]
+    if not ops:
+        return "\n".join(lines + ["Not run.", ""])
+    lines += ["Counts of the emitted C from each manifest (`ops`): `*`, `/`, binary `+`/`−` (subtractions count as "
+              "additions, unary minus not counted) and calls (sin, cos, sqrt).  The references "
+              "(`aggsym/codegen/ops.py`) are the book's Tables 2.3 and 3.2 (and 2.2, 3.1), its sweeps (2.41)+(2.43) "
+              "and Featherstone's general counts CRBA (10n²+22n−32)m + (6n²+37n−43)a, RNEA (93n−108)m + (81n−100)a, "
+              "ABA (224n−259)m + (205n−248)a, evaluated at the model's n.  The book's counts and Featherstone's "
+              "exclude the trigonometric calls, so the comparison is *mul+add+div* against *ref mul + ref add*.  "
+              "Rows marked *info* are not targets (Pinocchio's nonLinearEffects is RNEA with q̈ = 0).", ""]
+    order = [OPS_TARGET_MODEL] + [k for k in ops if k != OPS_TARGET_MODEL]
+    full = [k for k in order if k in ops and (k == OPS_TARGET_MODEL or k in ROBOTS)]
+    for label in full:
+        o = ops[label]
+        lines += [f"### {label} (n = {o['nq']})", ""]
+        rows = []
+        for r in o["rows"]:
+            if r.get("reference") is None:
+                rows.append((r["routine"], r["mul"], r["add"], r["div"], r["ours"], r["call"], "", "", ""))
+            else:
+                rows.append((r["routine"], r["mul"], r["add"], r["div"], r["ours"], r["call"],
+                             r["reference"] + ("" if r.get("target", True) else " (info)"), r["ref_total"],
+                             f"{r['ratio']:.2f}"))
+        lines += [table(("routine", "mul", "add", "div", "mul+add+div", "calls", "reference", "ref mul+add",
+                         "ours/ref"), rows, "lrrrrrlrr"), ""]
+    lines += ["### All models: ours / reference (mul+add+div)", ""]
+    cols = [("inertia", "Featherstone CRBA"), ("inertia", "book (2.34) A(q), Table 2.3"),
+            ("inertia+bias", "book Table 2.3 total (S, A, b, SH)"), ("inverse_dynamics", "Featherstone RNEA"),
+            ("inverse_dynamics", "book sweeps (2.41)+(2.43)"), ("forward_dynamics", "Featherstone ABA"),
+            ("forward_dynamics", "book Table 3.2 total (q'' by (3.20))")]
+    rows = []
+    for label in order:
+        o = ops[label]
+        idx = {(r["routine"], r.get("reference")): r for r in o["rows"]}
+        cells = []
+        for role, ref in cols:
+            r = idx.get((role, ref))
+            cells.append(f"{r['ours']} / {r['ref_total']} = {r['ratio']:.2f}" if r else "—")
+        rows.append((label, o["nq"], *cells))
+    lines += [table(("model", "n", "A vs CRBA", "A vs book (2.34)", "A+b vs Table 2.3", "ID vs RNEA",
+                     "ID vs sweeps", "FD vs ABA", "FD vs Table 3.2"), rows), "",
+              "![operation counts](opcounts.png)", ""]
+    return "\n".join(lines)
+
+
+def _runtime(results) -> str:
+    rt = results.get("runtime", {})
+    lines = ["## 3. Runtime", ""]
+    if not rt.get("robots"):
+        return "\n".join(lines + ["Not run." + (f" {rt['error']}" if rt.get("error") else ""), ""])
+    lines += ["ns per call.  The generated C of each robot is compiled `cc -std=c99 -O2 -fPIC` (no `-march=native`, "
+              "like the `pin` wheel's libraries) into one shared library; a C batch timer per routine "
+              "(`benchmarks/harness/bench.h`) calls it directly.  Pinocchio C++ from the `pin` wheel "
+              "(`benchmarks/harness/pinocchio_bench.cpp`, `g++ -std=c++17 -O2 -DNDEBUG` with the wheel's compile "
+              "definitions, linked to pinocchio_default, pinocchio_parsers, urdfdom_model) loads the same URDF with "
+              "`pinocchio::urdf::buildModel(path, model)` (fixed base) and is called the same way; both sides go "
+              "through a shared library.  The harness checks that the generated coordinates are Pinocchio's joints "
+              f"in the same order, precomputes {rt.get('states', '—')} random states (q uniform in [−π, π], q̇, q̈, τ "
+              "standard normal; continuous joints get (cos, sin) in Pinocchio's q), then per pair alternates one "
+              f"batch of the generated routine and one of Pinocchio's on the same states (a batch = "
+              f"{rt.get('calls_per_batch', '—')} calls on consecutive states, cycling through all of them; each "
+              "output read into a volatile sink), for about "
+              f"{rt.get('seconds_per_pair', '—')} s per pair, and reports the **median of the per-batch means** "
+              "(q10–q90 of the batch means in brackets).  Batches are short (tens of µs) so that on a shared "
+              "machine most of them hold no preemption and the median leaves out those that do; the ratio of the "
+              "medians of thread CPU time (`CLOCK_THREAD_CPUTIME_ID`, which excludes preemption) is given beside "
+              "as a cross-check.  Before timing, both sides are evaluated on the first "
+              "states and compared (*rel. error*: max |ours − theirs| / max |theirs|).", "",
+              "Pairing: A(q) ↔ `crba` (Pinocchio fills the **upper triangle only**; the generated code writes the "
+              "full n×n matrix), b+g (`nonlinear_effects`) ↔ `nonLinearEffects`, `inverse_dynamics` ↔ `rnea`, "
+              "`forward_dynamics` ↔ `aba`, `inertia_inverse` ↔ `computeMinverse` (upper triangle only as well).  "
+              "Pinocchio's `crba` and `aba` are timed in both of its conventions (`Convention::LOCAL`, the default, "
+              "and `Convention::WORLD`, each checked against the generated code) and the faster is Pinocchio's time "
+              "(named in the table).", ""]
+    for robot in rt["robots"]:
+        rows = []
+        for p in robot["pairs"]:
+            rows.append((RUNTIME_LABELS.get(p["role"], p["role"]), p["pinocchio"],
+                         f"{p['generated_ns']:.0f} [{p['generated_ns_q10']:.0f}–{p['generated_ns_q90']:.0f}]",
+                         f"{p['pinocchio_ns']:.0f} [{p['pinocchio_ns_q10']:.0f}–{p['pinocchio_ns_q90']:.0f}]",
+                         f"{p['ratio']:.3f}", _fmt(p.get("cpu_ratio"), 3), f"{p['relative_error']:.1e}",
+                         str(p["batches"])))
+        lines += [f"### {robot['name']} (n = {robot['nq']}, Pinocchio nq = {robot['pinocchio_nq']})", "",
+                  table(("pair", "Pinocchio function", "generated ns", "Pinocchio ns", "ratio", "CPU-time ratio",
+                         "rel. error", "batches"),
+                        rows), ""]
+    comp = rt.get("compile_seconds", {})
+    if comp:
+        lines += ["Compile times in this run: " + ", ".join(f"{k}: {v:.1f} s" for k, v in comp.items()) + ".", ""]
+    pairs = _runtime_pairs(results)
+    rows = []
+    for robot, figures in DESIGN_PINOCCHIO_NS.items():
+        for role, design in figures.items():
+            p = pairs.get((robot, role))
+            if p:
+                rows.append((robot, RUNTIME_LABELS[role], f"{p['pinocchio_ns']:.0f}", str(design),
+                             f"{p['pinocchio_ns'] / design:.1f}", f"{p['generated_ns']:.0f}",
+                             f"{p['generated_ns'] / design:.2f}"))
+    if rows:
+        lines += ["### Against the Pinocchio figures quoted in DESIGN.md", "",
+                  "DESIGN.md quotes Pinocchio 4.1 times \"measured on this kind of machine\".  The Pinocchio times "
+                  "measured here are higher by the factor shown; the last column is what the generated code's ratio "
+                  "would be against the DESIGN.md figures instead (a pessimistic reading, if those figures hold for "
+                  "some machine of this kind).", "",
+                  table(("robot", "pair", "Pinocchio here ns", "DESIGN.md ns", "here / DESIGN.md", "generated ns",
+                         "generated / DESIGN.md"), rows), ""]
+    lines += ["![runtime ratios](runtime.png)", ""]
+    return "\n".join(lines)
+
+
+def _targets(results) -> str:
+    rows = targets(results)
+    met = sum(1 for r in rows if r[2] is True)
+    lines = ["## 4. Targets", "",
+             f"{met} of {len(rows)} met.  Generation targets are judged on wall time (CPU time beside it).", "",
+             table(("target", "measured", "met"),
+                   [(w, m, {True: "yes", False: "**no**", None: "not measured"}[ok]) for w, m, ok in rows], "llr"),
+             ""]
+    notes = diagnose(results) + list(results.get("notes") or [])
+    if notes:
+        lines += ["Where the time goes (missed targets and failed runs):", ""] + [f"- {n}" for n in notes] + [""]
+    return "\n".join(lines)
+
+
+def write_report(results, folder) -> Path:
+    """Write REPORT.md and the PNG plots into ``folder``; returns the report's path."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    plot_generation(results, folder / "generation.png")
+    plot_opcounts(results, folder / "opcounts.png")
+    plot_runtime(results, folder / "runtime.png")
+    env = results.get("environment", {})
+    parts = [f"# aggsym benchmark ({env.get('date', 'date unknown')})", "",
+             "Produced by `make bench` (`benchmarks/run.py`); raw results in `benchmarks/*.json`.  Sections: "
+             "1. generation time and peak memory (with KanesMethod), 2. operation counts against the book and "
+             "Featherstone, 3. runtime against Pinocchio, 4. the targets and whether each is met.", "",
+             _environment(results), _generation(results), _opcounts(results), _runtime(results), _targets(results)]
+    path = folder / "REPORT.md"
+    path.write_text("\n".join(parts).rstrip() + "\n")
+    return path

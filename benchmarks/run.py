@@ -1,0 +1,231 @@
+"""``make bench``: the whole benchmark, then benchmarks/REPORT.md, benchmarks/*.json, the plots and the targets table.
+
+    python -m benchmarks.run        # from the repository root (make bench does this in .venv)
+
+Settings (environment variables; defaults in brackets):
+
+    AGGSYM_BENCH_CHAINS            chain lengths n for sections 1 and 2                 [4,8,12,16,24,32]
+    AGGSYM_BENCH_KANE_TIMEOUT      seconds allowed to one KanesMethod + cse run          [600]
+    AGGSYM_BENCH_KANE_MAX_N        largest chain given to KanesMethod                    [32]
+                                   (n goes up through AGGSYM_BENCH_CHAINS until one run exceeds the timeout)
+    AGGSYM_BENCH_GEN_TIMEOUT       seconds allowed to one aggsym generate               [300]
+    AGGSYM_BENCH_GEN_REPEATS       runs per model; the one of median wall time is kept   [3]
+    AGGSYM_BENCH_RUNTIME_SECONDS   timing budget per routine pair and robot             [0.5]
+    AGGSYM_BENCH_STATES            precomputed random states per robot                  [1000]
+    AGGSYM_BENCH_CALLS             calls per timed batch (cycling through the states)  [100]
+    AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane             [all]
+                                   (a section left out is read back from its JSON of an earlier run)
+
+Sections: 1. generation time and peak memory of every models/*.yaml, the four example-robot-data robots and
+the chains, with KanesMethod on the chains (generation.json, kane.json); 2. operation counts from the
+manifests (opcounts.json); 3. runtime of the generated C against Pinocchio C++ (runtime.json).
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+from . import report
+from .chain import write_chain
+from .environment import environment, load_average
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+BUILD = HERE / "build"
+
+# example-robot-data files (as in tests/pinocchio_reference.py; talos is the reduced 32-DOF model)
+ROBOT_FILES = {
+    "ur5": "ur_description/urdf/ur5_robot.urdf",
+    "panda": "panda_description/urdf/panda.urdf",
+    "hyq": "hyq_description/robots/hyq_no_sensors.urdf",
+    "talos": "talos_data/robots/talos_reduced.urdf",
+}
+
+
+def config() -> dict:
+    env = os.environ
+    return {
+        "AGGSYM_BENCH_CHAINS": env.get("AGGSYM_BENCH_CHAINS", "4,8,12,16,24,32"),
+        "AGGSYM_BENCH_KANE_TIMEOUT": float(env.get("AGGSYM_BENCH_KANE_TIMEOUT", "600")),
+        "AGGSYM_BENCH_KANE_MAX_N": int(env.get("AGGSYM_BENCH_KANE_MAX_N", "32")),
+        "AGGSYM_BENCH_GEN_TIMEOUT": float(env.get("AGGSYM_BENCH_GEN_TIMEOUT", "300")),
+        "AGGSYM_BENCH_GEN_REPEATS": int(env.get("AGGSYM_BENCH_GEN_REPEATS", "3")),
+        "AGGSYM_BENCH_RUNTIME_SECONDS": float(env.get("AGGSYM_BENCH_RUNTIME_SECONDS", "0.5")),
+        "AGGSYM_BENCH_STATES": int(env.get("AGGSYM_BENCH_STATES", "1000")),
+        "AGGSYM_BENCH_CALLS": int(env.get("AGGSYM_BENCH_CALLS", "100")),
+        "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS", "generation,runtime,kane"),
+    }
+
+
+def chain_lengths(cfg) -> list:
+    return sorted({int(x) for x in str(cfg["AGGSYM_BENCH_CHAINS"]).split(",") if x.strip()})
+
+
+def robots_directory() -> Path:
+    """``share/example-robot-data/robots`` of the installed example-robot-data (it has no Python loader)."""
+    from importlib import metadata
+
+    dist = metadata.distribution("example-robot-data")
+    for f in dist.files or ():
+        if f.as_posix().endswith("share/example-robot-data/package.xml"):
+            return Path(dist.locate_file(f)).parent / "robots"
+    raise FileNotFoundError("example-robot-data lists no share/example-robot-data/package.xml")
+
+
+def robot_paths() -> dict:
+    root = robots_directory()
+    return {name: root / rel for name, rel in ROBOT_FILES.items()}
+
+
+def log(msg: str):
+    print(f"[bench {time.strftime('%H:%M:%S')}] {msg}", flush=True)
+
+
+def _save(name: str, data):
+    (HERE / f"{name}.json").write_text(json.dumps(data, indent=1, default=str) + "\n")
+
+
+def _load(name: str):
+    path = HERE / f"{name}.json"
+    return json.loads(path.read_text()) if path.exists() else {}
+
+
+def models(cfg) -> list:
+    """(label, kind, path, n) of every model of section 1, in order."""
+    out = [(p.stem, "seed", p, None) for p in sorted((ROOT / "models").glob("*.yaml"))]
+    out += [(name, "robot", path, None) for name, path in robot_paths().items()]
+    out += [(f"chain{n}", "chain", write_chain(n, BUILD / "chains"), n) for n in chain_lengths(cfg)]
+    return out
+
+
+def section_generation(cfg) -> dict:
+    from .generation import generate_measured
+
+    runs = []
+    for label, kind, path, n in models(cfg):
+        tries = []
+        for _ in range(max(1, cfg["AGGSYM_BENCH_GEN_REPEATS"])):
+            tries.append(generate_measured(label, path, BUILD / "gen" / label, timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"]))
+            if not tries[-1]["ok"]:
+                break
+        # the run of median wall time stands for the model; every run's wall and CPU time are kept
+        r = sorted(tries, key=lambda t: t["wall_seconds"])[(len(tries) - 1) // 2] if tries[-1]["ok"] else tries[-1]
+        r.update({"kind": kind, "n": n if n is not None else r.get("nq"),
+                  "all_wall_seconds": [t["wall_seconds"] for t in tries],
+                  "all_cpu_seconds": [t["cpu_seconds"] for t in tries],
+                  "all_maxrss_kib": [t["maxrss_kib"] for t in tries]})
+        runs.append(r)
+        if r["ok"]:
+            log(f"generate {label:<26} n={r['nq']:<3} {r['wall_seconds']:7.2f} s wall {r['cpu_seconds']:7.2f} s CPU "
+                f"{r['maxrss_kib'] / 1024:7.0f} MiB")
+        else:
+            log(f"generate {label}: FAILED ({'timed out' if r['timed_out'] else r['returncode']})\n{r.get('stderr', '')}")
+    return {"runs": runs}
+
+
+def section_kane(cfg) -> dict:
+    from .generation import kane_measured
+
+    timeout = cfg["AGGSYM_BENCH_KANE_TIMEOUT"]
+    runs, timed_out_at, failed_at = [], None, None
+    for n in chain_lengths(cfg):
+        if n > cfg["AGGSYM_BENCH_KANE_MAX_N"]:
+            runs.append({"n": n, "skipped": f"n > AGGSYM_BENCH_KANE_MAX_N = {cfg['AGGSYM_BENCH_KANE_MAX_N']}"})
+            continue
+        if timed_out_at is not None:
+            runs.append({"n": n, "skipped": f"n = {timed_out_at} already exceeded {timeout:g} s"})
+            continue
+        if failed_at is not None:
+            runs.append({"n": n, "skipped": f"the run at n = {failed_at} failed"})
+            continue
+        log(f"KanesMethod + cse on chain{n} (timeout {timeout:g} s) ...")
+        r = kane_measured(write_chain(n, BUILD / "chains"), BUILD / "kane" / f"chain{n}.json", timeout)
+        r["n"] = n
+        runs.append(r)
+        if r["finished"]:
+            log(f"kane chain{n}: {r['seconds']:.1f} s (equations {r['kane_seconds']:.1f} s, cse {r['cse_seconds']:.1f} s), "
+                f"{r['maxrss_kib'] / 1024:.0f} MiB, ops {r.get('ops')}, check {r.get('relative_error_vs_aggsym')}")
+        elif r.get("failed"):
+            failed_at = n
+            log(f"kane chain{n}: FAILED\n{r.get('stderr', '')}")
+        else:
+            timed_out_at = n
+            log(f"kane chain{n}: exceeded {timeout:g} s")
+    return {"timeout": timeout, "runs": runs, "timed_out_at": timed_out_at}
+
+
+def section_runtime(cfg, generation) -> dict:
+    from .runtime import build_harness, run_harness
+
+    runs = {r["label"]: r for r in generation.get("runs", [])}
+    missing = [name for name in ROBOT_FILES if not runs.get(name, {}).get("ok")]
+    if missing:
+        return {"error": f"no generated code for {', '.join(missing)}"}
+    generated = {runs[name]["name"]: Path(runs[name]["outdir"]) for name in ROBOT_FILES}
+    log("building the runtime harness (the Pinocchio C++ side takes minutes) ...")
+    t0 = time.perf_counter()
+    built = build_harness(BUILD / "runtime", generated, log=lambda m: log("  " + m[:200]))
+    log(f"built in {time.perf_counter() - t0:.0f} s")
+    paths = robot_paths()
+    robots = {runs[name]["name"]: paths[name] for name in ROBOT_FILES}
+    data = run_harness(built["executable"], robots, BUILD / "runtime" / "runtime_raw.json",
+                       seconds=cfg["AGGSYM_BENCH_RUNTIME_SECONDS"], states=cfg["AGGSYM_BENCH_STATES"],
+                       calls=cfg["AGGSYM_BENCH_CALLS"], log=log)
+    data["compile_seconds"] = built["compile_seconds"]
+    # robots are named by their labels (ur5, panda, hyq, talos) in the report
+    labels = {runs[name]["name"]: name for name in ROBOT_FILES}
+    for robot in data["robots"]:
+        robot["model_name"] = robot["name"]
+        robot["name"] = labels.get(robot["name"], robot["name"])
+    bad = [(r["name"], p["role"], p["relative_error"]) for r in data["robots"] for p in r["pairs"]
+           if not p["relative_error"] <= 1e-9]
+    data["agreement"] = "all pairs within 1e-9 relative" if not bad else f"DISAGREEMENT: {bad}"
+    log(f"runtime: {data['agreement']}")
+    return data
+
+
+def main() -> int:
+    t_start = time.perf_counter()
+    cfg = config()
+    sections = {s.strip() for s in cfg["AGGSYM_BENCH_SECTIONS"].split(",") if s.strip()}
+    BUILD.mkdir(parents=True, exist_ok=True)
+    env = environment()
+    log(f"{env['cpu']}, {env['logical_cpus']} CPUs, load {env['load_average_start']}; settings {cfg}")
+
+    generation = section_generation(cfg) if "generation" in sections else _load("generation")
+    if "generation" in sections:
+        _save("generation", generation)
+    from .opcounts import section as opcount_section
+
+    opcounts = opcount_section(generation.get("runs", []))
+    _save("opcounts", opcounts)
+    if "runtime" in sections:
+        try:
+            runtime = section_runtime(cfg, generation)
+        except Exception as exc:  # reported, not fatal: the other sections still make a report
+            runtime = {"error": f"{exc.__class__.__name__}: {exc}"}
+            log(f"runtime section failed: {runtime['error']}")
+        _save("runtime", runtime)
+    else:
+        runtime = _load("runtime")
+    kane = section_kane(cfg) if "kane" in sections else _load("kane")
+    if "kane" in sections:
+        _save("kane", kane)
+
+    env["load_average_end"] = load_average()
+    env["bench_wall_seconds"] = round(time.perf_counter() - t_start, 1)
+    results = {"environment": env, "config": cfg, "generation": generation, "kane": kane, "opcounts": opcounts,
+               "runtime": runtime}
+    _save("environment", {"environment": env, "config": cfg})
+    path = report.write_report(results, HERE)
+    log(f"wrote {path.relative_to(ROOT)} and the plots in {env['bench_wall_seconds']:.0f} s")
+    print()
+    print(report.summary_text(results))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
