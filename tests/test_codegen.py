@@ -252,3 +252,23 @@ def test_outputs_may_alias_inputs(tmp_path, rng):
     lib.manipulator6_forward_dynamics(q.ctypes.data_as(p), qd.ctypes.data_as(p), inplace.ctypes.data_as(p), None,
                                       inplace.ctypes.data_as(p))
     assert np.array_equal(inplace, separate)
+
+
+def test_closed_forms_only_where_their_expansion_is_small(tmp_path):
+    """The LaTeX closed forms are chosen by a bound on the expanded size (deterministic): the seeds' small systems
+    get them, a general 3-D four-link arm (whose expansion SymPy does not finish) the intermediate-variable form."""
+    from aggsym.codegen.latex import CLOSED_FORM_MAX_TERMS, expanded_terms
+    from aggsym.codegen.generate import symbolic_routines
+    from benchmarks.chain import chain_model
+
+    def terms(model):
+        prog, outs = symbolic_routines(model, roles=("inertia", "bias", "gravity"))
+        return expanded_terms(prog, [x for o in outs.values() for out in o for x in out])
+
+    assert terms(aggsym.load(model_path("double_pendulum"))) == 12
+    assert terms(aggsym.load(model_path("planar_3link"))) <= CLOSED_FORM_MAX_TERMS
+    arm = chain_model(4, tmp_path)
+    assert terms(arm) > CLOSED_FORM_MAX_TERMS
+    tex = generate(arm).files[f"{arm.name}.tex"]
+    assert "Intermediate-variable form" in tex
+    assert "Intermediate-variable form" not in generate(aggsym.load(model_path("planar_3link"))).files["planar_3link.tex"]

@@ -1,6 +1,7 @@
 """The LaTeX document of a model's equations of motion.
 
-Small models (at most :data:`CLOSED_FORM_MAX_NQ` coordinates and :data:`CLOSED_FORM_MAX_NODES` program nodes in
+Small models (at most :data:`CLOSED_FORM_MAX_NQ` coordinates, :data:`CLOSED_FORM_MAX_NODES` program nodes and
+:data:`CLOSED_FORM_MAX_TERMS` expanded terms (:func:`expanded_terms`) in
 A, b and g) get closed forms: every entry of A, b and g
 simplified by SymPy, written as the scalar equations ``sum_j A_ij q''_j + b_i + g_i = tau_i`` (for the double
 pendulum these are (2.26)).  Larger models get the intermediate-variable form: the straight-line programs of
@@ -20,6 +21,33 @@ from .printing import Converter, LinComb, Num, Prod, _Common, straight_line
 CLOSED_FORM_MAX_NQ = 4
 CLOSED_FORM_MAX_NODES = 300  # and at most this many program nodes in A, b, g (SymPy's simplification of the
 # flywheel on a spherical pair, 3 coordinates but ~570 nodes, does not finish in minutes)
+CLOSED_FORM_MAX_TERMS = 1000  # and at most this many terms in the expansion of any entry (see expanded_terms)
+
+
+def expanded_terms(prog, outputs) -> int:
+    """An upper bound on the number of terms of the fully expanded outputs: sums add the counts of their operands,
+    products (and quotients) multiply them; sin, cos and inputs count one.  Deterministic and linear in the
+    program, so the choice between closed and intermediate forms does not depend on the machine (the double
+    pendulum gives 12, Tokad's three-link arm 76, a general 3-D 4-link arm 4346)."""
+    from .program import ADD, DIV, INPUT, MUL, NEG, SUB, Node
+
+    count: dict[int, int] = {}
+
+    def of(x):
+        return count[x.id] if isinstance(x, Node) else 1
+
+    for i in prog.reachable(outputs):
+        entry = prog.ops[i]
+        code = entry[0]
+        if code in (ADD, SUB):
+            count[i] = of(entry[1]) + of(entry[2])
+        elif code in (MUL, DIV):
+            count[i] = of(entry[1]) * of(entry[2])
+        elif code == NEG:
+            count[i] = of(entry[1])
+        else:
+            count[i] = 1
+    return max((of(x) for x in outputs), default=0)
 
 
 def _dotted(name_latex: str, accent: str) -> str:
@@ -241,7 +269,9 @@ def _escape(text: str) -> str:
 def latex_document(model, env, prog, outputs) -> str:
     """The standalone LaTeX document (rendered through templates/model.tex.j2)."""
     flat = [x for role in ("inertia", "bias", "gravity") if role in outputs for o in outputs[role] for x in o]
-    small = not model.couplings and model.nq <= CLOSED_FORM_MAX_NQ and len(prog.reachable(flat)) <= CLOSED_FORM_MAX_NODES
+    small = (not model.couplings and model.nq <= CLOSED_FORM_MAX_NQ
+             and len(prog.reachable(flat)) <= CLOSED_FORM_MAX_NODES
+             and expanded_terms(prog, flat) <= CLOSED_FORM_MAX_TERMS)
     names = symbol_names(model)
     q, qd, qdd = coordinate_symbols(model)
     ctx = {
