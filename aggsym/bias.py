@@ -38,15 +38,29 @@ def gravity_vector(bound, kin):
     return generalized(kin, kin.backward(Y))
 
 
-def coriolis_matrix(bound, kin, qd):
-    """B(q, q') = S Phi(V) A S^T + S A S'^T, the book's matrix of (2.17), (2.31) (A = diag A_lk of (2.13)).
+def coriolis_matrix(bound, kin, qd, skew=False):
+    """A matrix B(q, q') with ``B q' = b`` (2.36), linear in q'.
 
-    Column j is ``S (Phi(V) A V(e_j) + A X(q', e_j))`` with ``V(e_j) = S^T e_j`` (row j of S, (1.43)) and
-    ``X(u, e_j) = S'^T(u) e_j`` carried down the subtree of j's pair like (2.37):
-    ``X_k = L^T X_parent + phi(L^T V_parent(e_j), M F u)``, starting from the pair's own (M F)'(u) e_j (2.19).
-    So ``B q' = S (Phi A V + A X) = b`` (2.36).  This B is linear in q' but is not the Christoffel matrix
-    (A' - 2B is not skew in general).  O(n) per column; n x n rows.  For models without prescribed motions:
-    a prescribed spin's terms in b are not of the form B q' (the partition routine is not emitted for them)."""
+    ``skew=False``: the book's ``B = S Phi(V) A S^T + S A S'^T`` of (2.17),
+    (2.31) (A = diag A_lk of (2.13)).  Column j is ``S (Phi(V) A V(e_j) + A X(q', e_j))`` with
+    ``V(e_j) = S^T e_j`` (row j of S, (1.43)) and ``X(u, e_j) = S'^T(u) e_j`` carried down the subtree of j's
+    pair like (2.37): ``X_k = L^T X_parent + phi(L^T V_parent(e_j), M F u)``, starting from the pair's own
+    (M F)'(u) e_j (2.19).  Summed along the path this is the time derivative of the column S^T e_j in body k's
+    axes.  So ``B q' = S (Phi A V + A X) = b``.  This B is not a Christoffel-consistent matrix: A' - 2B is not
+    skew in general.
+
+    ``skew=True``: ``C = B + S A phi(V) S^T = S (Phi(V) A + A phi(V)) S^T + S A S'^T``, where ``phi(V)`` is
+    the motion cross product (1.22) (``Phi(V) = -phi(V)^T``).  The body block ``Phi(V) A + A phi(V)`` is skew
+    because A_lk is symmetric, and it maps V to ``Phi(V) A V`` since ``phi(V) V = 0``; hence ``C q' = b`` still,
+    and with ``A = S A S^T`` (2.30), ``A' = S' A S^T + S A S'^T``:
+    ``A' - 2C = (S' A S^T - S A S'^T) - 2 S (Phi A + A phi) S^T`` is skew: the passivity property that
+    controllers (Slotine-Li, passivity-based) need.  DESIGN's rung 1.  Computed as
+    ``Y_k = Phi(V_k) A_lk V_k(e_j) + A_lk D_k`` with ``D = X + phi(V) V(e_j)``, the rate of the column in the
+    inertial axes: D is constant along the subtree up to the frame change, ``D_k = L^T D_parent``, which saves
+    the phi of (2.37) and one product with A_lk per body.
+
+    O(n) per column; n x n rows.  For models without prescribed motions: a prescribed spin's terms in b are not
+    of the form B q' (the partition and coriolis routines are not emitted for them)."""
     tree = kin.tree
     n = tree.nq
     V = kin.velocities(qd)
@@ -61,6 +75,10 @@ def coriolis_matrix(bound, kin, qd):
         for k in tree.subtrees[st]:
             if k == st:
                 x = kin.relative_acceleration_bilinear(k, qd, unit)
+                if skew:
+                    x = add(x, phi_motion(V[k], W[k]))
+            elif skew:
+                x = kin.L[k].twist(X[tree.parent[k]])
             else:
                 p = tree.parent[k]
                 x = add(kin.L[k].twist(X[p]), phi_motion(kin.L[k].twist(W[p]), kin.relative_velocity(k, qd)))

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from . import elastic
-from .bias import bias_vector, gravity_vector
+from .bias import bias_vector, coriolis_matrix, gravity_vector
 from .energy import kinetic_energy, potential_energy
 from .inertia import inertia_matrix
 from .kinematics import TreeKinematics
@@ -124,6 +124,12 @@ register(Routine("bias", ("q", "qd", "p"), (Output("b", nq_vector),),
                  lambda bound, kin, x: (sweeps.d_vector(bound, kin, x["qd"], gravity=False),),
                  "b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) "
                  "(with prescribed spins: every term of their rates and accelerations too)"))
+
+register(Routine("coriolis", ("q", "qd", "p"), (Output("C", nq_square),),
+                 lambda bound, kin, x: (_flat(coriolis_matrix(bound, kin, x["qd"], skew=True)),),
+                 "C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew "
+                 "(S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based "
+                 "control", applies=lambda model: not model.time_dependent, coupled="matrix"))
 
 
 def _gravity(bound, kin, x):

@@ -87,14 +87,41 @@ def joint_names(pm) -> list:
     return names
 
 
-def relative_error(ours, theirs) -> float:
-    """max |ours - theirs| relative to the largest entry of theirs."""
+def relative_error(ours, theirs, floor: float = 1e-300) -> float:
+    """max |ours - theirs| relative to the largest entry of theirs, or to ``floor`` when that is larger (for
+    references that can vanish, e.g. dM/dt of a chain whose inertia does not change: floor = max|M| max|qd|)."""
     theirs = np.asarray(theirs)
-    return float(np.abs(np.asarray(ours) - theirs).max() / max(np.abs(theirs).max(), 1e-300))
+    return float(np.abs(np.asarray(ours) - theirs).max() / max(np.abs(theirs).max(), floor))
+
+
+def has_composite_joint(pm) -> bool:
+    return any(pm.joints[j].shortname() == "JointModelComposite" for j in range(1, pm.njoints))
+
+
+def crba(pm, Q) -> np.ndarray:
+    """Pinocchio's M(Q), both triangles (crba fills the upper one)."""
+    M = pin.crba(pm, pm.createData(), Q)
+    return np.triu(M) + np.triu(M, 1).T
+
+
+def inertia_rate(pm, Q, v) -> tuple:
+    """dM/dt along v and the relative tolerance to compare with it.
+
+    From Pinocchio's computeCoriolisMatrix Cp: dM/dt = Cp + Cp^T (its Cp has dM/dt - 2 Cp skew).  Pinocchio 4.1's
+    computeCoriolisMatrix is wrong on composite joints (the floating root of :func:`free_root`: its Cp + Cp^T
+    differs from the rate of its own crba by a few per cent), so there dM/dt is the central difference of crba
+    along v (relative error about 1e-10, compared to 1e-7).  A Coriolis matrix is not unique, but C qd = b and
+    C + C^T = dM/dt pin down the class with the skew property (A' - 2C skew is C + C^T = A', A' symmetric)."""
+    if has_composite_joint(pm):
+        h = 1e-6
+        return (crba(pm, pin.integrate(pm, Q, h * v)) - crba(pm, pin.integrate(pm, Q, -h * v))) / (2 * h), 1e-7
+    Cp = pin.computeCoriolisMatrix(pm, pm.createData(), Q, v)
+    return Cp + Cp.T, TOLERANCE
 
 
 def compare(model, pm, rng, states: int = 3, tolerance: float = TOLERANCE) -> float:
-    """Assert A, b + g, g and inverse dynamics equal Pinocchio's on random states; returns the largest error."""
+    """Assert A, b + g, g and inverse dynamics equal Pinocchio's on random states, and that the Coriolis matrix C has
+    C qd = b and C + C^T = dM/dt (:func:`inertia_rate`); returns the largest error."""
     assert model.nq == pm.nv
     twin = aggsym.NumericTwin(model)
     data = pm.createData()
@@ -114,6 +141,14 @@ def compare(model, pm, rng, states: int = 3, tolerance: float = TOLERANCE) -> fl
             "inverse_dynamics vs rnea": relative_error(twin.inverse_dynamics(q, qd, qdd),
                                                        pin.rnea(pm, data, Q, qd, qdd)),
         }
+        if not model.time_dependent:
+            C = twin.coriolis(q, qd)
+            errors["C qd vs nonLinearEffects - g"] = relative_error(
+                C @ qd, pin.nonLinearEffects(pm, data, Q, qd) - pin.computeGeneralizedGravity(pm, data, Q),
+                floor=np.abs(M).max() * np.abs(qd).max() ** 2)
+            Mdot, rate_tolerance = inertia_rate(pm, Q, qd)
+            error = relative_error(C + C.T, Mdot, floor=np.abs(M).max() * np.abs(qd).max())
+            assert error <= rate_tolerance, f"{model.name}: C + C^T vs dM/dt: relative error {error:.3g} at q={q.tolist()}"
         for what, error in errors.items():
             assert error <= tolerance, f"{model.name}: {what}: relative error {error:.3g} at q={q.tolist()}"
         worst = max(worst, *errors.values())

@@ -93,6 +93,24 @@ def test_bias_is_coriolis_of_inertia(path, rng):
         assert np.allclose(twin.bias(q, qd), expected, rtol=1e-6, atol=1e-6 * max(1.0, np.abs(expected).max()))
 
 
+@pytest.mark.parametrize("path", [p for p in MODELS if not aggsym.load(p).time_dependent], ids=lambda p: p.stem)
+def test_coriolis_matrix_is_skew_consistent(path, rng):
+    """The coriolis routine: C q' = b, C linear in q', and A' - 2C skew with A' by a central difference of A(q)
+    along q' (the book's B of (2.17) has B q' = b but not the skew property; the test tells them apart)."""
+    model = aggsym.load(path)
+    twin = aggsym.NumericTwin(model)
+    for q, qd, _ in states(model, rng, 2):
+        C = twin.coriolis(q, qd)
+        b = twin.bias(q, qd)
+        scale = max(1.0, np.abs(C).max())
+        assert np.abs(C @ qd - b).max() <= 1e-12 * max(1.0, np.abs(b).max())
+        assert np.allclose(twin.coriolis(q, 2 * qd), 2 * C, rtol=1e-12, atol=1e-12 * scale)
+        h = 1e-6
+        Adot = (twin.inertia(q + h * qd) - twin.inertia(q - h * qd)) / (2 * h)
+        K = Adot - 2 * C
+        assert np.abs(K + K.T).max() <= 1e-6 * max(1.0, np.abs(Adot).max())
+
+
 def test_bias_is_lagrange_of_kinetic_energy(model, rng):
     """b = d/dt dT/dq' - dT/dq at q'' = 0 (Lagrange), from the kinetic_energy routine alone, by finite differences.
 

@@ -14,7 +14,7 @@ from aggsym import cli
 from aggsym.codegen.compile import CLibrary, compile_shared, import_module
 from aggsym.codegen.generate import generate, write
 from aggsym.errors import ModelError
-from pinocchio_reference import pinocchio_q, relative_error
+from pinocchio_reference import inertia_rate, pinocchio_q, relative_error
 from random_trees import random_urdf
 
 TOLERANCE = 1e-9
@@ -79,8 +79,8 @@ def reduction(model):
 
 def references(model, path, q, qd, qdd):
     """The reduced equations from Pinocchio's standard algorithms on the full (mimic=False) model of the same
-    file: A_q = J^T M J, tau = J^T rnea(J q + o, J qd, J qdd), d = J^T nle, g = J^T g_full; q'' and A_q^-1 from
-    them.  (J is constant, so q''_tree = J q''.)"""
+    file: A_q = J^T M J, tau = J^T rnea(J q + o, J qd, J qdd), d = J^T nle, g = J^T g_full, A_q' = J^T M' J (for
+    C + C^T of the Coriolis matrix); q'' and A_q^-1 from them.  (J is constant, so q''_tree = J q''.)"""
     pm = pin.buildModelFromUrdf(str(path))
     J, o = reduction(model)
     Q = pinocchio_q(pm, J @ q + o)
@@ -89,7 +89,8 @@ def references(model, path, q, qd, qdd):
     tau = J.T @ pin.rnea(pm, pm.createData(), Q, J @ qd, J @ qdd)
     nle = J.T @ pin.nonLinearEffects(pm, pm.createData(), Q, J @ qd)
     g = J.T @ pin.computeGeneralizedGravity(pm, pm.createData(), Q)
-    return [("inertia", (q,), A), ("inverse_dynamics", (q, qd, qdd), tau), ("nonlinear_effects", (q, qd), nle),
+    Adot = J.T @ inertia_rate(pm, Q, J @ qd)[0] @ J
+    return [("coriolis + transpose", (q, qd), Adot), ("inertia", (q,), A), ("inverse_dynamics", (q, qd, qdd), tau), ("nonlinear_effects", (q, qd), nle),
             ("gravity", (q,), g), ("forward_dynamics", (q, qd, tau), qdd), ("inertia_inverse", (q,), np.linalg.inv(A))]
 
 
@@ -101,9 +102,17 @@ def compare(model, path, call, states=3):
         qd, qdd = rng.normal(size=model.nq), rng.normal(size=model.nq)
         checks = references(model, path, q, qd, qdd)
         for role, args, ref in checks:
-            got = call(role, *args)
-            assert relative_error(got, ref) <= TOLERANCE, (role, relative_error(got, ref))
-        nle = checks[2][2]
+            if role == "coriolis + transpose":
+                C = np.asarray(call("coriolis", *args)).reshape(model.nq, model.nq)
+                got = C + C.T
+            else:
+                got = call(role, *args)
+            floor = np.abs(checks[1][2]).max() * np.abs(qd).max() if role == "coriolis + transpose" else 1e-300
+            assert relative_error(got, ref, floor) <= TOLERANCE, (role, relative_error(got, ref, floor))
+        nle = checks[3][2]
+        C = np.asarray(call("coriolis", q, qd)).reshape(model.nq, model.nq)
+        floor = np.abs(checks[1][2]).max() * np.abs(qd).max() ** 2
+        assert relative_error(C @ qd, nle - checks[4][2], floor) <= TOLERANCE
         assert relative_error(call("bias", q, qd) + call("gravity", q), nle) <= TOLERANCE
 
 

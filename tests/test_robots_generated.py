@@ -2,7 +2,8 @@
 
 For the robots of example-robot-data (fixed base): A vs crba, d = b + g vs nonLinearEffects, g vs
 computeGeneralizedGravity, inverse dynamics vs rnea, the joint wrenches vs data.f after rnea, T and U vs
-computeKineticEnergy / computePotentialEnergy; relative error <= 1e-9.  The C is compiled with -O0 here (the
+computeKineticEnergy / computePotentialEnergy, the Coriolis matrix C by C qd = b and C + C^T = dM/dt from
+computeCoriolisMatrix; relative error <= 1e-9.  The C is compiled with -O0 here (the
 flags that matter, -std=c99 -Wall -Wextra -Wpedantic -Werror, stay; -O2 is exercised by test_codegen and
 `aggsym check`), which keeps talos' compile to seconds.
 """
@@ -15,7 +16,8 @@ import pytest
 import aggsym
 from aggsym.codegen.compile import CLibrary, compile_shared, import_module
 from aggsym.codegen.generate import generate, write
-from pinocchio_reference import ROBOTS, TOLERANCE, pinocchio_model, pinocchio_q, relative_error, robot_path
+from pinocchio_reference import (ROBOTS, TOLERANCE, inertia_rate, pinocchio_model, pinocchio_q, relative_error,
+                                 robot_path)
 from random_trees import random_urdf
 
 pytestmark = pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")
@@ -66,6 +68,13 @@ def test_generated_code_equals_pinocchio(robot, rng):
             assert relative_error(py, ref) <= TOLERANCE, (name, role, "NumPy", relative_error(py, ref))
         b, _ = both(lib, module, "bias", q, qd)
         assert relative_error(b + lib.call("gravity", q), nle) <= TOLERANCE
+        Mdot, _ = inertia_rate(pm, Q, qd)
+        for kind, C in zip(("C", "NumPy"), both(lib, module, "coriolis", q, qd)):
+            C = np.asarray(C).reshape(model.nq, model.nq)
+            assert relative_error(C @ qd, b, floor=np.abs(M).max() * np.abs(qd).max() ** 2) <= TOLERANCE, \
+                (name, kind, "C qd = b")
+            assert relative_error(C + C.T, Mdot, floor=np.abs(M).max() * np.abs(qd).max()) <= TOLERANCE, \
+                (name, kind, "C + C^T = dM/dt")
 
 
 @pytest.mark.parametrize("seed", range(20))

@@ -81,6 +81,52 @@ def bias(q, qd, p=None):
     return b
 
 
+def coriolis(q, qd, p=None):
+    """C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    C = np.empty(batch + (3, 3))
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    p_1 = p[..., 1]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    p_8 = p[..., 8]
+    p_9 = p[..., 9]
+    p_10 = p[..., 10]
+    C[..., 0, 0] = 0
+    C[..., 0, 1] = 0
+    C[..., 2, 0] = 0
+    C[..., 2, 2] = 0
+    x0 = p_1*p_3
+    x1 = p_1*p_3*p_3
+    x2 = p_9 + x1
+    x3 = p_10 + x1
+    x4 = np.cos(q_2)
+    x5 = np.sin(q_2)
+    x6 = x0*x4
+    x7 = x6 + p_1*p_4
+    x8 = qd_1*x5
+    x9 = qd_1*x4
+    x10 = p_4*qd_1
+    x11 = qd_0*x5
+    x12 = qd_0*x4
+    x13 = p_1*x4
+    C[..., 1, 0] = x5*(x10*x13 + x6*x9) - x4*(x10*p_1*x5 + x6*x8)
+    x14 = p_8*x5
+    x15 = p_4*x0 + x2*x4
+    C[..., 2, 1] = x8*x15 - x9*x14
+    C[..., 1, 1] = x4*(x7*x11 + qd_2*x14) - x5*(x7*x12 + qd_2*x15)
+    x16 = x0*x8
+    C[..., 0, 2] = x5*(p_1*x12 - x0*qd_2) - x11*x13
+    C[..., 1, 2] = x5*(x0*x10 + x3*x9 + p_8*x9) - x4*(x3*x8 + x2*x8) - p_4*(x16 + x16)
+    return C
+
+
 def gravity(q, p=None):
     """g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"""
     q = np.asarray(q, dtype=float)
@@ -227,7 +273,7 @@ def kinetic_energy(q, qd, p=None):
     x6 = p_4*qd_1
     x7 = qd_0*x3
     x8 = qd_0*x2
-    T[..., 0] = 0.5*(qd_0*p_0*qd_0 + qd_1*(p_6 + p_0*p_2*p_2)*qd_1 + x7*p_1*x7 + x8*(p_1*x8 + x0*qd_2) + x6*(p_1*x6 + x0*x5) + x4*p_8*x4 + x5*(x0*x6 + (p_9 + x1)*x5) + qd_2*(x0*x8 + (p_10 + x1)*qd_2))
+    T[..., 0] = 0.5*(qd_0*p_0*qd_0 + qd_1*(p_6 + p_0*p_2*p_2)*qd_1 + x7*p_1*x7 + x8*(x0*qd_2 + p_1*x8) + x6*(p_1*x6 + x0*x5) + x4*p_8*x4 + x5*(x0*x6 + (p_9 + x1)*x5) + qd_2*(x0*x8 + (p_10 + x1)*qd_2))
     return T[..., 0][()]
 
 

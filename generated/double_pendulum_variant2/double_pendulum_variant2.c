@@ -93,6 +93,48 @@ void double_pendulum_variant2_bias(const double *q, const double *qd, const doub
     b[1] = x5*qd_2*x8*(x3 + x6) + x4*(x11*(p_8 - x3) - x2*x11) - p_4*x0*(x11 + x11);
 }
 
+/* C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control
+ * operations: 42 mul, 19 add, 0 div, 1 call */
+void double_pendulum_variant2_coriolis(const double *q, const double *qd, const double *p, double *C)
+{
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double p_1 = p[1];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
+    C[0] = 0;
+    C[1] = 0;
+    C[6] = 0;
+    C[8] = 0;
+    const double x0 = p_1*p_3;
+    const double x1 = p_1*p_3*p_3;
+    const double x2 = p_9 + x1;
+    const double x3 = p_10 + x1;
+    double x5, x4;
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = x0*x4;
+    const double x7 = x6 + p_1*p_4;
+    const double x8 = qd_1*x5;
+    const double x9 = qd_1*x4;
+    const double x10 = p_4*qd_1;
+    const double x11 = qd_0*x5;
+    const double x12 = qd_0*x4;
+    const double x13 = p_1*x4;
+    C[3] = x5*(x10*x13 + x6*x9) - x4*(x10*p_1*x5 + x6*x8);
+    const double x14 = p_8*x5;
+    const double x15 = p_4*x0 + x2*x4;
+    C[7] = x8*x15 - x9*x14;
+    C[4] = x4*(x7*x11 + qd_2*x14) - x5*(x7*x12 + qd_2*x15);
+    const double x16 = x0*x8;
+    C[2] = x5*(p_1*x12 - x0*qd_2) - x11*x13;
+    C[5] = x5*(x0*x10 + x3*x9 + p_8*x9) - x4*(x3*x8 + x2*x8) - p_4*(x16 + x16);
+}
+
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
  * operations: 11 mul, 2 add, 0 div, 2 call */
 void double_pendulum_variant2_gravity(const double *q, const double *p, double *g)
@@ -224,7 +266,7 @@ void double_pendulum_variant2_kinetic_energy(const double *q, const double *qd, 
     const double x6 = p_4*qd_1;
     const double x7 = qd_0*x3;
     const double x8 = qd_0*x2;
-    T[0] = 0.5*(qd_0*p_0*qd_0 + qd_1*(p_6 + p_0*p_2*p_2)*qd_1 + x7*p_1*x7 + x8*(p_1*x8 + x0*qd_2) + x6*(p_1*x6 + x0*x5) + x4*p_8*x4 + x5*(x0*x6 + (p_9 + x1)*x5) + qd_2*(x0*x8 + (p_10 + x1)*qd_2));
+    T[0] = 0.5*(qd_0*p_0*qd_0 + qd_1*(p_6 + p_0*p_2*p_2)*qd_1 + x7*p_1*x7 + x8*(x0*qd_2 + p_1*x8) + x6*(p_1*x6 + x0*x5) + x4*p_8*x4 + x5*(x0*x6 + (p_9 + x1)*x5) + qd_2*(x0*x8 + (p_10 + x1)*qd_2));
 }
 
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs

@@ -80,6 +80,50 @@ void gyroscope_bias(const double *q, const double *qd, const double *p, double *
     b[0] = x0*(x2*x11 - x3*x12 - 0.0015*x6 - 0.0005*x6) + x1*(x10 + x10);
 }
 
+/* C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control
+ * operations: 56 mul, 26 add, 0 div, 2 call */
+void gyroscope_coriolis(const double *q, const double *qd, const double *p, double *C)
+{
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    (void)p;
+    C[8] = 0;
+    double x1, x0;
+    aggsym_sincos(q_1, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_2, &x3, &x2);
+    const double x4 = 0.002*x1;
+    const double x5 = qd_0*x0;
+    const double x6 = qd_0*x1;
+    const double x7 = x2*x5 + qd_1*x3;
+    const double x8 = qd_1*x2 - x3*x5;
+    const double x9 = qd_2 + x6;
+    const double x10 = 0.0011048*x0*x2;
+    const double x11 = 0.0011048*x0*x3;
+    const double x12 = x4*x8 + x9*x11;
+    const double x13 = x9*x10 - x4*x7;
+    const double x14 = x7*x11 + x8*x10;
+    C[6] = -x14;
+    C[3] = x3*x12 + x2*x13;
+    C[0] = x0*(qd_1*0.0015*x1 + x2*x12 - x3*x13) - x1*(qd_1*0.0015*x0 + x14);
+    const double x15 = 0.002*x5;
+    const double x16 = 0.0011048*x3;
+    const double x17 = 0.0011048*x2;
+    const double x18 = x9*x17 + 0.0011048*x2*x6;
+    const double x19 = x9*x16 + 0.0011048*x3*x6;
+    const double x20 = x15 + x7*x17 - x8*x16;
+    C[7] = x20;
+    C[4] = x2*x19 - x3*x18;
+    C[1] = x1*(x15 + 0.0015*x5 + x20) - x0*(0.002*x6 + 0.0015*x6 + x2*x18 + x3*x19);
+    const double x21 = 0.002*x8 + 0.0011048*x8;
+    const double x22 = 0.002*x7 + 0.0011048*x7;
+    C[5] = x3*x21 - x2*x22;
+    C[2] = x0*(x2*x21 + x3*x22);
+}
+
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
  * operations: 11 mul, 3 add, 0 div, 2 call */
 void gyroscope_gravity(const double *q, const double *p, double *g)

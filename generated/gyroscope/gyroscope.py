@@ -65,6 +65,53 @@ def bias(q, qd, p=None):
     return b
 
 
+def coriolis(q, qd, p=None):
+    """C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    C = np.empty(batch + (3, 3))
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    C[..., 2, 2] = 0
+    x0 = np.cos(q_1)
+    x1 = np.sin(q_1)
+    x2 = np.cos(q_2)
+    x3 = np.sin(q_2)
+    x4 = 0.002*x1
+    x5 = qd_0*x0
+    x6 = qd_0*x1
+    x7 = x2*x5 + qd_1*x3
+    x8 = qd_1*x2 - x3*x5
+    x9 = qd_2 + x6
+    x10 = 0.0011048*x0*x2
+    x11 = 0.0011048*x0*x3
+    x12 = x4*x8 + x9*x11
+    x13 = x9*x10 - x4*x7
+    x14 = x7*x11 + x8*x10
+    C[..., 2, 0] = -x14
+    C[..., 1, 0] = x3*x12 + x2*x13
+    C[..., 0, 0] = x0*(qd_1*0.0015*x1 + x2*x12 - x3*x13) - x1*(qd_1*0.0015*x0 + x14)
+    x15 = 0.002*x5
+    x16 = 0.0011048*x3
+    x17 = 0.0011048*x2
+    x18 = x9*x17 + 0.0011048*x2*x6
+    x19 = x9*x16 + 0.0011048*x3*x6
+    x20 = x15 + x7*x17 - x8*x16
+    C[..., 2, 1] = x20
+    C[..., 1, 1] = x2*x19 - x3*x18
+    C[..., 0, 1] = x1*(x15 + 0.0015*x5 + x20) - x0*(0.002*x6 + 0.0015*x6 + x2*x18 + x3*x19)
+    x21 = 0.002*x8 + 0.0011048*x8
+    x22 = 0.002*x7 + 0.0011048*x7
+    C[..., 1, 2] = x3*x21 - x2*x22
+    C[..., 0, 2] = x0*(x2*x21 + x3*x22)
+    return C
+
+
 def gravity(q, p=None):
     """g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"""
     q = np.asarray(q, dtype=float)

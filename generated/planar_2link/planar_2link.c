@@ -74,6 +74,32 @@ void planar_2link_bias(const double *q, const double *qd, const double *p, doubl
     b[0] = x6 + p_2*(x1*p_1*x4 - x2*(x0*x5*x5 + p_1*x1*x3));
 }
 
+/* C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control
+ * operations: 22 mul, 7 add, 0 div, 1 call */
+void planar_2link_coriolis(const double *q, const double *qd, const double *p, double *C)
+{
+    const double q_1 = q[1];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    C[3] = 0;
+    const double x0 = p_1*0.5*p_3;
+    double x2, x1;
+    aggsym_sincos(q_1, &x2, &x1);
+    const double x3 = qd_0 + qd_1;
+    const double x4 = p_2*qd_0;
+    const double x5 = x2*x4;
+    const double x6 = x1*x4;
+    const double x7 = p_1*p_2*x2;
+    const double x8 = x0 + p_1*p_2*x1;
+    const double x9 = x5*x8 - x6*x7;
+    C[2] = x9;
+    C[0] = x9 + p_2*(x1*x3*x7 - x2*x3*x8);
+    C[1] = p_2*(x2*(p_1*x6 - x0*x3) - x1*p_1*x5);
+}
+
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
  * operations: 17 mul, 5 add, 0 div, 2 call */
 void planar_2link_gravity(const double *q, const double *p, double *g)
@@ -173,7 +199,7 @@ void planar_2link_kinetic_energy(const double *q, const double *qd, const double
     const double x4 = p_2*qd_0;
     const double x5 = x2*x4;
     const double x6 = x1*x4;
-    T[0] = 0.5*(qd_0*p_2*p_2*0.3333333333333333*p_0*qd_0 + x5*p_1*x5 + x6*(p_1*x6 + x0*x3) + x3*(x0*x6 + p_3*p_3*0.3333333333333333*p_1*x3));
+    T[0] = 0.5*(qd_0*p_2*p_2*0.3333333333333333*p_0*qd_0 + x5*p_1*x5 + x6*(x0*x3 + p_1*x6) + x3*(x0*x6 + p_3*p_3*0.3333333333333333*p_1*x3));
 }
 
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs

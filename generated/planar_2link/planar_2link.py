@@ -61,6 +61,36 @@ def bias(q, qd, p=None):
     return b
 
 
+def coriolis(q, qd, p=None):
+    """C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    C = np.empty(batch + (2, 2))
+    q_1 = q[..., 1]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    C[..., 1, 1] = 0
+    x0 = p_1*0.5*p_3
+    x1 = np.cos(q_1)
+    x2 = np.sin(q_1)
+    x3 = qd_0 + qd_1
+    x4 = p_2*qd_0
+    x5 = x2*x4
+    x6 = x1*x4
+    x7 = p_1*p_2*x2
+    x8 = x0 + p_1*p_2*x1
+    x9 = x5*x8 - x6*x7
+    C[..., 1, 0] = x9
+    C[..., 0, 0] = x9 + p_2*(x1*x3*x7 - x2*x3*x8)
+    C[..., 0, 1] = p_2*(x2*(p_1*x6 - x0*x3) - x1*p_1*x5)
+    return C
+
+
 def gravity(q, p=None):
     """g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"""
     q = np.asarray(q, dtype=float)
@@ -175,7 +205,7 @@ def kinetic_energy(q, qd, p=None):
     x4 = p_2*qd_0
     x5 = x2*x4
     x6 = x1*x4
-    T[..., 0] = 0.5*(qd_0*p_2*p_2*0.3333333333333333*p_0*qd_0 + x5*p_1*x5 + x6*(p_1*x6 + x0*x3) + x3*(x0*x6 + p_3*p_3*0.3333333333333333*p_1*x3))
+    T[..., 0] = 0.5*(qd_0*p_2*p_2*0.3333333333333333*p_0*qd_0 + x5*p_1*x5 + x6*(x0*x3 + p_1*x6) + x3*(x0*x6 + p_3*p_3*0.3333333333333333*p_1*x3))
     return T[..., 0][()]
 
 

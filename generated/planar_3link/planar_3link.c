@@ -109,6 +109,71 @@ void planar_3link_bias(const double *q, const double *qd, const double *p, doubl
     b[0] = x18 + p_3*(x3*(x4*x15 - x5*x14 - x0*x10 - p_1*x7) + x2*(x17 + p_1*x8));
 }
 
+/* C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control
+ * operations: 73 mul, 40 add, 0 div, 2 call */
+void planar_3link_coriolis(const double *q, const double *qd, const double *p, double *C)
+{
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_5 = p[5];
+    C[8] = 0;
+    const double x0 = p_1*0.5*p_4;
+    const double x1 = p_2*0.5*p_5;
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = qd_0 + qd_1;
+    const double x7 = qd_2 + x6;
+    const double x8 = p_3*qd_0;
+    const double x9 = x3*x8;
+    const double x10 = x2*x8;
+    const double x11 = x10 + p_4*x6;
+    const double x12 = x4*x9;
+    const double x13 = x12 + x5*x11;
+    const double x14 = x5*x9;
+    const double x15 = x4*x11 - x14;
+    const double x16 = p_3*x3;
+    const double x17 = p_3*x2;
+    const double x18 = p_4 + x17;
+    const double x19 = p_1*x16;
+    const double x20 = x0 + p_1*x17;
+    const double x21 = p_2*(x4*x16 + x5*x18);
+    const double x22 = x1 + p_2*(x4*x18 - x5*x16);
+    const double x23 = x7*x22;
+    const double x24 = x7*x21;
+    const double x25 = x13*x22 - x15*x21;
+    C[6] = x25;
+    const double x26 = x4*x24 - x5*x23;
+    const double x27 = x9*x20 - x10*x19 + x25 + p_4*x26;
+    C[3] = x27;
+    C[0] = x27 + p_3*(x2*(x6*x19 + x26) - x3*(x6*x20 + x4*x23 + x5*x24));
+    const double x28 = x12 + x5*x10;
+    const double x29 = p_2*p_4*x5;
+    const double x30 = x1 + p_2*p_4*x4;
+    const double x31 = p_2*(x4*x10 - x14) - x7*x30;
+    const double x32 = x7*x29 - p_2*x28;
+    const double x33 = x13*x30 - x15*x29 - x1*x28;
+    C[7] = x33;
+    const double x34 = x5*x31 + x4*x32;
+    const double x35 = x33 + p_4*x34;
+    C[4] = x35;
+    C[1] = x35 + p_3*(x3*(p_1*x10 - x0*x6 + x4*x31 - x5*x32) + x2*(x34 - p_1*x9));
+    const double x36 = p_2*x13;
+    const double x37 = p_2*x15 - x1*x7;
+    const double x38 = x5*x37 - x4*x36;
+    const double x39 = p_4*x38;
+    C[5] = x39;
+    C[2] = x39 + p_3*(x3*(x4*x37 + x5*x36) + x2*x38);
+}
+
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
  * operations: 31 mul, 13 add, 0 div, 3 call */
 void planar_3link_gravity(const double *q, const double *p, double *g)
@@ -268,7 +333,7 @@ void planar_3link_kinetic_energy(const double *q, const double *qd, const double
     const double x11 = x10 + p_4*x6;
     const double x12 = x4*x9 + x5*x11;
     const double x13 = x4*x11 - x5*x9;
-    T[0] = 0.5*(qd_0*p_3*p_3*0.3333333333333333*p_0*qd_0 + x9*p_1*x9 + x10*(p_1*x10 + x0*x6) + x6*(x0*x10 + p_4*p_4*0.3333333333333333*p_1*x6) + x12*p_2*x12 + x13*(p_2*x13 + x1*x7) + x7*(x1*x13 + p_5*p_5*0.3333333333333333*p_2*x7));
+    T[0] = 0.5*(qd_0*p_3*p_3*0.3333333333333333*p_0*qd_0 + x9*p_1*x9 + x10*(x0*x6 + p_1*x10) + x6*(x0*x10 + p_4*p_4*0.3333333333333333*p_1*x6) + x12*p_2*x12 + x13*(x1*x7 + p_2*x13) + x7*(x1*x13 + p_5*p_5*0.3333333333333333*p_2*x7));
 }
 
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs

@@ -97,6 +97,75 @@ def bias(q, qd, p=None):
     return b
 
 
+def coriolis(q, qd, p=None):
+    """C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    C = np.empty(batch + (3, 3))
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    p_5 = p[..., 5]
+    C[..., 2, 2] = 0
+    x0 = p_1*0.5*p_4
+    x1 = p_2*0.5*p_5
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = np.cos(q_2)
+    x5 = np.sin(q_2)
+    x6 = qd_0 + qd_1
+    x7 = qd_2 + x6
+    x8 = p_3*qd_0
+    x9 = x3*x8
+    x10 = x2*x8
+    x11 = x10 + p_4*x6
+    x12 = x4*x9
+    x13 = x12 + x5*x11
+    x14 = x5*x9
+    x15 = x4*x11 - x14
+    x16 = p_3*x3
+    x17 = p_3*x2
+    x18 = p_4 + x17
+    x19 = p_1*x16
+    x20 = x0 + p_1*x17
+    x21 = p_2*(x4*x16 + x5*x18)
+    x22 = x1 + p_2*(x4*x18 - x5*x16)
+    x23 = x7*x22
+    x24 = x7*x21
+    x25 = x13*x22 - x15*x21
+    C[..., 2, 0] = x25
+    x26 = x4*x24 - x5*x23
+    x27 = x9*x20 - x10*x19 + x25 + p_4*x26
+    C[..., 1, 0] = x27
+    C[..., 0, 0] = x27 + p_3*(x2*(x6*x19 + x26) - x3*(x6*x20 + x4*x23 + x5*x24))
+    x28 = x12 + x5*x10
+    x29 = p_2*p_4*x5
+    x30 = x1 + p_2*p_4*x4
+    x31 = p_2*(x4*x10 - x14) - x7*x30
+    x32 = x7*x29 - p_2*x28
+    x33 = x13*x30 - x15*x29 - x1*x28
+    C[..., 2, 1] = x33
+    x34 = x5*x31 + x4*x32
+    x35 = x33 + p_4*x34
+    C[..., 1, 1] = x35
+    C[..., 0, 1] = x35 + p_3*(x3*(p_1*x10 - x0*x6 + x4*x31 - x5*x32) + x2*(x34 - p_1*x9))
+    x36 = p_2*x13
+    x37 = p_2*x15 - x1*x7
+    x38 = x5*x37 - x4*x36
+    x39 = p_4*x38
+    C[..., 1, 2] = x39
+    C[..., 0, 2] = x39 + p_3*(x3*(x4*x37 + x5*x36) + x2*x38)
+    return C
+
+
 def gravity(q, p=None):
     """g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"""
     q = np.asarray(q, dtype=float)
@@ -271,7 +340,7 @@ def kinetic_energy(q, qd, p=None):
     x11 = x10 + p_4*x6
     x12 = x4*x9 + x5*x11
     x13 = x4*x11 - x5*x9
-    T[..., 0] = 0.5*(qd_0*p_3*p_3*0.3333333333333333*p_0*qd_0 + x9*p_1*x9 + x10*(p_1*x10 + x0*x6) + x6*(x0*x10 + p_4*p_4*0.3333333333333333*p_1*x6) + x12*p_2*x12 + x13*(p_2*x13 + x1*x7) + x7*(x1*x13 + p_5*p_5*0.3333333333333333*p_2*x7))
+    T[..., 0] = 0.5*(qd_0*p_3*p_3*0.3333333333333333*p_0*qd_0 + x9*p_1*x9 + x10*(x0*x6 + p_1*x10) + x6*(x0*x10 + p_4*p_4*0.3333333333333333*p_1*x6) + x12*p_2*x12 + x13*(x1*x7 + p_2*x13) + x7*(x1*x13 + p_5*p_5*0.3333333333333333*p_2*x7))
     return T[..., 0][()]
 
 

@@ -33,6 +33,8 @@ extern "C" {
 void spacecraft_inertia(const double *q, const double *p, double *A);
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too) */
 void spacecraft_bias(const double *q, const double *qd, const double *p, double *b);
+/* C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control */
+void spacecraft_coriolis(const double *q, const double *qd, const double *p, double *C);
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest) */
 void spacecraft_gravity(const double *q, const double *p, double *g);
 /* d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27) */
