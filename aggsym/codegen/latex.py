@@ -29,7 +29,7 @@ def expanded_terms(prog, outputs) -> int:
     products (and quotients) multiply them; sin, cos and inputs count one.  Deterministic and linear in the
     program, so the choice between closed and intermediate forms does not depend on the machine (the double
     pendulum gives 12, Tokad's three-link arm 76, a general 3-D 4-link arm 4346)."""
-    from .program import ADD, DIV, INPUT, MUL, NEG, SUB, Node
+    from .program import ADD, DIV, MUL, NEG, SUB, Node
 
     count: dict[int, int] = {}
 
