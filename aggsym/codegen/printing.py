@@ -22,7 +22,7 @@ from fractions import Fraction
 from sympy.printing.c import C99CodePrinter
 from sympy.printing.numpy import NumPyPrinter as _SympyNumPyPrinter
 
-from .program import ADD, COS, DIV, FUNCTIONS, INPUT, MUL, NEG, SIN, SQRT, SUB, Node
+from .program import ADD, COS, DIV, FUNCTIONS, INPUT, MUL, NEG, SIN, SQRT, SUB, Node, is_zero, normalize_const
 
 sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))
 
@@ -168,7 +168,7 @@ class Converter:
         if code in FUNCTIONS:
             return Call({SIN: "sin", COS: "cos", SQRT: "sqrt"}[code], self(entry[1], False))
         if code in (ADD, SUB):
-            return LinComb(self._terms(x, top, 1))
+            return LinComb(_merge_constants(self._terms(x, top, 1)))
         if code == MUL:
             sign, factors = self._factors(x, top)
             return Prod(sign, factors)
@@ -204,6 +204,23 @@ class Converter:
                 sa, fa = self._factors(entry[1], False)
                 return -sa, fa
         return 1, [self(x, False)]
+
+
+def _merge_constants(terms: list) -> list:
+    """One constant term in place of several (``c1 + x - c2`` -> ``x + (c1 - c2)`` at the first constant's place):
+    the program folds constants only when they meet in one operation, and a flattened chain of additions can hold
+    several, e.g. the parameters of bodies lumped together."""
+    constants = [k for k, (_, term) in enumerate(terms) if isinstance(term, Num)]
+    if len(constants) < 2:
+        return terms
+    total = normalize_const(sum(terms[k][0] * terms[k][1].value for k in constants))
+    out = []
+    for k, term in enumerate(terms):
+        if k == constants[0] and not is_zero(total):
+            out.append((1, Num(total)) if total > 0 else (-1, Num(normalize_const(-total))))
+        elif k not in constants:
+            out.append(term)
+    return out or [(1, Num(0))]
 
 
 def _float_literal(value: float) -> str:

@@ -33,7 +33,7 @@ static void aggsym_sincos(double x, double *s, double *c)
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 91 mul, 84 add, 0 div, 3 call */
+ * operations: 91 mul, 79 add, 0 div, 3 call */
 void flywheel_on_body_inertia(const double *q, const double *t, const double *p, double *A)
 {
     const double q_1 = q[1];
@@ -68,11 +68,11 @@ void flywheel_on_body_inertia(const double *q, const double *t, const double *p,
     const double x24 = 0.25*x15;
     const double x25 = 0.09809999999999999 + 2*(x22 + x23 - x24);
     const double x26 = 0.0075 + x5*x19 + x6*x20 + 0.9512512425641976*x21 + 0.25*x14 - 0.02*x15;
-    const double x27 = 0.6499999999999999 + x25 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 - x22 - x22 - 0.0037500000000000007;
-    const double x28 = 0.01 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14 - 0.0015;
-    const double x29 = 0.015 + 0.018750000000000003 + x5*x16 + x6*x17 + 0.9512512425641976*x18 + 0.25*x13 - 0.05*x15;
-    const double x30 = 0.7005 + x25 + x3*x19 + x4*x20 - 0.2548870022441787*x21 - x23 - x23 - 0.0006000000000000001;
-    const double x31 = 0.15050000000000002 + x25 + x24 + x5*(0.0100075*x5 + 0.000509*x6 - 4.280630591538889e-06) + x6*(2.8537537276925926e-06 + 0.000509*x5 + 0.012015*x6) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x6 - 4.5e-06*x5) + x24 - 0.09375;
+    const double x27 = 0.6462499999999999 + x25 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 - x22 - x22;
+    const double x28 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14;
+    const double x29 = 0.03375 + x5*x16 + x6*x17 + 0.9512512425641976*x18 + 0.25*x13 - 0.05*x15;
+    const double x30 = 0.6999 + x25 + x3*x19 + x4*x20 - 0.2548870022441787*x21 - x23 - x23;
+    const double x31 = 0.05675000000000002 + x25 + x24 + x5*(0.0100075*x5 + 0.000509*x6 - 4.280630591538889e-06) + x6*(2.8537537276925926e-06 + 0.000509*x5 + 0.012015*x6) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x6 - 4.5e-06*x5) + x24;
     A[8] = x31;
     const double x32 = x11*x29 - x12*x26 + x8*x31;
     A[2] = x32;

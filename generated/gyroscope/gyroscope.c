@@ -33,7 +33,7 @@ static void aggsym_sincos(double x, double *s, double *c)
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 3 mul, 2 add, 0 div, 1 call */
+ * operations: 3 mul, 1 add, 0 div, 1 call */
 void gyroscope_inertia(const double *q, const double *p, double *A)
 {
     const double q_1 = q[1];
@@ -46,7 +46,7 @@ void gyroscope_inertia(const double *q, const double *p, double *A)
     A[8] = 0.002;
     double x0, x0_cos;
     aggsym_sincos(q_1, &x0, &x0_cos);
-    A[0] = 0.004 + 0.0026048 + 0.0008952000000000001*x0*x0;
+    A[0] = 0.0066048 + 0.0008952000000000001*x0*x0;
     const double x1 = 0.002*x0;
     A[2] = x1;
     A[6] = x1;
@@ -318,7 +318,7 @@ void gyroscope_joint_wrenches(const double *q, const double *qd, const double *q
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 44 mul, 25 add, 1 div, 3 call */
+ * operations: 44 mul, 24 add, 1 div, 3 call */
 void gyroscope_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_0 = q[0];
@@ -347,14 +347,14 @@ void gyroscope_forward_dynamics(const double *q, const double *qd, const double 
     const double x13 = 0.0011048*(qd_2*x10 - x4*x8) + 0.0008952000000000001*x10*x11;
     const double x14 = 0.0011048*(x5*x8 - qd_2*x9) - 0.0008952000000000001*x9*x11;
     const double x15 = tau_2 - x12;
-    const double x16 = 1/(0.004 + 0.0026048 - 0.0011048*x3*x3)*(tau_0 - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(x12 + x12 + x15) + 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1));
+    const double x16 = 1/(0.0066048 - 0.0011048*x3*x3)*(tau_0 - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(x12 + x12 + x15) + 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1));
     qdd[0] = x16;
     qdd[1] = 322.0819376449369*(tau_1 - x5*x13 - x4*x14 + 0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1));
     qdd[2] = 500.0*x15 - x3*x16;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 4 mul, 3 add, 1 div, 1 call */
+ * operations: 4 mul, 2 add, 1 div, 1 call */
 void gyroscope_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_1 = q[1];
@@ -366,7 +366,7 @@ void gyroscope_inertia_inverse(const double *q, const double *p, double *Ainv)
     Ainv[7] = 0;
     double x0, x0_cos;
     aggsym_sincos(q_1, &x0, &x0_cos);
-    const double x1 = 1/(0.004 + 0.0026048 - 0.0011048*x0*x0);
+    const double x1 = 1/(0.0066048 - 0.0011048*x0*x0);
     Ainv[0] = x1;
     const double x2 = x0*x1;
     const double x3 = -x2;
@@ -376,7 +376,7 @@ void gyroscope_inertia_inverse(const double *q, const double *p, double *Ainv)
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 2 mul, 2 add, 0 div, 1 call */
+ * operations: 2 mul, 1 add, 0 div, 1 call */
 void gyroscope_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_1 = q[1];
@@ -388,5 +388,5 @@ void gyroscope_transvective_factors(const double *q, const double *p, double *ta
     double x0, x0_cos;
     aggsym_sincos(q_1, &x0, &x0_cos);
     targs[1] = x0;
-    diag[0] = 0.004 + 0.0026048 - 0.0011048*x0*x0;
+    diag[0] = 0.0066048 - 0.0011048*x0*x0;
 }

@@ -33,7 +33,7 @@ static void aggsym_sincos(double x, double *s, double *c)
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 82 mul, 73 add, 0 div, 4 call */
+ * operations: 82 mul, 67 add, 0 div, 4 call */
 void manipulator6_inertia(const double *q, const double *p, double *A)
 {
     const double q_1 = q[1];
@@ -59,9 +59,9 @@ void manipulator6_inertia(const double *q, const double *p, double *A)
     const double x9 = 0.012*x7;
     const double x10 = 0.0005799999999999998*x7*x7;
     const double x11 = 0.0005799999999999998*x6*x7;
-    const double x12 = 0.00435 + 0.0021 - x10;
+    const double x12 = 0.006449999999999999 - x10;
     A[21] = x12;
-    const double x13 = 0.00435 + 0.00152 + x10;
+    const double x13 = 0.00587 + x10;
     const double x14 = 0.061*x4 - x5*x8;
     const double x15 = 0.061*x5 + x4*x8;
     const double x16 = x5*x11;
@@ -75,10 +75,10 @@ void manipulator6_inertia(const double *q, const double *p, double *A)
     const double x20 = 0.4*x14;
     const double x21 = 0.4160000000000001 + 0.8*x14;
     const double x22 = x16 - 0.0048000000000000004*x7;
-    const double x23 = 0.8999999999999999 + 1.04 + x14;
+    const double x23 = 1.94 + x14;
     const double x24 = 0.05 + x15;
     const double x25 = 0.2225 + x12 + x21;
-    const double x26 = 0.010500000000000015 + x21 + 0.00358 - x19 - x20 - x20 - 0.4160000000000001;
+    const double x26 = -0.40192000000000005 + x21 - x19 - x20 - x20;
     A[8] = x26;
     A[13] = x26;
     A[14] = x26;
@@ -94,7 +94,7 @@ void manipulator6_inertia(const double *q, const double *p, double *A)
     const double x36 = 1.539 + 0.9*x23;
     const double x37 = x3*x27 + x2*x22 - 0.45*(x3*x24 + x2*x9);
     const double x38 = 0.44000000000000006 + x25 + x33 + x36;
-    A[7] = 0.02 + x36 + x26 - x35 - x35 - 1.539;
+    A[7] = -1.519 + x36 + x26 - x35 - x35;
     const double x39 = x1*(x2*x27 - x3*x22 - 0.45*(x2*x24 - x3*x9));
     const double x40 = x39 + x0*(0.001 + x37);
     A[1] = x40;
@@ -1080,7 +1080,7 @@ void manipulator6_joint_wrenches(const double *q, const double *qd, const double
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 299 mul, 249 add, 3 div, 6 call */
+ * operations: 299 mul, 243 add, 3 div, 6 call */
 void manipulator6_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_0 = q[0];
@@ -1185,16 +1185,16 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
     const double x80 = 0.09113924050632916*x12;
     const double x81 = 0.0007799999999999999*x12;
     const double x82 = 0.0007799999999999999*x13;
-    const double x83 = 1.5 + 1.008860759493671 + x80;
-    const double x84 = 1/(0.00435 + 0.0021 - x81);
+    const double x83 = 2.508860759493671 + x80;
+    const double x84 = 1/(0.006449999999999999 - x81);
     const double x85 = x14*x84;
     const double x86 = 0.061*x84;
     const double x87 = x82*x84;
     const double x88 = x14*x86;
     const double x89 = x15 - x14*x87;
-    const double x90 = 1.5 + 1.1 - x80 - 0.003721*x84;
+    const double x90 = 2.6 - x80 - 0.003721*x84;
     const double x91 = 0.061*x87;
-    const double x92 = 0.00435 + 0.00132 + x81 - x82*x87;
+    const double x92 = 0.00567 + x81 - x82*x87;
     const double x93 = x6*0.09113924050632916*x13;
     const double x94 = x90 + x16*(2.6 - x14*x85 - x90) + x17*(x88 + x88);
     const double x95 = 0.002 - x92;
@@ -1206,7 +1206,7 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
     const double x101 = 0.4*x97;
     const double x102 = 0.05 + 0.061*x7;
     const double x103 = x17*x95 - 0.0244*x7 - 0.009;
-    const double x104 = 1/(0.010500000000000015 + 0.002 - x96);
+    const double x104 = 1/(0.012500000000000015 - x96);
     const double x105 = x102*x104;
     const double x106 = x97*x104;
     const double x107 = x101*x104;
@@ -1234,7 +1234,7 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
     const double x129 = x114 - x128;
     const double x130 = x112 - x128;
     const double x131 = 0.45*(x115 - x127 - 0.45*(x110 - x18*x120 + x19*x119)) + x117 - x18*x123 + x19*x122 - 0.45*(x111 + x127);
-    const double x132 = 0.44000000000000006 + 0.45*(x129 + 0.45*(x113 - x121)) + x116 + x124 + 0.45*x129 - 5e-05;
+    const double x132 = 0.43995000000000006 + 0.45*(x129 + 0.45*(x113 - x121)) + x116 + x124 + 0.45*x129;
     const double x133 = tau_5 - x64;
     const double x134 = 0.00132*x50 - 0.00052*x51 + x64 + x133;
     const double x135 = tau_4 - x67 - x79;
@@ -1277,7 +1277,7 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 172 mul, 137 add, 3 div, 4 call */
+ * operations: 172 mul, 131 add, 3 div, 4 call */
 void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_1 = q[1];
@@ -1304,16 +1304,16 @@ void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv
     const double x16 = 0.09113924050632916*x8;
     const double x17 = 0.0007799999999999999*x8;
     const double x18 = 0.0007799999999999999*x9;
-    const double x19 = 1.5 + 1.008860759493671 + x16;
-    const double x20 = 1/(0.00435 + 0.0021 - x17);
+    const double x19 = 2.508860759493671 + x16;
+    const double x20 = 1/(0.006449999999999999 - x17);
     const double x21 = x10*x20;
     const double x22 = 0.061*x20;
     const double x23 = x18*x20;
     const double x24 = x10*x22;
     const double x25 = 0.012*x7 - x10*x23;
-    const double x26 = 1.5 + 1.1 - x16 - 0.003721*x20;
+    const double x26 = 2.6 - x16 - 0.003721*x20;
     const double x27 = 0.061*x23;
-    const double x28 = 0.00435 + 0.00132 + x17 - x18*x23;
+    const double x28 = 0.00567 + x17 - x18*x23;
     const double x29 = x4*0.09113924050632916*x9;
     const double x30 = x26 + x11*(2.6 - x10*x21 - x26) + x12*(x24 + x24);
     const double x31 = 0.002 - x28;
@@ -1325,7 +1325,7 @@ void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv
     const double x37 = 0.4*x33;
     const double x38 = 0.05 + 0.061*x5;
     const double x39 = x12*x31 - 0.0244*x5 - 0.009;
-    const double x40 = 1/(0.010500000000000015 + 0.002 - x32);
+    const double x40 = 1/(0.012500000000000015 - x32);
     const double x41 = x38*x40;
     const double x42 = x33*x40;
     const double x43 = x37*x40;
@@ -1353,7 +1353,7 @@ void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv
     const double x65 = x50 - x64;
     const double x66 = x48 - x64;
     const double x67 = 0.45*(x51 - x63 - 0.45*(x46 - x13*x56 + x14*x55)) + x53 - x13*x59 + x14*x58 - 0.45*(x47 + x63);
-    const double x68 = 0.44000000000000006 + 0.45*(x65 + 0.45*(x49 - x57)) + x52 + x60 + 0.45*x65 - 5e-05;
+    const double x68 = 0.43995000000000006 + 0.45*(x65 + 0.45*(x49 - x57)) + x52 + x60 + 0.45*x65;
     const double x69 = 1/(0.1 + x68 + x1*x1*(0.44000000000000006 + x54 - x60 - 0.45*x66 - 0.45*(x66 - 0.45*(x45 + x57)) - x68) + x0*x1*(x67 + x67));
     Ainv[0] = x69;
     const double x70 = x4*x6;
@@ -1429,7 +1429,7 @@ void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 133 mul, 110 add, 2 div, 4 call */
+ * operations: 133 mul, 104 add, 2 div, 4 call */
 void manipulator6_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_1 = q[1];
@@ -1467,8 +1467,8 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x16 = 0.09113924050632916*x8;
     const double x17 = 0.0007799999999999999*x8;
     const double x18 = 0.0007799999999999999*x9;
-    const double x19 = 1.5 + 1.008860759493671 + x16;
-    const double x20 = 0.00435 + 0.0021 - x17;
+    const double x19 = 2.508860759493671 + x16;
+    const double x20 = 0.006449999999999999 - x17;
     diag[3] = x20;
     const double x21 = 1/x20;
     const double x22 = x10*x21;
@@ -1476,9 +1476,9 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x24 = x18*x21;
     const double x25 = x10*x23;
     const double x26 = 0.012*x7 - x10*x24;
-    const double x27 = 1.5 + 1.1 - x16 - 0.003721*x21;
+    const double x27 = 2.6 - x16 - 0.003721*x21;
     const double x28 = 0.061*x24;
-    const double x29 = 0.00435 + 0.00132 + x17 - x18*x24;
+    const double x29 = 0.00567 + x17 - x18*x24;
     const double x30 = x4*0.09113924050632916*x9;
     const double x31 = x27 + x11*(2.6 - x10*x22 - x27) + x12*(x25 + x25);
     const double x32 = 0.002 - x29;
@@ -1489,7 +1489,7 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x37 = x28 + x12*x26 - x11*x28 - x35;
     const double x38 = 0.4*x34;
     const double x39 = 0.05 + 0.061*x5;
-    const double x40 = 0.010500000000000015 + 0.002 - x33;
+    const double x40 = 0.012500000000000015 - x33;
     diag[2] = x40;
     const double x41 = x12*x32 - 0.0244*x5 - 0.009;
     const double x42 = 1/x40;
@@ -1520,7 +1520,7 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x67 = x52 - x66;
     const double x68 = x50 - x66;
     const double x69 = 0.45*(x53 - x65 - 0.45*(x48 - x13*x58 + x14*x57)) + x55 - x13*x61 + x14*x60 - 0.45*(x49 + x65);
-    const double x70 = 0.44000000000000006 + 0.45*(x67 + 0.45*(x51 - x59)) + x54 + x62 + 0.45*x67 - 5e-05;
+    const double x70 = 0.43995000000000006 + 0.45*(x67 + 0.45*(x51 - x59)) + x54 + x62 + 0.45*x67;
     diag[0] = 0.1 + x70 + x1*x1*(0.44000000000000006 + x56 - x62 - 0.45*x68 - 0.45*(x68 - 0.45*(x47 + x59)) - x70) + x0*x1*(x69 + x69);
     const double x71 = x4*x6;
     targs[10] = x0*(x2*x7 + x3*x71) + x1*(x2*x71 - x3*x7);

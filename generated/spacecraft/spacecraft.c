@@ -33,7 +33,7 @@ static void aggsym_sincos(double x, double *s, double *c)
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 297 mul, 226 add, 0 div, 9 call */
+ * operations: 297 mul, 210 add, 0 div, 9 call */
 void spacecraft_inertia(const double *q, const double *p, double *A)
 {
     const double q_3 = q[3];
@@ -122,11 +122,11 @@ void spacecraft_inertia(const double *q, const double *p, double *A)
     const double x41 = 0.96*x36;
     const double x42 = 2.5600000000000005 + 1.92*x36;
     const double x43 = 0.45999999999999996*x36*x37 + 0.96*x37;
-    const double x44 = 3.2 + 3.2 + x38;
-    const double x45 = 0.05 + x42 + 0.02 + x40 - x41 - x41 - 2.5600000000000005;
-    const double x46 = 1.7300000000000002 + 0.48 - x40 + x42;
+    const double x44 = 6.4 + x38;
+    const double x45 = -2.4900000000000007 + x42 + x40 - x41 - x41;
+    const double x46 = 2.21 - x40 + x42;
     A[130] = x46;
-    const double x47 = 1.7300000000000002 + 0.48 + x42;
+    const double x47 = 2.21 + x42;
     const double x48 = x35*x44;
     const double x49 = x34*x44;
     const double x50 = x35*x43;
@@ -140,8 +140,8 @@ void spacecraft_inertia(const double *q, const double *p, double *A)
     const double x56 = 4.32 + 1.2*x49;
     const double x57 = x51 + 0.72*x37;
     const double x58 = x34*x35*x53 + 0.6*x48;
-    const double x59 = 3.5999999999999996 + 7.199999999999999 + x49;
-    const double x60 = 0.1 + x56 + x45 + x54 - x55 - x55 - 4.32;
+    const double x59 = 10.799999999999999 + x49;
+    const double x60 = -4.220000000000001 + x56 + x45 + x54 - x55 - x55;
     A[117] = x60;
     const double x61 = 1.48 + x46 + x56;
     const double x62 = 1.48 + x47 - x54 + x56;
@@ -169,15 +169,15 @@ void spacecraft_inertia(const double *q, const double *p, double *A)
     const double x84 = x17*x17*x83;
     const double x85 = 1.2*x82;
     const double x86 = 36.0 + 2.4*x82;
-    const double x87 = 16 + 24 + x59 + 15*x19;
+    const double x87 = 40 + x59 + 15*x19;
     const double x88 = x76 - x81;
-    const double x89 = 40 + 7.199999999999999 + x68 + 30.0 + x82;
-    const double x90 = 302.08 + x74 + x60 - x59 - x59 - 24 + 15 - x78 + x86;
+    const double x89 = 77.2 + x68 + x82;
+    const double x90 = 293.08 + x74 + x60 - x59 - x59 - x78 + x86;
     const double x91 = 4.16 - x75 + x17*x79;
-    const double x92 = x69 - 0.3*x59 - x68 - 7.199999999999999 - 2.8 - x16*x79 - 18*x19;
-    const double x93 = 262.32 + x61 - x72 + x74 + 15 - x84 + x86;
+    const double x92 = x69 - 0.3*x59 - x68 - 10 - x16*x79 - 18*x19;
+    const double x93 = 277.32 + x61 - x72 + x74 - x84 + x86;
     const double x94 = 1.9 + x50 - x63*x71 + x64*x70 - 0.3*x65 + x16*x17*x83 + 1.2*x81;
-    const double x95 = 200.4 + x74 + x62 + x72 - x73 - x73 - 2.16 + x86 + x80 + x84 - x85 - x85 - 36.0;
+    const double x95 = 162.24 + x74 + x62 + x72 - x73 - x73 + x86 + x80 + x84 - x85 - x85;
     A[65] = x95;
     const double x96 = x3*x88 + x11*x89;
     const double x97 = x11*x87;
@@ -2319,7 +2319,7 @@ void spacecraft_joint_wrenches(const double *q, const double *qd, const double *
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 773 mul, 686 add, 10 div, 9 call */
+ * operations: 773 mul, 683 add, 10 div, 9 call */
 void spacecraft_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_3 = q[3];
@@ -2508,17 +2508,17 @@ void spacecraft_forward_dynamics(const double *q, const double *qd, const double
     const double x152 = 3*x39;
     const double x153 = 1 + x151;
     const double x154 = 2.4000000000000004*x39;
-    const double x155 = 8 + 4 - x151;
+    const double x155 = 12 - x151;
     const double x156 = 8 + x153;
     const double x157 = 3.2 + 0.8*x153;
     const double x158 = -3.2 - x41;
     const double x159 = 1.7300000000000002 + 0.6400000000000001*x153;
-    const double x160 = 1/(1.7300000000000002 + 0.8*x41 + 0.48 - x40 + 0.96*x36);
+    const double x160 = 1/(2.21 + 0.8*x41 - x40 + 0.96*x36);
     const double x161 = x158*x160;
     const double x162 = x42*x160;
     const double x163 = 12 - x158*x161;
     const double x164 = 1.2*x37 + x158*x162;
-    const double x165 = 0.05 + 0.02 + x40 - x42*x162;
+    const double x165 = 0.07 + x40 - x42*x162;
     const double x166 = x35*x152;
     const double x167 = x34*x152;
     const double x168 = x34*x157;
@@ -2849,7 +2849,7 @@ void spacecraft_forward_dynamics(const double *q, const double *qd, const double
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 965 mul, 820 add, 10 div, 9 call */
+ * operations: 965 mul, 817 add, 10 div, 9 call */
 void spacecraft_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_3 = q[3];
@@ -2925,17 +2925,17 @@ void spacecraft_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double x60 = 3*x39;
     const double x61 = 1 + x59;
     const double x62 = 2.4000000000000004*x39;
-    const double x63 = 8 + 4 - x59;
+    const double x63 = 12 - x59;
     const double x64 = 8 + x61;
     const double x65 = 3.2 + 0.8*x61;
     const double x66 = -3.2 - x41;
     const double x67 = 1.7300000000000002 + 0.6400000000000001*x61;
-    const double x68 = 1/(1.7300000000000002 + 0.8*x41 + 0.48 - x40 + 0.96*x36);
+    const double x68 = 1/(2.21 + 0.8*x41 - x40 + 0.96*x36);
     const double x69 = x66*x68;
     const double x70 = x42*x68;
     const double x71 = 12 - x66*x69;
     const double x72 = 1.2*x37 + x66*x70;
-    const double x73 = 0.05 + 0.02 + x40 - x42*x70;
+    const double x73 = 0.07 + x40 - x42*x70;
     const double x74 = x35*x60;
     const double x75 = x34*x60;
     const double x76 = x34*x65;
@@ -3557,7 +3557,7 @@ void spacecraft_inertia_inverse(const double *q, const double *p, double *Ainv)
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 531 mul, 439 add, 9 div, 9 call */
+ * operations: 531 mul, 436 add, 9 div, 9 call */
 void spacecraft_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_3 = q[3];
@@ -3643,11 +3643,11 @@ void spacecraft_transvective_factors(const double *q, const double *p, double *t
     const double x57 = 3*x39;
     const double x58 = 1 + x56;
     const double x59 = 2.4000000000000004*x39;
-    const double x60 = 8 + 4 - x56;
+    const double x60 = 12 - x56;
     const double x61 = 8 + x58;
     const double x62 = 3.2 + 0.8*x58;
     const double x63 = -3.2 - x41;
-    const double x64 = 1.7300000000000002 + 0.8*x41 + 0.48 - x40 + 0.96*x36;
+    const double x64 = 2.21 + 0.8*x41 - x40 + 0.96*x36;
     diag[10] = x64;
     const double x65 = 1.7300000000000002 + 0.6400000000000001*x58;
     const double x66 = 1/x64;
@@ -3655,7 +3655,7 @@ void spacecraft_transvective_factors(const double *q, const double *p, double *t
     const double x68 = x42*x66;
     const double x69 = 12 - x63*x67;
     const double x70 = 1.2*x37 + x63*x68;
-    const double x71 = 0.05 + 0.02 + x40 - x42*x68;
+    const double x71 = 0.07 + x40 - x42*x68;
     const double x72 = x35*x57;
     const double x73 = x34*x57;
     const double x74 = x34*x62;

@@ -33,7 +33,7 @@ static void aggsym_sincos(double x, double *s, double *c)
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 2313 mul, 1696 add, 0 div, 39 call */
+ * operations: 2313 mul, 1609 add, 0 div, 39 call */
 void test_bench_inertia(const double *q, const double *p, double *A)
 {
     const double q_3 = q[3];
@@ -1704,10 +1704,10 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x84 = 0.2*x83;
     const double x85 = 2*x83*x83;
     const double x86 = 0.4*x83 + x85;
-    const double x87 = 0.44999999999999996 + 0.2 + 2*x83;
-    const double x88 = 0.08750000000000001 + 0.030000000000000006 + x86;
+    const double x87 = 0.6499999999999999 + 2*x83;
+    const double x88 = 0.11750000000000002 + x86;
     A[2254] = x88;
-    const double x89 = 0.004 + x86 + 0.002 - x84 - x84 - x85;
+    const double x89 = 0.006 + x86 - x84 - x84 - x85;
     const double x90 = x82*x87;
     const double x91 = x81*x87;
     const double x92 = x88 - x89;
@@ -1715,9 +1715,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x94 = 0.4*x91;
     const double x95 = 0.8000000000000002 + 0.8*x91;
     const double x96 = x81*x82*x92 + 0.4*x90;
-    const double x97 = 0.8 + 2.0 + x91;
+    const double x97 = 2.8 + x91;
     const double x98 = 0.19000000000000003 + x88 - x93 + x95;
-    const double x99 = 0.005 + x95 + x89 + x93 - x94 - x94 - 0.8000000000000002;
+    const double x99 = -0.7950000000000002 + x95 + x89 + x93 - x94 - x94;
     const double x100 = 0.19000000000000003 + x88 + x95;
     A[2205] = x100;
     const double x101 = x80*x80;
@@ -1761,9 +1761,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x133 = 2.25 + x125;
     const double x134 = x127 + 0.5*x115;
     const double x135 = x123*x130 + x124*x129 - x116 - 0.5*x126;
-    const double x136 = 1.5 + 4.5 + x125;
+    const double x136 = 6 + x125;
     const double x137 = 0.425 + x122 + x133;
-    const double x138 = 0.01 + x133 + x112 - x131 - x132 - x132 - 2.25;
+    const double x138 = -2.24 + x133 + x112 - x131 - x132 - x132;
     const double x139 = 0.425 + x121 + x131 + x133;
     A[2058] = x139;
     const double x140 = x74*x74;
@@ -1801,10 +1801,10 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x169 = 0.2*x70;
     const double x170 = 2*x70*x70;
     const double x171 = 0.4*x70 + x170;
-    const double x172 = 0.44999999999999996 + 0.2 + 2*x70;
-    const double x173 = 0.08750000000000001 + 0.030000000000000006 + x171;
+    const double x172 = 0.6499999999999999 + 2*x70;
+    const double x173 = 0.11750000000000002 + x171;
     A[1911] = x173;
-    const double x174 = 0.004 + x171 + 0.002 - x169 - x169 - x170;
+    const double x174 = 0.006 + x171 - x169 - x169 - x170;
     const double x175 = x69*x172;
     const double x176 = x68*x172;
     const double x177 = x173 - x174;
@@ -1812,9 +1812,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x179 = 0.4*x176;
     const double x180 = 0.8000000000000002 + 0.8*x176;
     const double x181 = x68*x69*x177 + 0.4*x175;
-    const double x182 = 0.8 + 2.0 + x176;
+    const double x182 = 2.8 + x176;
     const double x183 = 0.19000000000000003 + x173 - x178 + x180;
-    const double x184 = 0.005 + x180 + x174 + x178 - x179 - x179 - 0.8000000000000002;
+    const double x184 = -0.7950000000000002 + x180 + x174 + x178 - x179 - x179;
     const double x185 = 0.19000000000000003 + x173 + x180;
     A[1862] = x185;
     const double x186 = x67*x67;
@@ -1858,9 +1858,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x218 = 2.25 + x210;
     const double x219 = x212 + 0.5*x200;
     const double x220 = x208*x215 + x209*x214 - x201 - 0.5*x211;
-    const double x221 = 1.5 + 4.5 + x210;
+    const double x221 = 6 + x210;
     const double x222 = 0.425 + x207 + x218;
-    const double x223 = 0.01 + x218 + x197 - x216 - x217 - x217 - 2.25;
+    const double x223 = -2.24 + x218 + x197 - x216 - x217 - x217;
     const double x224 = 0.425 + x206 + x216 + x218;
     A[1715] = x224;
     const double x225 = x61*x61;
@@ -1898,10 +1898,10 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x254 = 0.2*x57;
     const double x255 = 2*x57*x57;
     const double x256 = 0.4*x57 + x255;
-    const double x257 = 0.44999999999999996 + 0.2 + 2*x57;
-    const double x258 = 0.08750000000000001 + 0.030000000000000006 + x256;
+    const double x257 = 0.6499999999999999 + 2*x57;
+    const double x258 = 0.11750000000000002 + x256;
     A[1568] = x258;
-    const double x259 = 0.004 + x256 + 0.002 - x254 - x254 - x255;
+    const double x259 = 0.006 + x256 - x254 - x254 - x255;
     const double x260 = x56*x257;
     const double x261 = x55*x257;
     const double x262 = x258 - x259;
@@ -1909,9 +1909,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x264 = 0.4*x261;
     const double x265 = 0.8000000000000002 + 0.8*x261;
     const double x266 = x55*x56*x262 + 0.4*x260;
-    const double x267 = 0.8 + 2.0 + x261;
+    const double x267 = 2.8 + x261;
     const double x268 = 0.19000000000000003 + x258 - x263 + x265;
-    const double x269 = 0.005 + x265 + x259 + x263 - x264 - x264 - 0.8000000000000002;
+    const double x269 = -0.7950000000000002 + x265 + x259 + x263 - x264 - x264;
     const double x270 = 0.19000000000000003 + x258 + x265;
     A[1519] = x270;
     const double x271 = x54*x54;
@@ -1955,9 +1955,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x303 = 2.25 + x295;
     const double x304 = x297 + 0.5*x285;
     const double x305 = x293*x300 + x294*x299 - x286 - 0.5*x296;
-    const double x306 = 1.5 + 4.5 + x295;
+    const double x306 = 6 + x295;
     const double x307 = 0.425 + x292 + x303;
-    const double x308 = 0.01 + x303 + x282 - x301 - x302 - x302 - 2.25;
+    const double x308 = -2.24 + x303 + x282 - x301 - x302 - x302;
     const double x309 = 0.425 + x291 + x301 + x303;
     A[1372] = x309;
     const double x310 = x48*x48;
@@ -1993,10 +1993,10 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x337 = 0.2*x44;
     const double x338 = 2*x44*x44;
     const double x339 = 0.4*x44 + x338;
-    const double x340 = 0.44999999999999996 + 0.2 + 2*x44;
-    const double x341 = 0.08750000000000001 + 0.030000000000000006 + x339;
+    const double x340 = 0.6499999999999999 + 2*x44;
+    const double x341 = 0.11750000000000002 + x339;
     A[1225] = x341;
-    const double x342 = 0.004 + x339 + 0.002 - x337 - x337 - x338;
+    const double x342 = 0.006 + x339 - x337 - x337 - x338;
     const double x343 = x43*x340;
     const double x344 = x42*x340;
     const double x345 = x341 - x342;
@@ -2004,9 +2004,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x347 = 0.4*x344;
     const double x348 = 0.8000000000000002 + 0.8*x344;
     const double x349 = x42*x43*x345 + 0.4*x343;
-    const double x350 = 0.8 + 2.0 + x344;
+    const double x350 = 2.8 + x344;
     const double x351 = 0.19000000000000003 + x341 - x346 + x348;
-    const double x352 = 0.005 + x348 + x342 + x346 - x347 - x347 - 0.8000000000000002;
+    const double x352 = -0.7950000000000002 + x348 + x342 + x346 - x347 - x347;
     const double x353 = 0.19000000000000003 + x341 + x348;
     A[1176] = x353;
     const double x354 = x41*x41;
@@ -2050,9 +2050,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x386 = 2.25 + x378;
     const double x387 = x380 + 0.5*x368;
     const double x388 = x376*x383 + x377*x382 - x369 - 0.5*x379;
-    const double x389 = 1.5 + 4.5 + x378;
+    const double x389 = 6 + x378;
     const double x390 = 0.425 + x375 + x386;
-    const double x391 = 0.01 + x386 + x365 - x384 - x385 - x385 - 2.25;
+    const double x391 = -2.24 + x386 + x365 - x384 - x385 - x385;
     const double x392 = 0.425 + x374 + x384 + x386;
     A[1029] = x392;
     const double x393 = x35*x35;
@@ -2090,10 +2090,10 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x422 = 0.2*x31;
     const double x423 = 2*x31*x31;
     const double x424 = 0.4*x31 + x423;
-    const double x425 = 0.44999999999999996 + 0.2 + 2*x31;
-    const double x426 = 0.08750000000000001 + 0.030000000000000006 + x424;
+    const double x425 = 0.6499999999999999 + 2*x31;
+    const double x426 = 0.11750000000000002 + x424;
     A[882] = x426;
-    const double x427 = 0.004 + x424 + 0.002 - x422 - x422 - x423;
+    const double x427 = 0.006 + x424 - x422 - x422 - x423;
     const double x428 = x30*x425;
     const double x429 = x29*x425;
     const double x430 = x426 - x427;
@@ -2101,9 +2101,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x432 = 0.4*x429;
     const double x433 = 0.8000000000000002 + 0.8*x429;
     const double x434 = x29*x30*x430 + 0.4*x428;
-    const double x435 = 0.8 + 2.0 + x429;
+    const double x435 = 2.8 + x429;
     const double x436 = 0.19000000000000003 + x426 - x431 + x433;
-    const double x437 = 0.005 + x433 + x427 + x431 - x432 - x432 - 0.8000000000000002;
+    const double x437 = -0.7950000000000002 + x433 + x427 + x431 - x432 - x432;
     const double x438 = 0.19000000000000003 + x426 + x433;
     A[833] = x438;
     const double x439 = x28*x28;
@@ -2147,9 +2147,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x471 = 2.25 + x463;
     const double x472 = x465 + 0.5*x453;
     const double x473 = x461*x468 + x462*x467 - x454 - 0.5*x464;
-    const double x474 = 1.5 + 4.5 + x463;
+    const double x474 = 6 + x463;
     const double x475 = 0.425 + x460 + x471;
-    const double x476 = 0.01 + x471 + x450 - x469 - x470 - x470 - 2.25;
+    const double x476 = -2.24 + x471 + x450 - x469 - x470 - x470;
     const double x477 = 0.425 + x459 + x469 + x471;
     A[686] = x477;
     const double x478 = x22*x22;
@@ -2187,10 +2187,10 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x507 = 0.2*x18;
     const double x508 = 2*x18*x18;
     const double x509 = 0.4*x18 + x508;
-    const double x510 = 0.44999999999999996 + 0.2 + 2*x18;
-    const double x511 = 0.08750000000000001 + 0.030000000000000006 + x509;
+    const double x510 = 0.6499999999999999 + 2*x18;
+    const double x511 = 0.11750000000000002 + x509;
     A[539] = x511;
-    const double x512 = 0.004 + x509 + 0.002 - x507 - x507 - x508;
+    const double x512 = 0.006 + x509 - x507 - x507 - x508;
     const double x513 = x17*x510;
     const double x514 = x16*x510;
     const double x515 = x511 - x512;
@@ -2198,9 +2198,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x517 = 0.4*x514;
     const double x518 = 0.8000000000000002 + 0.8*x514;
     const double x519 = x16*x17*x515 + 0.4*x513;
-    const double x520 = 0.8 + 2.0 + x514;
+    const double x520 = 2.8 + x514;
     const double x521 = 0.19000000000000003 + x511 - x516 + x518;
-    const double x522 = 0.005 + x518 + x512 + x516 - x517 - x517 - 0.8000000000000002;
+    const double x522 = -0.7950000000000002 + x518 + x512 + x516 - x517 - x517;
     const double x523 = 0.19000000000000003 + x511 + x518;
     A[490] = x523;
     const double x524 = x15*x15;
@@ -2244,9 +2244,9 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x556 = 2.25 + x548;
     const double x557 = x550 + 0.5*x538;
     const double x558 = x546*x553 + x547*x552 - x539 - 0.5*x549;
-    const double x559 = 1.5 + 4.5 + x548;
+    const double x559 = 6 + x548;
     const double x560 = 0.425 + x545 + x556;
-    const double x561 = 0.01 + x556 + x535 - x554 - x555 - x555 - 2.25;
+    const double x561 = -2.24 + x556 + x535 - x554 - x555 - x555;
     const double x562 = 0.425 + x544 + x554 + x556;
     A[343] = x562;
     const double x563 = x9*x9;
@@ -2279,15 +2279,15 @@ void test_bench_inertia(const double *q, const double *p, double *A)
     const double x587 = 12.3 - 2*(x585 + x586);
     const double x588 = x6*x576 - x7*x569 - 0.9*x579;
     const double x589 = 0.9*x580;
-    const double x590 = 6.75 - x142 + -6.75 - x227 + -13.5 - x312 + -6.75 - x395 + 6.75 - x480 + 13.5 - x565;
-    const double x591 = x156 - 11.690999999999999 + x241 - 11.690999999999999 + x326 + 11.690999999999999 + x409 + 11.690999999999999 + x494 + x579;
-    const double x592 = 6 + x157 - 1.5 + x242 - 1.5 + x327 - 1.5 + x410 - 1.5 + x495 - 1.5 + x580 - 1.5;
-    const double x593 = 20.3 + x166 + x163 + x151 + x163 - 3.0375 + x251 + x236 - x248 - x248 - 3.0375 + x334 + x321 - x332 - x332 - 12.15 + x419 + x404 - x416 - x416 - 3.0375 + x504 + x501 + x489 + x501 - 3.0375 + x587 + x585 + x574 + x585 - 12.15;
-    const double x594 = 5.260949999999999 + x158 - 0.7794*x142 - x167 + x243 - 0.7794*x227 + x252 - 5.260949999999999 + x335 + 5.260949999999999 + x411 + 0.7794*x395 + x420 + x496 + 0.7794*x480 - x505 - 5.260949999999999 + x588;
-    const double x595 = 0.675 + x159 - 0.1*x142 - x168 + x244 - 0.1*x227 + x253 - 0.675 + x328 - 0.1*x312 + x336 - 1.35 + x412 - 0.1*x395 + x421 - 0.675 + 0.675 + x497 - 0.1*x480 - x506 + 1.35 + x581 - 0.1*x565 - x589;
-    const double x596 = 30.3 + x166 + x164 + x152 - x162 + x164 - 9.111965399999999 + x251 + x249 + x237 - x247 + x249 - 9.111965399999999 + x322 - x331 + x334 + x419 + x405 - x415 - x417 - x417 - 9.111965399999999 + x504 + x490 - x500 - x502 - x502 - 9.111965399999999 + x575 - x584 + x587;
-    const double x597 = x147 - x154*x161 + x155*x160 + 0.1*x156 + 0.7794*x157 - 1.1691000000000003 + x232 - x239*x246 + x240*x245 + 0.1*x241 + 0.7794*x242 - 1.1691000000000003 + x317 - x324*x330 + x325*x329 + 0.1*x326 + 1.1691000000000003 + x400 - x407*x414 + x408*x413 + 0.1*x409 - 0.7794*x410 + 1.1691000000000003 + x485 - x492*x499 + x493*x498 + 0.1*x494 - 0.7794*x495 + x570 - x577*x583 + x578*x582 + 0.1*x579;
-    const double x598 = 45 + x166 + x165 + x139 + x162 + x165 - 0.15000000000000002 + x251 + x250 + x224 + x247 + x250 - 0.15000000000000002 + x334 + x333 + x309 + x331 + x333 - 0.15000000000000002 + x419 + x418 + x392 + x415 + x418 - 0.15000000000000002 + x504 + x503 + x477 + x500 + x503 - 0.15000000000000002 + x587 + x586 + x562 + x584 + x586 - 0.15000000000000002;
+    const double x590 = -x142 - x227 - x312 - x395 - x480 - x565;
+    const double x591 = x156 + x241 + x326 + x409 + x494 + x579;
+    const double x592 = -3 + x157 + x242 + x327 + x410 + x495 + x580;
+    const double x593 = -16.150000000000002 + x166 + x163 + x151 + x163 + x251 + x236 - x248 - x248 + x334 + x321 - x332 - x332 + x419 + x404 - x416 - x416 + x504 + x501 + x489 + x501 + x587 + x585 + x574 + x585;
+    const double x594 = x158 - 0.7794*x142 - x167 + x243 - 0.7794*x227 + x252 + x335 + x411 + 0.7794*x395 + x420 + x496 + 0.7794*x480 - x505 + x588;
+    const double x595 = -2.220446049250313e-16 + x159 - 0.1*x142 - x168 + x244 - 0.1*x227 + x253 + x328 - 0.1*x312 + x336 + x412 - 0.1*x395 + x421 + x497 - 0.1*x480 - x506 + x581 - 0.1*x565 - x589;
+    const double x596 = -6.147861599999995 + x166 + x164 + x152 - x162 + x164 + x251 + x249 + x237 - x247 + x249 + x322 - x331 + x334 + x419 + x405 - x415 - x417 - x417 + x504 + x490 - x500 - x502 - x502 + x575 - x584 + x587;
+    const double x597 = x147 - x154*x161 + x155*x160 + 0.1*x156 + 0.7794*x157 + x232 - x239*x246 + x240*x245 + 0.1*x241 + 0.7794*x242 + x317 - x324*x330 + x325*x329 + 0.1*x326 + x400 - x407*x414 + x408*x413 + 0.1*x409 - 0.7794*x410 + x485 - x492*x499 + x493*x498 + 0.1*x494 - 0.7794*x495 + x570 - x577*x583 + x578*x582 + 0.1*x579;
+    const double x598 = 44.10000000000001 + x166 + x165 + x139 + x162 + x165 + x251 + x250 + x224 + x247 + x250 + x334 + x333 + x309 + x331 + x333 + x419 + x418 + x392 + x415 + x418 + x504 + x503 + x477 + x500 + x503 + x587 + x586 + x562 + x584 + x586;
     A[245] = x598;
     const double x599 = x5*x5;
     const double x600 = x4*x5;
@@ -18166,7 +18166,7 @@ void test_bench_joint_wrenches(const double *q, const double *qd, const double *
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 3244 mul, 2926 add, 42 div, 39 call */
+ * operations: 3244 mul, 2914 add, 42 div, 39 call */
 void test_bench_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_3 = q[3];
@@ -19010,13 +19010,13 @@ void test_bench_forward_dynamics(const double *q, const double *qd, const double
     const double x699 = -0.8 - 0.4*x693;
     const double x700 = 0.8 + x697;
     const double x701 = 0.19000000000000003 + 0.4*x697 + x684 - x695 + 0.4*x688;
-    const double x702 = 0.005 + 0.006 + x695;
+    const double x702 = 0.011 + x695;
     const double x703 = 1/(0.19000000000000003 + 0.16000000000000003*x693);
     const double x704 = x699*x703;
     const double x705 = x696*x703;
     const double x706 = 4 + x693 - x699*x704;
     const double x707 = x692 + x699*x705;
-    const double x708 = 4 + 3 + x691 - x696*x705;
+    const double x708 = 7 + x691 - x696*x705;
     const double x709 = x80*x700 + x79*x689;
     const double x710 = x706 - x708;
     const double x711 = x707 + x707;
@@ -19177,13 +19177,13 @@ void test_bench_forward_dynamics(const double *q, const double *qd, const double
     const double x866 = -0.8 - 0.4*x860;
     const double x867 = 0.8 + x864;
     const double x868 = 0.19000000000000003 + 0.4*x864 + x851 - x862 + 0.4*x855;
-    const double x869 = 0.005 + 0.006 + x862;
+    const double x869 = 0.011 + x862;
     const double x870 = 1/(0.19000000000000003 + 0.16000000000000003*x860);
     const double x871 = x866*x870;
     const double x872 = x863*x870;
     const double x873 = 4 + x860 - x866*x871;
     const double x874 = x859 + x866*x872;
-    const double x875 = 4 + 3 + x858 - x863*x872;
+    const double x875 = 7 + x858 - x863*x872;
     const double x876 = x67*x867 + x66*x856;
     const double x877 = x873 - x875;
     const double x878 = x874 + x874;
@@ -19344,13 +19344,13 @@ void test_bench_forward_dynamics(const double *q, const double *qd, const double
     const double x1033 = -0.8 - 0.4*x1027;
     const double x1034 = 0.8 + x1031;
     const double x1035 = 0.19000000000000003 + 0.4*x1031 + x1018 - x1029 + 0.4*x1022;
-    const double x1036 = 0.005 + 0.006 + x1029;
+    const double x1036 = 0.011 + x1029;
     const double x1037 = 1/(0.19000000000000003 + 0.16000000000000003*x1027);
     const double x1038 = x1033*x1037;
     const double x1039 = x1030*x1037;
     const double x1040 = 4 + x1027 - x1033*x1038;
     const double x1041 = x1026 + x1033*x1039;
-    const double x1042 = 4 + 3 + x1025 - x1030*x1039;
+    const double x1042 = 7 + x1025 - x1030*x1039;
     const double x1043 = x54*x1034 + x53*x1023;
     const double x1044 = x1040 - x1042;
     const double x1045 = x1041 + x1041;
@@ -19507,13 +19507,13 @@ void test_bench_forward_dynamics(const double *q, const double *qd, const double
     const double x1196 = -0.8 - 0.4*x1190;
     const double x1197 = 0.8 + x1194;
     const double x1198 = 0.19000000000000003 + 0.4*x1194 + x1181 - x1192 + 0.4*x1185;
-    const double x1199 = 0.005 + 0.006 + x1192;
+    const double x1199 = 0.011 + x1192;
     const double x1200 = 1/(0.19000000000000003 + 0.16000000000000003*x1190);
     const double x1201 = x1196*x1200;
     const double x1202 = x1193*x1200;
     const double x1203 = 4 + x1190 - x1196*x1201;
     const double x1204 = x1189 + x1196*x1202;
-    const double x1205 = 4 + 3 + x1188 - x1193*x1202;
+    const double x1205 = 7 + x1188 - x1193*x1202;
     const double x1206 = x41*x1197 + x40*x1186;
     const double x1207 = x1203 - x1205;
     const double x1208 = x1204 + x1204;
@@ -19674,13 +19674,13 @@ void test_bench_forward_dynamics(const double *q, const double *qd, const double
     const double x1363 = -0.8 - 0.4*x1357;
     const double x1364 = 0.8 + x1361;
     const double x1365 = 0.19000000000000003 + 0.4*x1361 + x1348 - x1359 + 0.4*x1352;
-    const double x1366 = 0.005 + 0.006 + x1359;
+    const double x1366 = 0.011 + x1359;
     const double x1367 = 1/(0.19000000000000003 + 0.16000000000000003*x1357);
     const double x1368 = x1363*x1367;
     const double x1369 = x1360*x1367;
     const double x1370 = 4 + x1357 - x1363*x1368;
     const double x1371 = x1356 + x1363*x1369;
-    const double x1372 = 4 + 3 + x1355 - x1360*x1369;
+    const double x1372 = 7 + x1355 - x1360*x1369;
     const double x1373 = x28*x1364 + x27*x1353;
     const double x1374 = x1370 - x1372;
     const double x1375 = x1371 + x1371;
@@ -19841,13 +19841,13 @@ void test_bench_forward_dynamics(const double *q, const double *qd, const double
     const double x1530 = -0.8 - 0.4*x1524;
     const double x1531 = 0.8 + x1528;
     const double x1532 = 0.19000000000000003 + 0.4*x1528 + x1515 - x1526 + 0.4*x1519;
-    const double x1533 = 0.005 + 0.006 + x1526;
+    const double x1533 = 0.011 + x1526;
     const double x1534 = 1/(0.19000000000000003 + 0.16000000000000003*x1524);
     const double x1535 = x1530*x1534;
     const double x1536 = x1527*x1534;
     const double x1537 = 4 + x1524 - x1530*x1535;
     const double x1538 = x1523 + x1530*x1536;
-    const double x1539 = 4 + 3 + x1522 - x1527*x1536;
+    const double x1539 = 7 + x1522 - x1527*x1536;
     const double x1540 = x15*x1531 + x14*x1520;
     const double x1541 = x1537 - x1539;
     const double x1542 = x1538 + x1538;
@@ -20541,7 +20541,7 @@ void test_bench_forward_dynamics(const double *q, const double *qd, const double
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 11356 mul, 9399 add, 42 div, 39 call */
+ * operations: 11356 mul, 9387 add, 42 div, 39 call */
 void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_3 = q[3];
@@ -20802,13 +20802,13 @@ void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double x209 = -0.8 - 0.4*x203;
     const double x210 = 0.8 + x207;
     const double x211 = 0.19000000000000003 + 0.4*x207 + x194 - x205 + 0.4*x198;
-    const double x212 = 0.005 + 0.006 + x205;
+    const double x212 = 0.011 + x205;
     const double x213 = 1/(0.19000000000000003 + 0.16000000000000003*x203);
     const double x214 = x209*x213;
     const double x215 = x206*x213;
     const double x216 = 4 + x203 - x209*x214;
     const double x217 = x202 + x209*x215;
-    const double x218 = 4 + 3 + x201 - x206*x215;
+    const double x218 = 7 + x201 - x206*x215;
     const double x219 = x75*x210 + x74*x199;
     const double x220 = x216 - x218;
     const double x221 = x217 + x217;
@@ -20969,13 +20969,13 @@ void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double x376 = -0.8 - 0.4*x370;
     const double x377 = 0.8 + x374;
     const double x378 = 0.19000000000000003 + 0.4*x374 + x361 - x372 + 0.4*x365;
-    const double x379 = 0.005 + 0.006 + x372;
+    const double x379 = 0.011 + x372;
     const double x380 = 1/(0.19000000000000003 + 0.16000000000000003*x370);
     const double x381 = x376*x380;
     const double x382 = x373*x380;
     const double x383 = 4 + x370 - x376*x381;
     const double x384 = x369 + x376*x382;
-    const double x385 = 4 + 3 + x368 - x373*x382;
+    const double x385 = 7 + x368 - x373*x382;
     const double x386 = x63*x377 + x62*x366;
     const double x387 = x383 - x385;
     const double x388 = x384 + x384;
@@ -21136,13 +21136,13 @@ void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double x543 = -0.8 - 0.4*x537;
     const double x544 = 0.8 + x541;
     const double x545 = 0.19000000000000003 + 0.4*x541 + x528 - x539 + 0.4*x532;
-    const double x546 = 0.005 + 0.006 + x539;
+    const double x546 = 0.011 + x539;
     const double x547 = 1/(0.19000000000000003 + 0.16000000000000003*x537);
     const double x548 = x543*x547;
     const double x549 = x540*x547;
     const double x550 = 4 + x537 - x543*x548;
     const double x551 = x536 + x543*x549;
-    const double x552 = 4 + 3 + x535 - x540*x549;
+    const double x552 = 7 + x535 - x540*x549;
     const double x553 = x51*x544 + x50*x533;
     const double x554 = x550 - x552;
     const double x555 = x551 + x551;
@@ -21299,13 +21299,13 @@ void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double x706 = -0.8 - 0.4*x700;
     const double x707 = 0.8 + x704;
     const double x708 = 0.19000000000000003 + 0.4*x704 + x691 - x702 + 0.4*x695;
-    const double x709 = 0.005 + 0.006 + x702;
+    const double x709 = 0.011 + x702;
     const double x710 = 1/(0.19000000000000003 + 0.16000000000000003*x700);
     const double x711 = x706*x710;
     const double x712 = x703*x710;
     const double x713 = 4 + x700 - x706*x711;
     const double x714 = x699 + x706*x712;
-    const double x715 = 4 + 3 + x698 - x703*x712;
+    const double x715 = 7 + x698 - x703*x712;
     const double x716 = x39*x707 + x38*x696;
     const double x717 = x713 - x715;
     const double x718 = x714 + x714;
@@ -21466,13 +21466,13 @@ void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double x873 = -0.8 - 0.4*x867;
     const double x874 = 0.8 + x871;
     const double x875 = 0.19000000000000003 + 0.4*x871 + x858 - x869 + 0.4*x862;
-    const double x876 = 0.005 + 0.006 + x869;
+    const double x876 = 0.011 + x869;
     const double x877 = 1/(0.19000000000000003 + 0.16000000000000003*x867);
     const double x878 = x873*x877;
     const double x879 = x870*x877;
     const double x880 = 4 + x867 - x873*x878;
     const double x881 = x866 + x873*x879;
-    const double x882 = 4 + 3 + x865 - x870*x879;
+    const double x882 = 7 + x865 - x870*x879;
     const double x883 = x27*x874 + x26*x863;
     const double x884 = x880 - x882;
     const double x885 = x881 + x881;
@@ -21633,13 +21633,13 @@ void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double x1040 = -0.8 - 0.4*x1034;
     const double x1041 = 0.8 + x1038;
     const double x1042 = 0.19000000000000003 + 0.4*x1038 + x1025 - x1036 + 0.4*x1029;
-    const double x1043 = 0.005 + 0.006 + x1036;
+    const double x1043 = 0.011 + x1036;
     const double x1044 = 1/(0.19000000000000003 + 0.16000000000000003*x1034);
     const double x1045 = x1040*x1044;
     const double x1046 = x1037*x1044;
     const double x1047 = 4 + x1034 - x1040*x1045;
     const double x1048 = x1033 + x1040*x1046;
-    const double x1049 = 4 + 3 + x1032 - x1037*x1046;
+    const double x1049 = 7 + x1032 - x1037*x1046;
     const double x1050 = x15*x1041 + x14*x1030;
     const double x1051 = x1047 - x1049;
     const double x1052 = x1048 + x1048;
@@ -26998,7 +26998,7 @@ void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv)
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 3300 mul, 2370 add, 41 div, 39 call */
+ * operations: 3300 mul, 2358 add, 41 div, 39 call */
 void test_bench_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_3 = q[3];
@@ -27302,7 +27302,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x203 = -0.8 - 0.4*x197;
     const double x204 = 0.8 + x201;
     const double x205 = 0.19000000000000003 + 0.4*x201 + x188 - x199 + 0.4*x192;
-    const double x206 = 0.005 + 0.006 + x199;
+    const double x206 = 0.011 + x199;
     const double x207 = 0.19000000000000003 + 0.16000000000000003*x197;
     diag[45] = x207;
     const double x208 = 1/x207;
@@ -27310,7 +27310,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x210 = x200*x208;
     const double x211 = 4 + x197 - x203*x209;
     const double x212 = x196 + x203*x210;
-    const double x213 = 4 + 3 + x195 - x200*x210;
+    const double x213 = 7 + x195 - x200*x210;
     const double x214 = x75*x204 + x74*x193;
     const double x215 = x211 - x213;
     const double x216 = x212 + x212;
@@ -27480,7 +27480,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x375 = -0.8 - 0.4*x369;
     const double x376 = 0.8 + x373;
     const double x377 = 0.19000000000000003 + 0.4*x373 + x360 - x371 + 0.4*x364;
-    const double x378 = 0.005 + 0.006 + x371;
+    const double x378 = 0.011 + x371;
     const double x379 = 0.19000000000000003 + 0.16000000000000003*x369;
     diag[38] = x379;
     const double x380 = 1/x379;
@@ -27488,7 +27488,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x382 = x372*x380;
     const double x383 = 4 + x369 - x375*x381;
     const double x384 = x368 + x375*x382;
-    const double x385 = 4 + 3 + x367 - x372*x382;
+    const double x385 = 7 + x367 - x372*x382;
     const double x386 = x63*x376 + x62*x365;
     const double x387 = x383 - x385;
     const double x388 = x384 + x384;
@@ -27658,7 +27658,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x547 = -0.8 - 0.4*x541;
     const double x548 = 0.8 + x545;
     const double x549 = 0.19000000000000003 + 0.4*x545 + x532 - x543 + 0.4*x536;
-    const double x550 = 0.005 + 0.006 + x543;
+    const double x550 = 0.011 + x543;
     const double x551 = 0.19000000000000003 + 0.16000000000000003*x541;
     diag[31] = x551;
     const double x552 = 1/x551;
@@ -27666,7 +27666,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x554 = x544*x552;
     const double x555 = 4 + x541 - x547*x553;
     const double x556 = x540 + x547*x554;
-    const double x557 = 4 + 3 + x539 - x544*x554;
+    const double x557 = 7 + x539 - x544*x554;
     const double x558 = x51*x548 + x50*x537;
     const double x559 = x555 - x557;
     const double x560 = x556 + x556;
@@ -27832,7 +27832,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x715 = -0.8 - 0.4*x709;
     const double x716 = 0.8 + x713;
     const double x717 = 0.19000000000000003 + 0.4*x713 + x700 - x711 + 0.4*x704;
-    const double x718 = 0.005 + 0.006 + x711;
+    const double x718 = 0.011 + x711;
     const double x719 = 0.19000000000000003 + 0.16000000000000003*x709;
     diag[24] = x719;
     const double x720 = 1/x719;
@@ -27840,7 +27840,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x722 = x712*x720;
     const double x723 = 4 + x709 - x715*x721;
     const double x724 = x708 + x715*x722;
-    const double x725 = 4 + 3 + x707 - x712*x722;
+    const double x725 = 7 + x707 - x712*x722;
     const double x726 = x39*x716 + x38*x705;
     const double x727 = x723 - x725;
     const double x728 = x724 + x724;
@@ -28010,7 +28010,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x887 = -0.8 - 0.4*x881;
     const double x888 = 0.8 + x885;
     const double x889 = 0.19000000000000003 + 0.4*x885 + x872 - x883 + 0.4*x876;
-    const double x890 = 0.005 + 0.006 + x883;
+    const double x890 = 0.011 + x883;
     const double x891 = 0.19000000000000003 + 0.16000000000000003*x881;
     diag[17] = x891;
     const double x892 = 1/x891;
@@ -28018,7 +28018,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x894 = x884*x892;
     const double x895 = 4 + x881 - x887*x893;
     const double x896 = x880 + x887*x894;
-    const double x897 = 4 + 3 + x879 - x884*x894;
+    const double x897 = 7 + x879 - x884*x894;
     const double x898 = x27*x888 + x26*x877;
     const double x899 = x895 - x897;
     const double x900 = x896 + x896;
@@ -28188,7 +28188,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x1059 = -0.8 - 0.4*x1053;
     const double x1060 = 0.8 + x1057;
     const double x1061 = 0.19000000000000003 + 0.4*x1057 + x1044 - x1055 + 0.4*x1048;
-    const double x1062 = 0.005 + 0.006 + x1055;
+    const double x1062 = 0.011 + x1055;
     const double x1063 = 0.19000000000000003 + 0.16000000000000003*x1053;
     diag[10] = x1063;
     const double x1064 = 1/x1063;
@@ -28196,7 +28196,7 @@ void test_bench_transvective_factors(const double *q, const double *p, double *t
     const double x1066 = x1056*x1064;
     const double x1067 = 4 + x1053 - x1059*x1065;
     const double x1068 = x1052 + x1059*x1066;
-    const double x1069 = 4 + 3 + x1051 - x1056*x1066;
+    const double x1069 = 7 + x1051 - x1056*x1066;
     const double x1070 = x15*x1060 + x14*x1049;
     const double x1071 = x1067 - x1069;
     const double x1072 = x1068 + x1068;

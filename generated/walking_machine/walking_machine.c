@@ -33,7 +33,7 @@ static void aggsym_sincos(double x, double *s, double *c)
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 720 mul, 690 add, 0 div, 21 call */
+ * operations: 720 mul, 612 add, 0 div, 21 call */
 void walking_machine_inertia(const double *q, const double *p, double *A)
 {
     const double q_3 = q[3];
@@ -392,11 +392,11 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x55 = 0.033600000000000005*x50;
     const double x56 = 0.072 + 0.06720000000000001*x50;
     const double x57 = 0.021280000000000004*x50*x51 + 0.033600000000000005*x51;
-    const double x58 = -0.24 - x52 - 0.18;
-    const double x59 = 0.037 + 0.021680000000000005 - x54 + x56;
-    const double x60 = 0.037 + 0.021680000000000005 + x56;
+    const double x58 = -0.42 - x52;
+    const double x59 = 0.05868 - x54 + x56;
+    const double x60 = 0.05868 + x56;
     A[550] = x60;
-    const double x61 = 0.0008 + x56 + 0.0004 + x54 - x55 - x55 - 0.072;
+    const double x61 = -0.07079999999999999 + x56 + x54 - x55 - x55;
     const double x62 = x49*x49;
     const double x63 = x48*x49;
     const double x64 = x49*x53;
@@ -410,10 +410,10 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x72 = x62*x70 + x63*x69 - x57;
     const double x73 = 0.05*x68;
     const double x74 = 0.05*x65;
-    const double x75 = 0.0007125 + 0.005000000000000001 + x59 + x71;
+    const double x75 = 0.0057125000000000006 + x59 + x71;
     A[525] = x75;
-    const double x76 = 0.0003 + 0.005000000000000001 + x60 - 0.005000000000000001;
-    const double x77 = 0.0007125 + 0.005000000000000001 + x61 - x71;
+    const double x76 = 0.0002999999999999999 + x60;
+    const double x77 = 0.0057125000000000006 + x61 - x71;
     const double x78 = x47*x47;
     const double x79 = x46*x47;
     const double x80 = 0.1125*x46 + x47*x65;
@@ -435,11 +435,11 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x96 = 0.033600000000000005*x44;
     const double x97 = 0.072 + 0.06720000000000001*x44;
     const double x98 = 0.021280000000000004*x44*x45 + 0.033600000000000005*x45;
-    const double x99 = -0.24 - x93 - 0.18;
-    const double x100 = 0.037 + 0.021680000000000005 - x95 + x97;
-    const double x101 = 0.037 + 0.021680000000000005 + x97;
+    const double x99 = -0.42 - x93;
+    const double x100 = 0.05868 - x95 + x97;
+    const double x101 = 0.05868 + x97;
     A[475] = x101;
-    const double x102 = 0.0008 + x97 + 0.0004 + x95 - x96 - x96 - 0.072;
+    const double x102 = -0.07079999999999999 + x97 + x95 - x96 - x96;
     const double x103 = x43*x43;
     const double x104 = x42*x43;
     const double x105 = x43*x94;
@@ -453,10 +453,10 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x113 = x103*x111 + x104*x110 - x98;
     const double x114 = 0.05*x109;
     const double x115 = 0.05*x106;
-    const double x116 = 0.0007125 + 0.005000000000000001 + x100 + x112;
+    const double x116 = 0.0057125000000000006 + x100 + x112;
     A[450] = x116;
-    const double x117 = 0.0003 + 0.005000000000000001 + x101 - 0.005000000000000001;
-    const double x118 = 0.0007125 + 0.005000000000000001 + x102 - x112;
+    const double x117 = 0.0002999999999999999 + x101;
+    const double x118 = 0.0057125000000000006 + x102 - x112;
     const double x119 = x41*x41;
     const double x120 = x40*x41;
     const double x121 = 0.1125*x40 + x41*x106;
@@ -478,11 +478,11 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x135 = 0.033600000000000005*x38;
     const double x136 = 0.072 + 0.06720000000000001*x38;
     const double x137 = 0.021280000000000004*x38*x39 + 0.033600000000000005*x39;
-    const double x138 = -0.24 - x132 - 0.18;
-    const double x139 = 0.037 + 0.021680000000000005 - x134 + x136;
-    const double x140 = 0.037 + 0.021680000000000005 + x136;
+    const double x138 = -0.42 - x132;
+    const double x139 = 0.05868 - x134 + x136;
+    const double x140 = 0.05868 + x136;
     A[400] = x140;
-    const double x141 = 0.0008 + x136 + 0.0004 + x134 - x135 - x135 - 0.072;
+    const double x141 = -0.07079999999999999 + x136 + x134 - x135 - x135;
     const double x142 = x37*x37;
     const double x143 = x36*x37;
     const double x144 = x37*x133;
@@ -496,10 +496,10 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x152 = x142*x150 + x143*x149 - x137;
     const double x153 = 0.05*x148;
     const double x154 = 0.05*x145;
-    const double x155 = 0.0007125 + 0.005000000000000001 + x139 + x151;
+    const double x155 = 0.0057125000000000006 + x139 + x151;
     A[375] = x155;
-    const double x156 = 0.0003 + 0.005000000000000001 + x140 - 0.005000000000000001;
-    const double x157 = 0.0007125 + 0.005000000000000001 + x141 - x151;
+    const double x156 = 0.0002999999999999999 + x140;
+    const double x157 = 0.0057125000000000006 + x141 - x151;
     const double x158 = x35*x35;
     const double x159 = x34*x35;
     const double x160 = 0.1125*x34 + x35*x145;
@@ -521,11 +521,11 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x176 = 0.033600000000000005*x32;
     const double x177 = 0.072 + 0.06720000000000001*x32;
     const double x178 = 0.021280000000000004*x32*x33 + 0.033600000000000005*x33;
-    const double x179 = -0.24 - x173 - 0.18;
-    const double x180 = 0.037 + 0.021680000000000005 - x175 + x177;
-    const double x181 = 0.037 + 0.021680000000000005 + x177;
+    const double x179 = -0.42 - x173;
+    const double x180 = 0.05868 - x175 + x177;
+    const double x181 = 0.05868 + x177;
     A[325] = x181;
-    const double x182 = 0.0008 + x177 + 0.0004 + x175 - x176 - x176 - 0.072;
+    const double x182 = -0.07079999999999999 + x177 + x175 - x176 - x176;
     const double x183 = x31*x31;
     const double x184 = x30*x31;
     const double x185 = x31*x174;
@@ -539,10 +539,10 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x193 = x183*x191 + x184*x190 - x178;
     const double x194 = 0.05*x189;
     const double x195 = 0.05*x186;
-    const double x196 = 0.0007125 + 0.005000000000000001 + x180 + x192;
+    const double x196 = 0.0057125000000000006 + x180 + x192;
     A[300] = x196;
-    const double x197 = 0.0003 + 0.005000000000000001 + x181 - 0.005000000000000001;
-    const double x198 = 0.0007125 + 0.005000000000000001 + x182 - x192;
+    const double x197 = 0.0002999999999999999 + x181;
+    const double x198 = 0.0057125000000000006 + x182 - x192;
     const double x199 = x29*x29;
     const double x200 = x28*x29;
     const double x201 = 0.1125*x28 - x29*x186;
@@ -564,11 +564,11 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x215 = 0.033600000000000005*x26;
     const double x216 = 0.072 + 0.06720000000000001*x26;
     const double x217 = 0.021280000000000004*x26*x27 + 0.033600000000000005*x27;
-    const double x218 = -0.24 - x212 - 0.18;
-    const double x219 = 0.037 + 0.021680000000000005 - x214 + x216;
-    const double x220 = 0.037 + 0.021680000000000005 + x216;
+    const double x218 = -0.42 - x212;
+    const double x219 = 0.05868 - x214 + x216;
+    const double x220 = 0.05868 + x216;
     A[250] = x220;
-    const double x221 = 0.0008 + x216 + 0.0004 + x214 - x215 - x215 - 0.072;
+    const double x221 = -0.07079999999999999 + x216 + x214 - x215 - x215;
     const double x222 = x25*x25;
     const double x223 = x24*x25;
     const double x224 = x25*x213;
@@ -582,10 +582,10 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x232 = x222*x230 + x223*x229 - x217;
     const double x233 = 0.05*x228;
     const double x234 = 0.05*x225;
-    const double x235 = 0.0007125 + 0.005000000000000001 + x219 + x231;
+    const double x235 = 0.0057125000000000006 + x219 + x231;
     A[225] = x235;
-    const double x236 = 0.0003 + 0.005000000000000001 + x220 - 0.005000000000000001;
-    const double x237 = 0.0007125 + 0.005000000000000001 + x221 - x231;
+    const double x236 = 0.0002999999999999999 + x220;
+    const double x237 = 0.0057125000000000006 + x221 - x231;
     const double x238 = x23*x23;
     const double x239 = x22*x23;
     const double x240 = 0.1125*x22 - x23*x225;
@@ -605,11 +605,11 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x252 = 0.033600000000000005*x20;
     const double x253 = 0.072 + 0.06720000000000001*x20;
     const double x254 = 0.021280000000000004*x20*x21 + 0.033600000000000005*x21;
-    const double x255 = -0.24 - x249 - 0.18;
-    const double x256 = 0.037 + 0.021680000000000005 - x251 + x253;
-    const double x257 = 0.037 + 0.021680000000000005 + x253;
+    const double x255 = -0.42 - x249;
+    const double x256 = 0.05868 - x251 + x253;
+    const double x257 = 0.05868 + x253;
     A[175] = x257;
-    const double x258 = 0.0008 + x253 + 0.0004 + x251 - x252 - x252 - 0.072;
+    const double x258 = -0.07079999999999999 + x253 + x251 - x252 - x252;
     const double x259 = x19*x19;
     const double x260 = x18*x19;
     const double x261 = x19*x250;
@@ -623,10 +623,10 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x269 = x259*x267 + x260*x266 - x254;
     const double x270 = 0.05*x265;
     const double x271 = 0.05*x262;
-    const double x272 = 0.0007125 + 0.005000000000000001 + x256 + x268;
+    const double x272 = 0.0057125000000000006 + x256 + x268;
     A[150] = x272;
-    const double x273 = 0.0003 + 0.005000000000000001 + x257 - 0.005000000000000001;
-    const double x274 = 0.0007125 + 0.005000000000000001 + x258 - x268;
+    const double x273 = 0.0002999999999999999 + x257;
+    const double x274 = 0.0057125000000000006 + x258 - x268;
     const double x275 = x17*x17;
     const double x276 = x16*x17;
     const double x277 = 0.1125*x16 - x17*x262;
@@ -642,13 +642,13 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x287 = x16*x269 - x17*x270 - 0.4*x278;
     A[126] = x287;
     A[149] = x287;
-    const double x288 = 0.3 + x68 - 1 + x109 + 1.0 + x148 + x189 - 1 + x228 + 1.0 + x265;
-    const double x289 = -0.5 - x80 + -0.5 - x121 + -0.5 - x160 + 0.5 + x201 + 0.5 + x240 + 0.5 + x277;
+    const double x288 = 0.30000000000000004 + x68 + x109 + x148 + x189 + x228 + x265;
+    const double x289 = -x80 - x121 - x160 + x201 + x240 + x277;
     const double x290 = 0.6 + x83 + x124 + x163 + x202 + x241 + x278;
-    const double x291 = 0.41200000000000003 + x91 + x89 + x75 + x89 - 0.4000000000000001 + x116 + x131 + x171 + x155 - x169 - x169 - 0.4000000000000001 + x209 + x207 + x196 + x207 - 0.4000000000000001 + x235 + x248 + x285 + x272 - x283 - x283 - 0.4000000000000001;
-    const double x292 = x84 + 0.2*x68 - x92 - 0.20000000000000004 + x125 + 0.2*x109 + 0.20000000000000004 + x164 + 0.2*x148 + x172 + 0.20000000000000004 + x210 - x203 - 0.2*x189 - x242 - 0.2*x228 - 0.20000000000000004 - x279 - 0.2*x265 - x286;
+    const double x291 = -1.1880000000000004 + x91 + x89 + x75 + x89 + x116 + x131 + x171 + x155 - x169 - x169 + x209 + x207 + x196 + x207 + x235 + x248 + x285 + x272 - x283 - x283;
+    const double x292 = x84 + 0.2*x68 - x92 + x125 + 0.2*x109 + x164 + 0.2*x148 + x172 + x210 - x203 - 0.2*x189 - x242 - 0.2*x228 - x279 - 0.2*x265 - x286;
     const double x293 = x85 + 0.4*x83 - 0.006 + x126 + x165 - 0.4*x163 + x211 + x243 + x287;
-    const double x294 = 1.615 + x91 + x76 - x88 - x90 - x90 - 0.10000000000000002 + x131 + x117 - x129 - x130 - x130 - 0.10000000000000002 + x171 + x156 - x168 - x170 - x170 - 0.10000000000000002 + x209 + x197 - x206 - x208 - x208 - 0.10000000000000002 + x248 + x236 - x246 - x247 - x247 - 0.10000000000000002 + x285 + x273 - x282 - x284 - x284 - 0.10000000000000002;
+    const double x294 = 1.0149999999999995 + x91 + x76 - x88 - x90 - x90 + x131 + x117 - x129 - x130 - x130 + x171 + x156 - x168 - x170 - x170 + x209 + x197 - x206 - x208 - x208 + x248 + x236 - x246 - x247 - x247 + x285 + x273 - x282 - x284 - x284;
     const double x295 = x74 - x78*x87 + x79*x86 + 0.2*x83 + x115 - x119*x128 + x120*x127 + 0.2*x124 + x154 - x158*x167 + x159*x166 + 0.2*x163 + x199*x205 + x200*x204 - x195 - 0.2*x202 + x238*x245 + x239*x244 - x234 - 0.2*x241 + x275*x281 + x276*x280 - x271 - 0.2*x278;
     const double x296 = 1.803 + x77 + x88 + x91 + x118 + x129 + x131 + x157 + x168 + x171 + x198 + x206 + x209 + x237 + x246 + x248 + x274 + x282 + x285;
     A[125] = x296;
@@ -7714,7 +7714,7 @@ void walking_machine_joint_wrenches(const double *q, const double *qd, const dou
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 1800 mul, 1664 add, 18 div, 21 call */
+ * operations: 1800 mul, 1640 add, 18 div, 21 call */
 void walking_machine_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_3 = q[3];
@@ -8227,14 +8227,14 @@ void walking_machine_forward_dynamics(const double *q, const double *qd, const d
     const double x440 = 0.17357933579335796*x53;
     const double x441 = -0.18 - 0.3*x438;
     const double x442 = 0.18 + x439;
-    const double x443 = 0.037 + 0.3*x439 + 0.021680000000000005 - x55 + 0.033600000000000005*x50;
-    const double x444 = 0.0008 + 0.0004 + x55;
+    const double x443 = 0.05868 + 0.3*x439 - x55 + 0.033600000000000005*x50;
+    const double x444 = 0.0012000000000000001 + x55;
     const double x445 = 1/(0.037 + 0.09*x438);
     const double x446 = x441*x445;
     const double x447 = x440*x445;
     const double x448 = 1.2 + x438 - x441*x446;
     const double x449 = 0.5785977859778599*x53 + x441*x447;
-    const double x450 = 1.2 + 0.8 - x437 - x440*x447;
+    const double x450 = 2 - x437 - x440*x447;
     const double x451 = x48*x442 - x49*x54;
     const double x452 = x450 - x448;
     const double x453 = x449 + x449;
@@ -8292,14 +8292,14 @@ void walking_machine_forward_dynamics(const double *q, const double *qd, const d
     const double x505 = 0.17357933579335796*x63;
     const double x506 = -0.18 - 0.3*x503;
     const double x507 = 0.18 + x504;
-    const double x508 = 0.037 + 0.3*x504 + 0.021680000000000005 - x65 + 0.033600000000000005*x44;
-    const double x509 = 0.0008 + 0.0004 + x65;
+    const double x508 = 0.05868 + 0.3*x504 - x65 + 0.033600000000000005*x44;
+    const double x509 = 0.0012000000000000001 + x65;
     const double x510 = 1/(0.037 + 0.09*x503);
     const double x511 = x506*x510;
     const double x512 = x505*x510;
     const double x513 = 1.2 + x503 - x506*x511;
     const double x514 = 0.5785977859778599*x63 + x506*x512;
-    const double x515 = 1.2 + 0.8 - x502 - x505*x512;
+    const double x515 = 2 - x502 - x505*x512;
     const double x516 = x42*x507 - x43*x64;
     const double x517 = x515 - x513;
     const double x518 = x514 + x514;
@@ -8351,14 +8351,14 @@ void walking_machine_forward_dynamics(const double *q, const double *qd, const d
     const double x564 = 0.17357933579335796*x73;
     const double x565 = -0.18 - 0.3*x562;
     const double x566 = 0.18 + x563;
-    const double x567 = 0.037 + 0.3*x563 + 0.021680000000000005 - x75 + 0.033600000000000005*x38;
-    const double x568 = 0.0008 + 0.0004 + x75;
+    const double x567 = 0.05868 + 0.3*x563 - x75 + 0.033600000000000005*x38;
+    const double x568 = 0.0012000000000000001 + x75;
     const double x569 = 1/(0.037 + 0.09*x562);
     const double x570 = x565*x569;
     const double x571 = x564*x569;
     const double x572 = 1.2 + x562 - x565*x570;
     const double x573 = 0.5785977859778599*x73 + x565*x571;
-    const double x574 = 1.2 + 0.8 - x561 - x564*x571;
+    const double x574 = 2 - x561 - x564*x571;
     const double x575 = x36*x566 - x37*x74;
     const double x576 = x574 - x572;
     const double x577 = x573 + x573;
@@ -8416,14 +8416,14 @@ void walking_machine_forward_dynamics(const double *q, const double *qd, const d
     const double x629 = 0.17357933579335796*x83;
     const double x630 = -0.18 - 0.3*x627;
     const double x631 = 0.18 + x628;
-    const double x632 = 0.037 + 0.3*x628 + 0.021680000000000005 - x85 + 0.033600000000000005*x32;
-    const double x633 = 0.0008 + 0.0004 + x85;
+    const double x632 = 0.05868 + 0.3*x628 - x85 + 0.033600000000000005*x32;
+    const double x633 = 0.0012000000000000001 + x85;
     const double x634 = 1/(0.037 + 0.09*x627);
     const double x635 = x630*x634;
     const double x636 = x629*x634;
     const double x637 = 1.2 + x627 - x630*x635;
     const double x638 = 0.5785977859778599*x83 + x630*x636;
-    const double x639 = 1.2 + 0.8 - x626 - x629*x636;
+    const double x639 = 2 - x626 - x629*x636;
     const double x640 = x30*x631 - x31*x84;
     const double x641 = x639 - x637;
     const double x642 = x638 + x638;
@@ -8480,14 +8480,14 @@ void walking_machine_forward_dynamics(const double *q, const double *qd, const d
     const double x693 = 0.17357933579335796*x93;
     const double x694 = -0.18 - 0.3*x691;
     const double x695 = 0.18 + x692;
-    const double x696 = 0.037 + 0.3*x692 + 0.021680000000000005 - x95 + 0.033600000000000005*x26;
-    const double x697 = 0.0008 + 0.0004 + x95;
+    const double x696 = 0.05868 + 0.3*x692 - x95 + 0.033600000000000005*x26;
+    const double x697 = 0.0012000000000000001 + x95;
     const double x698 = 1/(0.037 + 0.09*x691);
     const double x699 = x694*x698;
     const double x700 = x693*x698;
     const double x701 = 1.2 + x691 - x694*x699;
     const double x702 = 0.5785977859778599*x93 + x694*x700;
-    const double x703 = 1.2 + 0.8 - x690 - x693*x700;
+    const double x703 = 2 - x690 - x693*x700;
     const double x704 = x24*x695 - x25*x94;
     const double x705 = x703 - x701;
     const double x706 = x702 + x702;
@@ -8538,14 +8538,14 @@ void walking_machine_forward_dynamics(const double *q, const double *qd, const d
     const double x751 = 0.17357933579335796*x103;
     const double x752 = -0.18 - 0.3*x749;
     const double x753 = 0.18 + x750;
-    const double x754 = 0.037 + 0.3*x750 + 0.021680000000000005 - x105 + 0.033600000000000005*x20;
-    const double x755 = 0.0008 + 0.0004 + x105;
+    const double x754 = 0.05868 + 0.3*x750 - x105 + 0.033600000000000005*x20;
+    const double x755 = 0.0012000000000000001 + x105;
     const double x756 = 1/(0.037 + 0.09*x749);
     const double x757 = x752*x756;
     const double x758 = x751*x756;
     const double x759 = 1.2 + x749 - x752*x757;
     const double x760 = 0.5785977859778599*x103 + x752*x758;
-    const double x761 = 1.2 + 0.8 - x748 - x751*x758;
+    const double x761 = 2 - x748 - x751*x758;
     const double x762 = x18*x753 - x19*x104;
     const double x763 = x761 - x759;
     const double x764 = x760 + x760;
@@ -8615,7 +8615,7 @@ void walking_machine_forward_dynamics(const double *q, const double *qd, const d
     const double x828 = x500 - 0.3 + x557 + x624 + x688 + x744 + x810 - x814*x822;
     const double x829 = 0.41200000000000003 + 0.04000000000000001*x486 + 0.04000000000000001*x550 + 0.04000000000000001*x610 + 0.04000000000000001*x675 + 0.04000000000000001*x738 + 0.04000000000000001*x797 - x815*x821;
     const double x830 = 0.2*x688 - 0.2*x500 - 0.2*x557 - 0.2*x624 + 0.2*x744 + 0.2*x810 - x815*x822;
-    const double x831 = 1.615 + 0.4*x500 + 0.0003 - x489 + 0.4*x493 + 0.0003 - x553 + 0.0003 - x613 - 0.4*x617 - 0.4*x624 + 0.4*x688 + 0.0003 - x678 + 0.4*x681 + 0.0003 - x741 + 0.0003 - x800 - 0.4*x803 - 0.4*x810 - x816*x822;
+    const double x831 = 1.6167999999999998 + 0.4*x500 - x489 + 0.4*x493 - x553 - x613 - 0.4*x617 - 0.4*x624 + 0.4*x688 - x678 + 0.4*x681 - x741 - x800 - 0.4*x803 - 0.4*x810 - x816*x822;
     const double x832 = x5*x823 + x4*x824;
     const double x833 = x5*x825 + x4*x826;
     const double x834 = x5*x827 + x4*x828;
@@ -8912,7 +8912,7 @@ void walking_machine_forward_dynamics(const double *q, const double *qd, const d
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 3117 mul, 2686 add, 18 div, 21 call */
+ * operations: 3117 mul, 2662 add, 18 div, 21 call */
 void walking_machine_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_3 = q[3];
@@ -9055,14 +9055,14 @@ void walking_machine_inertia_inverse(const double *q, const double *p, double *A
     const double x115 = 0.17357933579335796*x53;
     const double x116 = -0.18 - 0.3*x113;
     const double x117 = 0.18 + x114;
-    const double x118 = 0.037 + 0.3*x114 + 0.021680000000000005 - x55 + 0.033600000000000005*x50;
-    const double x119 = 0.0008 + 0.0004 + x55;
+    const double x118 = 0.05868 + 0.3*x114 - x55 + 0.033600000000000005*x50;
+    const double x119 = 0.0012000000000000001 + x55;
     const double x120 = 1/(0.037 + 0.09*x113);
     const double x121 = x116*x120;
     const double x122 = x115*x120;
     const double x123 = 1.2 + x113 - x116*x121;
     const double x124 = 0.5785977859778599*x53 + x116*x122;
-    const double x125 = 1.2 + 0.8 - x112 - x115*x122;
+    const double x125 = 2 - x112 - x115*x122;
     const double x126 = x48*x117 - x49*x54;
     const double x127 = x125 - x123;
     const double x128 = x124 + x124;
@@ -9120,14 +9120,14 @@ void walking_machine_inertia_inverse(const double *q, const double *p, double *A
     const double x180 = 0.17357933579335796*x63;
     const double x181 = -0.18 - 0.3*x178;
     const double x182 = 0.18 + x179;
-    const double x183 = 0.037 + 0.3*x179 + 0.021680000000000005 - x65 + 0.033600000000000005*x44;
-    const double x184 = 0.0008 + 0.0004 + x65;
+    const double x183 = 0.05868 + 0.3*x179 - x65 + 0.033600000000000005*x44;
+    const double x184 = 0.0012000000000000001 + x65;
     const double x185 = 1/(0.037 + 0.09*x178);
     const double x186 = x181*x185;
     const double x187 = x180*x185;
     const double x188 = 1.2 + x178 - x181*x186;
     const double x189 = 0.5785977859778599*x63 + x181*x187;
-    const double x190 = 1.2 + 0.8 - x177 - x180*x187;
+    const double x190 = 2 - x177 - x180*x187;
     const double x191 = x42*x182 - x43*x64;
     const double x192 = x190 - x188;
     const double x193 = x189 + x189;
@@ -9179,14 +9179,14 @@ void walking_machine_inertia_inverse(const double *q, const double *p, double *A
     const double x239 = 0.17357933579335796*x73;
     const double x240 = -0.18 - 0.3*x237;
     const double x241 = 0.18 + x238;
-    const double x242 = 0.037 + 0.3*x238 + 0.021680000000000005 - x75 + 0.033600000000000005*x38;
-    const double x243 = 0.0008 + 0.0004 + x75;
+    const double x242 = 0.05868 + 0.3*x238 - x75 + 0.033600000000000005*x38;
+    const double x243 = 0.0012000000000000001 + x75;
     const double x244 = 1/(0.037 + 0.09*x237);
     const double x245 = x240*x244;
     const double x246 = x239*x244;
     const double x247 = 1.2 + x237 - x240*x245;
     const double x248 = 0.5785977859778599*x73 + x240*x246;
-    const double x249 = 1.2 + 0.8 - x236 - x239*x246;
+    const double x249 = 2 - x236 - x239*x246;
     const double x250 = x36*x241 - x37*x74;
     const double x251 = x249 - x247;
     const double x252 = x248 + x248;
@@ -9244,14 +9244,14 @@ void walking_machine_inertia_inverse(const double *q, const double *p, double *A
     const double x304 = 0.17357933579335796*x83;
     const double x305 = -0.18 - 0.3*x302;
     const double x306 = 0.18 + x303;
-    const double x307 = 0.037 + 0.3*x303 + 0.021680000000000005 - x85 + 0.033600000000000005*x32;
-    const double x308 = 0.0008 + 0.0004 + x85;
+    const double x307 = 0.05868 + 0.3*x303 - x85 + 0.033600000000000005*x32;
+    const double x308 = 0.0012000000000000001 + x85;
     const double x309 = 1/(0.037 + 0.09*x302);
     const double x310 = x305*x309;
     const double x311 = x304*x309;
     const double x312 = 1.2 + x302 - x305*x310;
     const double x313 = 0.5785977859778599*x83 + x305*x311;
-    const double x314 = 1.2 + 0.8 - x301 - x304*x311;
+    const double x314 = 2 - x301 - x304*x311;
     const double x315 = x30*x306 - x31*x84;
     const double x316 = x314 - x312;
     const double x317 = x313 + x313;
@@ -9308,14 +9308,14 @@ void walking_machine_inertia_inverse(const double *q, const double *p, double *A
     const double x368 = 0.17357933579335796*x93;
     const double x369 = -0.18 - 0.3*x366;
     const double x370 = 0.18 + x367;
-    const double x371 = 0.037 + 0.3*x367 + 0.021680000000000005 - x95 + 0.033600000000000005*x26;
-    const double x372 = 0.0008 + 0.0004 + x95;
+    const double x371 = 0.05868 + 0.3*x367 - x95 + 0.033600000000000005*x26;
+    const double x372 = 0.0012000000000000001 + x95;
     const double x373 = 1/(0.037 + 0.09*x366);
     const double x374 = x369*x373;
     const double x375 = x368*x373;
     const double x376 = 1.2 + x366 - x369*x374;
     const double x377 = 0.5785977859778599*x93 + x369*x375;
-    const double x378 = 1.2 + 0.8 - x365 - x368*x375;
+    const double x378 = 2 - x365 - x368*x375;
     const double x379 = x24*x370 - x25*x94;
     const double x380 = x378 - x376;
     const double x381 = x377 + x377;
@@ -9366,14 +9366,14 @@ void walking_machine_inertia_inverse(const double *q, const double *p, double *A
     const double x426 = 0.17357933579335796*x103;
     const double x427 = -0.18 - 0.3*x424;
     const double x428 = 0.18 + x425;
-    const double x429 = 0.037 + 0.3*x425 + 0.021680000000000005 - x105 + 0.033600000000000005*x20;
-    const double x430 = 0.0008 + 0.0004 + x105;
+    const double x429 = 0.05868 + 0.3*x425 - x105 + 0.033600000000000005*x20;
+    const double x430 = 0.0012000000000000001 + x105;
     const double x431 = 1/(0.037 + 0.09*x424);
     const double x432 = x427*x431;
     const double x433 = x426*x431;
     const double x434 = 1.2 + x424 - x427*x432;
     const double x435 = 0.5785977859778599*x103 + x427*x433;
-    const double x436 = 1.2 + 0.8 - x423 - x426*x433;
+    const double x436 = 2 - x423 - x426*x433;
     const double x437 = x18*x428 - x19*x104;
     const double x438 = x436 - x434;
     const double x439 = x435 + x435;
@@ -9443,7 +9443,7 @@ void walking_machine_inertia_inverse(const double *q, const double *p, double *A
     const double x503 = x175 - 0.3 + x232 + x299 + x363 + x419 + x485 - x489*x497;
     const double x504 = 0.41200000000000003 + 0.04000000000000001*x161 + 0.04000000000000001*x225 + 0.04000000000000001*x285 + 0.04000000000000001*x350 + 0.04000000000000001*x413 + 0.04000000000000001*x472 - x490*x496;
     const double x505 = 0.2*x363 - 0.2*x175 - 0.2*x232 - 0.2*x299 + 0.2*x419 + 0.2*x485 - x490*x497;
-    const double x506 = 1.615 + 0.4*x175 + 0.0003 - x164 + 0.4*x168 + 0.0003 - x228 + 0.0003 - x288 - 0.4*x292 - 0.4*x299 + 0.4*x363 + 0.0003 - x353 + 0.4*x356 + 0.0003 - x416 + 0.0003 - x475 - 0.4*x478 - 0.4*x485 - x491*x497;
+    const double x506 = 1.6167999999999998 + 0.4*x175 - x164 + 0.4*x168 - x228 - x288 - 0.4*x292 - 0.4*x299 + 0.4*x363 - x353 + 0.4*x356 - x416 - x475 - 0.4*x478 - 0.4*x485 - x491*x497;
     const double x507 = x5*x498 + x4*x499;
     const double x508 = x5*x500 + x4*x501;
     const double x509 = x5*x502 + x4*x503;
@@ -10908,7 +10908,7 @@ void walking_machine_inertia_inverse(const double *q, const double *p, double *A
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 1217 mul, 1015 add, 17 div, 21 call */
+ * operations: 1217 mul, 991 add, 17 div, 21 call */
 void walking_machine_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_3 = q[3];
@@ -11057,16 +11057,16 @@ void walking_machine_transvective_factors(const double *q, const double *p, doub
     const double x115 = 0.17357933579335796*x53;
     const double x116 = -0.18 - 0.3*x113;
     const double x117 = 0.18 + x114;
-    const double x118 = 0.037 + 0.3*x114 + 0.021680000000000005 - x55 + 0.033600000000000005*x50;
+    const double x118 = 0.05868 + 0.3*x114 - x55 + 0.033600000000000005*x50;
     const double x119 = 0.037 + 0.09*x113;
     diag[22] = x119;
-    const double x120 = 0.0008 + 0.0004 + x55;
+    const double x120 = 0.0012000000000000001 + x55;
     const double x121 = 1/x119;
     const double x122 = x116*x121;
     const double x123 = x115*x121;
     const double x124 = 1.2 + x113 - x116*x122;
     const double x125 = 0.5785977859778599*x53 + x116*x123;
-    const double x126 = 1.2 + 0.8 - x112 - x115*x123;
+    const double x126 = 2 - x112 - x115*x123;
     const double x127 = x48*x117 - x49*x54;
     const double x128 = x126 - x124;
     const double x129 = x125 + x125;
@@ -11126,16 +11126,16 @@ void walking_machine_transvective_factors(const double *q, const double *p, doub
     const double x182 = 0.17357933579335796*x63;
     const double x183 = -0.18 - 0.3*x180;
     const double x184 = 0.18 + x181;
-    const double x185 = 0.037 + 0.3*x181 + 0.021680000000000005 - x65 + 0.033600000000000005*x44;
+    const double x185 = 0.05868 + 0.3*x181 - x65 + 0.033600000000000005*x44;
     const double x186 = 0.037 + 0.09*x180;
     diag[19] = x186;
-    const double x187 = 0.0008 + 0.0004 + x65;
+    const double x187 = 0.0012000000000000001 + x65;
     const double x188 = 1/x186;
     const double x189 = x183*x188;
     const double x190 = x182*x188;
     const double x191 = 1.2 + x180 - x183*x189;
     const double x192 = 0.5785977859778599*x63 + x183*x190;
-    const double x193 = 1.2 + 0.8 - x179 - x182*x190;
+    const double x193 = 2 - x179 - x182*x190;
     const double x194 = x42*x184 - x43*x64;
     const double x195 = x193 - x191;
     const double x196 = x192 + x192;
@@ -11189,16 +11189,16 @@ void walking_machine_transvective_factors(const double *q, const double *p, doub
     const double x243 = 0.17357933579335796*x73;
     const double x244 = -0.18 - 0.3*x241;
     const double x245 = 0.18 + x242;
-    const double x246 = 0.037 + 0.3*x242 + 0.021680000000000005 - x75 + 0.033600000000000005*x38;
+    const double x246 = 0.05868 + 0.3*x242 - x75 + 0.033600000000000005*x38;
     const double x247 = 0.037 + 0.09*x241;
     diag[16] = x247;
-    const double x248 = 0.0008 + 0.0004 + x75;
+    const double x248 = 0.0012000000000000001 + x75;
     const double x249 = 1/x247;
     const double x250 = x244*x249;
     const double x251 = x243*x249;
     const double x252 = 1.2 + x241 - x244*x250;
     const double x253 = 0.5785977859778599*x73 + x244*x251;
-    const double x254 = 1.2 + 0.8 - x240 - x243*x251;
+    const double x254 = 2 - x240 - x243*x251;
     const double x255 = x36*x245 - x37*x74;
     const double x256 = x254 - x252;
     const double x257 = x253 + x253;
@@ -11258,16 +11258,16 @@ void walking_machine_transvective_factors(const double *q, const double *p, doub
     const double x310 = 0.17357933579335796*x83;
     const double x311 = -0.18 - 0.3*x308;
     const double x312 = 0.18 + x309;
-    const double x313 = 0.037 + 0.3*x309 + 0.021680000000000005 - x85 + 0.033600000000000005*x32;
+    const double x313 = 0.05868 + 0.3*x309 - x85 + 0.033600000000000005*x32;
     const double x314 = 0.037 + 0.09*x308;
     diag[13] = x314;
-    const double x315 = 0.0008 + 0.0004 + x85;
+    const double x315 = 0.0012000000000000001 + x85;
     const double x316 = 1/x314;
     const double x317 = x311*x316;
     const double x318 = x310*x316;
     const double x319 = 1.2 + x308 - x311*x317;
     const double x320 = 0.5785977859778599*x83 + x311*x318;
-    const double x321 = 1.2 + 0.8 - x307 - x310*x318;
+    const double x321 = 2 - x307 - x310*x318;
     const double x322 = x30*x312 - x31*x84;
     const double x323 = x321 - x319;
     const double x324 = x320 + x320;
@@ -11326,16 +11326,16 @@ void walking_machine_transvective_factors(const double *q, const double *p, doub
     const double x376 = 0.17357933579335796*x93;
     const double x377 = -0.18 - 0.3*x374;
     const double x378 = 0.18 + x375;
-    const double x379 = 0.037 + 0.3*x375 + 0.021680000000000005 - x95 + 0.033600000000000005*x26;
+    const double x379 = 0.05868 + 0.3*x375 - x95 + 0.033600000000000005*x26;
     const double x380 = 0.037 + 0.09*x374;
     diag[10] = x380;
-    const double x381 = 0.0008 + 0.0004 + x95;
+    const double x381 = 0.0012000000000000001 + x95;
     const double x382 = 1/x380;
     const double x383 = x377*x382;
     const double x384 = x376*x382;
     const double x385 = 1.2 + x374 - x377*x383;
     const double x386 = 0.5785977859778599*x93 + x377*x384;
-    const double x387 = 1.2 + 0.8 - x373 - x376*x384;
+    const double x387 = 2 - x373 - x376*x384;
     const double x388 = x24*x378 - x25*x94;
     const double x389 = x387 - x385;
     const double x390 = x386 + x386;
@@ -11388,16 +11388,16 @@ void walking_machine_transvective_factors(const double *q, const double *p, doub
     const double x436 = 0.17357933579335796*x103;
     const double x437 = -0.18 - 0.3*x434;
     const double x438 = 0.18 + x435;
-    const double x439 = 0.037 + 0.3*x435 + 0.021680000000000005 - x105 + 0.033600000000000005*x20;
+    const double x439 = 0.05868 + 0.3*x435 - x105 + 0.033600000000000005*x20;
     const double x440 = 0.037 + 0.09*x434;
     diag[7] = x440;
-    const double x441 = 0.0008 + 0.0004 + x105;
+    const double x441 = 0.0012000000000000001 + x105;
     const double x442 = 1/x440;
     const double x443 = x437*x442;
     const double x444 = x436*x442;
     const double x445 = 1.2 + x434 - x437*x443;
     const double x446 = 0.5785977859778599*x103 + x437*x444;
-    const double x447 = 1.2 + 0.8 - x433 - x436*x444;
+    const double x447 = 2 - x433 - x436*x444;
     const double x448 = x18*x438 - x19*x104;
     const double x449 = x447 - x445;
     const double x450 = x446 + x446;
@@ -11471,7 +11471,7 @@ void walking_machine_transvective_factors(const double *q, const double *p, doub
     const double x516 = x177 - 0.3 + x236 + x305 + x371 + x429 + x497 - x501*x510;
     const double x517 = 0.41200000000000003 + 0.04000000000000001*x163 + 0.04000000000000001*x229 + 0.04000000000000001*x291 + 0.04000000000000001*x358 + 0.04000000000000001*x423 + 0.04000000000000001*x484 - x502*x509;
     const double x518 = 0.2*x371 - 0.2*x177 - 0.2*x236 - 0.2*x305 + 0.2*x429 + 0.2*x497 - x502*x510;
-    const double x519 = 1.615 + 0.4*x177 + 0.0003 - x166 + 0.4*x170 + 0.0003 - x232 + 0.0003 - x294 - 0.4*x298 - 0.4*x305 + 0.4*x371 + 0.0003 - x361 + 0.4*x364 + 0.0003 - x426 + 0.0003 - x487 - 0.4*x490 - 0.4*x497 - x503*x510;
+    const double x519 = 1.6167999999999998 + 0.4*x177 - x166 + 0.4*x170 - x232 - x294 - 0.4*x298 - 0.4*x305 + 0.4*x371 - x361 + 0.4*x364 - x426 - x487 - 0.4*x490 - 0.4*x497 - x503*x510;
     const double x520 = x5*x511 + x4*x512;
     const double x521 = x5*x513 + x4*x514;
     const double x522 = x5*x515 + x4*x516;
