@@ -54,8 +54,10 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--trials", type=int, default=20, help="random states per routine (default 20)")
     c.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     c.add_argument("--tol", type=float, default=1e-12, help="largest relative error accepted (default 1e-12)")
-    c.add_argument("--opt", default="-O2", choices=["-O0", "-O1", "-O2", "-O3"],
-                   help="optimization level of the compile (default -O2; large models compile much faster at -O0)")
+    c.add_argument("--opt", default="-O2", type=lambda v: v if v.startswith("-") else "-" + v,
+                   choices=["-O0", "-O1", "-O2", "-O3"],
+                   help="optimization level of the compile: O0, O1, O2 or O3 (or --opt=-O2; default -O2; large "
+                        "models compile much faster at O0)")
     command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
     return parser
 

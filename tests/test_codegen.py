@@ -272,3 +272,16 @@ def test_closed_forms_only_where_their_expansion_is_small(tmp_path):
     tex = generate(arm).files[f"{arm.name}.tex"]
     assert "Intermediate-variable form" in tex
     assert "Intermediate-variable form" not in generate(aggsym.load(model_path("planar_3link"))).files["planar_3link.tex"]
+
+
+def test_check_opt_takes_the_level_with_or_without_its_dash():
+    """``--opt O0`` (argparse reads ``--opt -O0`` as two options, so the dash is optional), ``--opt=-O3``; a level
+    that is not one of O0-O3 is a usage error (exit 2)."""
+    parser = cli._parser()
+    base = ["check", str(model_path("planar_2link"))]
+    assert parser.parse_args(base + ["--opt", "O0"]).opt == "-O0"
+    assert parser.parse_args(base + ["--opt=-O3"]).opt == "-O3"
+    assert parser.parse_args(base).opt == "-O2"
+    with pytest.raises(SystemExit) as exc:
+        parser.parse_args(base + ["--opt", "O9"])
+    assert exc.value.code == 2
