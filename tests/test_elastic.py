@@ -30,26 +30,11 @@ from aggsym.elastic import BLOCKS, fast_slow
 from aggsym.equations import coordinate_symbols, to_sympy
 from aggsym.errors import ModelError
 from aggsym.kinematics import TreeKinematics
-from aggsym.routines import ROUTINES
 from conftest import MODELS, model_path
+from symbolic_routines import routine_sympy
 from test_book_closed_forms import assert_equal, sym
 
 ELASTIC = "double_pendulum_elastic_stand"
-
-
-def routine_sympy(model, role):
-    """The outputs of a routine as SymPy expressions in the symbols of aggsym.equations."""
-    routine = ROUTINES[role]
-    back = Symbolic()
-    prog = back.program
-    bound = bind(model, back)
-    ins = {n: prog.vector(n, model.nq) for n in routine.inputs if n != "p"}
-    outs = routine.build(bound, TreeKinematics(bound, ins["q"]), ins)
-    q, qd, _ = coordinate_symbols(model)
-    symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
-    symbols.update({("q", i): s for i, s in enumerate(q)})
-    symbols.update({("qd", i): s for i, s in enumerate(qd)})
-    return [to_sympy(prog, out, symbols) for out in outs]
 
 
 def book_coefficients(theta):

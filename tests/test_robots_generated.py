@@ -3,36 +3,18 @@
 For the robots of example-robot-data (fixed base): A vs crba, d = b + g vs nonLinearEffects, g vs
 computeGeneralizedGravity, inverse dynamics vs rnea, the joint wrenches vs data.f after rnea, T and U vs
 computeKineticEnergy / computePotentialEnergy, the Coriolis matrix C by C qd = b and C + C^T = dM/dt from
-computeCoriolisMatrix; relative error <= 1e-9.  The C is compiled with -O0 here (the
-flags that matter, -std=c99 -Wall -Wextra -Wpedantic -Werror, stay; -O2 is exercised by test_codegen and
-`aggsym check`), which keeps talos' compile to seconds.
+computeCoriolisMatrix; relative error <= 1e-9.  The code comes from conftest's ``robot_code`` (compiled -O0,
+shared with test_transvective_pinocchio).
 """
-import json
-
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import aggsym
-from aggsym.codegen.compile import CLibrary, compile_shared, import_module
-from aggsym.codegen.generate import generate, write
-from pinocchio_reference import (ROBOTS, TOLERANCE, inertia_rate, pinocchio_model, pinocchio_q, relative_error,
-                                 robot_path)
+from pinocchio_reference import TOLERANCE, inertia_rate, pinocchio_model, pinocchio_q, relative_error
 from random_trees import random_urdf
 
 pytestmark = pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")
-
-
-@pytest.fixture(scope="module", params=sorted(ROBOTS))
-def robot(request, tmp_path_factory):
-    name = request.param
-    model = aggsym.load(robot_path(name))
-    out = tmp_path_factory.mktemp(name)
-    write(generate(model, latex=False), out)
-    manifest = json.loads((out / f"{model.name}.json").read_text())
-    lib = CLibrary(compile_shared(out / f"{model.name}.c", out / "lib.so", extra=("-O0",)), manifest)
-    module = import_module(out / f"{model.name}.py")
-    return name, model, lib, module, pinocchio_model(robot_path(name))
 
 
 def both(lib, module, role, *args):
@@ -40,8 +22,8 @@ def both(lib, module, role, *args):
     return lib.call(role, *args), getattr(module, role)(*args)
 
 
-def test_generated_code_equals_pinocchio(robot, rng):
-    name, model, lib, module, pm = robot
+def test_generated_code_equals_pinocchio(robot_code, rng):
+    name, model, lib, module, pm = robot_code
     data = pm.createData()
     assert model.nq == pm.nv
     for _ in range(3):

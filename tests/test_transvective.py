@@ -14,7 +14,6 @@ import sympy as sp
 
 import aggsym
 from aggsym.backend import Numeric, Symbolic, bind
-from aggsym.equations import coordinate_symbols, to_sympy
 from aggsym.kinematics import TreeKinematics
 from aggsym.model.tree import Tree
 from aggsym.routines import ROUTINES
@@ -25,6 +24,7 @@ from aggsym.transvective import (
     transvected_forces, transvection_pairs,
 )
 from conftest import MODELS, model_path
+from symbolic_routines import routine_program, routine_sympy
 from test_variants import chain_of_elementary_frames
 
 DATA = Path(__file__).resolve().parent / "data"
@@ -259,21 +259,6 @@ def test_trig_zero_can_fail():
     assert not trig_zero(sp.sin(x) ** 2 - sp.cos(x) ** 2, [x])
 
 
-def routine_sympy(model, role):
-    """The outputs of a routine as SymPy expressions in the symbols of aggsym.equations."""
-    routine = ROUTINES[role]
-    back = Symbolic()
-    prog = back.program
-    bound = bind(model, back)
-    ins = {n: prog.vector(n, model.nq) for n in routine.inputs if n != "p"}
-    outs = routine.build(bound, TreeKinematics(bound, ins["q"]), ins)
-    q, qd, _ = coordinate_symbols(model)
-    symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
-    symbols.update({("q", i): s for i, s in enumerate(q)})
-    symbols.update({("qd", i): s for i, s in enumerate(qd)})
-    return [to_sympy(prog, out, symbols) for out in outs]
-
-
 @pytest.mark.parametrize("name", ["double_pendulum", "planar_3link"])
 def test_symbolic_identities(name):
     """T A T^T = diag (3.11) and A^-1 A = E (3.19) hold identically for the double pendulum and Tokad's arm."""
@@ -385,12 +370,7 @@ def program_operations(model, role) -> int:
     after folding and value numbering (the code generator's CSE comes on top)."""
     from aggsym.codegen.program import ADD, DIV, MUL, NEG, SUB
 
-    routine = ROUTINES[role]
-    back = Symbolic()
-    prog = back.program
-    bound = bind(model, back)
-    ins = {n: prog.vector(n, model.nq) for n in routine.inputs if n != "p"}
-    outs = routine.build(bound, TreeKinematics(bound, ins["q"]), ins)
+    prog, outs = routine_program(model, role)
     ids = prog.reachable([x for out in outs for x in out])
     return sum(prog.ops[i][0] in (MUL, DIV, ADD, SUB, NEG) for i in ids)
 

@@ -7,15 +7,11 @@ error: max |ours - Pinocchio| / max |Pinocchio| <= 1e-9.  computeMinverse fills 
 mirrored.  The C is compiled with -O0 (the warning flags stay; -O2 is exercised by test_codegen), which keeps
 talos' compile to seconds.
 """
-import json
-
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import aggsym
-from aggsym.codegen.compile import CLibrary, compile_shared, import_module
-from aggsym.codegen.generate import generate, write
 from aggsym.model.tree import Tree
 from pinocchio_reference import ROBOTS, TOLERANCE, pinocchio_model, pinocchio_q, relative_error, robot_path
 from random_trees import random_urdf
@@ -132,20 +128,8 @@ def test_singular_tree_is_refused(seed, tmp_path):
 # the generated C and NumPy module
 
 
-@pytest.fixture(scope="module", params=sorted(ROBOTS))
-def generated(request, tmp_path_factory):
-    """(name, model, C library, NumPy module, Pinocchio model) of a robot's generated code."""
-    name = request.param
-    model = aggsym.load(robot_path(name))
-    out = tmp_path_factory.mktemp(name)
-    write(generate(model, latex=False), out)
-    manifest = json.loads((out / f"{model.name}.json").read_text())
-    lib = CLibrary(compile_shared(out / f"{model.name}.c", out / "lib.so", extra=("-O0",)), manifest)
-    return name, model, lib, import_module(out / f"{model.name}.py"), pinocchio_model(robot_path(name))
-
-
-def test_generated_code_against_pinocchio(generated, rng):
-    name, model, lib, module, pm = generated
+def test_generated_code_against_pinocchio(robot_code, rng):
+    name, model, lib, module, pm = robot_code
     data = pm.createData()
     for q, qd, tau in states(model, rng):
         qdd, Minv = pinocchio_reference(pm, data, q, qd, tau)
