@@ -48,7 +48,9 @@ def _parser() -> argparse.ArgumentParser:
 
     g = command("generate", "write NAME.h, NAME.c, NAME.py, NAME.tex and NAME.json")
     g.add_argument("-o", "--output", metavar="OUTDIR", help="output folder (default: generated/NAME/)")
-    g.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    g.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    g.add_argument("--list-routines", action="store_true",
+                   help="print the routines this model gets, one line each (what each computes), and write nothing")
     command("latex", "print the LaTeX document of the equations of motion")
     c = command("check", "compile the C, run it and the NumPy module on random states, compare with the numeric twin")
     c.add_argument("--trials", type=int, default=20, help="random states per routine (default 20)")
@@ -81,18 +83,26 @@ def _progress(quiet: bool, name: str):
 
 
 def cmd_generate(args) -> int:
-    from .codegen.generate import generate, write
-
     t0 = time.perf_counter()
     model = _load(args)
+    if args.list_routines:
+        from .contract import c_symbol, routines_for
+
+        routines = routines_for(model)
+        width = max(len(c_symbol(model, r)) for r in routines)
+        for r in routines:
+            print(f"{c_symbol(model, r).ljust(width)}  {r.doc}")
+        return 0
+    from .codegen.generate import generate, write
+
     gen = generate(model, progress=_progress(args.quiet, model.name))
     outdir = Path(args.output) if args.output else Path("generated") / model.name
     paths = write(gen, outdir)
     if not args.quiet:
         print(f"aggsym: {model.name}: wrote {len(paths)} files to {outdir} in {time.perf_counter() - t0:.2f} s",
               file=sys.stderr)
-    for p in paths:
-        print(p)
+        for p in paths:
+            print(p)
     return 0
 
 

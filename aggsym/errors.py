@@ -30,9 +30,3 @@ class ModelError(AggsymError):
 
 class ModelWarning(UserWarning):
     """A model file that can be used but looks wrong (e.g. a URDF inertia violating the triangle inequality)."""
-
-
-class CheckMismatch(AggsymError):
-    """Generated code disagrees with the numeric twin."""
-
-    exit_code = 1

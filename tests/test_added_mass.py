@@ -15,10 +15,12 @@ import pytest
 import sympy as sp
 
 import aggsym
-from aggsym.backend import Numeric, bind
+from aggsym.core.backend import Numeric
+from aggsym.mechanics.bound import bind
 from aggsym.errors import ModelError
-from aggsym.kinematics import TreeKinematics
+from aggsym.mechanics.kinematics import TreeKinematics
 from conftest import model_path
+from helpers import rk4_step
 from reference import NumericModel, newton_euler, rot
 
 DATA = Path(__file__).parent / "data"
@@ -116,12 +118,7 @@ def test_spheroid_keeps_kirchhoffs_impulse_and_turns_by_the_munk_moment():
     zero, dt = np.zeros(6), 2e-3
     f = lambda q, v: twin.forward_dynamics(q, v, zero)
     for _ in range(100):
-        k1q, k1v = qd, f(q, qd)
-        k2q, k2v = qd + dt / 2 * k1v, f(q + dt / 2 * k1q, qd + dt / 2 * k1v)
-        k3q, k3v = qd + dt / 2 * k2v, f(q + dt / 2 * k2q, qd + dt / 2 * k2v)
-        k4q, k4v = qd + dt * k3v, f(q + dt * k3q, qd + dt * k3v)
-        q = q + dt / 6 * (k1q + 2 * k2q + 2 * k3q + k4q)
-        qd = qd + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        q, qd = rk4_step(f, q, qd, dt)
     P, K = impulse(model, twin, q, qd)
     assert np.abs(P - P0).max() <= 1e-9 * np.abs(P0).max()
     assert np.abs(K - K0).max() <= 1e-9 * max(np.abs(K0).max(), np.abs(P0).max())

@@ -202,10 +202,12 @@ def test_templates_ship_inside_the_wheel(tmp_path):
     shutil.copy(model_path("planar_2link"), elsewhere)
     env = dict(os.environ, PYTHONPATH=str(target))
     proc = subprocess.run([sys.executable, "-c", "import aggsym, sys; print(aggsym.__file__); "
+                           "from importlib.resources import files; print(files('aggsym.templates')); "
                            "from aggsym.cli import main; sys.exit(main(['generate', 'planar_2link.yaml', '-q']))"],
                           cwd=elsewhere, env=env, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.startswith(str(target))
+    package, templates = proc.stdout.split()
+    assert package.startswith(str(target)) and templates.startswith(str(target))
     assert (elsewhere / "generated" / "planar_2link" / "planar_2link.c").exists()
 
 
@@ -257,7 +259,8 @@ def test_outputs_may_alias_inputs(tmp_path, rng):
 def test_closed_forms_only_where_their_expansion_is_small(tmp_path):
     """The LaTeX closed forms are chosen by a bound on the expanded size (deterministic): the seeds' small systems
     get them, a general 3-D four-link arm (whose expansion SymPy does not finish) the intermediate-variable form."""
-    from aggsym.codegen.latex import CLOSED_FORM_MAX_TERMS, expanded_terms
+    from aggsym.codegen.latex import CLOSED_FORM_MAX_TERMS
+    from aggsym.core.program import expanded_terms
     from aggsym.codegen.generate import symbolic_routines
     from benchmarks.chain import chain_model
 
@@ -285,3 +288,71 @@ def test_check_opt_takes_the_level_with_or_without_its_dash():
     with pytest.raises(SystemExit) as exc:
         parser.parse_args(base + ["--opt", "O9"])
     assert exc.value.code == 2
+
+
+def test_readme_c_example_compiles_and_runs(tmp_path):
+    """The complete C program of README.md, compiled against the committed generated/double_pendulum with -Werror,
+    prints tau = A qdd + b + g and recovers qdd by forward dynamics, with the run-time parameter change applied."""
+    import re
+
+    text = (ROOT / "README.md").read_text()
+    source = re.search(r"```c\n(/\* main\.c.*?)```", text, re.S).group(1)
+    (tmp_path / "main.c").write_text(source)
+    folder = ROOT / "generated" / "double_pendulum"
+    exe = tmp_path / "main"
+    cc = os.environ.get("CC", "cc")
+    subprocess.run([cc, "-std=c99", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-I", str(folder),
+                    str(tmp_path / "main.c"), str(folder / "double_pendulum.c"), "-lm", "-o", str(exe)],
+                   check=True, capture_output=True, text=True)
+    out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout
+    rows = [[float(x) for x in re.findall(r"= *(-?[\d.]+)", line)] for line in out.strip().splitlines()]
+    model = aggsym.load(model_path("double_pendulum"))
+    p = np.array(model.parameter_values)
+    p[[x.name for x in model.parameters].index("m3")] = 1.2
+    twin = aggsym.NumericTwin(model)
+    q, qd, qdd = np.array([0.1, 0.4, -0.3]), np.array([0.0, 1.0, -0.5]), np.array([0.2, -1.0, 0.5])
+    tau = twin.inverse_dynamics(q, qd, qdd, p=p)
+    A = twin.inertia(q, p=p)
+    assert np.allclose([r[0] for r in rows], tau, atol=2e-6)
+    assert np.allclose([r[1] for r in rows], qdd, atol=2e-6)
+    assert np.allclose([r[2] for r in rows], np.diag(A), atol=2e-6)
+
+
+def test_header_size_and_index_macros(tmp_path):
+    """The header defines NQ, NP, an index per parameter and a size per output array, equal to the manifest's."""
+    import re
+
+    model = aggsym.load(model_path("double_pendulum_elastic_stand"))
+    gen = generate(model, latex=False)
+    header = gen.files[f"{model.name}.h"]
+    manifest = json.loads(gen.files[f"{model.name}.json"])
+    macros = dict(re.findall(r"#define (\w+) (\d+)", header))
+    up = model.name.upper()
+    assert int(macros[f"{up}_NQ"]) == model.nq and int(macros[f"{up}_NP"]) == len(model.parameters)
+    for i, p in enumerate(manifest["parameters"]):
+        assert int(macros[f"{up}_P_{p['name']}"]) == i
+    for role, sig in manifest["signatures"].items():
+        for o in sig["outputs"]:
+            name = f"{up}_{role.upper()}" + (f"_{o['name'].upper()}" if len(sig["outputs"]) > 1 else "") + "_SIZE"
+            assert int(macros[name]) == int(np.prod(o["shape"])), name
+    assert f"{up}_JOINT_WRENCHES_SIZE" in macros and f"{up}_TRANSVECTIVE_FACTORS_TARGS_SIZE" in macros
+
+
+def test_quiet_generate_prints_nothing_and_list_routines_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert cli.main(["generate", str(model_path("planar_2link")), "-o", str(out), "-q"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err == ""
+    assert (out / "planar_2link.c").exists()
+    other = tmp_path / "other"
+    assert cli.main(["generate", str(model_path("planar_2link")), "-o", str(other), "--list-routines"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    manifest = json.loads((out / "planar_2link.json").read_text())
+    assert [line.split()[0] for line in lines] == list(manifest["functions"].values())
+    assert all(len(line.split(None, 1)[1]) > 10 for line in lines) and not other.exists()
+
+
+def test_version_flag(capsys):
+    with pytest.raises(SystemExit) as info:
+        cli.main(["--version"])
+    assert info.value.code == 0 and capsys.readouterr().out.strip() == f"aggsym {aggsym.__version__}"

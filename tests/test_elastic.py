@@ -23,15 +23,17 @@ import pytest
 import sympy as sp
 
 import aggsym
-from aggsym.backend import Numeric, Symbolic, bind
-from aggsym.bias import coriolis_matrix
+from aggsym.core.backend import Numeric, Symbolic
+from aggsym.mechanics.bound import bind
+from aggsym.mechanics.bias import coriolis_matrix
 from aggsym.codegen.generate import generate
-from aggsym.elastic import BLOCKS, fast_slow
-from aggsym.equations import coordinate_symbols, to_sympy
+from aggsym.mechanics.elastic import BLOCKS, fast_slow
+from aggsym.core.program import to_sympy
+from aggsym.symbolic import coordinate_symbols
 from aggsym.errors import ModelError
-from aggsym.kinematics import TreeKinematics
+from aggsym.mechanics.kinematics import TreeKinematics
 from conftest import MODELS, model_path
-from symbolic_routines import routine_sympy
+from helpers import assert_model_error, routine_sympy
 from test_book_closed_forms import assert_equal, sym
 
 ELASTIC = "double_pendulum_elastic_stand"
@@ -231,13 +233,7 @@ def test_bad_elastic_pair_is_reported_precisely(case, tmp_path):
     path = tmp_path / f"{case}.yaml"
     path.write_text("name: x\nbodies:\n  - name: a\n    pair:\n      functional: {o1: x, o2: y}\n      "
                     + entry + "\n    mass: 1.0\n")
-    with pytest.raises(ModelError) as info:
-        aggsym.load(path)
-    err = info.value
-    assert err.where == where, str(err)
-    assert err.line is not None and str(err).startswith(f"{path}:{err.line}:")
-    for w in words:
-        assert w in str(err), str(err)
+    assert_model_error(path, where, words)
 
 
 def test_all_coordinates_elastic_generates_empty_slow_blocks(tmp_path):

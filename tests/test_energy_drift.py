@@ -14,15 +14,12 @@ planar_3link 3.9e-10, spacecraft 4.1e-14, test_bench 5.6e-10, walking_machine 6.
 The check can fail: the elastic stand integrated without its springs in forward_dynamics (but with their energy
 in U) drifts by far more.  (Models with prescribed spins are covered by test_rotors.py's energy balance.)
 """
-import json
-
 import numpy as np
 import pytest
 
 import aggsym
-from aggsym.codegen.compile import import_module
-from aggsym.codegen.generate import generate, write
 from conftest import MODELS
+from helpers import generated_code, rk4_step
 
 TOLERANCE = 1e-8
 STEP = {"double_pendulum_elastic_stand": 5e-4, "planar_2link": 5e-4, "planar_3link": 5e-4, "test_bench": 2e-3,
@@ -34,19 +31,9 @@ def rk4(f, q, v, dt, steps, energy):
     """Classical RK4 for q'' = f(q, q'); returns the worst |E - E(0)| seen at the steps."""
     E0, worst = energy(q, v), 0.0
     for _ in range(steps):
-        k1q, k1v = v, f(q, v)
-        k2q, k2v = v + dt / 2 * k1v, f(q + dt / 2 * k1q, v + dt / 2 * k1v)
-        k3q, k3v = v + dt / 2 * k2v, f(q + dt / 2 * k2q, v + dt / 2 * k2v)
-        k4q, k4v = v + dt * k3v, f(q + dt * k3q, v + dt * k3v)
-        q = q + dt / 6 * (k1q + 2 * k2q + 2 * k3q + k4q)
-        v = v + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        q, v = rk4_step(f, q, v, dt)
         worst = max(worst, abs(energy(q, v) - E0))
     return worst
-
-
-def generated_module(model, folder):
-    write(generate(model, latex=False), folder)
-    return import_module(folder / f"{model.name}.py"), json.loads((folder / f"{model.name}.json").read_text())
 
 
 def initial_state(model):
@@ -65,7 +52,7 @@ def test_conservative_is_the_models_without_prescribed_motion():
 @pytest.mark.parametrize("path", CONSERVATIVE, ids=lambda p: p.stem)
 def test_energy_is_conserved_along_free_motion(path, tmp_path):
     model = aggsym.load(path)
-    mod, manifest = generated_module(model, tmp_path)
+    _, mod, manifest = generated_code(model, tmp_path, c=False)
     assert manifest["conservative"] is True
     q, v = initial_state(model)
     zero = np.zeros(model.nq)
@@ -83,7 +70,7 @@ def test_the_drift_check_can_fail(tmp_path):
     """The elastic stand with its springs left out of the dynamics (forward_dynamics given tau = c(q)) but kept in
     U drifts by orders of magnitude more than the tolerance within 0.1 s."""
     model = aggsym.load(CONSERVATIVE[0].parent / "double_pendulum_elastic_stand.yaml")
-    mod, _ = generated_module(model, tmp_path)
+    _, mod, _ = generated_code(model, tmp_path, c=False)
     q, v = initial_state(model)
 
     def energy(q, v):

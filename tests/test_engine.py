@@ -2,12 +2,12 @@
 import numpy as np
 import sympy as sp
 
-from aggsym.backend import Numeric, Symbolic
-from aggsym.codegen.program import Node, Program
-from aggsym.equations import to_sympy
-from aggsym.group import Motion, phi_force, phi_motion, rotation
-from aggsym.kinematics import pair_functional, pair_velocity_product
-from aggsym.linalg import mm
+from aggsym.core.backend import Numeric, Symbolic
+from aggsym.core.program import Node, Program
+from aggsym.core.program import to_sympy
+from aggsym.mechanics.group import Motion, phi_force, phi_motion, rotation
+from aggsym.mechanics.kinematics import pair_functional, pair_velocity_product
+from aggsym.mechanics.linalg import mm
 
 
 def test_folding_of_zeros_ones_and_constants():
@@ -132,3 +132,30 @@ def test_nodes_have_no_truth_value():
         pass
     else:
         raise AssertionError("a symbolic value must not have a truth value")
+
+
+def test_deep_programs_print_and_evaluate_without_deep_recursion():
+    """A 200,000-term sum (a chain of additions, each used once) is named every INLINE_DEPTH levels, so printing it
+    recurses no deeper than that; evaluation is iterative.  The interpreter's recursion limit is never raised."""
+    import sys
+
+    from aggsym.codegen.printing import CPrinter, Converter
+    from aggsym.core.program import INLINE_DEPTH, Program, straight_line
+
+    limit = sys.getrecursionlimit()
+    prog = Program()
+    xs = prog.vector("p", 200_000)
+    acc = 0
+    for x in xs:
+        acc = acc + x * x
+    sl = straight_line(prog, [[acc]])
+    assert 200_000 // INLINE_DEPTH - 2 <= len(sl.temps) <= 200_000 // (INLINE_DEPTH // 2)
+    names = {prog.inputs[key].id: f"p_{key[1]}" for key in sl.inputs}
+    names.update({i: f"x{k}" for k, i in enumerate(sl.temps)})
+    conv, printer = Converter(prog, names), CPrinter()
+    lines = [printer._print(conv(prog.nodes[i])) for i in sl.temps]
+    assert lines[-1].count("+") <= INLINE_DEPTH
+    values = {("p", i): 1.0 + (i % 7) for i in range(200_000)}
+    (total,) = prog.evaluate([acc], values)
+    assert total == sum((1.0 + (i % 7)) ** 2 for i in range(200_000))
+    assert sys.getrecursionlimit() == limit

@@ -3,10 +3,12 @@ import numpy as np
 import pytest
 
 import aggsym
-from aggsym.backend import Numeric, bind
-from aggsym.inertia import inertia_matrix, inertia_matrix_sas
-from aggsym.kinematics import TreeKinematics
+from aggsym.core.backend import Numeric
+from aggsym.mechanics.bound import bind
+from aggsym.mechanics.inertia import inertia_matrix, inertia_matrix_sas
+from aggsym.mechanics.kinematics import TreeKinematics
 from conftest import MODELS
+from helpers import states as random_states
 from reference import NumericModel, mass_matrix, newton_euler
 
 TRIALS = 5
@@ -18,8 +20,7 @@ def model(request):
 
 
 def states(model, rng, n=TRIALS):
-    for _ in range(n):
-        yield (rng.uniform(-np.pi, np.pi, model.nq), rng.normal(size=model.nq), rng.normal(size=model.nq))
+    return random_states(model, rng, n)
 
 
 def test_composite_bodies_equal_s_a_st(model, rng):

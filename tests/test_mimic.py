@@ -14,7 +14,7 @@ from aggsym import cli
 from aggsym.codegen.compile import CLibrary, compile_shared, import_module
 from aggsym.codegen.generate import generate, write
 from aggsym.errors import ModelError
-from pinocchio_reference import inertia_rate, pinocchio_q, relative_error
+from helpers import inertia_rate, pinocchio_q, relative_error
 from random_trees import random_urdf
 
 TOLERANCE = 1e-9

@@ -11,7 +11,7 @@ import pinocchio as pin
 import pytest
 
 import aggsym
-from pinocchio_reference import TOLERANCE, inertia_rate, pinocchio_model, pinocchio_q, relative_error
+from helpers import TOLERANCE, inertia_rate, pinocchio_model, pinocchio_q, relative_error
 from random_trees import random_urdf
 
 pytestmark = pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")

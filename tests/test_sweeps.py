@@ -10,18 +10,20 @@ import pinocchio as pin
 import pytest
 
 import aggsym
-from aggsym.aggregates import Rigid
-from aggsym.backend import Numeric, Symbolic, bind
-from aggsym.codegen.program import ADD, MUL, NEG, SUB
-from aggsym.group import phi_force
-from aggsym.kinematics import TreeKinematics, generalized, world_frame_vectors
-from aggsym.linalg import cross
-from aggsym.routines import ROUTINES, inverse_dynamics_by_equations, run
-from aggsym.sweeps import (
+from aggsym.mechanics.aggregates import Rigid
+from aggsym.core.backend import Numeric, Symbolic
+from aggsym.mechanics.bound import bind
+from aggsym.core.program import ADD, MUL, NEG, SUB
+from aggsym.mechanics.group import phi_force
+from aggsym.mechanics.kinematics import TreeKinematics, generalized, world_frame_vectors
+from aggsym.mechanics.linalg import cross
+from aggsym.contract import ROUTINES, joint_wrench_layout, run
+from aggsym.mechanics.sweeps import (
     body_wrench, d_vector, forward_sweep, gravity_base, gravity_wrenches, inverse_dynamics,
-    joint_wrench_layout, keeps_origin, origin_sweep, pair_bodies, transmitted_wrenches,
+    keeps_origin, origin_sweep, pair_bodies, transmitted_wrenches,
 )
 from conftest import MODELS, ROOT, model_path
+from helpers import inverse_dynamics_by_equations, states as random_states
 from reference import NumericModel, newton_euler_full, pair_wrenches, rot
 
 DATA = ROOT / "tests" / "data"
@@ -35,8 +37,7 @@ def model(request):
 
 
 def states(model, rng, n=TRIALS):
-    for _ in range(n):
-        yield (rng.uniform(-np.pi, np.pi, model.nq), rng.normal(size=model.nq), rng.normal(size=model.nq))
+    return random_states(model, rng, n)
 
 
 def close(a, b, rel):
@@ -53,7 +54,7 @@ def test_routines_are_the_sweeps(model, rng):
     """The contract's inverse_dynamics is the sweep (same signature) plus the springs C q of elastic pairs (2.27);
     bias and gravity are its d(q, q') without gravity and at rest (2.44)-(2.46), (2.52), and agree with the O(n)
     recursion (2.36)-(2.37) and -S G."""
-    from aggsym.bias import bias_vector, gravity_vector
+    from aggsym.mechanics.bias import bias_vector, gravity_vector
 
     routine = ROUTINES["inverse_dynamics"]
     assert routine.inputs == ("q", "qd", "qdd", "p")

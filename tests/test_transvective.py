@@ -13,18 +13,21 @@ import pytest
 import sympy as sp
 
 import aggsym
-from aggsym.backend import Numeric, Symbolic, bind
-from aggsym.kinematics import TreeKinematics
+from aggsym.core.backend import Numeric, Symbolic
+from aggsym.mechanics.bound import bind
+from aggsym.mechanics.kinematics import TreeKinematics
 from aggsym.model.tree import Tree
-from aggsym.routines import ROUTINES
-from aggsym import sweeps
-from aggsym.transvective import (
+from aggsym.contract import ROUTINES
+from aggsym.mechanics import sweeps
+from aggsym.mechanics.transvective import (
     apply_T, apply_T_transpose, apply_T_transpose_tree, apply_T_tree, articulated_factors, cauchy_solve,
-    cauchy_solve_tree, coordinates_above, corrected_factors, factored_form, forward_dynamics, layout,
+    cauchy_solve_tree, coordinates_above, corrected_factors, forward_dynamics,
     transvected_forces, transvection_pairs,
 )
+from aggsym.contract import transvective_layout as layout
+from aggsym.symbolic import factored_form
 from conftest import MODELS, model_path
-from symbolic_routines import routine_program, routine_sympy
+from helpers import routine_program, routine_sympy
 from test_variants import chain_of_elementary_frames
 
 DATA = Path(__file__).resolve().parent / "data"
@@ -368,7 +371,7 @@ def test_against_pinocchio(path, rng):
 def program_operations(model, role) -> int:
     """Arithmetic nodes (* / + - and negations) reachable from a routine's outputs in its straight-line program,
     after folding and value numbering (the code generator's CSE comes on top)."""
-    from aggsym.codegen.program import ADD, DIV, MUL, NEG, SUB
+    from aggsym.core.program import ADD, DIV, MUL, NEG, SUB
 
     prog, outs = routine_program(model, role)
     ids = prog.reachable([x for out in outs for x in out])
@@ -393,7 +396,7 @@ def chain_urdf(n: int) -> str:
 def test_forward_dynamics_is_linear_in_n(tmp_path, monkeypatch):
     """The emitted q'' costs O(n): on chains of 6, 12 and 24 links the operations grow by equal steps per link
     (the transvection-by-transvection order with the explicit arguments grows like n d = n^2 on a chain)."""
-    from aggsym import transvective
+    from aggsym.mechanics import transvective
 
     def counts():
         out = []

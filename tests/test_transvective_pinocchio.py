@@ -13,7 +13,7 @@ import pytest
 
 import aggsym
 from aggsym.model.tree import Tree
-from pinocchio_reference import ROBOTS, TOLERANCE, pinocchio_model, pinocchio_q, relative_error, robot_path
+from helpers import ROBOTS, TOLERANCE, pinocchio_model, pinocchio_q, relative_error, robot_path
 from random_trees import random_urdf
 
 pytestmark = pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")

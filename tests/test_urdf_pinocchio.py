@@ -16,7 +16,7 @@ import pytest
 import aggsym
 from aggsym.errors import ModelWarning
 from aggsym.model.types import elementary_rotation
-from pinocchio_reference import ROBOTS, compare, joint_names, pinocchio_model, pinocchio_q, robot_path
+from helpers import ROBOTS, compare, joint_names, pinocchio_model, pinocchio_q, robot_path
 from random_trees import random_urdf
 
 RANDOM_SEEDS = range(25)

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..contract import ROUTINES, signature
 from ..errors import AggsymError
-from ..numeric import NumericTwin
-from ..routines import ROUTINES, signature
+from ..twin import NumericTwin
 
 CFLAGS = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-fPIC", "-shared"]
 

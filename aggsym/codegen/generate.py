@@ -1,10 +1,11 @@
 """``aggsym generate``: every routine of the contract as C, NumPy and LaTeX, plus the JSON manifest.
 
 The recursions run once on the symbolic backend into one shared straight-line program (kinematics shared by
-all routines); each routine's outputs are then cut out of it (:func:`~aggsym.codegen.printing.straight_line`),
-printed through the SymPy printer subclasses, and laid out by the Jinja templates in ``templates/`` (layout
-only).  Files are written only after everything has been generated, through a temporary folder, so a failure
-leaves the output folder as it was.
+all routines); each routine's outputs are then cut out of it (:func:`aggsym.core.program.straight_line`),
+printed through the SymPy printer subclasses of :mod:`.printing`, and laid out by the Jinja templates (layout
+only; the package data ``aggsym.templates``, the project's top-level ``templates/``).  What a routine is called,
+takes and returns comes from :mod:`aggsym.contract`.  Files are written only after everything has been
+generated, through a temporary folder, so a failure leaves the output folder as it was.
 """
 from __future__ import annotations
 
@@ -14,26 +15,31 @@ import shutil
 import tempfile
 import time
 from dataclasses import dataclass, field
+from importlib.resources import files
 from pathlib import Path
 
 import jinja2
 
 from .. import __version__
-from ..backend import Symbolic, bind
-from ..kinematics import TreeKinematics
+from ..contract import (
+    INPUT_KINDS, ROUTINES, Routine, c_prototype, c_symbol, header_macros, input_length, manifest, python_parameters, routines_for,
+    run, signature,
+)
+from ..core.backend import Symbolic
+from ..core.program import COS, SIN, Node, straight_line
+from ..mechanics.bound import bind
+from ..mechanics.kinematics import TreeKinematics
 from ..model.tree import Tree
-from ..routines import run, ROUTINES, Routine, input_length, signature
-from .printing import CPrinter, Converter, NumPyPrinter, count_ops, straight_line
-from .program import Node
-
-INPUT_KINDS = ("q", "qd", "qdd", "tau", "t")  # t: the time, one number, for models with prescribed motions
+from .printing import CPrinter, Converter, NumPyPrinter, count_ops
 
 
 @dataclass
 class EmittedRoutine:
     routine: Routine
-    inputs: tuple  # the input names in argument order for this model (routines.signature)
+    inputs: tuple  # the input names in argument order for this model (contract.signature)
     symbol: str  # C function name
+    prototype: str  # C prototype, without the semicolon
+    py_parameters: str  # the NumPy function's parameter list
     c_body: list  # C statements
     py_body: list  # Python statements
     ops: dict
@@ -48,25 +54,10 @@ class Generated:
     timings: list = field(default_factory=list)  # (stage, seconds)
 
 
-def template_root():
-    """Where the templates are: ``templates/`` of the source tree this package was imported from (a checkout: the
-    folder holds pyproject.toml naming aggsym), else the installed package data ``aggsym.templates`` (the wheel).
-
-    The check matters when the package is imported from one checkout (PYTHONPATH) while an editable install of
-    another one maps ``aggsym.templates`` there: the code and its templates must come from the same tree."""
-    from importlib.resources import files
-
-    tree = Path(__file__).resolve().parents[2]
-    project = tree / "pyproject.toml"
-    if (tree / "templates" / "model.c.j2").is_file() and project.is_file() and \
-            'name = "aggsym"' in project.read_text(encoding="utf-8"):
-        return tree / "templates"
-    return files("aggsym.templates")
-
-
 def templates() -> jinja2.Environment:
-    """The Jinja environment over the package's templates (shipped inside the wheel as aggsym/templates)."""
-    root = template_root()
+    """The Jinja environment over the package data ``aggsym.templates`` (``templates/`` of the project, mapped
+    into the package by pyproject.toml, in editable and in wheel installs alike)."""
+    root = files("aggsym.templates")
     return jinja2.Environment(
         loader=jinja2.FunctionLoader(lambda name: (root / name).read_text(encoding="utf-8")),
         undefined=jinja2.StrictUndefined,
@@ -92,7 +83,8 @@ class _Stages:
 
 
 def symbolic_routines(model, tree=None, roles=None):
-    """Run every routine on the symbolic backend: (program, {role: list of flat output lists})."""
+    """Run the model's routines (all, or those named) on the symbolic backend: (program, {role: list of flat
+    output lists})."""
     backend = Symbolic()
     prog = backend.program
     tree = tree or Tree(model)
@@ -100,23 +92,17 @@ def symbolic_routines(model, tree=None, roles=None):
     vectors = {k: prog.vector(k, input_length(model, k)) for k in INPUT_KINDS}
     kin = None if model.couplings else TreeKinematics(bound, vectors["q"])  # coupled: run() expands q first
     outputs = {}
-    for role, routine in ROUTINES.items():
-        if roles is not None and role not in roles or not routine.exists_for(model):
-            continue
+    for routine in routines_for(model, roles):
         x = {k: vectors[k] for k in signature(routine, model) if k not in ("p", "t")}
-        outputs[role] = [list(o) for o in run(routine, bound, x, kin)]
+        outputs[routine.role] = [list(o) for o in run(routine, bound, x, kin)]
     return prog, outputs
 
 
-def _input_symbols(sl, c: bool):
-    names = {}
-    for kind, index in sl.inputs:
-        node = sl.program.inputs[(kind, index)]
-        names[node.id] = f"{kind}_{index}"
-    return names
+def _input_symbols(sl):
+    return {sl.program.inputs[(kind, index)].id: f"{kind}_{index}" for kind, index in sl.inputs}
 
 
-def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> EmittedRoutine:
+def emit_routine(model, prog, routine: Routine, outputs) -> EmittedRoutine:
     """C and Python statements of one routine, and the operation count of the C."""
     sl = straight_line(prog, outputs)
     inputs = signature(routine, model)
@@ -126,8 +112,7 @@ def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> Emitted
             raise RuntimeError(f"routine {routine.role} depends on input {kind!r} outside its signature")
     cp, pp = CPrinter(), NumPyPrinter()
     temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
-    c_names = {**_input_symbols(sl, True), **temp_names}
-    py_names = {**_input_symbols(sl, False), **temp_names}
+    c_names = py_names = {**_input_symbols(sl), **temp_names}
     c_conv, py_conv = Converter(prog, c_names), Converter(prog, py_names)
     c_body, py_body = [], []
     for kind in inputs:  # every input is read before any output is written: outputs may alias inputs
@@ -169,18 +154,18 @@ def emit_routine(model, prog, routine: Routine, outputs, prefix: str) -> Emitted
         c_body.append(f"double {s_name}, {c_name};")
         c_body.append(f"aggsym_sincos({cp._print(c_conv(arg, top=False))}, &{s_name}, &{c_name});")
     ops = count_ops("\n".join(c_body))
-    return EmittedRoutine(routine, inputs, f"{prefix}_{routine.role}", c_body, py_body, ops, len(sl.temps))
+    return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine),
+                          python_parameters(model, routine), c_body, py_body, ops, len(sl.temps))
 
 
 def _trig_pairs(prog, temps) -> dict:
     """For every sin or cos temp: (sin id or None, cos id or None, argument), so that C computes both at once."""
-    from .program import COS, SIN, _key
-
     by_arg = {}
     for i in temps:
         entry = prog.ops[i]
         if entry[0] in (SIN, COS):
-            pair = by_arg.setdefault(_key(entry[1]), [None, None, entry[1]])
+            arg = entry[1]
+            pair = by_arg.setdefault(("n", arg.id) if isinstance(arg, Node) else ("c", repr(arg)), [None, None, arg])
             pair[0 if entry[0] == SIN else 1] = i
     return {i: tuple(pair) for pair in by_arg.values() for i in pair[:2] if i is not None}
 
@@ -193,71 +178,6 @@ def _unravel(k, shape):
     return tuple(reversed(out))
 
 
-def manifest(model, emitted, conservative: bool | None = None) -> dict:
-    """The JSON manifest of the generated-code contract; ``conservative`` defaults to the model's (T + U is kept
-    at tau = 0 unless a prescribed motion feeds energy in)."""
-    tree = Tree(model)
-    layouts = {}
-    for e in emitted:
-        if e.routine.layout is not None:
-            layouts[e.routine.role] = e.routine.layout(model)
-    out = {
-        "name": model.name,
-        "nq": model.nq,
-        "coordinates": [{"name": c.name, "joint": c.joint, "kind": c.kind} for c in model.coordinates],
-        "parameters": [{"name": p.name, "value": p.value} for p in model.parameters],
-        "functions": {e.routine.role: e.symbol for e in emitted},
-        "signatures": {e.routine.role: {"inputs": list(e.inputs),
-                                        "outputs": [{"name": o.name, "shape": list(o.shape(model))}
-                                                    for o in e.routine.outputs]} for e in emitted},
-        "layouts": layouts,
-        "couplings": [{"coordinate": c.coordinate, "master": c.master, "multiplier": c.multiplier,
-                       "offset": c.offset} for c in model.couplings],
-        "conservative": model.conservative if conservative is None else conservative,
-        "ops": {e.routine.role: e.ops for e in emitted},
-        "bodies": len(tree),
-        "generator": f"aggsym {__version__}",
-    }
-    if model.time_dependent:
-        out["time"] = time_entry(model)
-    if any(b.pair.elastic for b in model.bodies):
-        out["elastic"] = elastic_entry(model)
-    return out
-
-
-def time_entry(model) -> dict:
-    """The manifest's description of the time input and of the prescribed motions (rotors, (2.13))."""
-    rotors = []
-    for b in model.bodies:
-        for code, expr in b.pair.prescribed:
-            rotors.append({"body": b.name, "carrier": b.parent, "joint": b.pair.name, "axis": code,
-                           "angle": str(expr)})
-    return {
-        "input": "t",
-        "length": 1,
-        "meaning": ("the time: every routine takes it after its other inputs and before p (C: a pointer to one "
-                    "double; NumPy: a number or an array of the batch shape).  The prescribed angles below and "
-                    "their first and second derivatives (taken symbolically) are evaluated at t; the carrier's "
-                    "motion does not act on them (Prop. 2.7).  bias holds all their rate and acceleration terms."),
-        "prescribed": rotors,
-    }
-
-
-def elastic_entry(model) -> dict:
-    """The manifest's description of the elastic pairs (2.27)."""
-    pairs = []
-    for b in model.bodies:
-        if b.pair.elastic:
-            pairs.append({"joint": b.pair.name, "coordinates": [c.name for c in b.pair.coordinates],
-                          "stiffness": [[str(x) for x in row] for row in b.pair.stiffness],
-                          "rest": [str(x) for x in b.pair.rest] if b.pair.rest is not None
-                          else ["0"] * len(b.pair.coordinates)})
-    return {"equation": "A(q) qdd + b(q, qd) + g(q) + C (q - q0) = tau (2.27); c = C (q - q0) is the routine "
-                        "'elastic', included in inverse_dynamics, nonlinear_effects and forward_dynamics; "
-                        "1/2 (q - q0)^T C (q - q0) is in potential_energy",
-            "pairs": pairs}
-
-
 def generate(model, progress=None, latex: bool = True) -> Generated:
     """Generate all files of a model in memory."""
     from .latex import latex_document
@@ -266,7 +186,7 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
     tree = Tree(model)
     prog, outputs = symbolic_routines(model, tree)
     stages.done("recursions")
-    emitted = [emit_routine(model, prog, ROUTINES[role], outs, model.name) for role, outs in outputs.items()]
+    emitted = [emit_routine(model, prog, ROUTINES[role], outs) for role, outs in outputs.items()]
     stages.done("printing")
     env = templates()
     ctx = {
@@ -280,6 +200,7 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
         "description": model.description,
         "version": __version__,
         "parameters": [(p.name, repr(float(p.value))) for p in model.parameters],
+        "macros": header_macros(model, [e.routine for e in emitted]),
         "coordinates": model.coordinates,
         "sincos": any("aggsym_sincos(" in line for r in emitted for line in r.c_body),
         "time": model.time_dependent,
@@ -289,7 +210,8 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
     gen.files[f"{model.name}.h"] = env.get_template("model.h.j2").render(ctx)
     gen.files[f"{model.name}.c"] = env.get_template("model.c.j2").render(ctx)
     gen.files[f"{model.name}.py"] = env.get_template("model.py.j2").render(ctx)
-    gen.files[f"{model.name}.json"] = json.dumps(manifest(model, emitted), indent=2) + "\n"
+    gen.files[f"{model.name}.json"] = json.dumps(
+        manifest(model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted}), indent=2) + "\n"
     stages.done("templates")
     if latex:
         gen.files[f"{model.name}.tex"] = latex_document(model, env, prog, outputs)

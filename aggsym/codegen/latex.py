@@ -12,42 +12,16 @@ from __future__ import annotations
 import re
 
 import sympy as sp
-
-from ..equations import Equations, coordinate_symbols
 from sympy.printing.latex import LatexPrinter
 
-from .printing import Converter, LinComb, Num, Prod, _Common, straight_line
+from ..core.program import expanded_terms, straight_line
+from ..symbolic import Equations, coordinate_symbols
+from .printing import Converter, LinComb, Num, Prod, _Common
 
 CLOSED_FORM_MAX_NQ = 4
 CLOSED_FORM_MAX_NODES = 300  # and at most this many program nodes in A, b, g (SymPy's simplification of the
 # flywheel on a spherical pair, 3 coordinates but ~570 nodes, does not finish in minutes)
 CLOSED_FORM_MAX_TERMS = 1000  # and at most this many terms in the expansion of any entry (see expanded_terms)
-
-
-def expanded_terms(prog, outputs) -> int:
-    """An upper bound on the number of terms of the fully expanded outputs: sums add the counts of their operands,
-    products (and quotients) multiply them; sin, cos and inputs count one.  Deterministic and linear in the
-    program, so the choice between closed and intermediate forms does not depend on the machine (the double
-    pendulum gives 12, Tokad's three-link arm 76, a general 3-D 4-link arm 4346)."""
-    from .program import ADD, DIV, MUL, NEG, SUB, Node
-
-    count: dict[int, int] = {}
-
-    def of(x):
-        return count[x.id] if isinstance(x, Node) else 1
-
-    for i in prog.reachable(outputs):
-        entry = prog.ops[i]
-        code = entry[0]
-        if code in (ADD, SUB):
-            count[i] = of(entry[1]) + of(entry[2])
-        elif code in (MUL, DIV):
-            count[i] = of(entry[1]) * of(entry[2])
-        elif code == NEG:
-            count[i] = of(entry[1])
-        else:
-            count[i] = 1
-    return max((of(x) for x in outputs), default=0)
 
 
 def _dotted(name_latex: str, accent: str) -> str:
@@ -146,12 +120,10 @@ def closed_form(model):
 def cauchy_form(model):
     """The transvective Cauchy form (3.20) in the book's matrix-product form: the arguments <t,k>, the pivots
     (beta,beta)_k, and q'' = T^T diag(1/(beta,beta)) T F with T the product of the transvections (3.9)."""
-    from ..transvective import factored_form
-
     eq = Equations(model)
     names = symbol_names(model)
     n = model.nq
-    factors, diag = factored_form(model, simplify=False)
+    factors, diag = eq.transvective_factors(simplify=False)
 
     def readable(x):
         num, den = sp.fraction(sp.together(x))
@@ -191,16 +163,19 @@ def cauchy_form(model):
 class IntermediatePrinter(_Common, LatexPrinter):
     """LaTeX of aggsym's expression trees (a SymPy LaTeX printer subclass); names are LaTeX already."""
 
-    functions = {"sin": "\\sin", "cos": "\\cos", "sqrt": "\\sqrt"}
+    functions = {"sin": "\\sin", "cos": "\\cos", "tan": "\\tan", "exp": "\\exp", "log": "\\log",
+                 "asin": "\\arcsin", "acos": "\\arccos", "atan": "\\arctan", "atan2": "\\operatorname{atan2}"}
     times = " "
 
     def _print_Num(self, e):
         return sp.latex(sp.nsimplify(e.value) if not isinstance(e.value, float) else sp.Float(e.value, 6))
 
     def _print_Call(self, e):
-        arg = self._print(e.arg)
+        arg = ", ".join(self._print(a) for a in e.args)
         if e.name == "sqrt":
             return f"\\sqrt{{{arg}}}"
+        if e.name == "abs":
+            return f"\\left|{arg}\\right|"
         return f"{self.functions[e.name]}{{\\left({arg}\\right)}}"
 
     def _operand(self, e):

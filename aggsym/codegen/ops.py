@@ -19,7 +19,6 @@ class Reference:
         return round(self.mul(n)), round(self.add(n))
 
 
-BOOK_S = Reference("book (1.42) S, Table 2.1", lambda n: 5 * n * n - 21 * n + 26, lambda n: 3 * n * n - 15 * n + 20)
 BOOK_A_234 = Reference("book (2.34) A(q), Table 2.3", lambda n: 3 * n * n + 76 * n - 80,
                        lambda n: 2.5 * n * n + 75.5 * n - 79)  # printed 55.5n; 75.5n gives the printed 464 and (2.35)
 BOOK_A_230 = Reference("book (2.30) A(q), Table 2.2", lambda n: n ** 3 + 6 * n * n - 7 * n,

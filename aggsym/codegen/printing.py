@@ -1,12 +1,12 @@
-"""From a straight-line program to printed assignments: naming (CSE), SymPy printers, operation counts.
+"""From a straight-line program to printed assignments: expression trees, SymPy printers, operation counts.
 
-A routine's outputs are nodes of a :class:`~aggsym.codegen.program.Program`.  :func:`straight_line` decides which
-nodes get a name: every node used twice or more (common subexpressions, already shared by value numbering) and
-every function call (sin/cos of each angle, named once); the rest is inlined into its single use.  Each named
-right-hand side becomes a small expression tree (:class:`LinComb`, :class:`Prod`, :class:`Ratio`, :class:`Call`,
-:class:`Ref`, :class:`Num`), printed exactly as built (no reordering, no distribution of ``2*(a+b)``) by
-:class:`CPrinter` or :class:`NumPyPrinter`: SymPy code-printer subclasses with a ``_print_<Class>`` method per
-node type, which SymPy's printer dispatch calls.
+:func:`aggsym.core.program.straight_line` decides which nodes of a routine's program get a name.  Each named
+right-hand side becomes a small expression tree here (:class:`LinComb`, :class:`Prod`, :class:`Ratio`,
+:class:`Call`, :class:`Ref`, :class:`Num`), printed exactly as built (no reordering, no distribution of
+``2*(a+b)``) by :class:`CPrinter` or :class:`NumPyPrinter`: SymPy code-printer subclasses with a
+``_print_<Class>`` method per node type, which SymPy's printer dispatch calls.  The trees are shallow: the
+naming bounds the depth of what is inlined (:data:`aggsym.core.program.INLINE_DEPTH`), so printing needs no
+raised recursion limit whatever the program.
 
 :func:`count_ops` counts the operations of emitted C text: ``*`` multiplications, ``/`` divisions, binary ``+``
 and ``-`` additions (subtractions count as additions), and function calls; unary minus is not counted.
@@ -14,80 +14,12 @@ and ``-`` additions (subtractions count as additions), and function calls; unary
 from __future__ import annotations
 
 import re
-import sys
-from collections import Counter
-from dataclasses import dataclass
 from fractions import Fraction
 
 from sympy.printing.c import C99CodePrinter
 from sympy.printing.numpy import NumPyPrinter as _SympyNumPyPrinter
 
-from .program import ADD, COS, DIV, FUNCTIONS, INPUT, MUL, NEG, SIN, SQRT, SUB, Node, is_zero, normalize_const
-
-sys.setrecursionlimit(max(sys.getrecursionlimit(), 20000))
-
-
-@dataclass
-class StraightLine:
-    """Assignments ``temps`` (node ids in order) and per-output lists of nodes or constants."""
-
-    program: object
-    temps: list
-    outputs: list  # list (per output argument) of flat lists of scalars
-    inputs: list  # (kind, index) used, sorted
-    steps: list  # ("temp", node id) and ("out", output index, entry index), in emission order
-
-
-def straight_line(program, outputs) -> StraightLine:
-    """Name the nodes that need a name; ``outputs`` is a list of flat lists of scalars."""
-    flat = [x for out in outputs for x in out]
-    ids = program.reachable(flat)
-    uses: Counter = Counter()
-    for i in ids:
-        for a in program.operands(i):
-            if isinstance(a, Node):
-                uses[a.id] += 1
-    for x in flat:
-        if isinstance(x, Node):
-            uses[x.id] += 1
-    inputs = [program.ops[i][1:] for i in ids if program.ops[i][0] == INPUT]
-    named = {i for i in ids if program.ops[i][0] != INPUT and (uses[i] >= 2 or program.ops[i][0] in FUNCTIONS)}
-    temps = [i for i in ids if i in named]
-    # creation order (the recursions' own, which keeps a body's work together), each output stored as soon as its
-    # value exists so that it does not stay live to the end
-    at = {}
-    for o, out in enumerate(outputs):
-        for k, x in enumerate(out):
-            at.setdefault(x.id if isinstance(x, Node) else -1, []).append(("out", o, k))
-    steps = list(at.get(-1, []))
-    for i in ids:
-        if i in named:
-            steps.append(("temp", i))
-        steps.extend(at.get(i, []))
-    return StraightLine(program, temps, outputs, sorted(inputs), steps)
-
-
-def _post_order(program, roots, seen) -> list:
-    """Node ids in depth-first post-order from the roots, skipping (and extending) ``seen``: each value right
-    before its first use."""
-    order = []
-    for root in roots:
-        if not isinstance(root, Node) or root.id in seen:
-            continue
-        stack = [(root.id, False)]
-        while stack:
-            i, expanded = stack.pop()
-            if expanded:
-                order.append(i)
-                continue
-            if i in seen:
-                continue
-            seen.add(i)
-            stack.append((i, True))
-            for a in reversed(program.operands(i)):
-                if isinstance(a, Node) and a.id not in seen:
-                    stack.append((a.id, False))
-    return order
+from ..core.program import ADD, DIV, FUNCTIONS, INPUT, MUL, NEG, SUB, Node, is_zero, normalize_const
 
 
 class Num:
@@ -136,11 +68,13 @@ class Ratio:
 
 
 class Call:
-    __slots__ = ("name", "arg")
+    """A function of :data:`aggsym.core.program.FUNCTIONS` applied to its arguments."""
 
-    def __init__(self, name, arg):
+    __slots__ = ("name", "args")
+
+    def __init__(self, name, args):
         self.name = name
-        self.arg = arg
+        self.args = args
 
 
 class Converter:
@@ -166,7 +100,7 @@ class Converter:
                 return Prod(-inner.sign, inner.factors)
             return LinComb([(-1, inner)])
         if code in FUNCTIONS:
-            return Call({SIN: "sin", COS: "cos", SQRT: "sqrt"}[code], self(entry[1], False))
+            return Call(code, tuple(self(a, False) for a in entry[1:]))
         if code in (ADD, SUB):
             return LinComb(_merge_constants(self._terms(x, top, 1)))
         if code == MUL:
@@ -237,9 +171,9 @@ def _number(value) -> str:
 
 
 class _Common:
-    """Printing of aggsym's expression trees; subclasses name the functions."""
+    """Printing of aggsym's expression trees; subclasses name the functions (C99's <math.h> names here)."""
 
-    functions = {"sin": "sin", "cos": "cos", "sqrt": "sqrt"}
+    functions = {name: name for name in FUNCTIONS} | {"abs": "fabs"}
     times = "*"
 
     def _print_Num(self, e):
@@ -249,7 +183,7 @@ class _Common:
         return str(e.symbol)
 
     def _print_Call(self, e):
-        return f"{self.functions[e.name]}({self._print(e.arg)})"
+        return f"{self.functions[e.name]}({', '.join(self._print(a) for a in e.args)})"
 
     def _operand(self, e):
         text = self._print(e)
@@ -292,7 +226,8 @@ class CPrinter(_Common, C99CodePrinter):
 class NumPyPrinter(_Common, _SympyNumPyPrinter):
     """NumPy for aggsym: np.sin etc., element-wise so that inputs may carry a leading batch dimension."""
 
-    functions = {"sin": "np.sin", "cos": "np.cos", "sqrt": "np.sqrt"}
+    functions = {name: f"np.{name}" for name in FUNCTIONS} | {"asin": "np.arcsin", "acos": "np.arccos",
+                                                               "atan": "np.arctan", "atan2": "np.arctan2"}
 
     def __init__(self):
         super().__init__({"order": "none", "fully_qualified_modules": False})

@@ -63,7 +63,3 @@ class Tree:
         for k, p in enumerate(self.parent):
             d.append(1 if p < 0 else d[p] + 1)
         return d
-
-    def coordinate_ancestors(self, i: int) -> list[int]:
-        """Coordinates whose pairs lie on the path from the root to coordinate i's pair, i's own pair included."""
-        return [j for k in self.ancestors(self.body_of[i]) for j in self.coords[k]]

@@ -336,7 +336,7 @@ class _Reader:
         if not angle.has(TIME):
             self.fail(where, f"the prescribed spin {angle} does not depend on the time t (a rotor at a fixed angle "
                              f"is a welded body: give it as a body without pair coordinates)")
-        from ..backend import Numeric, to_scalar
+        from ..core.backend import Numeric, to_scalar
 
         values = {**self.defaults, TIME: 0.37}
         for k in range(3):

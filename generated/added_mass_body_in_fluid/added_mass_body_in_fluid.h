@@ -20,8 +20,21 @@
 extern "C" {
 #endif
 
-#define ADDED_MASS_BODY_IN_FLUID_NQ 6
-#define ADDED_MASS_BODY_IN_FLUID_NP 0
+#define ADDED_MASS_BODY_IN_FLUID_NQ 6  /* coordinates: the length of q, qd, qdd, tau */
+#define ADDED_MASS_BODY_IN_FLUID_NP 0  /* parameters: the length of p */
+#define ADDED_MASS_BODY_IN_FLUID_INERTIA_SIZE 36  /* inertia: A, 6 x 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_BIAS_SIZE 6  /* bias: b, 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_CORIOLIS_SIZE 36  /* coriolis: C, 6 x 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_GRAVITY_SIZE 6  /* gravity: g, 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_NONLINEAR_EFFECTS_SIZE 6  /* nonlinear_effects: d, 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_INVERSE_DYNAMICS_SIZE 6  /* inverse_dynamics: tau, 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_JOINT_WRENCHES_SIZE 6  /* joint_wrenches: W, 1 x 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_FORWARD_DYNAMICS_SIZE 6  /* forward_dynamics: qdd, 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_INERTIA_INVERSE_SIZE 36  /* inertia_inverse: Ainv, 6 x 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_TRANSVECTIVE_FACTORS_TARGS_SIZE 15  /* transvective_factors: targs, 15 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_TRANSVECTIVE_FACTORS_DIAG_SIZE 6  /* transvective_factors: diag, 6 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void added_mass_body_in_fluid_inertia(const double *q, const double *p, double *A);

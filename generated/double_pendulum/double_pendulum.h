@@ -30,8 +30,33 @@
 extern "C" {
 #endif
 
-#define DOUBLE_PENDULUM_NQ 3
-#define DOUBLE_PENDULUM_NP 12
+#define DOUBLE_PENDULUM_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define DOUBLE_PENDULUM_NP 12  /* parameters: the length of p */
+#define DOUBLE_PENDULUM_P_m2 0  /* index in p */
+#define DOUBLE_PENDULUM_P_m3 1  /* index in p */
+#define DOUBLE_PENDULUM_P_r21 2  /* index in p */
+#define DOUBLE_PENDULUM_P_r31 3  /* index in p */
+#define DOUBLE_PENDULUM_P_p31 4  /* index in p */
+#define DOUBLE_PENDULUM_P_I244 5  /* index in p */
+#define DOUBLE_PENDULUM_P_I255 6  /* index in p */
+#define DOUBLE_PENDULUM_P_I266 7  /* index in p */
+#define DOUBLE_PENDULUM_P_I344 8  /* index in p */
+#define DOUBLE_PENDULUM_P_I355 9  /* index in p */
+#define DOUBLE_PENDULUM_P_I366 10  /* index in p */
+#define DOUBLE_PENDULUM_P_g 11  /* index in p */
+#define DOUBLE_PENDULUM_INERTIA_SIZE 9  /* inertia: A, 3 x 3 doubles */
+#define DOUBLE_PENDULUM_BIAS_SIZE 3  /* bias: b, 3 doubles */
+#define DOUBLE_PENDULUM_CORIOLIS_SIZE 9  /* coriolis: C, 3 x 3 doubles */
+#define DOUBLE_PENDULUM_GRAVITY_SIZE 3  /* gravity: g, 3 doubles */
+#define DOUBLE_PENDULUM_NONLINEAR_EFFECTS_SIZE 3  /* nonlinear_effects: d, 3 doubles */
+#define DOUBLE_PENDULUM_INVERSE_DYNAMICS_SIZE 3  /* inverse_dynamics: tau, 3 doubles */
+#define DOUBLE_PENDULUM_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define DOUBLE_PENDULUM_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define DOUBLE_PENDULUM_JOINT_WRENCHES_SIZE 18  /* joint_wrenches: W, 3 x 6 doubles */
+#define DOUBLE_PENDULUM_FORWARD_DYNAMICS_SIZE 3  /* forward_dynamics: qdd, 3 doubles */
+#define DOUBLE_PENDULUM_INERTIA_INVERSE_SIZE 9  /* inertia_inverse: Ainv, 3 x 3 doubles */
+#define DOUBLE_PENDULUM_TRANSVECTIVE_FACTORS_TARGS_SIZE 3  /* transvective_factors: targs, 3 doubles */
+#define DOUBLE_PENDULUM_TRANSVECTIVE_FACTORS_DIAG_SIZE 3  /* transvective_factors: diag, 3 doubles */
 #define DOUBLE_PENDULUM_P_DEFAULTS { 1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */

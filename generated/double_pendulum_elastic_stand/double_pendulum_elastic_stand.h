@@ -35,8 +35,46 @@
 extern "C" {
 #endif
 
-#define DOUBLE_PENDULUM_ELASTIC_STAND_NQ 3
-#define DOUBLE_PENDULUM_ELASTIC_STAND_NP 15
+#define DOUBLE_PENDULUM_ELASTIC_STAND_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_NP 15  /* parameters: the length of p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_m2 0  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_m3 1  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_r21 2  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_r31 3  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_p21 4  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_I244 5  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_I255 6  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_I266 7  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_I344 8  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_I355 9  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_I366 10  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_g 11  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_k22 12  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_k25 13  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_P_k55 14  /* index in p */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_INERTIA_SIZE 9  /* inertia: A, 3 x 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_BIAS_SIZE 3  /* bias: b, 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_CORIOLIS_SIZE 9  /* coriolis: C, 3 x 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_GRAVITY_SIZE 3  /* gravity: g, 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_NONLINEAR_EFFECTS_SIZE 3  /* nonlinear_effects: d, 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_INVERSE_DYNAMICS_SIZE 3  /* inverse_dynamics: tau, 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_SIZE 3  /* elastic: c, 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_JOINT_WRENCHES_SIZE 12  /* joint_wrenches: W, 2 x 6 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_FORWARD_DYNAMICS_SIZE 3  /* forward_dynamics: qdd, 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_INERTIA_INVERSE_SIZE 9  /* inertia_inverse: Ainv, 3 x 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_TRANSVECTIVE_FACTORS_TARGS_SIZE 3  /* transvective_factors: targs, 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_TRANSVECTIVE_FACTORS_DIAG_SIZE 3  /* transvective_factors: diag, 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_A_PP_SIZE 1  /* elastic_partition: A_pp, 1 x 1 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_A_MP_SIZE 2  /* elastic_partition: A_mp, 1 x 2 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_A_PM_SIZE 2  /* elastic_partition: A_pm, 2 x 1 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_A_MM_SIZE 4  /* elastic_partition: A_mm, 2 x 2 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_B_PP_SIZE 1  /* elastic_partition: B_pp, 1 x 1 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_B_MP_SIZE 2  /* elastic_partition: B_mp, 1 x 2 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_B_PM_SIZE 2  /* elastic_partition: B_pm, 2 x 1 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_B_MM_SIZE 4  /* elastic_partition: B_mm, 2 x 2 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_C_MM_SIZE 4  /* elastic_partition: C_mm, 2 x 2 doubles */
 #define DOUBLE_PENDULUM_ELASTIC_STAND_P_DEFAULTS { 1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81, 400.0, 20.0, 150.0 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */

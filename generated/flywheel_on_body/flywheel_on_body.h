@@ -21,8 +21,22 @@
 extern "C" {
 #endif
 
-#define FLYWHEEL_ON_BODY_NQ 3
-#define FLYWHEEL_ON_BODY_NP 2
+#define FLYWHEEL_ON_BODY_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define FLYWHEEL_ON_BODY_NP 2  /* parameters: the length of p */
+#define FLYWHEEL_ON_BODY_P_Omega 0  /* index in p */
+#define FLYWHEEL_ON_BODY_P_eps 1  /* index in p */
+#define FLYWHEEL_ON_BODY_INERTIA_SIZE 9  /* inertia: A, 3 x 3 doubles */
+#define FLYWHEEL_ON_BODY_BIAS_SIZE 3  /* bias: b, 3 doubles */
+#define FLYWHEEL_ON_BODY_GRAVITY_SIZE 3  /* gravity: g, 3 doubles */
+#define FLYWHEEL_ON_BODY_NONLINEAR_EFFECTS_SIZE 3  /* nonlinear_effects: d, 3 doubles */
+#define FLYWHEEL_ON_BODY_INVERSE_DYNAMICS_SIZE 3  /* inverse_dynamics: tau, 3 doubles */
+#define FLYWHEEL_ON_BODY_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define FLYWHEEL_ON_BODY_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define FLYWHEEL_ON_BODY_JOINT_WRENCHES_SIZE 6  /* joint_wrenches: W, 1 x 6 doubles */
+#define FLYWHEEL_ON_BODY_FORWARD_DYNAMICS_SIZE 3  /* forward_dynamics: qdd, 3 doubles */
+#define FLYWHEEL_ON_BODY_INERTIA_INVERSE_SIZE 9  /* inertia_inverse: Ainv, 3 x 3 doubles */
+#define FLYWHEEL_ON_BODY_TRANSVECTIVE_FACTORS_TARGS_SIZE 3  /* transvective_factors: targs, 3 doubles */
+#define FLYWHEEL_ON_BODY_TRANSVECTIVE_FACTORS_DIAG_SIZE 3  /* transvective_factors: diag, 3 doubles */
 #define FLYWHEEL_ON_BODY_P_DEFAULTS { 60.0, 5.0 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */

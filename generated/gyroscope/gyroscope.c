@@ -350,7 +350,7 @@ void gyroscope_forward_dynamics(const double *q, const double *qd, const double 
     const double x16 = 1/(0.0066048 - 0.0011048*x3*x3)*(tau_0 - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(x12 + x12 + x15) + 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1));
     qdd[0] = x16;
     qdd[1] = 322.0819376449369*(tau_1 - x5*x13 - x4*x14 + 0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1));
-    qdd[2] = 500.0*x15 - x3*x16;
+    qdd[2] = 500*x15 - x3*x16;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
@@ -372,7 +372,7 @@ void gyroscope_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double x3 = -x2;
     Ainv[2] = x3;
     Ainv[6] = x3;
-    Ainv[8] = 500.0 + x0*x2;
+    Ainv[8] = 500 + x0*x2;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)

@@ -17,8 +17,21 @@
 extern "C" {
 #endif
 
-#define GYROSCOPE_NQ 3
-#define GYROSCOPE_NP 0
+#define GYROSCOPE_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define GYROSCOPE_NP 0  /* parameters: the length of p */
+#define GYROSCOPE_INERTIA_SIZE 9  /* inertia: A, 3 x 3 doubles */
+#define GYROSCOPE_BIAS_SIZE 3  /* bias: b, 3 doubles */
+#define GYROSCOPE_CORIOLIS_SIZE 9  /* coriolis: C, 3 x 3 doubles */
+#define GYROSCOPE_GRAVITY_SIZE 3  /* gravity: g, 3 doubles */
+#define GYROSCOPE_NONLINEAR_EFFECTS_SIZE 3  /* nonlinear_effects: d, 3 doubles */
+#define GYROSCOPE_INVERSE_DYNAMICS_SIZE 3  /* inverse_dynamics: tau, 3 doubles */
+#define GYROSCOPE_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define GYROSCOPE_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define GYROSCOPE_JOINT_WRENCHES_SIZE 18  /* joint_wrenches: W, 3 x 6 doubles */
+#define GYROSCOPE_FORWARD_DYNAMICS_SIZE 3  /* forward_dynamics: qdd, 3 doubles */
+#define GYROSCOPE_INERTIA_INVERSE_SIZE 9  /* inertia_inverse: Ainv, 3 x 3 doubles */
+#define GYROSCOPE_TRANSVECTIVE_FACTORS_TARGS_SIZE 3  /* transvective_factors: targs, 3 doubles */
+#define GYROSCOPE_TRANSVECTIVE_FACTORS_DIAG_SIZE 3  /* transvective_factors: diag, 3 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void gyroscope_inertia(const double *q, const double *p, double *A);

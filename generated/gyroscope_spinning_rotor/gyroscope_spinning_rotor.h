@@ -19,8 +19,21 @@
 extern "C" {
 #endif
 
-#define GYROSCOPE_SPINNING_ROTOR_NQ 2
-#define GYROSCOPE_SPINNING_ROTOR_NP 1
+#define GYROSCOPE_SPINNING_ROTOR_NQ 2  /* coordinates: the length of q, qd, qdd, tau */
+#define GYROSCOPE_SPINNING_ROTOR_NP 1  /* parameters: the length of p */
+#define GYROSCOPE_SPINNING_ROTOR_P_Omega 0  /* index in p */
+#define GYROSCOPE_SPINNING_ROTOR_INERTIA_SIZE 4  /* inertia: A, 2 x 2 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_BIAS_SIZE 2  /* bias: b, 2 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_GRAVITY_SIZE 2  /* gravity: g, 2 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_NONLINEAR_EFFECTS_SIZE 2  /* nonlinear_effects: d, 2 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_INVERSE_DYNAMICS_SIZE 2  /* inverse_dynamics: tau, 2 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_JOINT_WRENCHES_SIZE 12  /* joint_wrenches: W, 2 x 6 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_FORWARD_DYNAMICS_SIZE 2  /* forward_dynamics: qdd, 2 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_INERTIA_INVERSE_SIZE 4  /* inertia_inverse: Ainv, 2 x 2 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_TRANSVECTIVE_FACTORS_TARGS_SIZE 1  /* transvective_factors: targs, 1 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_TRANSVECTIVE_FACTORS_DIAG_SIZE 2  /* transvective_factors: diag, 2 doubles */
 #define GYROSCOPE_SPINNING_ROTOR_P_DEFAULTS { 300.0 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */

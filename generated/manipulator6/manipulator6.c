@@ -1256,7 +1256,7 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
     qdd[0] = x150;
     const double x151 = x2*x150;
     const double x152 = x3*x150;
-    const double x153 = 50.0*x149 - 0.05*x151;
+    const double x153 = 50*x149 - 0.05*x151;
     qdd[1] = x153;
     const double x154 = 0.45*x152;
     const double x155 = 0.45*x151;
@@ -1273,7 +1273,7 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
     const double x165 = x84*x140 - x158 - x86*x163 + x85*x7*x162 + x87*x164;
     qdd[3] = x165;
     qdd[4] = 632.9113924050632*x135 - x6*x161 - x7*x159 + 7.594936708860759*(x8*(x156 + 0.4*x159) + x9*x163);
-    qdd[5] = 5000.0*x133 - x9*(x158 + x165) - x8*x164;
+    qdd[5] = 5000*x133 - x9*(x158 + x165) - x8*x164;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
@@ -1387,8 +1387,8 @@ void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv
     const double x90 = x69*x83;
     Ainv[5] = x90;
     Ainv[30] = x90;
-    Ainv[7] = 50.0 + x79*x85;
-    const double x91 = -50.0 - x80*x85;
+    Ainv[7] = 50 + x79*x85;
+    const double x91 = -50 - x80*x85;
     Ainv[8] = x91;
     Ainv[13] = x91;
     const double x92 = -x81*x85;
@@ -1400,7 +1400,7 @@ void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv
     const double x94 = -x83*x85;
     Ainv[11] = x94;
     Ainv[31] = x94;
-    Ainv[14] = 50.0 + x40 + x80*x87;
+    Ainv[14] = 50 + x40 + x80*x87;
     const double x95 = x40*x76;
     const double x96 = x81*x87 - x95;
     Ainv[15] = x96;
@@ -1425,7 +1425,7 @@ void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv
     const double x104 = x83*x89 - x84*x97;
     Ainv[29] = x104;
     Ainv[34] = x104;
-    Ainv[35] = 5000.0 + x83*x90 + x84*x99 + x7*x102;
+    Ainv[35] = 5000 + x83*x90 + x84*x99 + x7*x102;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)

@@ -22,8 +22,26 @@
 extern "C" {
 #endif
 
-#define PLANAR_2LINK_NQ 2
-#define PLANAR_2LINK_NP 5
+#define PLANAR_2LINK_NQ 2  /* coordinates: the length of q, qd, qdd, tau */
+#define PLANAR_2LINK_NP 5  /* parameters: the length of p */
+#define PLANAR_2LINK_P_m1 0  /* index in p */
+#define PLANAR_2LINK_P_m2 1  /* index in p */
+#define PLANAR_2LINK_P_l1 2  /* index in p */
+#define PLANAR_2LINK_P_l2 3  /* index in p */
+#define PLANAR_2LINK_P_g 4  /* index in p */
+#define PLANAR_2LINK_INERTIA_SIZE 4  /* inertia: A, 2 x 2 doubles */
+#define PLANAR_2LINK_BIAS_SIZE 2  /* bias: b, 2 doubles */
+#define PLANAR_2LINK_CORIOLIS_SIZE 4  /* coriolis: C, 2 x 2 doubles */
+#define PLANAR_2LINK_GRAVITY_SIZE 2  /* gravity: g, 2 doubles */
+#define PLANAR_2LINK_NONLINEAR_EFFECTS_SIZE 2  /* nonlinear_effects: d, 2 doubles */
+#define PLANAR_2LINK_INVERSE_DYNAMICS_SIZE 2  /* inverse_dynamics: tau, 2 doubles */
+#define PLANAR_2LINK_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define PLANAR_2LINK_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define PLANAR_2LINK_JOINT_WRENCHES_SIZE 12  /* joint_wrenches: W, 2 x 6 doubles */
+#define PLANAR_2LINK_FORWARD_DYNAMICS_SIZE 2  /* forward_dynamics: qdd, 2 doubles */
+#define PLANAR_2LINK_INERTIA_INVERSE_SIZE 4  /* inertia_inverse: Ainv, 2 x 2 doubles */
+#define PLANAR_2LINK_TRANSVECTIVE_FACTORS_TARGS_SIZE 1  /* transvective_factors: targs, 1 doubles */
+#define PLANAR_2LINK_TRANSVECTIVE_FACTORS_DIAG_SIZE 2  /* transvective_factors: diag, 2 doubles */
 #define PLANAR_2LINK_P_DEFAULTS { 1.0, 0.7, 0.6, 0.4, 9.81 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */

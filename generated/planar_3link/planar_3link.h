@@ -25,8 +25,28 @@
 extern "C" {
 #endif
 
-#define PLANAR_3LINK_NQ 3
-#define PLANAR_3LINK_NP 7
+#define PLANAR_3LINK_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define PLANAR_3LINK_NP 7  /* parameters: the length of p */
+#define PLANAR_3LINK_P_m1 0  /* index in p */
+#define PLANAR_3LINK_P_m2 1  /* index in p */
+#define PLANAR_3LINK_P_m3 2  /* index in p */
+#define PLANAR_3LINK_P_l1 3  /* index in p */
+#define PLANAR_3LINK_P_l2 4  /* index in p */
+#define PLANAR_3LINK_P_l3 5  /* index in p */
+#define PLANAR_3LINK_P_g 6  /* index in p */
+#define PLANAR_3LINK_INERTIA_SIZE 9  /* inertia: A, 3 x 3 doubles */
+#define PLANAR_3LINK_BIAS_SIZE 3  /* bias: b, 3 doubles */
+#define PLANAR_3LINK_CORIOLIS_SIZE 9  /* coriolis: C, 3 x 3 doubles */
+#define PLANAR_3LINK_GRAVITY_SIZE 3  /* gravity: g, 3 doubles */
+#define PLANAR_3LINK_NONLINEAR_EFFECTS_SIZE 3  /* nonlinear_effects: d, 3 doubles */
+#define PLANAR_3LINK_INVERSE_DYNAMICS_SIZE 3  /* inverse_dynamics: tau, 3 doubles */
+#define PLANAR_3LINK_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define PLANAR_3LINK_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define PLANAR_3LINK_JOINT_WRENCHES_SIZE 18  /* joint_wrenches: W, 3 x 6 doubles */
+#define PLANAR_3LINK_FORWARD_DYNAMICS_SIZE 3  /* forward_dynamics: qdd, 3 doubles */
+#define PLANAR_3LINK_INERTIA_INVERSE_SIZE 9  /* inertia_inverse: Ainv, 3 x 3 doubles */
+#define PLANAR_3LINK_TRANSVECTIVE_FACTORS_TARGS_SIZE 3  /* transvective_factors: targs, 3 doubles */
+#define PLANAR_3LINK_TRANSVECTIVE_FACTORS_DIAG_SIZE 3  /* transvective_factors: diag, 3 doubles */
 #define PLANAR_3LINK_P_DEFAULTS { 1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */

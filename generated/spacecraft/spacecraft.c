@@ -168,7 +168,7 @@ void spacecraft_inertia(const double *q, const double *p, double *A)
     const double x83 = 15 - x80;
     const double x84 = x17*x17*x83;
     const double x85 = 1.2*x82;
-    const double x86 = 36.0 + 2.4*x82;
+    const double x86 = 36 + 2.4*x82;
     const double x87 = 40 + x59 + 15*x19;
     const double x88 = x76 - x81;
     const double x89 = 77.2 + x68 + x82;

@@ -26,8 +26,21 @@
 extern "C" {
 #endif
 
-#define SPACECRAFT_NQ 12
-#define SPACECRAFT_NP 0
+#define SPACECRAFT_NQ 12  /* coordinates: the length of q, qd, qdd, tau */
+#define SPACECRAFT_NP 0  /* parameters: the length of p */
+#define SPACECRAFT_INERTIA_SIZE 144  /* inertia: A, 12 x 12 doubles */
+#define SPACECRAFT_BIAS_SIZE 12  /* bias: b, 12 doubles */
+#define SPACECRAFT_CORIOLIS_SIZE 144  /* coriolis: C, 12 x 12 doubles */
+#define SPACECRAFT_GRAVITY_SIZE 12  /* gravity: g, 12 doubles */
+#define SPACECRAFT_NONLINEAR_EFFECTS_SIZE 12  /* nonlinear_effects: d, 12 doubles */
+#define SPACECRAFT_INVERSE_DYNAMICS_SIZE 12  /* inverse_dynamics: tau, 12 doubles */
+#define SPACECRAFT_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define SPACECRAFT_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define SPACECRAFT_JOINT_WRENCHES_SIZE 30  /* joint_wrenches: W, 5 x 6 doubles */
+#define SPACECRAFT_FORWARD_DYNAMICS_SIZE 12  /* forward_dynamics: qdd, 12 doubles */
+#define SPACECRAFT_INERTIA_INVERSE_SIZE 144  /* inertia_inverse: Ainv, 12 x 12 doubles */
+#define SPACECRAFT_TRANSVECTIVE_FACTORS_TARGS_SIZE 57  /* transvective_factors: targs, 57 doubles */
+#define SPACECRAFT_TRANSVECTIVE_FACTORS_DIAG_SIZE 12  /* transvective_factors: diag, 12 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void spacecraft_inertia(const double *q, const double *p, double *A);

@@ -62,8 +62,21 @@
 extern "C" {
 #endif
 
-#define TEST_BENCH_NQ 48
-#define TEST_BENCH_NP 0
+#define TEST_BENCH_NQ 48  /* coordinates: the length of q, qd, qdd, tau */
+#define TEST_BENCH_NP 0  /* parameters: the length of p */
+#define TEST_BENCH_INERTIA_SIZE 2304  /* inertia: A, 48 x 48 doubles */
+#define TEST_BENCH_BIAS_SIZE 48  /* bias: b, 48 doubles */
+#define TEST_BENCH_CORIOLIS_SIZE 2304  /* coriolis: C, 48 x 48 doubles */
+#define TEST_BENCH_GRAVITY_SIZE 48  /* gravity: g, 48 doubles */
+#define TEST_BENCH_NONLINEAR_EFFECTS_SIZE 48  /* nonlinear_effects: d, 48 doubles */
+#define TEST_BENCH_INVERSE_DYNAMICS_SIZE 48  /* inverse_dynamics: tau, 48 doubles */
+#define TEST_BENCH_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define TEST_BENCH_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define TEST_BENCH_JOINT_WRENCHES_SIZE 288  /* joint_wrenches: W, 48 x 6 doubles */
+#define TEST_BENCH_FORWARD_DYNAMICS_SIZE 48  /* forward_dynamics: qdd, 48 doubles */
+#define TEST_BENCH_INERTIA_INVERSE_SIZE 2304  /* inertia_inverse: Ainv, 48 x 48 doubles */
+#define TEST_BENCH_TRANSVECTIVE_FACTORS_TARGS_SIZE 393  /* transvective_factors: targs, 393 doubles */
+#define TEST_BENCH_TRANSVECTIVE_FACTORS_DIAG_SIZE 48  /* transvective_factors: diag, 48 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void test_bench_inertia(const double *q, const double *p, double *A);

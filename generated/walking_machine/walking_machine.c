@@ -657,10 +657,10 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     const double x299 = -x298;
     A[5] = x299;
     A[120] = x299;
-    A[0] = x10*45.0*x10 + x11*45.0*x11 + x3*45.0*x3;
-    const double x300 = 45.0*x12;
-    const double x301 = 45.0*x13;
-    const double x302 = 45.0*x7;
+    A[0] = x10*45*x10 + x11*45*x11 + x3*45*x3;
+    const double x300 = 45*x12;
+    const double x301 = 45*x13;
+    const double x302 = 45*x7;
     const double x303 = x13*x288 - x12*x289;
     A[29] = x303;
     A[121] = x303;
@@ -668,9 +668,9 @@ void walking_machine_inertia(const double *q, const double *p, double *A)
     A[1] = x304;
     A[24] = x304;
     A[25] = x12*x300 + x13*x301 + x7*x302;
-    const double x305 = 45.0*x14;
-    const double x306 = 45.0*x15;
-    const double x307 = 45.0*x9;
+    const double x305 = 45*x14;
+    const double x306 = 45*x15;
+    const double x307 = 45*x9;
     const double x308 = x15*x288 - x14*x289;
     A[53] = x308;
     A[122] = x308;

@@ -38,8 +38,21 @@
 extern "C" {
 #endif
 
-#define WALKING_MACHINE_NQ 24
-#define WALKING_MACHINE_NP 0
+#define WALKING_MACHINE_NQ 24  /* coordinates: the length of q, qd, qdd, tau */
+#define WALKING_MACHINE_NP 0  /* parameters: the length of p */
+#define WALKING_MACHINE_INERTIA_SIZE 576  /* inertia: A, 24 x 24 doubles */
+#define WALKING_MACHINE_BIAS_SIZE 24  /* bias: b, 24 doubles */
+#define WALKING_MACHINE_CORIOLIS_SIZE 576  /* coriolis: C, 24 x 24 doubles */
+#define WALKING_MACHINE_GRAVITY_SIZE 24  /* gravity: g, 24 doubles */
+#define WALKING_MACHINE_NONLINEAR_EFFECTS_SIZE 24  /* nonlinear_effects: d, 24 doubles */
+#define WALKING_MACHINE_INVERSE_DYNAMICS_SIZE 24  /* inverse_dynamics: tau, 24 doubles */
+#define WALKING_MACHINE_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
+#define WALKING_MACHINE_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define WALKING_MACHINE_JOINT_WRENCHES_SIZE 114  /* joint_wrenches: W, 19 x 6 doubles */
+#define WALKING_MACHINE_FORWARD_DYNAMICS_SIZE 24  /* forward_dynamics: qdd, 24 doubles */
+#define WALKING_MACHINE_INERTIA_INVERSE_SIZE 576  /* inertia_inverse: Ainv, 24 x 24 doubles */
+#define WALKING_MACHINE_TRANSVECTIVE_FACTORS_TARGS_SIZE 141  /* transvective_factors: targs, 141 doubles */
+#define WALKING_MACHINE_TRANSVECTIVE_FACTORS_DIAG_SIZE 24  /* transvective_factors: diag, 24 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void walking_machine_inertia(const double *q, const double *p, double *A);

@@ -26,8 +26,8 @@ The routines emit the Delta form.  It costs one 6x6 congruence per body (O(n)), 
 O(n d) moved columns and O(n d) 6-vector corrections (d the depth); and most of its 6x6 work folds away: the
 eliminated unit axis e_m makes row and column m of ``A^Delta - beta beta^T/(beta,beta)`` exactly zero, and the
 congruence with the pair's elementary rotation about that same axis is done in the rotation's plane with
-4 products per 2x2 block (:func:`_rotate_sym6`); the translations reuse the off-diagonal block
-(:func:`_translate_sym6`).  Six-link arm (``models/manipulator6.yaml``), arithmetic nodes of the straight-line
+4 products per 2x2 block, and the translations reuse the off-diagonal block (the one congruence through a pair,
+:meth:`aggsym.mechanics.kinematics.TreeKinematics.move_to_parent`).  Six-link arm (``models/manipulator6.yaml``), arithmetic nodes of the straight-line
 program: factors 246 (Delta) against 423 (delta); q'' 551 in the O(n) order below against 596 transvection by
 transvection.  ``tests/test_transvective.py`` checks that both forms give the same arguments, pivots and columns.
 
@@ -63,19 +63,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..core.program import is_one, is_zero
 from .aggregates import General
-from .codegen.program import is_const, is_one, is_zero, normalize_const
-from .group import Motion
 from .inertia import composite_inertias
-from .kinematics import pair_functional
-from .linalg import dot, scale, sub
+from .linalg import dot, mul, scale, sub
 
 __all__ = [
     "Factors", "coordinate_parents", "coordinates_above", "transvection_pairs", "articulated_factors",
-    "corrected_factors", "transvective_factors", "apply_T", "apply_T_transpose", "cauchy_solve",
+    "corrected_factors", "apply_T", "apply_T_transpose", "cauchy_solve",
     "transvect_pair", "apply_T_tree", "apply_T_transpose_tree", "cauchy_solve_tree", "transvected_forces",
     "T_columns", "inverse_from_factors", "forward_dynamics", "inertia_inverse", "factor_outputs",
-    "number_of_transvections", "factored_form", "layout",
 ]
 
 
@@ -152,18 +149,6 @@ class Factors:
         return [self.args[pk] for pk in self.pairs]
 
 
-def _rows(X):
-    """A symmetric 6x6 (Rigid or General) as a list of 6 rows."""
-    return X.general().matrix()
-
-
-def _general(M) -> General:
-    """The General (symmetric 6x6) of a list of 6 rows."""
-    return General(tuple(tuple(M[i][j] for j in range(3)) for i in range(3)),
-                   tuple(tuple(M[i][j] for j in range(3, 6)) for i in range(3)),
-                   tuple(tuple(M[i][j] for j in range(3, 6)) for i in range(3, 6)))
-
-
 def _pivot(beta, psi):
     """(beta,beta) = psi^T beta (3.12), its reciprocal and betabar = beta / (beta,beta) (3.13)."""
     d = dot(psi, beta)
@@ -171,7 +156,7 @@ def _pivot(beta, psi):
     return d, r, scale(r, beta)
 
 
-def _eliminate(X, psi, fold):
+def _eliminate(X, psi):
     """One step of (3.7) inside a body: beta = X psi, and X - beta beta^T / (beta,beta) as a General.
 
     Returns ``(beta, d, r, betabar, X')``.  When psi is the unit axis e_m, ``betabar_m = 1`` and row and column
@@ -182,122 +167,14 @@ def _eliminate(X, psi, fold):
     m = _unit_axis(psi)
     if m is not None:
         bbar = tuple(1 if i == m else x for i, x in enumerate(bbar))
-    M = _rows(X)
+    M = X.general().matrix()
     out = [[0] * 6 for _ in range(6)]
     for i in range(6):
         for j in range(i, 6):
             if i == m or j == m:
                 continue
-            out[i][j] = out[j][i] = fold(M[i][j] - _mul(beta[i], bbar[j]))
-    return beta, d, r, bbar, _general(out)
-
-
-def _mul(a, b):
-    """a b, or the structural zero when either factor is one."""
-    return 0 if is_zero(a) or is_zero(b) else a * b
-
-
-def _rotate_sym6(M, axis, c, s, s2, sc, fold):
-    """R M R^T for R = diag(c_axis, c_axis) (elementary rotation (Prop. 1.17) of both 3-blocks) and a symmetric
-    6x6 M given as rows; ``s2 = sin^2``, ``sc = sin cos``.
-
-    In the plane (i, j) of the rotation a 2x2 block B = [[a, b], [e, d]] becomes
-    ``[[a - delta, b - gamma], [e - gamma, d + delta]]`` with ``delta = (a - d) s2 + (b + e) sc`` and
-    ``gamma = (b + e) s2 - (a - d) sc`` (its antisymmetric part is invariant): 4 products where R B R^T takes 16.
-    The entries joining the axis itself to the plane turn as 2-vectors."""
-    a = axis - 1
-    i, j = (a + 1) % 3, (a + 2) % 3
-    planes = ((i, j), (3 + i, 3 + j))
-    out = [list(row) for row in M]
-    for f in (a, 3 + a):
-        for p, q in planes:
-            x, y = M[f][p], M[f][q]
-            out[f][p] = out[p][f] = fold(_mul(c, x) - _mul(s, y))
-            out[f][q] = out[q][f] = fold(_mul(s, x) + _mul(c, y))
-    for (p0, p1), (q0, q1) in ((planes[0], planes[0]), (planes[1], planes[1]), (planes[0], planes[1])):
-        ba, bb, be, bd = M[p0][q0], M[p0][q1], M[p1][q0], M[p1][q1]
-        amd, bpe = fold(ba - bd), fold(bb + be)
-        delta = fold(_mul(amd, s2) + _mul(bpe, sc))
-        gamma = fold(_mul(bpe, s2) - _mul(amd, sc))
-        out[p0][q0] = out[q0][p0] = fold(ba - delta)
-        out[p1][q1] = out[q1][p1] = fold(bd + delta)
-        out[p0][q1] = out[q1][p0] = fold(bb - gamma)
-        out[p1][q0] = out[q0][p1] = fold(be - gamma)
-    return out
-
-
-def _moved_to_parent(P, L0, functional, rots, fold):
-    """L P L^T (2.7) for the pair's L = L_constructive T(o) C(c1 c2 c3): the elementary rotations one at a time
-    by :func:`_rotate_sym6`, then the functional translation, then the constant constructive motion
-    T(p) C(c0), each translation by :func:`_translate_sym6`."""
-    M = _rows(P)
-    for axis, rot in reversed(rots):
-        i = axis % 3  # the first axis of the rotation's plane: rot[i][i] = cos, rot[(i + 1) % 3][i] = sin
-        c, s = rot[i][i], rot[(i + 1) % 3][i]
-        M = _rotate_sym6(M, axis, c, s, s * s, s * c, fold)
-    if not all(is_zero(x) for x in functional.o):
-        M = _translate_sym6(M, functional.o, fold)
-    if not _is_identity(L0.c):
-        M = _rows(_folded(_general(M).moved(Motion(L0.c)), fold))
-    if not all(is_zero(x) for x in L0.o):
-        M = _translate_sym6(M, L0.o, fold)
-    return _general(M)
-
-
-def _translate_sym6(M, o, fold):
-    """T(o) M T(o)^T for a symmetric 6x6 M given as rows, T(o) = [[E, 0], [hat(o), E]] (1.13).
-
-    With the blocks Y11, Y12, Y22 of M: ``Z12 = Y12 - Y11 hat(o)`` and, reusing it,
-    ``Z22 = Y22 + (hat(o) Y12)^T + hat(o) Z12`` (= Y22 + W + W^T - hat(o) Y11 hat(o), W = hat(o) Y12), upper
-    triangle only; Y11 stays.  Products with structural zeros of o are skipped."""
-    oh = ((0, -o[2], o[1]), (o[2], 0, -o[0]), (-o[1], o[0], 0))
-    y11 = [row[:3] for row in M[:3]]
-    y12 = [row[3:] for row in M[:3]]
-    y22 = [row[3:] for row in M[3:]]
-    z12 = [[fold(y12[i][j] - _lincomb([(y11[i][k], oh[k][j]) for k in range(3)])) for j in range(3)]
-           for i in range(3)]
-    out = [list(row) for row in M]
-    for i in range(3):
-        for j in range(3):
-            out[i][3 + j] = out[3 + j][i] = z12[i][j]
-        for j in range(i, 3):
-            w_ji = _lincomb([(oh[j][k], y12[k][i]) for k in range(3)])
-            oz_ij = _lincomb([(oh[i][k], z12[k][j]) for k in range(3)])
-            out[3 + i][3 + j] = out[3 + j][3 + i] = fold(y22[i][j] + w_ji + oz_ij)
-    return out
-
-
-def _lincomb(pairs):
-    """sum a b over (a, b) pairs, products with a structural zero skipped."""
-    acc = 0
-    for a, b in pairs:
-        if not (is_zero(a) or is_zero(b)):
-            acc = acc + a * b
-    return acc
-
-
-def _is_identity(c) -> bool:
-    """c is structurally the 3x3 identity."""
-    return all(is_one(c[i][j]) if i == j else is_zero(c[i][j]) for i in range(3) for j in range(3))
-
-
-def _folded(X, fold):
-    """X with its constant entries folded (see :func:`_folder`)."""
-    return _general([[fold(x) for x in row] for row in _rows(X)])
-
-
-def _folder(backend):
-    """On the symbolic backend, constants are compile-time values: fold the results of constant arithmetic
-    (``0.00078 - 0.00078`` is the structural zero 0, not the float 0.0).  On the numeric backend every value is a
-    runtime value and nothing is folded."""
-    if not backend.symbolic:
-        return _identity
-    return lambda x: normalize_const(x) if is_const(x) else x
-
-
-def _identity(x):
-    """No folding (numeric backend)."""
-    return x
+            out[i][j] = out[j][i] = M[i][j] - mul(beta[i], bbar[j])
+    return beta, d, r, bbar, General.from_rows(out)
 
 
 def _record_arguments(tree, kin, args, k, pos, bbar, reach):
@@ -333,7 +210,6 @@ def articulated_factors(bound, kin, arguments: bool = True) -> Factors:
     diag, recip, beta, betabar = [0] * n, [0] * n, [None] * n, [None] * n
     args: dict = {}
     acc = [b.mises for b in bound.bodies]  # A_kk, then + sum over children L (A^Delta - beta beta^T/(.,.)) L^T
-    fold = _folder(bound.backend)
     reach = _coordinates_above_body(tree)
     for k in range(len(tree) - 1, -1, -1):
         X = acc[k]
@@ -342,16 +218,14 @@ def articulated_factors(bound, kin, arguments: bool = True) -> Factors:
             if X is None:
                 raise ZeroDivisionError(f"coordinate {coords[pos]} moves no mass: A(q) is singular")
             j = coords[pos]
-            beta[j], diag[j], recip[j], bbar, X = _eliminate(X, kin.psi[k][pos], fold)
+            beta[j], diag[j], recip[j], bbar, X = _eliminate(X, kin.psi[k][pos])
             betabar[j] = bbar
             if arguments:
                 _record_arguments(tree, kin, args, k, pos, bbar, reach)
         p = tree.parent[k]
         if p >= 0 and X is not None:
-            qv = [kin.q[i] for i in coords]
-            functional, _, rots = pair_functional(bound.bodies[k].codes, qv, bound.backend)
-            moved = _moved_to_parent(X, bound.bodies[k].L0, functional, rots, fold)
-            acc[p] = moved if acc[p] is None else _folded(acc[p] + moved, fold)
+            moved = kin.move_to_parent(k, X)
+            acc[p] = moved if acc[p] is None else acc[p] + moved
     return Factors(transvection_pairs(tree), args, diag, recip, beta, betabar)
 
 
@@ -394,15 +268,6 @@ def corrected_factors(bound, kin) -> Factors:
     return Factors(transvection_pairs(tree), args, diag, recip, beta, betabar)
 
 
-def transvective_factors(bound, kin, form: str = "Delta") -> Factors:
-    """The factors of (3.11)/(3.16) by the Delta form (3.7) (default, emitted) or the delta form (3.15)."""
-    if form == "Delta":
-        return articulated_factors(bound, kin)
-    if form == "delta":
-        return corrected_factors(bound, kin)
-    raise ValueError(f"form must be 'Delta' or 'delta', not {form!r}")
-
-
 # --------------------------------------------------------------------------------------------------------------
 # applying the factors
 
@@ -439,7 +304,7 @@ def cauchy_solve(fac: Factors, F) -> list:
 
 def _axpy(acc, x, v):
     """acc + x v for a 6-vector v (acc None: nothing accumulated yet); products with structural zeros skipped."""
-    xv = tuple(_mul(x, e) for e in v)
+    xv = tuple(mul(x, e) for e in v)
     return xv if acc is None else tuple(a + b for a, b in zip(acc, xv))
 
 
@@ -513,7 +378,7 @@ def apply_T_transpose_tree(kin, fac: Factors, z) -> list:
 def cauchy_solve_tree(kin, fac: Factors, F) -> list:
     """q'' = T^T diag 1/(beta,beta)^k T F (3.20) by :func:`apply_T_tree` and :func:`apply_T_transpose_tree`."""
     y = apply_T_tree(kin, fac, F)
-    return apply_T_transpose_tree(kin, fac, [_mul(r, v) for r, v in zip(fac.recip, y)])
+    return apply_T_transpose_tree(kin, fac, [mul(r, v) for r, v in zip(fac.recip, y)])
 
 
 def T_columns(fac: Factors, n: int) -> list[dict]:
@@ -532,7 +397,7 @@ def T_columns(fac: Factors, n: int) -> list[dict]:
             for j in above[i]:
                 if j < t:
                     continue
-                acc = acc - _mul(1 if j == t else cols[j][t], fac.args[(j, i)])
+                acc = acc - mul(1 if j == t else cols[j][t], fac.args[(j, i)])
             col[t] = acc
         cols.append(col)
     return cols
@@ -544,45 +409,19 @@ def inverse_from_factors(fac: Factors, n: int) -> list:
     cols = T_columns(fac, n)
     out = [[0] * n for _ in range(n)]
     for i in range(n):
-        scaled = {k: _mul(fac.recip[k], x) for k, x in cols[i].items()}
+        scaled = {k: mul(fac.recip[k], x) for k, x in cols[i].items()}
         for j in range(i, n):
             acc = 0
             for k, x in scaled.items():
                 y = cols[j].get(k)
                 if y is not None:
-                    acc = acc + _mul(x, y)
+                    acc = acc + mul(x, y)
             out[i][j] = out[j][i] = acc
     return out
 
 
 # --------------------------------------------------------------------------------------------------------------
-# routine outputs and the manifest
-
-
-def layout(model) -> dict:
-    """The manifest's description of the outputs of ``transvective_factors``: enough to rebuild T and A^-1."""
-    from .model.tree import Tree
-
-    tree = Tree(model)
-    names = [c.name for c in model.coordinates]
-    pairs = transvection_pairs(tree)
-    return {
-        "indexing": "0-based coordinate indices in q order",
-        "targs": [[t, k] for t, k in pairs],
-        "targs_names": [[names[t], names[k]] for t, k in pairs],
-        "diag": names,
-        "T": "T = prod_i (E - targs[i] E_{t_i k_i}) in the listed order, E_tk the unit matrix at row t, column k "
-             "(the transvections t_tk^-1(<t,k>) of (3.9)); t is above k on k's path to the root",
-        "identities": ["T A(q) T^T = diag(diag) (3.11)", "A(q)^-1 = T^T diag(1/diag) T (3.19)",
-                       "qdd = T^T diag(1/diag) T (tau - b - g) (3.20)"],
-    }
-
-
-def number_of_transvections(model):
-    """Shape of the targs output: one scalar per transvection."""
-    from .model.tree import Tree
-
-    return (len(transvection_pairs(Tree(model))),)
+# the routines' outputs
 
 
 def transvected_forces(bound, kin, fac: Factors, tau, qd) -> list:
@@ -606,7 +445,7 @@ def forward_dynamics(bound, kin, tau, qd):
     formed."""
     fac = articulated_factors(bound, kin, arguments=False)
     y = transvected_forces(bound, kin, fac, tau, qd)
-    return apply_T_transpose_tree(kin, fac, [_mul(r, v) for r, v in zip(fac.recip, y)])
+    return apply_T_transpose_tree(kin, fac, [mul(r, v) for r, v in zip(fac.recip, y)])
 
 
 def inertia_inverse(bound, kin):
@@ -623,53 +462,3 @@ def factor_outputs(bound, kin):
     """(targs, diag): the arguments <t,k> in the order of :func:`transvection_pairs` and the pivots."""
     fac = articulated_factors(bound, kin)
     return fac.arguments(), list(fac.diag)
-
-
-# --------------------------------------------------------------------------------------------------------------
-# SymPy form for small models
-
-
-def factored_form(model, simplify: bool = False):
-    """The Cauchy form (3.20) as SymPy objects: ``(T_factors, diag)``.
-
-    ``T_factors`` are the n x n matrices ``t_tk^-1(<t,k>) = E - <t,k> E_tk`` in product order, so that
-    ``T = T_factors[0] * T_factors[1] * ...``; factors whose argument is zero (structurally, or after
-    simplification when ``simplify``) are left out.  ``diag`` is the diagonal matrix of the pivots
-    (beta,beta)^k, so ``A^-1 = T^T diag^-1 T`` and ``q'' = T^T diag^-1 T F``.  Symbols are those of
-    :func:`aggsym.equations` (coordinates by name, parameters by name).
-    """
-    import sympy as sp
-
-    from .backend import Symbolic, bind
-    from .equations import TIME, coordinate_symbols, to_sympy
-    from .kinematics import TreeKinematics
-    from .model.tree import Tree
-
-    if not hasattr(model, "bodies"):
-        from .model import load
-
-        model = load(model)
-    tree = Tree(model)
-    back = Symbolic()
-    prog = back.program
-    bound = bind(model, back, tree=tree)
-    kin = TreeKinematics(bound, prog.vector("q", model.nq))
-    fac = articulated_factors(bound, kin)
-    q, _, _ = coordinate_symbols(model)
-    symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
-    symbols.update({("q", i): s for i, s in enumerate(q)})
-    symbols[("t", 0)] = TIME  # A(q, t) turns with unbalanced rotors of prescribed spin
-    args = to_sympy(prog, fac.arguments(), symbols)
-    diag = to_sympy(prog, list(fac.diag), symbols)
-    if simplify:
-        args = [sp.simplify(a) for a in args]
-        diag = [sp.simplify(d) for d in diag]
-    n = model.nq
-    factors = []
-    for (t, k), a in zip(fac.pairs, args):
-        if a == 0:
-            continue
-        m = sp.eye(n)
-        m[t, k] = -a
-        factors.append(m)
-    return factors, sp.diag(*diag)

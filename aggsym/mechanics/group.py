@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from .linalg import EYE3, ZERO3, add, cross, mm, mtv, mv
 
-__all__ = ["Motion", "rotation", "phi_motion", "phi_force", "IDENTITY"]
+__all__ = ["Motion", "rotation", "phi_motion", "phi_force"]
 
 
 def rotation(axis: int, cos, sin):
@@ -64,8 +64,6 @@ class Motion:
         """c^T x."""
         return mtv(self.c, x)
 
-
-IDENTITY = Motion()
 
 
 def phi_motion(V, U):

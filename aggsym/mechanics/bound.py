@@ -1,113 +1,25 @@
-"""The two backends the recursions run on, and the model bound to one of them.
+"""The model bound to a backend: its SymPy expressions turned into scalars once (:func:`bind`).
 
-* :class:`Symbolic` records a straight-line program (:mod:`aggsym.codegen.program`); parameters are the
-  program inputs ``p[i]``.
-* :class:`Numeric` computes with floats or NumPy arrays (the numeric twin); parameters are numbers.
-
-:func:`bind` turns the model's SymPy expressions (masses, centres of mass, constructive configurations,
-gravity, added masses, stiffnesses, prescribed spins) into scalars of the backend once, so that the recursions
-only see scalars.  A model with prescribed motions (rotors, (2.13)) is bound at a time t: the program input
-``t[0]`` on the symbolic backend, a number on the numeric one; the prescribed rotation then belongs to the
-pair's q-independent part ``L0``, and its rates to ``spin``.
+Masses, centres of mass, constructive configurations, gravity, added masses, stiffnesses and prescribed spins
+become backend scalars (:mod:`aggsym.core.backend`), so that the recursions only see scalars.  Parameters are
+the program inputs ``p[i]`` on the symbolic backend, numbers on the numeric one.  A model with prescribed motions
+(rotors, (2.13)) is bound at a time t: the program input ``t[0]`` on the symbolic backend, a number on the numeric
+one; the prescribed rotation then belongs to the pair's q-independent part ``L0``, and its rates to ``spin``.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from fractions import Fraction
 
 import numpy as np
 import sympy as sp
 
+from ..core.backend import to_scalar
+from ..model.tree import Tree
+from ..model.types import TIME, Model, code_index
 from .aggregates import General, Rigid
-from .codegen.program import Program, normalize_const
 from .group import Motion
 from .kinematics import combine, pair_functional, pair_velocity_product
 from .linalg import add
-from .model.tree import Tree
-from .model.types import TIME, Model, code_index
-
-
-class Symbolic:
-    """Record operations into a :class:`Program`."""
-
-    symbolic = True
-
-    def __init__(self, program: Program | None = None):
-        self.program = program or Program()
-        self.sin = self.program.sin
-        self.cos = self.program.cos
-        self.sqrt = self.program.sqrt
-
-    def inputs(self, kind: str, n: int) -> list:
-        return self.program.vector(kind, n)
-
-
-class Numeric:
-    """Compute with floats (or NumPy arrays, element-wise over a batch)."""
-
-    symbolic = False
-    sin = staticmethod(np.sin)
-    cos = staticmethod(np.cos)
-    sqrt = staticmethod(np.sqrt)
-
-
-_FUNCS = {sp.sin: "sin", sp.cos: "cos"}
-
-
-def to_scalar(expr, values: dict, backend):
-    """A SymPy expression over parameter symbols as a backend scalar; ``values`` maps symbols to scalars."""
-    expr = sp.sympify(expr)
-    if expr.is_Integer:
-        return int(expr)
-    if expr.is_Rational:
-        q = Fraction(int(expr.p), int(expr.q))
-        return q if backend.symbolic else float(q)
-    if expr.is_Number or expr.is_NumberSymbol:
-        return normalize_const(float(expr))
-    if expr.is_Symbol:
-        return values[expr]
-    args = [to_scalar(a, values, backend) for a in expr.args]
-    if expr.is_Add:
-        acc = args[0]
-        for a in args[1:]:
-            acc = acc + a
-        return acc
-    if expr.is_Mul:
-        acc = args[0]
-        for a in args[1:]:
-            acc = acc * a
-        return acc
-    if expr.is_Pow:
-        base, exponent = args[0], expr.args[1]
-        if exponent == sp.Rational(1, 2):
-            return backend.sqrt(base)
-        if exponent.is_Integer:
-            n = int(exponent)
-            out = _power(base, abs(n))
-            return 1 / out if n < 0 else out
-        if exponent.is_Rational and exponent.q == 2:  # x^(k/2) = sqrt(x)^k (derivatives of sqrt)
-            n = int(exponent.p)
-            out = _power(backend.sqrt(base), abs(n))
-            return 1 / out if n < 0 else out
-        raise ValueError(f"unsupported power {expr}")
-    if expr.func == sp.tan:
-        return backend.sin(args[0]) / backend.cos(args[0])
-    if expr.func in _FUNCS:
-        return getattr(backend, _FUNCS[expr.func])(args[0])
-    if expr.func == sp.sqrt:
-        return backend.sqrt(args[0])
-    raise ValueError(f"unsupported expression {expr}")
-
-
-def _power(x, n: int):
-    out, base = 1, x
-    while n:
-        if n & 1:
-            out = out * base
-        n >>= 1
-        if n:
-            base = base * base
-    return out
 
 
 @dataclass
@@ -140,8 +52,14 @@ class Bound:
 
     def rational(self, num: int, den: int):
         """num/den as an exact constant on the symbolic backend, a float on the numeric one."""
-        q = Fraction(num, den)
-        return q if self.backend.symbolic else float(q)
+        return self.backend.rational(num, den)
+
+    def scalar(self, expr):
+        """A SymPy expression of the model (parameters, the time) as a scalar of this binding's backend."""
+        values = dict(zip(self.model.parameter_symbols, self.params))
+        if self.t is not None:
+            values[TIME] = self.t
+        return to_scalar(expr, values, self.backend)
 
 
 def parameter_scalars(model: Model, backend, p=None) -> list:

@@ -25,8 +25,8 @@ A_mm (p = +, m = -, upper index first) and likewise for B; B is :func:`aggsym.bi
 """
 from __future__ import annotations
 
+from ..core.program import is_zero
 from .bias import coriolis_matrix
-from .codegen.program import is_zero
 from .inertia import inertia_matrix
 
 
@@ -101,46 +101,9 @@ BLOCKS = (("A_pp", "A", "slow", "slow"), ("A_mp", "A", "slow", "fast"), ("A_pm",
           ("B_pm", "B", "fast", "slow"), ("B_mm", "B", "fast", "fast"), ("C_mm", "C", "fast", "fast"))
 
 
-def block_shape(name):
-    """model -> shape of one output block of :func:`partition`."""
-    _, _, rows, cols = next(b for b in BLOCKS if b[0] == name)
-
-    def shape(model):
-        slow, fast = fast_slow(model)
-        groups = {"slow": len(slow), "fast": len(fast)}
-        return (groups[rows], groups[cols])
-
-    return shape
-
-
 def partition(bound, kin, qd) -> tuple:
     """The blocks of Prop. 2.14 in the order of :data:`BLOCKS`, each flattened row-major."""
     slow, fast = fast_slow(bound.model)
     groups = {"slow": slow, "fast": fast}
     mats = {"A": inertia_matrix(bound, kin), "B": coriolis_matrix(bound, kin, qd), "C": stiffness_matrix(bound)}
     return tuple([mats[m][i][j] for i in groups[rows] for j in groups[cols]] for _, m, rows, cols in BLOCKS)
-
-
-def partition_layout(model) -> dict:
-    """The manifest entry of elastic_partition: the permutation and the meaning of every block."""
-    slow, fast = fast_slow(model)
-    names = [c.name for c in model.coordinates]
-    book = {"pp": "++", "mp": "-+", "pm": "+-", "mm": "--"}
-    blocks = {}
-    for name, m, rows, cols in BLOCKS:
-        blocks[name] = {"book": f"{m}{book[name[2:]]}", "rows": rows, "columns": cols,
-                        "shape": list(block_shape(name)(model)), "order": "row-major"}
-    return {
-        "slow": [names[i] for i in slow],
-        "fast": [names[i] for i in fast],
-        "permutation": slow + fast,
-        "convention": (
-            "Prop. 2.14: (P q)[r] = q[permutation[r]], the slow (non-elastic, +) coordinates first, then the fast "
-            "(elastic, -) ones.  X_pp, X_mp, X_pm, X_mm are the book's X++, X-+, X+-, X-- (upper index first: "
-            "the motion that contributes, lower: the equation it contributes to): rows are the equations of "
-            "'rows', columns the motions of 'columns'.  A: inertia, B: the matrix with b = B qd, "
-            "B = S Phi(V) A S^T + S A S'^T (2.17), C: stiffness.  Slow rows: "
-            "A_pp qdd+ + B_pp qd+ + A_mp qdd- + B_mp qd- + g+ = tau+; fast rows: "
-            "A_mm qdd- + B_mm qd- + A_pm qdd+ + B_pm qd+ + C_mm (q- - q0-) + g- = tau-"),
-        "blocks": blocks,
-    }

@@ -12,11 +12,16 @@ from functools import cached_property
 import sympy as sp
 from sympy.simplify.fu import TR10i
 
-from .backend import Symbolic, bind
-from .bias import bias_vector, gravity_vector
-from .codegen.program import Node
-from .inertia import inertia_matrix
-from .kinematics import TreeKinematics
+from .core.backend import Symbolic
+from .core.program import to_sympy
+from .errors import AggsymError
+from .mechanics.bias import bias_vector, gravity_vector
+from .mechanics.bound import bind
+from .mechanics.elastic import elastic_forces
+from .mechanics.inertia import inertia_matrix
+from .mechanics.kinematics import TreeKinematics
+from .mechanics.sweeps import inverse_dynamics
+from .mechanics.transvective import articulated_factors
 from .model.tree import Tree
 from .model.types import TIME
 
@@ -29,43 +34,11 @@ def coordinate_symbols(model):
     return q, qd, qdd
 
 
-def to_sympy(program, outputs, symbols: dict):
-    """SymPy expressions of program outputs; ``symbols[(kind, i)]`` names the inputs."""
-    from .codegen.program import ADD, COS, DIV, INPUT, MUL, NEG, SIN, SQRT, SUB
-
-    memo: dict[int, sp.Expr] = {}
-
-    def conv(x):
-        if isinstance(x, Node):
-            return memo[x.id]
-        return sp.nsimplify(x) if isinstance(x, float) and x.is_integer() else sp.sympify(x)
-
-    for i in program.reachable(outputs):
-        entry = program.ops[i]
-        code = entry[0]
-        if code == INPUT:
-            memo[i] = symbols[(entry[1], entry[2])]
-        elif code == NEG:
-            memo[i] = -conv(entry[1])
-        elif code == SIN:
-            memo[i] = sp.sin(conv(entry[1]))
-        elif code == COS:
-            memo[i] = sp.cos(conv(entry[1]))
-        elif code == SQRT:
-            memo[i] = sp.sqrt(conv(entry[1]))
-        else:
-            a, b = conv(entry[1]), conv(entry[2])
-            memo[i] = {ADD: a + b, SUB: a - b, MUL: a * b}[code] if code != DIV else a / b
-    return [conv(o) for o in outputs]
-
-
 class Equations:
     """SymPy form of a model's equations: ``S``, ``A``, ``b``, ``g``, coordinate symbols ``q``, ``qd``."""
 
     def __init__(self, model, simplify: bool = False):
         if model.couplings:
-            from .errors import AggsymError
-
             raise AggsymError(f"{model.name}: the SymPy equations of a model with coupled coordinates are not "
                               f"built; use the numeric twin or the generated code")
         self.model = model
@@ -140,25 +113,36 @@ class Equations:
         """The preplanned control u* = tau for the motion (q, q', q'') by the forward and backward sweeps
         (2.39)-(2.42), without assembling A, b, g; with the elastic forces C (q - q0) of (2.27) where there are
         springs."""
-        from .sweeps import inverse_dynamics
-
         return self._matrix(inverse_dynamics(self._bound, self._kin, self._qd, self._qdd), self.model.nq, 1) + self.c
 
     @cached_property
     def c(self) -> sp.Matrix:
         """C (q - q0), the elastic generalized force of (2.27) (zero without elastic pairs)."""
-        out = sp.zeros(self.model.nq, 1)
-        for k, body in enumerate(self.model.bodies):
-            pair = body.pair
-            if not pair.elastic:
+        c = to_sympy(self._backend.program, elastic_forces(self._bound, self._q), self._symbols)
+        return sp.Matrix(self.model.nq, 1, [sp.expand(x) for x in c])
+
+    def transvective_factors(self, simplify: bool = False):
+        """The Cauchy form (3.20) as SymPy objects: ``(T_factors, diag)``.
+
+        ``T_factors`` are the n x n matrices ``t_tk^-1(<t,k>) = E - <t,k> E_tk`` in product order, so that
+        ``T = T_factors[0] * T_factors[1] * ...``; factors whose argument is zero (structurally, or after
+        simplification when ``simplify``) are left out.  ``diag`` is the diagonal matrix of the pivots
+        (beta,beta)^k, so ``A^-1 = T^T diag^-1 T`` and ``q'' = T^T diag^-1 T F`` (3.19), (3.20)."""
+        fac = articulated_factors(self._bound, self._kin)
+        args = to_sympy(self._backend.program, fac.arguments(), self._symbols)
+        diag = to_sympy(self._backend.program, list(fac.diag), self._symbols)
+        if simplify:
+            args = [sp.simplify(a) for a in args]
+            diag = [sp.simplify(d) for d in diag]
+        n = self.model.nq
+        factors = []
+        for (t, k), a in zip(fac.pairs, args):
+            if a == 0:
                 continue
-            idx = self.tree.coords[k]
-            rest = pair.rest if pair.rest is not None else (0,) * len(idx)
-            d = sp.Matrix([self.q[i] - r for i, r in zip(idx, rest)])
-            f = sp.Matrix(pair.stiffness) * d
-            for a, i in enumerate(idx):
-                out[i] = sp.expand(f[a])
-        return out
+            m = sp.eye(n)
+            m[t, k] = -a
+            factors.append(m)
+        return factors, sp.diag(*diag)
 
     def lhs(self) -> sp.Matrix:
         """A q'' + b + g + c (2.27)."""
@@ -172,3 +156,9 @@ def equations(model, simplify: bool = False) -> Equations:
 
         model = load(model)
     return Equations(model, simplify=simplify)
+
+
+def factored_form(model, simplify: bool = False):
+    """The transvective factors of a model (or a path to one) as SymPy matrices: see
+    :meth:`Equations.transvective_factors`."""
+    return equations(model).transvective_factors(simplify)

@@ -1,4 +1,7 @@
-"""Pinocchio as the reference for URDF models: the example-robot-data files, configurations, comparisons.
+"""The tests' one helper module: robots and Pinocchio as their reference, building and compiling generated code,
+routines as programs or SymPy, random states, integration, and checks of error messages.
+
+Pinocchio as the reference for URDF models: the example-robot-data files, configurations, comparisons.
 
 The package ``example-robot-data`` (>= 4.4) ships the robot files only; its Python loaders moved to
 ``example-robot-data-loaders``.  The files are found the way the package installs them: through the
@@ -7,14 +10,29 @@ under whatever prefix the wheel uses.
 """
 from __future__ import annotations
 
+import json
 from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+import pytest
 
 import aggsym
+from aggsym.codegen.compile import CLibrary, compile_shared, import_module
+from aggsym.codegen.generate import generate, write
+from aggsym.contract import ROUTINES
+from aggsym.core.backend import Symbolic
+from aggsym.core.program import to_sympy
+from aggsym.symbolic import coordinate_symbols
+from aggsym.errors import ModelError
+from aggsym.mechanics.bias import bias_vector, gravity_vector
+from aggsym.mechanics.bound import bind
+from aggsym.mechanics.elastic import elastic_forces
+from aggsym.mechanics.inertia import inertia_matrix
+from aggsym.mechanics.kinematics import TreeKinematics
+from aggsym.mechanics.linalg import dot
 
 # The files example-robot-data's loaders open for these robots (robots_loader.py: path, urdf_subpath, urdf_filename).
 ROBOTS = {
@@ -153,3 +171,85 @@ def compare(model, pm, rng, states: int = 3, tolerance: float = TOLERANCE) -> fl
             assert error <= tolerance, f"{model.name}: {what}: relative error {error:.3g} at q={q.tolist()}"
         worst = max(worst, *errors.values())
     return worst
+
+
+# --------------------------------------------------------------------------------------------------------------
+# generated code
+
+
+def generated_code(model, folder: Path, opt: str = "-O2", c: bool = True):
+    """Generate a model's files into ``folder``, compile its C (``opt``; -Werror flags) and import its NumPy
+    module: (C library or None, NumPy module, manifest)."""
+    write(generate(model, latex=False), folder)
+    manifest = json.loads((folder / f"{model.name}.json").read_text())
+    lib = None
+    if c:
+        lib = CLibrary(compile_shared(folder / f"{model.name}.c", folder / f"lib{model.name}.so", extra=(opt,)),
+                       manifest)
+    return lib, import_module(folder / f"{model.name}.py"), manifest
+
+
+# --------------------------------------------------------------------------------------------------------------
+# routines as programs and as SymPy
+
+
+def routine_program(model, role):
+    """(program, outputs): the routine's straight-line program and its outputs (lists of nodes or constants)."""
+    routine = ROUTINES[role]
+    back = Symbolic()
+    prog = back.program
+    bound = bind(model, back)
+    ins = {n: prog.vector(n, model.nq) for n in routine.inputs if n != "p"}
+    return prog, routine.build(bound, TreeKinematics(bound, ins["q"]), ins)
+
+
+def routine_sympy(model, role):
+    """The outputs of a routine as SymPy expressions in the symbols of aggsym.equations."""
+    prog, outs = routine_program(model, role)
+    q, qd, _ = coordinate_symbols(model)
+    symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
+    symbols.update({("q", i): s for i, s in enumerate(q)})
+    symbols.update({("qd", i): s for i, s in enumerate(qd)})
+    return [to_sympy(prog, out, symbols) for out in outs]
+
+
+def inverse_dynamics_by_equations(bound, kin, qd, qdd):
+    """A(q) qdd + b(q, qd) + g(q) + C (q - q0) from the assembled equations (2.17), (2.27), (2.29): a cross-check
+    of the sweeps."""
+    A = inertia_matrix(bound, kin)
+    b = bias_vector(bound, kin, qd)
+    g = gravity_vector(bound, kin)
+    c = elastic_forces(bound, kin.q)
+    return [dot(A[i], qdd) + b[i] + g[i] + c[i] for i in range(len(b))]
+
+
+# --------------------------------------------------------------------------------------------------------------
+# states, integration, messages
+
+
+def states(model, rng, n):
+    """n random (q, qd, qdd): angles in [-pi, pi], rates and accelerations standard normal."""
+    for _ in range(n):
+        yield (rng.uniform(-np.pi, np.pi, model.nq), rng.normal(size=model.nq), rng.normal(size=model.nq))
+
+
+def rk4_step(f, q, v, dt):
+    """One classical RK4 step of q'' = f(q, q'): the new (q, q')."""
+    k1q, k1v = v, f(q, v)
+    k2q, k2v = v + dt / 2 * k1v, f(q + dt / 2 * k1q, v + dt / 2 * k1v)
+    k3q, k3v = v + dt / 2 * k2v, f(q + dt / 2 * k2q, v + dt / 2 * k2v)
+    k4q, k4v = v + dt * k3v, f(q + dt * k3q, v + dt * k3v)
+    return q + dt / 6 * (k1q + 2 * k2q + 2 * k3q + k4q), v + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+
+
+def assert_model_error(path, where: str, words) -> ModelError:
+    """Loading ``path`` fails with a ModelError at ``where`` whose message names the file and line and holds every
+    one of ``words``."""
+    with pytest.raises(ModelError) as info:
+        aggsym.load(path)
+    err = info.value
+    assert err.where == where, str(err)
+    assert err.line is not None and str(err).startswith(f"{path}:{err.line}:")
+    for w in words:
+        assert w in str(err), str(err)
+    return err

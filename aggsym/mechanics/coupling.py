@@ -19,7 +19,6 @@ The transvective factors and the elastic partition belong to the tree; they are 
 from __future__ import annotations
 
 from . import elastic, transvective
-from .kinematics import TreeKinematics
 
 
 class Coupler:
@@ -122,23 +121,3 @@ def solve_small(S: list, r: list) -> list:
             acc = acc - M[i][j] * x[j]
         x[i] = acc / M[i][i]
     return x
-
-
-def coupled_outputs(routine, bound, inputs: dict) -> tuple:
-    """A routine's outputs for q's inputs of a model with couplings (see the module docstring)."""
-    coupler = Coupler(bound.model, bound.tree)
-    x = coupler.expand(inputs)
-    kin = TreeKinematics(bound, x["q"])
-    how = routine.coupled
-    if how == "forward":
-        return (coupler.forward_dynamics(bound, kin, x),)
-    if how == "inverse":
-        return ([v for row in coupler.inertia_inverse(bound, kin) for v in row],)
-    outs = routine.build(bound, kin, x)
-    if how == "force":
-        return tuple(coupler.reduce(list(o)) for o in outs)
-    if how == "matrix":
-        n = coupler.n_tree
-        return tuple([v for row in coupler.reduce_matrix([list(o[i * n:(i + 1) * n]) for i in range(n)])
-                      for v in row] for o in outs)
-    return outs

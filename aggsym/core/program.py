@@ -1,4 +1,5 @@
-"""Straight-line programs: the symbolic scalar the book's recursions run on.
+"""Straight-line programs: the symbolic scalar the book's recursions run on, and everything done with them
+before printing (naming for CSE, evaluation, conversion to SymPy).
 
 Every recursion of aggsym (kinematics (1.28)-(1.43), composite bodies (2.32)-(2.34), the O(n) bias
 (2.36)-(2.37), the sweeps (2.39)-(2.46), the transvective factors (3.7)-(3.20)) is written once against plain
@@ -16,20 +17,36 @@ A node is created through :meth:`Program.op`, which
   are those of an existing product *is* that node, so ``x (k y)`` and ``y (k x)`` are one value and their
   difference folds to 0.  Only existing nodes are reused; nothing is regrouped.
 
-Constants are plain Python numbers; integral floats are stored as ``int`` so that the zero and one tests
-(``type(x) is int``) are exact.  Node ids grow in creation order, which is a topological order.
+Constants are plain Python numbers; every constant operand is normalized on the way in (integral floats become
+``int``, so ``2.0*x`` and ``2*x`` are one node and the zero and one tests are exact).  Node ids grow in creation
+order, which is a topological order.
+
+Everything that walks a program is iterative (no recursion over its depth): :meth:`Program.reachable`,
+:meth:`Program.interpret` (the one interpreter: :meth:`Program.evaluate` on floats or arrays, :func:`to_sympy`,
+:func:`expanded_terms`) and :func:`straight_line` (which nodes get a name: the CSE of the emitted code).
 """
 from __future__ import annotations
 
 import math
+from collections import Counter
+from dataclasses import dataclass
 from fractions import Fraction
 
-__all__ = ["Program", "Node", "is_zero", "is_one", "is_const", "normalize_const"]
+__all__ = ["Program", "Node", "is_zero", "is_one", "is_const", "normalize_const", "fold", "to_sympy",
+           "expanded_terms", "straight_line", "StraightLine", "FUNCTIONS", "INLINE_DEPTH"]
 
 # operation codes
-INPUT, ADD, SUB, MUL, DIV, NEG, SIN, COS, SQRT = "in", "+", "-", "*", "/", "neg", "sin", "cos", "sqrt"
-FUNCTIONS = (SIN, COS, SQRT)
+INPUT, ADD, SUB, MUL, DIV, NEG = "in", "+", "-", "*", "/", "neg"
+SIN, COS, SQRT = "sin", "cos", "sqrt"
+# the functions a program can call, with their arity and their value on Python floats (constant folding)
+FUNCTIONS = {
+    SIN: (1, math.sin), COS: (1, math.cos), SQRT: (1, math.sqrt), "tan": (1, math.tan), "exp": (1, math.exp),
+    "log": (1, math.log), "abs": (1, abs), "asin": (1, math.asin), "acos": (1, math.acos), "atan": (1, math.atan),
+    "atan2": (2, math.atan2),
+}
 _COMMUTATIVE = (ADD, MUL)
+_NUMBERS = (int, float, Fraction)
+INLINE_DEPTH = 64  # the deepest expression a named value inlines: what printers may recurse through
 
 
 def normalize_const(x):
@@ -46,6 +63,11 @@ def normalize_const(x):
 
 def is_const(x) -> bool:
     return not isinstance(x, Node)
+
+
+def fold(x):
+    """A Python number in its canonical form (:func:`normalize_const`); anything else (nodes, NumPy values) as is."""
+    return normalize_const(x) if type(x) in _NUMBERS else x
 
 
 _EXACT = (int, float, Fraction)  # Python constants; NumPy scalars and arrays are runtime values
@@ -147,14 +169,24 @@ class Program:
     def vector(self, kind: str, n: int) -> list:
         return [self.input(kind, i) for i in range(n)]
 
+    def call(self, name: str, *args):
+        """The function ``name`` of :data:`FUNCTIONS` applied to its arguments (folded on constants)."""
+        arity, value = FUNCTIONS[name]
+        if len(args) != arity:
+            raise TypeError(f"{name} takes {arity} argument(s)")
+        args = tuple(fold(a) for a in args)
+        if all(is_const(a) for a in args):
+            return normalize_const(value(*args))
+        return self._make(name, *args)
+
     def sin(self, x):
-        return self.op(SIN, x)
+        return self.call(SIN, x)
 
     def cos(self, x):
-        return self.op(COS, x)
+        return self.call(COS, x)
 
     def sqrt(self, x):
-        return self.op(SQRT, x)
+        return self.call(SQRT, x)
 
     def _new(self, entry: tuple) -> Node:
         node = Node(self, len(self.ops))
@@ -182,12 +214,11 @@ class Program:
 
     def op(self, opcode, a, b=None):
         """Record ``a opcode b`` with folding; the result is a constant or a node."""
+        a, b = fold(a), fold(b)
         if opcode == NEG:
             return self._neg(a)
         if opcode in FUNCTIONS:
-            if is_const(a):
-                return normalize_const({SIN: math.sin, COS: math.cos, SQRT: math.sqrt}[opcode](a))
-            return self._make(opcode, a)
+            return self.call(opcode, a)
         if is_const(a) and is_const(b):
             if opcode == ADD:
                 return normalize_const(a + b)
@@ -341,25 +372,128 @@ class Program:
                     stack.append(a.id)
         return sorted(seen)
 
-    def evaluate(self, outputs, values: dict, lib=math):
-        """Evaluate outputs numerically; ``values[(kind, index)]`` gives the inputs (floats or arrays)."""
-        ids = self.reachable(outputs)
+    def interpret(self, outputs, leaf, apply, constant=lambda x: x):
+        """The one interpreter of a program: the values of ``outputs`` with ``leaf(kind, index)`` for the inputs,
+        ``apply(opcode, *operand values)`` for every other node and ``constant(x)`` for constant operands, in
+        creation (topological) order, iteratively."""
         val: dict[int, object] = {}
-        fun = {SIN: lib.sin, COS: lib.cos, SQRT: lib.sqrt}
 
         def get(x):
-            return val[x.id] if isinstance(x, Node) else x
+            return val[x.id] if isinstance(x, Node) else constant(x)
 
-        for i in ids:
+        for i in self.reachable(outputs):
             entry = self.ops[i]
-            code = entry[0]
-            if code == INPUT:
-                val[i] = values[(entry[1], entry[2])]
-            elif code == NEG:
-                val[i] = -get(entry[1])
-            elif code in fun:
-                val[i] = fun[code](get(entry[1]))
+            if entry[0] == INPUT:
+                val[i] = leaf(entry[1], entry[2])
             else:
-                a, b = get(entry[1]), get(entry[2])
-                val[i] = a + b if code == ADD else a - b if code == SUB else a * b if code == MUL else a / b
+                val[i] = apply(entry[0], *(get(a) for a in entry[1:]))
         return [get(o) for o in outputs]
+
+    def evaluate(self, outputs, values: dict, lib=math):
+        """Evaluate outputs numerically; ``values[(kind, index)]`` gives the inputs (floats or arrays), ``lib`` the
+        functions (``math`` or ``numpy``)."""
+        names = {"abs": "fabs" if lib is math else "abs", "asin": "asin" if lib is math else "arcsin",
+                 "acos": "acos" if lib is math else "arccos", "atan": "atan" if lib is math else "arctan",
+                 "atan2": "atan2" if lib is math else "arctan2"}
+        return self.interpret(outputs, lambda kind, i: values[(kind, i)],
+                              lambda code, *x: _arith(code, x, lambda f: getattr(lib, names.get(f, f))))
+
+
+def _arith(code, x, function):
+    """One operation on values: arithmetic by Python's operators, functions looked up by ``function(name)``."""
+    if code == ADD:
+        return x[0] + x[1]
+    if code == SUB:
+        return x[0] - x[1]
+    if code == MUL:
+        return x[0] * x[1]
+    if code == DIV:
+        return x[0] / x[1]
+    if code == NEG:
+        return -x[0]
+    return function(code)(*x)
+
+
+def to_sympy(program, outputs, symbols: dict):
+    """SymPy expressions of program outputs; ``symbols[(kind, i)]`` names the inputs."""
+    import sympy as sp
+
+    functions = {"sin": sp.sin, "cos": sp.cos, "sqrt": sp.sqrt, "tan": sp.tan, "exp": sp.exp, "log": sp.log,
+                 "abs": sp.Abs, "asin": sp.asin, "acos": sp.acos, "atan": sp.atan, "atan2": sp.atan2}
+
+    def constant(x):
+        if isinstance(x, Fraction):
+            return sp.Rational(x.numerator, x.denominator)
+        return sp.Integer(x) if type(x) is int else sp.Float(x)
+
+    return program.interpret(outputs, lambda kind, i: symbols[(kind, i)],
+                             lambda code, *x: _arith(code, x, functions.__getitem__), constant)
+
+
+def expanded_terms(program, outputs) -> int:
+    """An upper bound on the number of terms of the fully expanded outputs: sums add the counts of their operands,
+    products (and quotients) multiply them; functions and inputs count one.  Deterministic and linear in the
+    program (the double pendulum gives 12, Tokad's three-link arm 76, a general 3-D 4-link arm 4346)."""
+    def apply(code, *x):
+        if code in (ADD, SUB):
+            return x[0] + x[1]
+        if code in (MUL, DIV):
+            return x[0] * x[1]
+        return x[0] if code == NEG else 1
+
+    return max(program.interpret(outputs, lambda kind, i: 1, apply, lambda x: 1), default=0)
+
+
+@dataclass
+class StraightLine:
+    """Assignments ``temps`` (node ids in order) and per-output lists of nodes or constants."""
+
+    program: Program
+    temps: list
+    outputs: list  # list (per output argument) of flat lists of scalars
+    inputs: list  # (kind, index) used, sorted
+    steps: list  # ("temp", node id) and ("out", output index, entry index), in emission order
+
+
+def straight_line(program, outputs) -> StraightLine:
+    """Which nodes get a name (the CSE of the emitted code): every node used twice or more (common
+    subexpressions, already shared by value numbering), every function call (sin/cos of each angle, named
+    once), and every node whose inlined expression would be deeper than :data:`INLINE_DEPTH` (so a
+    200,000-term sum prints as a chain of named partial sums, and no printer recursion is ever deep); the rest
+    is inlined into its single use.  ``outputs`` is a list of flat lists of scalars.
+
+    Steps follow creation order (the recursions' own, which keeps a body's work together), each output stored as
+    soon as its value exists so that it does not stay live to the end."""
+    flat = [x for out in outputs for x in out]
+    ids = program.reachable(flat)
+    uses: Counter = Counter()
+    for i in ids:
+        for a in program.operands(i):
+            if isinstance(a, Node):
+                uses[a.id] += 1
+    for x in flat:
+        if isinstance(x, Node):
+            uses[x.id] += 1
+    inputs = [program.ops[i][1:] for i in ids if program.ops[i][0] == INPUT]
+    named = {i for i in ids if program.ops[i][0] != INPUT and (uses[i] >= 2 or program.ops[i][0] in FUNCTIONS)}
+    depth: dict[int, int] = {}  # depth of the expression a node inlines (0: a name)
+    for i in ids:
+        entry = program.ops[i]
+        if entry[0] == INPUT:
+            depth[i] = 0
+            continue
+        d = 1 + max((depth[a.id] for a in entry[1:] if isinstance(a, Node)), default=0)
+        if d > INLINE_DEPTH:
+            named.add(i)
+        depth[i] = 0 if i in named else d
+    temps = [i for i in ids if i in named]
+    at: dict = {}
+    for o, out in enumerate(outputs):
+        for k, x in enumerate(out):
+            at.setdefault(x.id if isinstance(x, Node) else -1, []).append(("out", o, k))
+    steps = list(at.get(-1, []))
+    for i in ids:
+        if i in named:
+            steps.append(("temp", i))
+        steps.extend(at.get(i, []))
+    return StraightLine(program, temps, outputs, sorted(inputs), steps)

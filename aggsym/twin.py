@@ -8,13 +8,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .backend import Numeric, bind
+from .contract import ROUTINES, run, signature
+from .core.backend import Numeric
+from .mechanics.bound import bind
 from .model.tree import Tree
-from .routines import ROUTINES, run, signature
 
 
 class NumericTwin:
-    """Float evaluation of every routine of :data:`aggsym.routines.ROUTINES`."""
+    """Float evaluation of every routine of :data:`aggsym.contract.ROUTINES`."""
 
     def __init__(self, model):
         self.model = model

@@ -8,16 +8,16 @@ Two representations of a symmetric 6x6 matrix acting on quasi-velocities V = (v,
 * :class:`General` is any symmetric 6x6 matrix ``[[X11, X12], [X12^T, X22]]``: added masses (2.8) and the
   articulated blocks of chapter 3 (3.7) are of this kind.
 
-Both implement ``apply(V)`` (the kinetic binary vector ``Theta V`` (2.5)), ``moved(L)`` (``L Theta L^T`` (2.7))
-and addition.
+Both implement ``apply(V)`` (the kinetic binary vector ``Theta V`` (2.5)), the congruence ``L Theta L^T`` (2.7)
+(``moved(L)``, and its cheap factors: ``rotated`` by an elementary rotation within its plane, ``translated``
+by T(o)) and addition.  This is the one place symmetric 6x6 congruences are written.
 """
 from __future__ import annotations
 
-from .codegen.program import is_zero
+from ..core.program import is_zero
 from .group import phi_force
-from .linalg import (
-    add, congruence3, cross, dot, hat, madd, mm, mmt, msub, mscale, mtv, mv, outer, scale, transpose,
-)
+from .linalg import add, congruence3, cross, dot, hat, is_identity, madd, mm, mmt, mscale, mtv, mul, mv, scale, \
+    transpose
 
 
 class Rigid:
@@ -60,15 +60,15 @@ class Rigid:
         a = axis - 1
         i, j = (a + 1) % 3, (a + 2) % 3
         h = list(self.h)
-        h[i], h[j] = _mul(c, self.h[i]) - _mul(s, self.h[j]), _mul(s, self.h[i]) + _mul(c, self.h[j])
+        h[i], h[j] = mul(c, self.h[i]) - mul(s, self.h[j]), mul(s, self.h[i]) + mul(c, self.h[j])
         th = [list(r) for r in self.theta]
         x, y = self.theta[a][i], self.theta[a][j]
-        th[a][i] = th[i][a] = _mul(c, x) - _mul(s, y)
-        th[a][j] = th[j][a] = _mul(s, x) + _mul(c, y)
+        th[a][i] = th[i][a] = mul(c, x) - mul(s, y)
+        th[a][j] = th[j][a] = mul(s, x) + mul(c, y)
         A, B, D = self.theta[i][i], self.theta[i][j], self.theta[j][j]
         amd, b2 = A - D, B + B
-        d = _mul(amd, s2) + _mul(b2, sc)
-        e = _mul(b2, s2) - _mul(amd, sc)
+        d = mul(amd, s2) + mul(b2, sc)
+        e = mul(b2, s2) - mul(amd, sc)
         th[i][i], th[j][j] = A - d, D + d
         th[i][j] = th[j][i] = B - e
         return Rigid(self.m, tuple(h), tuple(tuple(r) for r in th))
@@ -83,11 +83,11 @@ class Rigid:
         h = add(hr, scale(m, o))
         ho = dot(hr, o)
         oo = dot(o, o)
-        diag = 2 * ho + _mul(m, oo)
+        diag = 2 * ho + mul(m, oo)
         out = [[0] * 3 for _ in range(3)]
         for i in range(3):
             for j in range(i, 3):
-                x = th[i][j] - _mul(hr[i], o[j]) - _mul(o[i], hr[j]) - _mul(m, _mul(o[i], o[j]))
+                x = th[i][j] - mul(hr[i], o[j]) - mul(o[i], hr[j]) - mul(m, mul(o[i], o[j]))
                 if i == j:
                     x = x + diag
                 out[i][j] = out[j][i] = x
@@ -129,22 +129,58 @@ class General:
         return add(self.apply(A), phi_force(V, self.apply(V)))
 
     def moved(self, L) -> "General":
-        """L X L^T (2.7) for any symmetric X: rotate the blocks, then translate by T(o)."""
+        """L X L^T (2.7) for any symmetric X and L = T(o) C(c): the rotation's congruence block by block, then
+        :meth:`translated`."""
         c, o = L.c, L.o
-        y11 = congruence3(c, self.x11)
-        y12 = mmt(mm(c, self.x12), c)
-        y22 = congruence3(c, self.x22)
-        if all(is_zero(x) for x in o):
-            return General(y11, y12, y22)
+        X = self
+        if not is_identity(c):
+            X = General(congruence3(c, self.x11), mmt(mm(c, self.x12), c), congruence3(c, self.x22))
+        return X if all(is_zero(x) for x in o) else X.translated(o)
+
+    def translated(self, o) -> "General":
+        """T(o) X T(o)^T (2.7), T(o) = [[E, 0], [hat(o), E]] (1.13): X11 stays, ``Z12 = X12 - X11 hat(o)`` and,
+        reusing it, ``Z22 = X22 + (hat(o) X12)^T + hat(o) Z12`` (= X22 + W + W^T - hat(o) X11 hat(o) with
+        W = hat(o) X12), upper triangle only; products with structural zeros of o skipped."""
         oh = hat(o)
-        z12 = msub(y12, mm(y11, oh))
-        w = mm(oh, y12)
-        oyo = mm(mm(oh, y11), oh)
+        x11, x12, x22 = self.x11, self.x12, self.x22
+        z12 = tuple(tuple(x12[i][j] - dot([x11[i][k] for k in range(3)], [oh[k][j] for k in range(3)])
+                          for j in range(3)) for i in range(3))
         z22 = [[0] * 3 for _ in range(3)]
         for i in range(3):
             for j in range(i, 3):
-                z22[i][j] = z22[j][i] = y22[i][j] + w[i][j] + w[j][i] - oyo[i][j]
-        return General(y11, z12, tuple(tuple(r) for r in z22))
+                w_ji = dot(oh[j], [x12[k][i] for k in range(3)])
+                oz_ij = dot(oh[i], [z12[k][j] for k in range(3)])
+                z22[i][j] = z22[j][i] = x22[i][j] + w_ji + oz_ij
+        return General(x11, z12, tuple(tuple(r) for r in z22))
+
+    def rotated(self, axis, c, s, s2, sc) -> "General":
+        """R X R^T for R = diag(c_axis, c_axis), the elementary rotation (Prop. 1.17) of both 3-blocks, with cos c,
+        sin s, s2 = sin^2 and sc = sin cos of its angle.
+
+        In the plane (i, j) of the rotation a 2x2 block B = [[a, b], [e, d]] becomes
+        ``[[a - delta, b - gamma], [e - gamma, d + delta]]`` with ``delta = (a - d) s2 + (b + e) sc`` and
+        ``gamma = (b + e) s2 - (a - d) sc`` (its antisymmetric part is invariant): 4 products where R B R^T takes
+        16.  The entries joining the axis itself to the plane turn as 2-vectors."""
+        a = axis - 1
+        i, j = (a + 1) % 3, (a + 2) % 3
+        planes = ((i, j), (3 + i, 3 + j))
+        M = self.matrix()
+        out = [list(row) for row in M]
+        for f in (a, 3 + a):
+            for p, q in planes:
+                x, y = M[f][p], M[f][q]
+                out[f][p] = out[p][f] = mul(c, x) - mul(s, y)
+                out[f][q] = out[q][f] = mul(s, x) + mul(c, y)
+        for (p0, p1), (q0, q1) in ((planes[0], planes[0]), (planes[1], planes[1]), (planes[0], planes[1])):
+            ba, bb, be, bd = M[p0][q0], M[p0][q1], M[p1][q0], M[p1][q1]
+            amd, bpe = ba - bd, bb + be
+            delta = mul(amd, s2) + mul(bpe, sc)
+            gamma = mul(bpe, s2) - mul(amd, sc)
+            out[p0][q0] = out[q0][p0] = ba - delta
+            out[p1][q1] = out[q1][p1] = bd + delta
+            out[p0][q1] = out[q1][p0] = bb - gamma
+            out[p1][q0] = out[q0][p1] = be - gamma
+        return General.from_rows(out)
 
     def __add__(self, other):
         if other is None:
@@ -154,15 +190,6 @@ class General:
         return General(madd(self.x11, other.x11), madd(self.x12, other.x12), madd(self.x22, other.x22))
 
     __radd__ = __add__
-
-    def minus_outer(self, u, s) -> "General":
-        """X - s u u^T for a 6-vector u and a scalar s (the articulated correction of (3.7))."""
-        su = scale(s, u)
-        full = outer(u, su)
-        x11 = tuple(tuple(self.x11[i][j] - full[i][j] for j in range(3)) for i in range(3))
-        x12 = tuple(tuple(self.x12[i][j] - full[i][j + 3] for j in range(3)) for i in range(3))
-        x22 = tuple(tuple(self.x22[i][j] - full[i + 3][j + 3] for j in range(3)) for i in range(3))
-        return General(x11, x12, x22)
 
     def general(self) -> "General":
         return self
@@ -174,7 +201,10 @@ class General:
         bottom = [list(x21[i]) + list(self.x22[i]) for i in range(3)]
         return top + bottom
 
-
-def _mul(a, b):
-    return 0 if is_zero(a) or is_zero(b) else a * b
+    @staticmethod
+    def from_rows(M) -> "General":
+        """The General of a symmetric 6x6 given as 6 rows."""
+        return General(tuple(tuple(M[i][j] for j in range(3)) for i in range(3)),
+                       tuple(tuple(M[i][j] for j in range(3, 6)) for i in range(3)),
+                       tuple(tuple(M[i][j] for j in range(3, 6)) for i in range(3, 6)))
 

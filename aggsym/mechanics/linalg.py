@@ -1,17 +1,22 @@
 """Zero-aware 3-vector and 3x3 arithmetic shared by the symbolic and the numeric runs.
 
 Vectors are tuples of three scalars, matrices tuples of three row tuples.  A scalar is a Python number, a
-float or NumPy array (numeric twin) or a :class:`~aggsym.codegen.program.Node` (straight-line program).
-Products with an exact structural zero (the int 0) are skipped, which is where the economy of the book's
-section 5 rules (P, sec. 5) comes from: an elementary rotation touches two rows, a translation along one
-axis one column.
+float or NumPy array (numeric twin) or a :class:`~aggsym.core.program.Node` (straight-line program).
+Products with an exact structural zero are skipped (:func:`mul`, the one zero-skipping product every
+recursion uses), which is where the economy of the book's section 5 rules (P, sec. 5) comes from: an
+elementary rotation touches two rows, a translation along one axis one column.
 """
 from __future__ import annotations
 
-from .codegen.program import is_zero
+from ..core.program import is_one, is_zero
 
 ZERO3 = (0, 0, 0)
 EYE3 = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
+
+
+def mul(a, b):
+    """a b, or the structural zero when either factor is one."""
+    return 0 if is_zero(a) or is_zero(b) else a * b
 
 
 def dot(a, b):
@@ -37,23 +42,17 @@ def neg(a):
 
 
 def scale(s, a):
-    return tuple(s * x for x in a)
+    """s a, products with structural zeros skipped."""
+    return tuple(mul(s, x) for x in a)
 
 
 def cross(a, b):
     """a x b."""
     return (
-        _d2(a[1], b[2], a[2], b[1]),
-        _d2(a[2], b[0], a[0], b[2]),
-        _d2(a[0], b[1], a[1], b[0]),
+        mul(a[1], b[2]) - mul(a[2], b[1]),
+        mul(a[2], b[0]) - mul(a[0], b[2]),
+        mul(a[0], b[1]) - mul(a[1], b[0]),
     )
-
-
-def _d2(a, b, c, d):
-    """a*b - c*d with structural zeros skipped."""
-    left = 0 if is_zero(a) or is_zero(b) else a * b
-    right = 0 if is_zero(c) or is_zero(d) else c * d
-    return left - right
 
 
 def hat(x):
@@ -90,10 +89,6 @@ def madd(a, b):
     return tuple(add(r, s) for r, s in zip(a, b))
 
 
-def msub(a, b):
-    return tuple(sub(r, s) for r, s in zip(a, b))
-
-
 def mscale(s, a):
     return tuple(scale(s, r) for r in a)
 
@@ -109,10 +104,6 @@ def congruence3(c, m):
     return tuple(tuple(r) for r in out)
 
 
-def outer(a, b):
-    return tuple(tuple(0 if is_zero(x) or is_zero(y) else x * y for y in b) for x in a)
-
-
-def sym_from_upper(m):
-    """Symmetrize by copying the upper triangle down (for values known to be symmetric)."""
-    return tuple(tuple(m[min(i, j)][max(i, j)] for j in range(3)) for i in range(3))
+def is_identity(c) -> bool:
+    """c is structurally the 3x3 identity."""
+    return all(is_one(c[i][j]) if i == j else is_zero(c[i][j]) for i in range(3) for j in range(3))

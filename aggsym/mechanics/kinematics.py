@@ -21,9 +21,10 @@ All 6-vectors are in the body's own frame, (v, w) order.
 """
 from __future__ import annotations
 
+from ..model.types import code_index
+from .aggregates import Rigid
 from .group import Motion, phi_motion, rotation
 from .linalg import EYE3, ZERO3, add, dot, mm, mtv, scale
-from .model.types import code_index
 
 ZERO6 = (0, 0, 0, 0, 0, 0)
 
@@ -63,36 +64,18 @@ def pair_functional(codes, qv, backend):
 
 
 def pair_velocity_product(codes, qdv, rots):
-    """(M F)' q' of (2.19): the pair's relative quasi-acceleration at zero q'' .
-
-    The pair is run as a chain of its elementary frames (translations o1..o3, then rotations theta4..theta6)
-    through the forward sweep (2.40) with zero acceleration; for a single coordinate the result is zero.
-    """
-    v = [0, 0, 0]
-    rates = []
-    for code, x in zip(codes, qdv):
-        i = code_index(code)
-        if i < 3:
-            v[i] = x
-        else:
-            rates.append(x)
-    V = tuple(v) + ZERO3
-    A = ZERO6
-    for (axis, m), rate in zip(rots, rates):
-        Vr = mtv(m, V[:3]) + mtv(m, V[3:])
-        Ar = mtv(m, A[:3]) + mtv(m, A[3:])
-        U = ZERO3 + tuple(rate if j == axis - 1 else 0 for j in range(3))
-        A = add(Ar, phi_motion(Vr, U))
-        V = add(Vr, U)
-    return A
+    """(M F)' q' of (2.19): the pair's relative quasi-acceleration at zero q'' (:func:`pair_velocity_bilinear`
+    with w = u); zero for a single coordinate."""
+    return pair_velocity_bilinear(codes, qdv, qdv, rots)
 
 
 def pair_velocity_bilinear(codes, u, w, rots):
     """(M F)'(u) w: the rate of change of the pair's M F w at a fixed w while its coordinates move with rates u
-    (2.19); ``pair_velocity_product(codes, u, rots)`` is the case w = u.
+    (2.19).
 
-    The same chain of elementary frames as :func:`pair_velocity_product`: the velocity is built from w, the
-    frames turn with u, ``A <- c^T A + phi(c^T V_w, (0, u_r e))``."""
+    The pair is run as a chain of its elementary frames (translations o1..o3, then rotations theta4..theta6)
+    through the forward sweep (2.40) with zero acceleration: the velocity is built from w, the frames turn with
+    u, ``A <- c^T A + phi(c^T V_w, (0, u_r e))``."""
     v = [0, 0, 0]
     rates_u, rates_w = [], []
     for code, x, y in zip(codes, u, w):
@@ -155,17 +138,19 @@ class TreeKinematics:
 
     def move_to_parent(self, k, X):
         """L X L^T (2.7) for a symmetric 6x6 X (Rigid or General) of body k, L = L_constructive T(o) C(c1 c2 c3):
-        the elementary rotations one at a time within their planes where X is a Mises matrix, then the
-        functional translation, then the constant constructive motion."""
-        rotations = self.rotations[k]
-        if rotations and hasattr(X, "rotated"):
-            for axis, rot in reversed(rotations):
-                i = axis % 3  # the plane's first axis: rot[i][i] = cos, rot[(i + 1) % 3][i] = sin
-                c, s = rot[i][i], rot[(i + 1) % 3][i]
-                X = X.rotated(axis, c, s, s * s, s * c)
-            X = X.moved(Motion(EYE3, self.functional[k].o))
-            return X.moved(self.bound.bodies[k].L0)
-        return X.moved(self.L[k])
+        the elementary rotations one at a time within their planes (``rotated``), then the functional
+        translation, then the constant constructive motion.  Through a pair without rotations a Mises matrix
+        moves by L at once (its parallel-axis form costs about the same for any o), a general block by the
+        functional translation first (along one axis its translated form skips most products).  The one congruence through a pair: composite
+        bodies (2.32) and the articulated blocks of (3.7) both move by it."""
+        if not self.rotations[k] and isinstance(X, Rigid):
+            return X.moved(self.L[k])
+        for axis, rot in reversed(self.rotations[k]):
+            i = axis % 3  # the plane's first axis: rot[i][i] = cos, rot[(i + 1) % 3][i] = sin
+            c, s = rot[i][i], rot[(i + 1) % 3][i]
+            X = X.rotated(axis, c, s, s * s, s * c)
+        X = X.moved(Motion(EYE3, self.functional[k].o))
+        return X.moved(self.bound.bodies[k].L0)
 
     def pair_rates(self, k, qd):
         return [qd[i] for i in self.tree.coords[k]]

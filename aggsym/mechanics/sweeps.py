@@ -44,18 +44,17 @@ from __future__ import annotations
 
 from fractions import Fraction
 
+from ..core.program import Node, fold, is_zero, normalize_const
+from ..model.types import code_index
 from .aggregates import Rigid
-from .backend import to_scalar
-from .codegen.program import Node, is_one, is_zero, normalize_const
 from .group import phi_force
 from .kinematics import ZERO6, combine, project, world_frame_vectors
-from .linalg import ZERO3, add, cross, dot, mtv, neg, scale, sub
-from .model.types import code_index
+from .linalg import ZERO3, add, cross, dot, is_identity, mtv, mul, neg, scale, sub
 
 __all__ = ["gravity_base", "gravity_wrenches", "forward_sweep", "Origin", "origin_sweep", "transport",
            "body_wrench", "body_wrench_rest", "body_wrenches", "backward_sweep", "transmitted_wrenches",
            "keeps_origin", "generalized_forces_lumped", "inverse_dynamics", "d_vector",
-           "pair_bodies", "link_rotation", "joint_wrench_rows", "joint_wrench_layout", "lincomb"]
+           "pair_bodies", "link_rotation", "joint_wrench_rows", "lincomb"]
 
 
 def gravity_base(bound):
@@ -125,8 +124,7 @@ def _kept_axis(bound, k):
     body = bound.bodies[k]
     if len(body.codes) != 1 or code_index(body.codes[0]) < 3:
         return None
-    c = body.L0.c
-    if all(is_one(c[i][j]) if i == j else is_zero(c[i][j]) for i in range(3) for j in range(3)):
+    if is_identity(body.L0.c):
         return code_index(body.codes[0]) - 3
     return None
 
@@ -259,7 +257,7 @@ def generalized_forces_lumped(bound, kin, origins, rest, transvect=None):
                 first[k] = ZERO3
             h = L.rotate_free(first[k])
             a = origins[p].a
-            lumped = _times(mass[k], a) + cross(h, a)  # L Theta+_k (a_k, 0), parent frame
+            lumped = scale(mass[k], a) + cross(h, a)  # L Theta+_k (a_k, 0), parent frame
             u = [dot(L.wrench(col), lumped) + dot(col, E[k]) for col in kin.psi[k]]  # L = diag(c, c): L^T L = E
             if transvect is not None:
                 u, W = transvect(k, u)
@@ -267,12 +265,12 @@ def generalized_forces_lumped(bound, kin, origins, rest, transvect=None):
                     E[k] = add(E[k], W)
             for i, x in zip(tree.coords[k], u):
                 tau[i] = x
-            mass[p] = _fold(mass[p] + mass[k])
-            first[p] = tuple(_fold(x) for x in add(first[p], h))
+            mass[p] = fold(mass[p] + mass[k])
+            first[p] = tuple(fold(x) for x in add(first[p], h))
             E[p] = add(E[p], L.wrench(E[k]))
         else:
             a = origins[k].a
-            Z = add(_times(mass[k], a), E[k][:3]) + add(cross(first[k], a), E[k][3:])
+            Z = add(scale(mass[k], a), E[k][:3]) + add(cross(first[k], a), E[k][3:])
             u = project(kin.psi[k], Z)
             if transvect is not None:
                 u, W = transvect(k, u)
@@ -301,20 +299,9 @@ def d_vector(bound, kin, qd, H=None, gravity=True):
 
 # scalar helpers -------------------------------------------------------------------------------------------
 
-_NUMBER = (int, float, Fraction)
-
-
 def _number(x) -> bool:
-    return isinstance(x, _NUMBER) and not isinstance(x, bool)
-
-
-def _times(m, v):
-    """m v for a scalar m and a 3-vector v, structural zeros skipped."""
-    return tuple(0 if is_zero(m) or is_zero(x) else m * x for x in v)
-
-
-def _fold(x):
-    return normalize_const(x) if _number(x) else x
+    """A Python (or NumPy scalar) number, not a node nor an array."""
+    return isinstance(x, (int, float, Fraction)) and not isinstance(x, bool)
 
 
 def _pk(i, j):
@@ -323,7 +310,7 @@ def _pk(i, j):
 
 def _products(w):
     """The six products w_i w_j (i <= j), structural zeros kept as 0."""
-    return {(i, j): 0 if is_zero(w[i]) or is_zero(w[j]) else w[i] * w[j] for i in range(3) for j in range(i, 3)}
+    return {(i, j): mul(w[i], w[j]) for i in range(3) for j in range(i, 3)}
 
 
 def _ident(x):
@@ -376,8 +363,7 @@ def link_rotation(bound, k):
     R = bound.model.bodies[k].link_rotation
     if R is None:
         return None
-    values = dict(zip(bound.model.parameter_symbols, bound.params))
-    return tuple(tuple(to_scalar(R[i][j], values, bound.backend) for j in range(3)) for i in range(3))
+    return tuple(tuple(bound.scalar(R[i][j]) for j in range(3)) for i in range(3))
 
 
 def joint_wrench_rows(bound, Z):
@@ -390,27 +376,3 @@ def joint_wrench_rows(bound, Z):
             z = mtv(R, z[:3]) + mtv(R, z[3:])
         rows.append(tuple(z))
     return rows
-
-
-FRAME_CONVENTION = (
-    "row r: the wrench (fx, fy, fz, mx, my, mz) that the parent exerts on the child body and its subtree through "
-    "the joint (reaction + control + friction + the spring of an elastic pair, Z = R + U + N (+ C) of (2.9), "
-    "(2.42), Prop. 2.13), moment about the child frame "
-    "origin, both in the child frame's axes (for URDF models the child link frame); the joint's generalized "
-    "forces tau are the projections of this wrench on its axes")
-
-
-def joint_wrench_layout(model):
-    """The manifest entry of joint_wrenches: one row per coordinate-bearing joint, its names and frame."""
-    rows = []
-    for k in pair_bodies(model):
-        body = model.bodies[k]
-        rows.append({
-            "joint": body.pair.name,
-            "body": body.name,
-            "coordinates": [c.name for c in body.pair.coordinates],
-            "frame": "link" if body.link_rotation is not None else "body",
-        })
-    return {"W": {"shape": [len(rows), 6], "order": "row-major",
-                  "columns": ["fx", "fy", "fz", "mx", "my", "mz"],
-                  "convention": FRAME_CONVENTION, "rows": rows}}

@@ -1,0 +1,437 @@
+"""The generated-code contract, in one place: every routine's name, inputs, outputs and their layouts, the C and
+NumPy signatures, the header's size and index macros, and the manifest.
+
+A :class:`Routine` takes named input vectors (``q``, ``qd``, ``qdd``, ``tau``; ``p`` is bound with the model) and
+returns its outputs flattened row-major.  Its ``build`` is written once over a backend (:mod:`aggsym.mechanics`):
+on floats it is the numeric twin (:mod:`aggsym.twin`), on the symbolic backend the straight-line program that
+:mod:`aggsym.codegen` prints as C and NumPy.  Adding an output is adding one entry to :data:`ROUTINES` (its
+algorithm lives in the mechanics; a layout for the manifest, if it needs one, lives here).
+
+The equations are ``A(q) q'' + b(q, q') + g(q) + c(q) = tau`` (2.17), (2.27):
+
+* ``c(q) = C (q - q0)``, the elastic generalized force of the Hooke-elastic pairs (routine ``elastic``, models
+  with stiffness only); it is in ``inverse_dynamics``, ``nonlinear_effects`` (d = b + g + c) and hence
+  ``forward_dynamics``, and its energy is in ``potential_energy``; ``bias`` and ``gravity`` never hold it.
+* A model with prescribed motions (rotors with a prescribed spin, (2.13)) is time dependent: every routine then
+  takes the time ``t`` (one number) after its other inputs and before ``p`` (:func:`signature`).  Its
+  ``bias`` holds every term of the spins' rates and accelerations (the book's A'V and T of (2.13) less the
+  rotors' weight, which is in ``gravity``), so that ``b = B q'`` no longer holds, and A(q, t) turns with the
+  rotors.
+* Coordinates tied to others (URDF ``<mimic>`` with ``mimic="couple"``) are handled by
+  :mod:`aggsym.mechanics.coupling`; each routine says how its outputs reduce (``Routine.coupled``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+from . import __version__
+from .mechanics import elastic, sweeps, transvective
+from .mechanics.bias import coriolis_matrix, gravity_vector
+from .mechanics.coupling import Coupler
+from .mechanics.energy import kinetic_energy, potential_energy
+from .mechanics.inertia import inertia_matrix
+from .mechanics.kinematics import TreeKinematics
+from .model.tree import Tree
+
+INPUT_KINDS = ("q", "qd", "qdd", "tau", "t")  # in argument order; t: the time of models with prescribed motions
+
+
+@dataclass(frozen=True)
+class Output:
+    """One output array of a routine: its C argument name and shape (as a function of the model)."""
+
+    name: str
+    shape: Callable  # model -> tuple
+
+
+@dataclass(frozen=True)
+class Routine:
+    role: str  # the contract's name, e.g. "inertia" -> NAME_inertia
+    inputs: tuple  # input vectors in argument order, "p" included where the C signature has it
+    outputs: tuple  # Output, in argument order after the inputs
+    build: Callable  # (bound, kinematics, inputs) -> tuple of flat lists, one per output
+    doc: str  # one line: what it computes, with the book's equation
+    layout: Callable | None = None  # model -> JSON-able description of the outputs' layout (manifest)
+    applies: Callable | None = None  # model -> bool; None means every model has this routine
+    # with coupled coordinates: "force" (outputs reduce by J^T), "matrix" (J^T X J), "tree" (the tree's own
+    # outputs), "forward" / "inverse" (q'' and A^-1 under the coupling), None (not emitted)
+    coupled: str | None = "force"
+
+    def exists_for(self, model) -> bool:
+        if model.couplings and self.coupled is None:
+            return False
+        return self.applies is None or bool(self.applies(model))
+
+
+ROUTINES: dict[str, Routine] = {}
+
+
+def register(routine: Routine) -> Routine:
+    """Add a routine to the contract (the order of registration is the order of emission)."""
+    ROUTINES[routine.role] = routine
+    return routine
+
+
+# --------------------------------------------------------------------------------------------------------------
+# signatures
+
+
+def signature(routine: Routine, model) -> tuple:
+    """The routine's inputs for this model: ``t`` (the time, one number) is added before ``p`` when the model has
+    prescribed motions (``model.time_dependent``)."""
+    if not model.time_dependent:
+        return routine.inputs
+    ins = [i for i in routine.inputs if i != "p"]
+    return tuple(ins + ["t"] + (["p"] if "p" in routine.inputs else []))
+
+
+def input_length(model, name: str) -> int:
+    return len(model.parameters) if name == "p" else 1 if name == "t" else model.nq
+
+
+def c_symbol(model, routine: Routine) -> str:
+    return f"{model.name}_{routine.role}"
+
+
+def c_prototype(model, routine: Routine) -> str:
+    """``void NAME_role(const double *q, ..., double *out)``: inputs in the order q, qd, qdd|tau, t, p, then the
+    outputs."""
+    args = [f"const double *{i}" for i in signature(routine, model)] + [f"double *{o.name}" for o in routine.outputs]
+    return f"void {c_symbol(model, routine)}({', '.join(args)})"
+
+
+def python_parameters(model, routine: Routine) -> str:
+    """The NumPy function's parameter list: the same inputs, ``p=None`` (the defaults) last."""
+    return ", ".join(f"{i}=None" if i == "p" else i for i in signature(routine, model))
+
+
+def size_macro(model, routine: Routine, output: Output) -> str:
+    """``NAME_ROLE_SIZE`` for a routine's only output, ``NAME_ROLE_OUTPUT_SIZE`` for one of several."""
+    parts = [model.name, routine.role] + ([output.name] if len(routine.outputs) > 1 else [])
+    return "_".join(parts).upper() + "_SIZE"
+
+
+def parameter_macro(model, parameter) -> str:
+    """``NAME_P_<param>``: the index of a parameter in p, the parameter's name spelled as in the model (so that
+    ``m`` and ``M`` stay two macros)."""
+    return f"{model.name.upper()}_P_{parameter.name}"
+
+
+def header_macros(model, routines) -> list:
+    """(macro, value, comment) of the header: NQ, NP, one index per parameter, one size per output array."""
+    out = [(f"{model.name}_NQ".upper(), model.nq, "coordinates: the length of q, qd, qdd, tau"),
+           (f"{model.name}_NP".upper(), len(model.parameters), "parameters: the length of p")]
+    for i, p in enumerate(model.parameters):
+        out.append((parameter_macro(model, p), i, "index in p"))
+    for r in routines:
+        for o in r.outputs:
+            shape = o.shape(model)
+            size = 1
+            for n in shape:
+                size *= n
+            out.append((size_macro(model, r, o), size,
+                        f"{r.role}: {o.name}, " + " x ".join(str(n) for n in shape) + " doubles"))
+    return out
+
+
+# --------------------------------------------------------------------------------------------------------------
+# output shapes and layouts
+
+
+def nq_vector(model):
+    return (model.nq,)
+
+
+def nq_square(model):
+    return (model.nq, model.nq)
+
+
+def scalar(model):
+    return (1,)
+
+
+def joint_wrench_shape(model):
+    return (len(sweeps.pair_bodies(model)), 6)
+
+
+JOINT_WRENCH_CONVENTION = (
+    "row r: the wrench (fx, fy, fz, mx, my, mz) that the parent exerts on the child body and its subtree through "
+    "the joint (reaction + control + friction + the spring of an elastic pair, Z = R + U + N (+ C) of (2.9), "
+    "(2.42), Prop. 2.13), moment about the child frame "
+    "origin, both in the child frame's axes (for URDF models the child link frame); the joint's generalized "
+    "forces tau are the projections of this wrench on its axes")
+
+
+def joint_wrench_layout(model) -> dict:
+    """The manifest entry of joint_wrenches: one row per coordinate-bearing joint, its names and frame."""
+    rows = []
+    for k in sweeps.pair_bodies(model):
+        body = model.bodies[k]
+        rows.append({
+            "joint": body.pair.name,
+            "body": body.name,
+            "coordinates": [c.name for c in body.pair.coordinates],
+            "frame": "link" if body.link_rotation is not None else "body",
+        })
+    return {"W": {"shape": [len(rows), 6], "order": "row-major",
+                  "columns": ["fx", "fy", "fz", "mx", "my", "mz"],
+                  "convention": JOINT_WRENCH_CONVENTION, "rows": rows}}
+
+
+def transvection_count(model):
+    """Shape of the targs output: one scalar per transvection."""
+    return (len(transvective.transvection_pairs(Tree(model))),)
+
+
+def transvective_layout(model) -> dict:
+    """The manifest's description of the outputs of ``transvective_factors``: enough to rebuild T and A^-1."""
+    names = [c.name for c in model.coordinates]
+    pairs = transvective.transvection_pairs(Tree(model))
+    return {
+        "indexing": "0-based coordinate indices in q order",
+        "targs": [[t, k] for t, k in pairs],
+        "targs_names": [[names[t], names[k]] for t, k in pairs],
+        "diag": names,
+        "T": "T = prod_i (E - targs[i] E_{t_i k_i}) in the listed order, E_tk the unit matrix at row t, column k "
+             "(the transvections t_tk^-1(<t,k>) of (3.9)); t is above k on k's path to the root",
+        "identities": ["T A(q) T^T = diag(diag) (3.11)", "A(q)^-1 = T^T diag(1/diag) T (3.19)",
+                       "qdd = T^T diag(1/diag) T (tau - b - g) (3.20)"],
+    }
+
+
+def partition_block_shape(name):
+    """model -> shape of one output block of :func:`aggsym.mechanics.elastic.partition`."""
+    _, _, rows, cols = next(b for b in elastic.BLOCKS if b[0] == name)
+
+    def shape(model):
+        slow, fast = elastic.fast_slow(model)
+        groups = {"slow": len(slow), "fast": len(fast)}
+        return (groups[rows], groups[cols])
+
+    return shape
+
+
+def partition_layout(model) -> dict:
+    """The manifest entry of elastic_partition: the permutation and the meaning of every block."""
+    slow, fast = elastic.fast_slow(model)
+    names = [c.name for c in model.coordinates]
+    book = {"pp": "++", "mp": "-+", "pm": "+-", "mm": "--"}
+    blocks = {}
+    for name, m, rows, cols in elastic.BLOCKS:
+        blocks[name] = {"book": f"{m}{book[name[2:]]}", "rows": rows, "columns": cols,
+                        "shape": list(partition_block_shape(name)(model)), "order": "row-major"}
+    return {
+        "slow": [names[i] for i in slow],
+        "fast": [names[i] for i in fast],
+        "permutation": slow + fast,
+        "convention": (
+            "Prop. 2.14: (P q)[r] = q[permutation[r]], the slow (non-elastic, +) coordinates first, then the fast "
+            "(elastic, -) ones.  X_pp, X_mp, X_pm, X_mm are the book's X++, X-+, X+-, X-- (upper index first: "
+            "the motion that contributes, lower: the equation it contributes to): rows are the equations of "
+            "'rows', columns the motions of 'columns'.  A: inertia, B: the matrix with b = B qd, "
+            "B = S Phi(V) A S^T + S A S'^T (2.17), C: stiffness.  Slow rows: "
+            "A_pp qdd+ + B_pp qd+ + A_mp qdd- + B_mp qd- + g+ = tau+; fast rows: "
+            "A_mm qdd- + B_mm qd- + A_pm qdd+ + B_pm qd+ + C_mm (q- - q0-) + g- = tau-"),
+        "blocks": blocks,
+    }
+
+
+# --------------------------------------------------------------------------------------------------------------
+# the routines
+
+
+def _flat(rows):
+    return [x for row in rows for x in row]
+
+
+def _plus(a, b):
+    """a + b entry by entry (b's structural zeros fold)."""
+    return [x + y for x, y in zip(a, b)]
+
+
+def _minus(a, b):
+    return [x - y for x, y in zip(a, b)]
+
+
+def _zeros(kin):
+    return [0] * kin.tree.nq
+
+
+def _gravity(bound, kin, x):
+    """g = -S G: the sweeps at rest, or, when prescribed spins keep rotors turning at rest, the backward recurrence
+    of -S G itself (:func:`aggsym.mechanics.bias.gravity_vector`), which leaves their motion out."""
+    if bound.model.time_dependent:
+        return (gravity_vector(bound, kin),)
+    return (sweeps.inverse_dynamics(bound, kin, _zeros(kin), _zeros(kin)),)
+
+
+def _joint_wrenches(bound, kin, x):
+    Z = sweeps.transmitted_wrenches(bound, kin, x["qd"], x["qdd"])
+    return (_flat(sweeps.joint_wrench_rows(bound, Z)),)
+
+
+register(Routine("inertia", ("q", "p"), (Output("A", nq_square),),
+                 lambda bound, kin, x: (_flat(inertia_matrix(bound, kin)),),
+                 "A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)",
+                 coupled="matrix"))
+register(Routine("bias", ("q", "qd", "p"), (Output("b", nq_vector),),
+                 lambda bound, kin, x: (sweeps.d_vector(bound, kin, x["qd"], gravity=False),),
+                 "b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) "
+                 "(with prescribed spins: every term of their rates and accelerations too)"))
+register(Routine("coriolis", ("q", "qd", "p"), (Output("C", nq_square),),
+                 lambda bound, kin, x: (_flat(coriolis_matrix(bound, kin, x["qd"], skew=True)),),
+                 "C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew "
+                 "(S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based "
+                 "control", applies=lambda model: not model.time_dependent, coupled="matrix"))
+register(Routine("gravity", ("q", "p"), (Output("g", nq_vector),), _gravity,
+                 "g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"))
+register(Routine("nonlinear_effects", ("q", "qd", "p"), (Output("d", nq_vector),),
+                 lambda bound, kin, x: (_plus(sweeps.d_vector(bound, kin, x["qd"]),
+                                              elastic.elastic_forces(bound, kin.q)),),
+                 "d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic "
+                 "force C (q - q0) of (2.27)"))
+register(Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), (Output("tau", nq_vector),),
+                 lambda bound, kin, x: (_plus(sweeps.inverse_dynamics(bound, kin, x["qd"], x["qdd"]),
+                                              elastic.elastic_forces(bound, kin.q)),),
+                 "tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals "
+                 "A(q) qdd + b(q, qd) + g(q) + c(q)"))
+register(Routine("elastic", ("q", "p"), (Output("c", nq_vector),),
+                 lambda bound, kin, x: (elastic.elastic_forces(bound, kin.q),),
+                 "c(q) = C (q - q0), the generalized force of the Hooke-elastic pairs on the left side of (2.27)",
+                 applies=elastic.is_elastic))
+register(Routine("kinetic_energy", ("q", "qd", "p"), (Output("T", scalar),),
+                 lambda bound, kin, x: ([kinetic_energy(bound, kin, x["qd"])],),
+                 "T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, "
+                 "Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins", coupled="tree"))
+register(Routine("potential_energy", ("q", "p"), (Output("U", scalar),),
+                 lambda bound, kin, x: ([potential_energy(bound, kin) + elastic.elastic_energy(bound, kin.q)],),
+                 "U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs",
+                 coupled="tree"))
+register(Routine("joint_wrenches", ("q", "qd", "qdd", "p"), (Output("W", joint_wrench_shape),), _joint_wrenches,
+                 "W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)",
+                 layout=joint_wrench_layout, coupled="tree"))
+register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_vector),),
+                 lambda bound, kin, x: (transvective.forward_dynamics(
+                     bound, kin, _minus(x["tau"], elastic.elastic_forces(bound, kin.q)), x["qd"]),),
+                 "qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), "
+                 "evaluated in O(n)", coupled="forward"))
+register(Routine("inertia_inverse", ("q", "p"), (Output("Ainv", nq_square),),
+                 lambda bound, kin, x: (_flat(transvective.inertia_inverse(bound, kin)),),
+                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)", coupled="inverse"))
+register(Routine("transvective_factors", ("q", "p"),
+                 (Output("targs", transvection_count), Output("diag", nq_vector)),
+                 lambda bound, kin, x: transvective.factor_outputs(bound, kin),
+                 "the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k "
+                 "of T A(q) T^T = diag (3.11)", layout=transvective_layout, coupled=None))
+register(Routine("elastic_partition", ("q", "qd", "p"),
+                 tuple(Output(name, partition_block_shape(name)) for name, _, _, _ in elastic.BLOCKS),
+                 lambda bound, kin, x: elastic.partition(bound, kin, x["qd"]),
+                 "the slow/fast partition of Prop. 2.14: blocks of A(q), B(q, qd) (b = B qd) and C, slow (+) "
+                 "and fast (-, elastic) coordinates, see the manifest's layout",
+                 layout=partition_layout,
+                 applies=lambda model: elastic.is_elastic(model) and not model.time_dependent, coupled=None))
+
+
+def routines_for(model, roles=None) -> list:
+    """The routines a model has (all of the contract's that apply, or those named), in emission order."""
+    return [r for role, r in ROUTINES.items() if (roles is None or role in roles) and r.exists_for(model)]
+
+
+# --------------------------------------------------------------------------------------------------------------
+# running a routine
+
+
+def run(routine: Routine, bound, inputs: dict, kin=None) -> tuple:
+    """Evaluate a routine on a bound model; ``inputs`` maps vector names (without p) to lists of scalars of q's
+    length (``kin``: the kinematics of ``inputs["q"]`` when already built).  Models with coupled coordinates go
+    through :class:`aggsym.mechanics.coupling.Coupler`.
+
+    Returns one flat list of scalars per output."""
+    if bound.model.couplings:
+        return _coupled_outputs(routine, bound, inputs)
+    kin = kin or TreeKinematics(bound, inputs["q"])
+    return routine.build(bound, kin, inputs)
+
+
+def _coupled_outputs(routine, bound, inputs: dict) -> tuple:
+    """A routine's outputs for q's inputs of a model with couplings, by ``routine.coupled``."""
+    coupler = Coupler(bound.model, bound.tree)
+    x = coupler.expand(inputs)
+    kin = TreeKinematics(bound, x["q"])
+    how = routine.coupled
+    if how == "forward":
+        return (coupler.forward_dynamics(bound, kin, x),)
+    if how == "inverse":
+        return (_flat(coupler.inertia_inverse(bound, kin)),)
+    outs = routine.build(bound, kin, x)
+    if how == "force":
+        return tuple(coupler.reduce(list(o)) for o in outs)
+    if how == "matrix":
+        n = coupler.n_tree
+        return tuple(_flat(coupler.reduce_matrix([list(o[i * n:(i + 1) * n]) for i in range(n)])) for o in outs)
+    return outs
+
+
+# --------------------------------------------------------------------------------------------------------------
+# the manifest
+
+
+def manifest(model, routines, ops: dict) -> dict:
+    """The JSON manifest of the generated code: ``routines`` those emitted, ``ops[role]`` their operation counts."""
+    out = {
+        "name": model.name,
+        "nq": model.nq,
+        "coordinates": [{"name": c.name, "joint": c.joint, "kind": c.kind} for c in model.coordinates],
+        "parameters": [{"name": p.name, "value": p.value} for p in model.parameters],
+        "functions": {r.role: c_symbol(model, r) for r in routines},
+        "descriptions": {r.role: r.doc for r in routines},
+        "signatures": {r.role: {"inputs": list(signature(r, model)),
+                                "outputs": [{"name": o.name, "shape": list(o.shape(model))} for o in r.outputs]}
+                       for r in routines},
+        "layouts": {r.role: r.layout(model) for r in routines if r.layout is not None},
+        "couplings": [{"coordinate": c.coordinate, "master": c.master, "multiplier": c.multiplier,
+                       "offset": c.offset} for c in model.couplings],
+        "conservative": model.conservative,
+        "ops": {r.role: ops[r.role] for r in routines},
+        "bodies": len(model.bodies),
+        "generator": f"aggsym {__version__}",
+    }
+    if model.time_dependent:
+        out["time"] = time_entry(model)
+    if elastic.is_elastic(model):
+        out["elastic"] = elastic_entry(model)
+    return out
+
+
+def time_entry(model) -> dict:
+    """The manifest's description of the time input and of the prescribed motions (rotors, (2.13))."""
+    rotors = []
+    for b in model.bodies:
+        for code, expr in b.pair.prescribed:
+            rotors.append({"body": b.name, "carrier": b.parent, "joint": b.pair.name, "axis": code,
+                           "angle": str(expr)})
+    return {
+        "input": "t",
+        "length": 1,
+        "meaning": ("the time: every routine takes it after its other inputs and before p (C: a pointer to one "
+                    "double; NumPy: a number or an array of the batch shape).  The prescribed angles below and "
+                    "their first and second derivatives (taken symbolically) are evaluated at t; the carrier's "
+                    "motion does not act on them (Prop. 2.7).  bias holds all their rate and acceleration terms."),
+        "prescribed": rotors,
+    }
+
+
+def elastic_entry(model) -> dict:
+    """The manifest's description of the elastic pairs (2.27)."""
+    pairs = []
+    for b in model.bodies:
+        if b.pair.elastic:
+            pairs.append({"joint": b.pair.name, "coordinates": [c.name for c in b.pair.coordinates],
+                          "stiffness": [[str(x) for x in row] for row in b.pair.stiffness],
+                          "rest": [str(x) for x in b.pair.rest] if b.pair.rest is not None
+                          else ["0"] * len(b.pair.coordinates)})
+    return {"equation": "A(q) qdd + b(q, qd) + g(q) + C (q - q0) = tau (2.27); c = C (q - q0) is the routine "
+                        "'elastic', included in inverse_dynamics, nonlinear_effects and forward_dynamics; "
+                        "1/2 (q - q0)^T C (q - q0) is in potential_energy",
+            "pairs": pairs}

@@ -1,0 +1,148 @@
+"""The two backends the recursions run on, and the conversion of the model's SymPy expressions to their scalars.
+
+* :class:`Symbolic` records a straight-line program (:mod:`aggsym.core.program`).
+* :class:`Numeric` computes with floats or NumPy arrays (the numeric twin).
+
+Both offer ``call(name, *args)`` for the functions of :data:`aggsym.core.program.FUNCTIONS` and the shortcuts
+``sin``, ``cos``, ``sqrt``; :func:`to_scalar` turns a SymPy expression (a mass, a constructive angle, a
+parameter expression) into a scalar of either.
+"""
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numpy as np
+import sympy as sp
+
+from .program import FUNCTIONS, Program, normalize_const
+
+
+class Symbolic:
+    """Record operations into a :class:`Program`."""
+
+    symbolic = True
+
+    def __init__(self, program: Program | None = None):
+        self.program = program or Program()
+        self.call = self.program.call
+        self.sin = self.program.sin
+        self.cos = self.program.cos
+        self.sqrt = self.program.sqrt
+
+    def inputs(self, kind: str, n: int) -> list:
+        return self.program.vector(kind, n)
+
+    def rational(self, num: int, den: int):
+        """num/den as an exact constant."""
+        return Fraction(num, den)
+
+
+_NUMPY = {"abs": np.abs, "asin": np.arcsin, "acos": np.arccos, "atan": np.arctan, "atan2": np.arctan2}
+
+
+class Numeric:
+    """Compute with floats (or NumPy arrays, element-wise over a batch)."""
+
+    symbolic = False
+    sin = staticmethod(np.sin)
+    cos = staticmethod(np.cos)
+    sqrt = staticmethod(np.sqrt)
+
+    @staticmethod
+    def call(name: str, *args):
+        if name not in FUNCTIONS:
+            raise KeyError(name)
+        return _NUMPY.get(name, getattr(np, name, None))(*args)
+
+    @staticmethod
+    def rational(num: int, den: int):
+        return num / den
+
+
+# SymPy's functions that a model's expressions may hold, by the program's name for them
+_SYMPY_FUNCTIONS = {sp.sin: "sin", sp.cos: "cos", sp.tan: "tan", sp.exp: "exp", sp.log: "log", sp.Abs: "abs",
+                    sp.asin: "asin", sp.acos: "acos", sp.atan: "atan", sp.atan2: "atan2"}
+
+
+def to_scalar(expr, values: dict, backend):
+    """A SymPy expression over parameter symbols as a backend scalar; ``values`` maps symbols to scalars.
+
+    Iterative (an explicit post-order stack), so the depth of the expression is no limit; sums and products are
+    folded left to right.  Powers: integer and half-integer exponents (sqrt)."""
+    if isinstance(expr, (int, float, Fraction)) and not isinstance(expr, bool):
+        return normalize_const(expr) if backend.symbolic else float(expr)
+    if not isinstance(expr, sp.Basic):
+        raise TypeError(f"not a SymPy expression: {type(expr).__name__}")
+    done: dict = {}
+    stack = [(expr, False)]
+    while stack:
+        e, expanded = stack.pop()
+        if e in done:
+            continue
+        leaf = _leaf(e, values, backend)
+        if leaf is not None:
+            done[e] = leaf
+        elif not expanded:
+            stack.append((e, True))
+            stack.extend((a, False) for a in reversed(e.args) if a not in done)
+        else:
+            done[e] = _node(e, [done[a] for a in e.args], backend)
+    return done[expr]
+
+
+
+def _leaf(e, values, backend):
+    """The scalar of a number or symbol, or None for a compound expression."""
+    if e.is_Integer:
+        return int(e)
+    if e.is_Rational:
+        q = Fraction(int(e.p), int(e.q))
+        return q if backend.symbolic else float(q)
+    if e.is_Number or e.is_NumberSymbol:
+        return normalize_const(float(e))
+    if e.is_Symbol:
+        return values[e]
+    return None
+
+
+def _node(expr, args, backend):
+    """A compound expression from the scalars of its arguments."""
+    if expr.is_Add:
+        acc = args[0]
+        for a in args[1:]:
+            acc = acc + a
+        return acc
+    if expr.is_Mul:
+        acc = args[0]
+        for a in args[1:]:
+            acc = acc * a
+        return acc
+    if expr.is_Pow:
+        base, exponent = args[0], expr.args[1]
+        if exponent == sp.Rational(1, 2):
+            return backend.sqrt(base)
+        if exponent.is_Integer:
+            n = int(exponent)
+            out = _power(base, abs(n))
+            return 1 / out if n < 0 else out
+        if exponent.is_Rational and exponent.q == 2:  # x^(k/2) = sqrt(x)^k (derivatives of sqrt)
+            n = int(exponent.p)
+            out = _power(backend.sqrt(base), abs(n))
+            return 1 / out if n < 0 else out
+        raise ValueError(f"unsupported power {expr}")
+    if expr.func in _SYMPY_FUNCTIONS:
+        return backend.call(_SYMPY_FUNCTIONS[expr.func], *args)
+    raise ValueError(f"unsupported expression {expr}")
+
+
+def _power(x, n: int):
+    out, base = 1, x
+    while n:
+        if n & 1:
+            out = out * base
+        n >>= 1
+        if n:
+            base = base * base
+    return out
+
+
