@@ -6,6 +6,7 @@ the file, the place in it and the problem; never a traceback).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import time
@@ -44,6 +45,8 @@ def _parser() -> argparse.ArgumentParser:
                        help="URDF only: give the root a free 6-coordinate pair (o1 o2 o3 theta4 theta5 theta6)")
         p.add_argument("--mimic", choices=["independent", "couple"], default="independent",
                        help="URDF only: <mimic> joints keep their own coordinate (default) or follow their master")
+        p.add_argument("--name", metavar="NAME",
+                       help="the name of the generated code (C prefix, module and file names) instead of the model's")
         return p
 
     g = command("generate", "write NAME.h, NAME.c, NAME.py, NAME.tex and NAME.json")
@@ -73,7 +76,15 @@ def _load(args):
         options["mimic"] = args.mimic
     if options and path.suffix.lower() != ".urdf":
         raise AggsymError(f"{path}: --floating-base and --mimic apply to URDF models only")
-    return load(path, **options)
+    model = load(path, **options)
+    if args.name is not None:
+        from .codegen.escape import check_c_identifier, check_module_name
+
+        problem = check_c_identifier(args.name) or check_module_name(args.name)
+        if problem:
+            raise AggsymError(f"--name: {problem}")
+        model = dataclasses.replace(model, name=args.name)
+    return model
 
 
 def _progress(quiet: bool, name: str):

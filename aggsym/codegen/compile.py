@@ -5,6 +5,7 @@ from __future__ import annotations
 import ctypes
 import importlib.util
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -29,9 +30,15 @@ def compiler() -> str:
 
 
 def compile_shared(c_file: Path, out: Path, extra=()) -> Path:
-    """cc -std=c99 -Wall -Wextra -Wpedantic -Werror -O2 -shared; raises with the compiler's message on failure."""
-    cmd = [compiler(), *CFLAGS, *extra, "-o", str(out), str(c_file), "-lm"]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+    """cc -std=c99 -Wall -Wextra -Wpedantic -Werror -O2 -shared, then ``extra`` (e.g. the --opt level), then the
+    environment's CFLAGS (which win: ``CFLAGS=-ffast-math aggsym check ...``); CC names the compiler.  Raises
+    with the compiler's message on failure."""
+    cmd = [*shlex.split(compiler()), *CFLAGS, *extra, *shlex.split(os.environ.get("CFLAGS", "")), "-o", str(out), str(c_file),
+           "-lm"]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+    except OSError as exc:
+        raise AggsymError(f"cannot run the C compiler {cmd[0]!r} (CC): {exc.strerror or exc}") from None
     if proc.returncode != 0 or proc.stderr.strip():
         raise AggsymError(f"compiling {c_file.name} failed:\n{proc.stderr.strip()}")
     return out

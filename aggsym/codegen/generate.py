@@ -30,7 +30,9 @@ from ..core.program import COS, SIN, Node, straight_line
 from ..mechanics.bound import bind
 from ..mechanics.kinematics import TreeKinematics
 from ..model.tree import Tree
-from .printing import CPrinter, Converter, NumPyPrinter, count_ops
+from ..errors import AggsymError, ModelError
+from .escape import FILTERS, check_c_identifier, check_module_name
+from .printing import CPrinter, Converter, NumPyPrinter, _number, count_ops
 
 
 @dataclass
@@ -58,7 +60,7 @@ def templates() -> jinja2.Environment:
     """The Jinja environment over the package data ``aggsym.templates`` (``templates/`` of the project, mapped
     into the package by pyproject.toml, in editable and in wheel installs alike)."""
     root = files("aggsym.templates")
-    return jinja2.Environment(
+    env = jinja2.Environment(
         loader=jinja2.FunctionLoader(lambda name: (root / name).read_text(encoding="utf-8")),
         undefined=jinja2.StrictUndefined,
         keep_trailing_newline=True,
@@ -66,6 +68,8 @@ def templates() -> jinja2.Environment:
         lstrip_blocks=True,
         autoescape=False,
     )
+    env.filters.update(FILTERS)  # user text reaches a template only through these (aggsym.codegen.escape)
+    return env
 
 
 class _Stages:
@@ -119,6 +123,10 @@ def emit_routine(model, prog, routine: Routine, outputs) -> EmittedRoutine:
         used = [i for k, i in sl.inputs if k == kind]
         if not used:
             c_body.append(f"(void){kind};")
+        elif kind == "p":  # p == NULL means the defaults, as in the NumPy module
+            defaults = ", ".join(_number(float(x.value)) for x in model.parameters)
+            c_body.append(f"static const double p_defaults[{len(model.parameters)}] = {{{defaults}}};")
+            c_body.append("if (!p) p = p_defaults;")
         for i in used:
             c_body.append(f"const double {kind}_{i} = {kind}[{i}];")
             py_body.append(f"{kind}_{i} = {kind}[..., {i}]")
@@ -182,6 +190,7 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
     """Generate all files of a model in memory."""
     from .latex import latex_document
 
+    check_names(model)
     stages = _Stages(progress)
     tree = Tree(model)
     prog, outputs = symbolic_routines(model, tree)
@@ -221,18 +230,48 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
 
 
 def write(gen: Generated, outdir) -> list:
-    """Write the files into ``outdir`` through a temporary folder; returns the paths written."""
+    """Write the files into ``outdir`` through a temporary folder beside it; returns the paths written.
+
+    A new folder appears whole (the temporary one is renamed); in an existing folder each file is replaced
+    atomically, after the folder was found writable.  An output path that cannot be used (a file, read-only, a
+    name too long for the file system) is the user's error, reported with that path."""
     outdir = Path(outdir)
-    outdir.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{outdir.name}.", dir=outdir.parent))
+    tmp = None
     try:
+        if outdir.exists() and not outdir.is_dir():
+            raise AggsymError(f"{outdir}: the output folder is a file")
+        if outdir.is_dir() and not os.access(outdir, os.W_OK | os.X_OK):
+            raise AggsymError(f"{outdir}: the output folder is not writable")
+        outdir.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".aggsym-", dir=outdir.parent))
         for name, text in gen.files.items():
             (tmp / name).write_text(text, encoding="utf-8")
-        outdir.mkdir(exist_ok=True)
-        paths = []
-        for name in gen.files:
-            os.replace(tmp / name, outdir / name)
-            paths.append(outdir / name)
-        return paths
+        if not outdir.exists():
+            os.chmod(tmp, 0o777 & ~_umask())
+            os.replace(tmp, outdir)
+            tmp = None
+        else:
+            for name in gen.files:
+                os.replace(tmp / name, outdir / name)
+        return [outdir / name for name in gen.files]
+    except OSError as exc:
+        raise AggsymError(f"{outdir}: cannot write the output folder: {exc.strerror or exc}") from None
     finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def check_names(model) -> None:
+    """The model's name must make a C prefix and an importable Python module: a ModelError (exit 2) suggesting
+    ``--name`` otherwise."""
+    problem = check_c_identifier(model.name) or check_module_name(model.name)
+    if problem:
+        raise ModelError(model.source or model.name, "name",
+                         f"the model's name cannot name the generated code: {problem}; give another with "
+                         f"--name NAME")

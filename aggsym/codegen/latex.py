@@ -9,8 +9,6 @@ A, b and g, one named intermediate per line, as the C code computes them.
 """
 from __future__ import annotations
 
-import re
-
 import sympy as sp
 from sympy.printing.latex import LatexPrinter
 
@@ -237,10 +235,6 @@ def intermediate_form(model, prog, outputs, roles=("inertia", "bias", "gravity")
     return blocks
 
 
-def _escape(text: str) -> str:
-    return re.sub(r"([_%&#$])", r"\\\1", text)
-
-
 def latex_document(model, env, prog, outputs) -> str:
     """The standalone LaTeX document (rendered through templates/model.tex.j2)."""
     flat = [x for role in ("inertia", "bias", "gravity") if role in outputs for o in outputs[role] for x in o]
@@ -250,9 +244,9 @@ def latex_document(model, env, prog, outputs) -> str:
     names = symbol_names(model)
     q, qd, qdd = coordinate_symbols(model)
     ctx = {
-        "name": _escape(model.name),
-        "description": _escape(model.description or ""),
-        "coordinates": [(sp.latex(s), _escape(c.joint), c.kind) for s, c in zip(q, model.coordinates)],
+        "name": model.name,
+        "description": model.description or "",
+        "coordinates": [(sp.latex(s), c.joint, c.kind) for s, c in zip(q, model.coordinates)],
         "parameters": [(sp.latex(p.symbol), repr(p.value)) for p in model.parameters],
         "gravity": ", ".join(sp.latex(g) for g in model.gravity),
         "closed": closed_form(model) if small else None,

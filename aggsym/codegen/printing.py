@@ -158,12 +158,18 @@ def _merge_constants(terms: list) -> list:
 
 
 def _float_literal(value: float) -> str:
-    text = repr(float(value))
-    return text if ("." in text or "e" in text or "n" in text) else text + ".0"
+    """A double literal that reads back as exactly ``value`` (Python's repr is the shortest round-trip form)."""
+    value = float(value)
+    if value != value or value in (float("inf"), float("-inf")):
+        raise ValueError(f"the constant {value!r} is not a finite double")
+    text = repr(value)
+    return text if ("." in text or "e" in text) else text + ".0"
 
 
 def _number(value) -> str:
-    if type(value) is int:
+    """A constant as C/NumPy source: small integers as they are, everything else as an exact double literal
+    (integers beyond 2^53 are doubles: an integer literal of 2^64 or more is undefined in C)."""
+    if type(value) is int and abs(value) < 2 ** 53:
         return str(value)
     if isinstance(value, Fraction):
         return _float_literal(value.numerator / value.denominator)

@@ -6,9 +6,10 @@ Every function accepts a leading batch dimension on its inputs (shape (..., 6));
 """
 import numpy as np
 
-NAME = "added_mass_body_in_fluid"
+NAME = 'added_mass_body_in_fluid'
 NQ = 6
-COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw", )
+COORDINATES = ('x', 'y', 'z', 'roll', 'pitch', 'yaw', )
+JOINTS = ('free_motion', 'free_motion', 'free_motion', 'free_motion', 'free_motion', 'free_motion', )
 PARAMETER_NAMES = ()
 PARAMETERS = np.array([], dtype=float)
 

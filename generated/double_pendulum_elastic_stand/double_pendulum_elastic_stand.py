@@ -7,10 +7,11 @@ Every function accepts a leading batch dimension on its inputs (shape (..., 3));
 """
 import numpy as np
 
-NAME = "double_pendulum_elastic_stand"
+NAME = 'double_pendulum_elastic_stand'
 NQ = 3
-COORDINATES = ("delta12", "delta15", "theta26", )
-PARAMETER_NAMES = ("m2", "m3", "r21", "r31", "p21", "I244", "I255", "I266", "I344", "I355", "I366", "g", "k22", "k25", "k55", )
+COORDINATES = ('delta12', 'delta15', 'theta26', )
+JOINTS = ('stand', 'stand', 'elbow', )
+PARAMETER_NAMES = ('m2', 'm3', 'r21', 'r31', 'p21', 'I244', 'I255', 'I266', 'I344', 'I355', 'I366', 'g', 'k22', 'k25', 'k55', )
 PARAMETERS = np.array([1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81, 400.0, 20.0, 150.0, ], dtype=float)
 
 

@@ -8,6 +8,12 @@
  * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
 static void aggsym_sincos(double x, double *s, double *c)
 {
+#ifdef __FAST_MATH__
+    /* Under -ffast-math the compiler may reassociate the reduction below ((x - k hi) - k mid) - k lo, losing the
+     * low bits of r at large |x|: libm's sin and cos, compiled without it, keep full accuracy there. */
+    *s = sin(x);
+    *c = cos(x);
+#else
     if (!(fabs(x) < 1.0e6)) {
         *s = sin(x);
         *c = cos(x);
@@ -30,6 +36,7 @@ static void aggsym_sincos(double x, double *s, double *c)
     case 2: *s = -sr; *c = -cr; break;
     default: *s = -cr; *c = sr; break;
     }
+#endif
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -37,6 +44,8 @@ static void aggsym_sincos(double x, double *s, double *c)
 void double_pendulum_variant2_inertia(const double *q, const double *p, double *A)
 {
     const double q_2 = q[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -69,6 +78,8 @@ void double_pendulum_variant2_bias(const double *q, const double *qd, const doub
     const double q_2 = q[2];
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_1 = p[1];
     const double p_3 = p[3];
     const double p_4 = p[4];
@@ -101,6 +112,8 @@ void double_pendulum_variant2_coriolis(const double *q, const double *qd, const 
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_1 = p[1];
     const double p_3 = p[3];
     const double p_4 = p[4];
@@ -141,6 +154,8 @@ void double_pendulum_variant2_gravity(const double *q, const double *p, double *
 {
     const double q_1 = q[1];
     const double q_2 = q[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -166,6 +181,8 @@ void double_pendulum_variant2_nonlinear_effects(const double *q, const double *q
     const double q_2 = q[2];
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -207,6 +224,8 @@ void double_pendulum_variant2_inverse_dynamics(const double *q, const double *qd
     const double qdd_0 = qdd[0];
     const double qdd_1 = qdd[1];
     const double qdd_2 = qdd[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -248,6 +267,8 @@ void double_pendulum_variant2_kinetic_energy(const double *q, const double *qd, 
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -275,6 +296,8 @@ void double_pendulum_variant2_potential_energy(const double *q, const double *p,
 {
     const double q_1 = q[1];
     const double q_2 = q[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -300,6 +323,8 @@ void double_pendulum_variant2_joint_wrenches(const double *q, const double *qd, 
     const double qdd_0 = qdd[0];
     const double qdd_1 = qdd[1];
     const double qdd_2 = qdd[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -363,6 +388,8 @@ void double_pendulum_variant2_forward_dynamics(const double *q, const double *qd
     const double tau_0 = tau[0];
     const double tau_1 = tau[1];
     const double tau_2 = tau[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -406,6 +433,8 @@ void double_pendulum_variant2_forward_dynamics(const double *q, const double *qd
 void double_pendulum_variant2_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_2 = q[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -445,6 +474,8 @@ void double_pendulum_variant2_inertia_inverse(const double *q, const double *p, 
 void double_pendulum_variant2_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_2 = q[2];
+    static const double p_defaults[12] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];

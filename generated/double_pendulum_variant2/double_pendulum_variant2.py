@@ -6,10 +6,11 @@ Every function accepts a leading batch dimension on its inputs (shape (..., 3));
 """
 import numpy as np
 
-NAME = "double_pendulum_variant2"
+NAME = 'double_pendulum_variant2'
 NQ = 3
-COORDINATES = ("o12", "theta15", "theta26", )
-PARAMETER_NAMES = ("m2", "m3", "r21", "r31", "p21", "I244", "I255", "I266", "I344", "I355", "I366", "g", )
+COORDINATES = ('o12', 'theta15', 'theta26', )
+JOINTS = ('hanger', 'hanger', 'elbow', )
+PARAMETER_NAMES = ('m2', 'm3', 'r21', 'r31', 'p21', 'I244', 'I255', 'I266', 'I344', 'I355', 'I366', 'g', )
 PARAMETERS = np.array([1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81, ], dtype=float)
 
 

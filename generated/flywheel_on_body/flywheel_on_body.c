@@ -8,6 +8,12 @@
  * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
 static void aggsym_sincos(double x, double *s, double *c)
 {
+#ifdef __FAST_MATH__
+    /* Under -ffast-math the compiler may reassociate the reduction below ((x - k hi) - k mid) - k lo, losing the
+     * low bits of r at large |x|: libm's sin and cos, compiled without it, keep full accuracy there. */
+    *s = sin(x);
+    *c = cos(x);
+#else
     if (!(fabs(x) < 1.0e6)) {
         *s = sin(x);
         *c = cos(x);
@@ -30,6 +36,7 @@ static void aggsym_sincos(double x, double *s, double *c)
     case 2: *s = -sr; *c = -cr; break;
     default: *s = -cr; *c = sr; break;
     }
+#endif
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -39,6 +46,8 @@ void flywheel_on_body_inertia(const double *q, const double *t, const double *p,
     const double q_1 = q[1];
     const double q_2 = q[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
@@ -99,6 +108,8 @@ void flywheel_on_body_bias(const double *q, const double *qd, const double *t, c
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
@@ -187,6 +198,8 @@ void flywheel_on_body_gravity(const double *q, const double *t, const double *p,
     const double q_1 = q[1];
     const double q_2 = q[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
@@ -241,6 +254,8 @@ void flywheel_on_body_nonlinear_effects(const double *q, const double *qd, const
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
@@ -341,6 +356,8 @@ void flywheel_on_body_inverse_dynamics(const double *q, const double *qd, const 
     const double qdd_1 = qdd[1];
     const double qdd_2 = qdd[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
@@ -434,6 +451,8 @@ void flywheel_on_body_kinetic_energy(const double *q, const double *qd, const do
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
@@ -472,6 +491,8 @@ void flywheel_on_body_potential_energy(const double *q, const double *t, const d
     const double q_1 = q[1];
     const double q_2 = q[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
@@ -508,6 +529,8 @@ void flywheel_on_body_joint_wrenches(const double *q, const double *qd, const do
     const double qdd_1 = qdd[1];
     const double qdd_2 = qdd[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
@@ -612,6 +635,8 @@ void flywheel_on_body_forward_dynamics(const double *q, const double *qd, const 
     const double tau_1 = tau[1];
     const double tau_2 = tau[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
@@ -740,6 +765,8 @@ void flywheel_on_body_inertia_inverse(const double *q, const double *t, const do
     const double q_1 = q[1];
     const double q_2 = q[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
@@ -809,6 +836,8 @@ void flywheel_on_body_transvective_factors(const double *q, const double *t, con
     const double q_1 = q[1];
     const double q_2 = q[2];
     const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;

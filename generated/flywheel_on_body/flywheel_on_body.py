@@ -8,10 +8,11 @@ shape) before p.
 """
 import numpy as np
 
-NAME = "flywheel_on_body"
+NAME = 'flywheel_on_body'
 NQ = 3
-COORDINATES = ("psi1", "psi2", "psi3", )
-PARAMETER_NAMES = ("Omega", "eps", )
+COORDINATES = ('psi1', 'psi2', 'psi3', )
+JOINTS = ('pivot', 'pivot', 'pivot', )
+PARAMETER_NAMES = ('Omega', 'eps', )
 PARAMETERS = np.array([60.0, 5.0, ], dtype=float)
 
 

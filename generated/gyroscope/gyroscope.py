@@ -6,9 +6,10 @@ Every function accepts a leading batch dimension on its inputs (shape (..., 3));
 """
 import numpy as np
 
-NAME = "gyroscope"
+NAME = 'gyroscope'
 NQ = 3
-COORDINATES = ("theta14", "theta25", "theta36", )
+COORDINATES = ('theta14', 'theta25', 'theta36', )
+JOINTS = ('outer_axis', 'inner_axis', 'spin_axis', )
 PARAMETER_NAMES = ()
 PARAMETERS = np.array([], dtype=float)
 

@@ -8,6 +8,12 @@
  * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
 static void aggsym_sincos(double x, double *s, double *c)
 {
+#ifdef __FAST_MATH__
+    /* Under -ffast-math the compiler may reassociate the reduction below ((x - k hi) - k mid) - k lo, losing the
+     * low bits of r at large |x|: libm's sin and cos, compiled without it, keep full accuracy there. */
+    *s = sin(x);
+    *c = cos(x);
+#else
     if (!(fabs(x) < 1.0e6)) {
         *s = sin(x);
         *c = cos(x);
@@ -30,6 +36,7 @@ static void aggsym_sincos(double x, double *s, double *c)
     case 2: *s = -sr; *c = -cr; break;
     default: *s = -cr; *c = sr; break;
     }
+#endif
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -38,6 +45,8 @@ void gyroscope_spinning_rotor_inertia(const double *q, const double *t, const do
 {
     const double q_1 = q[1];
     const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     A[1] = 0;
     A[2] = 0;
@@ -60,6 +69,8 @@ void gyroscope_spinning_rotor_bias(const double *q, const double *qd, const doub
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
     const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double x0 = p_0*t_0;
     double x2, x1;
@@ -86,6 +97,8 @@ void gyroscope_spinning_rotor_gravity(const double *q, const double *t, const do
     const double q_0 = q[0];
     const double q_1 = q[1];
     const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double x0 = p_0*t_0;
     double x2, x1;
@@ -111,6 +124,8 @@ void gyroscope_spinning_rotor_nonlinear_effects(const double *q, const double *q
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
     const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double x0 = p_0*t_0;
     double x2, x1;
@@ -143,6 +158,8 @@ void gyroscope_spinning_rotor_inverse_dynamics(const double *q, const double *qd
     const double qdd_0 = qdd[0];
     const double qdd_1 = qdd[1];
     const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double x0 = p_0*t_0;
     double x2, x1;
@@ -174,6 +191,8 @@ void gyroscope_spinning_rotor_kinetic_energy(const double *q, const double *qd, 
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
     const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double x0 = p_0*t_0;
     double x2, x1;
@@ -214,6 +233,8 @@ void gyroscope_spinning_rotor_joint_wrenches(const double *q, const double *qd, 
     const double qdd_0 = qdd[0];
     const double qdd_1 = qdd[1];
     const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double x0 = p_0*t_0;
     double x2, x1;
@@ -278,6 +299,8 @@ void gyroscope_spinning_rotor_forward_dynamics(const double *q, const double *qd
     const double tau_0 = tau[0];
     const double tau_1 = tau[1];
     const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double x0 = p_0*t_0;
     double x2, x1;
@@ -307,6 +330,8 @@ void gyroscope_spinning_rotor_inertia_inverse(const double *q, const double *t, 
 {
     const double q_1 = q[1];
     const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     Ainv[1] = 0;
     Ainv[2] = 0;
@@ -327,6 +352,8 @@ void gyroscope_spinning_rotor_transvective_factors(const double *q, const double
 {
     const double q_1 = q[1];
     const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     targs[0] = 0;
     const double x0 = p_0*t_0;

@@ -8,10 +8,11 @@ shape) before p.
 """
 import numpy as np
 
-NAME = "gyroscope_spinning_rotor"
+NAME = 'gyroscope_spinning_rotor'
 NQ = 2
-COORDINATES = ("theta14", "theta25", )
-PARAMETER_NAMES = ("Omega", )
+COORDINATES = ('theta14', 'theta25', )
+JOINTS = ('outer_axis', 'inner_axis', )
+PARAMETER_NAMES = ('Omega', )
 PARAMETERS = np.array([300.0, ], dtype=float)
 
 

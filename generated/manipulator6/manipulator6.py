@@ -6,9 +6,10 @@ Every function accepts a leading batch dimension on its inputs (shape (..., 6));
 """
 import numpy as np
 
-NAME = "manipulator6"
+NAME = 'manipulator6'
 NQ = 6
-COORDINATES = ("theta14", "theta25", "theta35", "theta44", "theta55", "theta66", )
+COORDINATES = ('theta14', 'theta25', 'theta35', 'theta44', 'theta55', 'theta66', )
+JOINTS = ('joint1', 'joint2', 'joint3', 'joint4', 'joint5', 'joint6', )
 PARAMETER_NAMES = ()
 PARAMETERS = np.array([], dtype=float)
 

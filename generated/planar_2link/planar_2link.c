@@ -8,6 +8,12 @@
  * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
 static void aggsym_sincos(double x, double *s, double *c)
 {
+#ifdef __FAST_MATH__
+    /* Under -ffast-math the compiler may reassociate the reduction below ((x - k hi) - k mid) - k lo, losing the
+     * low bits of r at large |x|: libm's sin and cos, compiled without it, keep full accuracy there. */
+    *s = sin(x);
+    *c = cos(x);
+#else
     if (!(fabs(x) < 1.0e6)) {
         *s = sin(x);
         *c = cos(x);
@@ -30,6 +36,7 @@ static void aggsym_sincos(double x, double *s, double *c)
     case 2: *s = -sr; *c = -cr; break;
     default: *s = -cr; *c = sr; break;
     }
+#endif
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -37,6 +44,8 @@ static void aggsym_sincos(double x, double *s, double *c)
 void planar_2link_inertia(const double *q, const double *p, double *A)
 {
     const double q_1 = q[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -60,6 +69,8 @@ void planar_2link_bias(const double *q, const double *qd, const double *p, doubl
     const double q_1 = q[1];
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_1 = p[1];
     const double p_2 = p[2];
     const double p_3 = p[3];
@@ -81,6 +92,8 @@ void planar_2link_coriolis(const double *q, const double *qd, const double *p, d
     const double q_1 = q[1];
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_1 = p[1];
     const double p_2 = p[2];
     const double p_3 = p[3];
@@ -106,6 +119,8 @@ void planar_2link_gravity(const double *q, const double *p, double *g)
 {
     const double q_0 = q[0];
     const double q_1 = q[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -131,6 +146,8 @@ void planar_2link_nonlinear_effects(const double *q, const double *qd, const dou
     const double q_1 = q[1];
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -160,6 +177,8 @@ void planar_2link_inverse_dynamics(const double *q, const double *qd, const doub
     const double qd_1 = qd[1];
     const double qdd_0 = qdd[0];
     const double qdd_1 = qdd[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -188,6 +207,8 @@ void planar_2link_kinetic_energy(const double *q, const double *qd, const double
     const double q_1 = q[1];
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -208,6 +229,8 @@ void planar_2link_potential_energy(const double *q, const double *p, double *U)
 {
     const double q_0 = q[0];
     const double q_1 = q[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -231,6 +254,8 @@ void planar_2link_joint_wrenches(const double *q, const double *qd, const double
     const double qd_1 = qd[1];
     const double qdd_0 = qdd[0];
     const double qdd_1 = qdd[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -278,6 +303,8 @@ void planar_2link_forward_dynamics(const double *q, const double *qd, const doub
     const double qd_1 = qd[1];
     const double tau_0 = tau[0];
     const double tau_1 = tau[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -307,6 +334,8 @@ void planar_2link_forward_dynamics(const double *q, const double *qd, const doub
 void planar_2link_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_1 = q[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -332,6 +361,8 @@ void planar_2link_inertia_inverse(const double *q, const double *p, double *Ainv
 void planar_2link_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_1 = q[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];

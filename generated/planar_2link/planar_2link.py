@@ -6,10 +6,11 @@ Every function accepts a leading batch dimension on its inputs (shape (..., 2));
 """
 import numpy as np
 
-NAME = "planar_2link"
+NAME = 'planar_2link'
 NQ = 2
-COORDINATES = ("theta1", "theta2", )
-PARAMETER_NAMES = ("m1", "m2", "l1", "l2", "g", )
+COORDINATES = ('theta1', 'theta2', )
+JOINTS = ('joint1', 'joint2', )
+PARAMETER_NAMES = ('m1', 'm2', 'l1', 'l2', 'g', )
 PARAMETERS = np.array([1.0, 0.7, 0.6, 0.4, 9.81, ], dtype=float)
 
 

@@ -8,6 +8,12 @@
  * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
 static void aggsym_sincos(double x, double *s, double *c)
 {
+#ifdef __FAST_MATH__
+    /* Under -ffast-math the compiler may reassociate the reduction below ((x - k hi) - k mid) - k lo, losing the
+     * low bits of r at large |x|: libm's sin and cos, compiled without it, keep full accuracy there. */
+    *s = sin(x);
+    *c = cos(x);
+#else
     if (!(fabs(x) < 1.0e6)) {
         *s = sin(x);
         *c = cos(x);
@@ -30,6 +36,7 @@ static void aggsym_sincos(double x, double *s, double *c)
     case 2: *s = -sr; *c = -cr; break;
     default: *s = -cr; *c = sr; break;
     }
+#endif
 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -38,6 +45,8 @@ void planar_3link_inertia(const double *q, const double *p, double *A)
 {
     const double q_1 = q[1];
     const double q_2 = q[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -80,6 +89,8 @@ void planar_3link_bias(const double *q, const double *qd, const double *p, doubl
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_1 = p[1];
     const double p_2 = p[2];
     const double p_3 = p[3];
@@ -118,6 +129,8 @@ void planar_3link_coriolis(const double *q, const double *qd, const double *p, d
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_1 = p[1];
     const double p_2 = p[2];
     const double p_3 = p[3];
@@ -181,6 +194,8 @@ void planar_3link_gravity(const double *q, const double *p, double *g)
     const double q_0 = q[0];
     const double q_1 = q[1];
     const double q_2 = q[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -219,6 +234,8 @@ void planar_3link_nonlinear_effects(const double *q, const double *qd, const dou
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -266,6 +283,8 @@ void planar_3link_inverse_dynamics(const double *q, const double *qd, const doub
     const double qdd_0 = qdd[0];
     const double qdd_1 = qdd[1];
     const double qdd_2 = qdd[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -313,6 +332,8 @@ void planar_3link_kinetic_energy(const double *q, const double *qd, const double
     const double qd_0 = qd[0];
     const double qd_1 = qd[1];
     const double qd_2 = qd[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -343,6 +364,8 @@ void planar_3link_potential_energy(const double *q, const double *p, double *U)
     const double q_0 = q[0];
     const double q_1 = q[1];
     const double q_2 = q[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -376,6 +399,8 @@ void planar_3link_joint_wrenches(const double *q, const double *qd, const double
     const double qdd_0 = qdd[0];
     const double qdd_1 = qdd[1];
     const double qdd_2 = qdd[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -448,6 +473,8 @@ void planar_3link_forward_dynamics(const double *q, const double *qd, const doub
     const double tau_0 = tau[0];
     const double tau_1 = tau[1];
     const double tau_2 = tau[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -511,6 +538,8 @@ void planar_3link_inertia_inverse(const double *q, const double *p, double *Ainv
 {
     const double q_1 = q[1];
     const double q_2 = q[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];
@@ -564,6 +593,8 @@ void planar_3link_transvective_factors(const double *q, const double *p, double 
 {
     const double q_1 = q[1];
     const double q_2 = q[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double p_2 = p[2];

@@ -6,10 +6,11 @@ Every function accepts a leading batch dimension on its inputs (shape (..., 3));
 """
 import numpy as np
 
-NAME = "planar_3link"
+NAME = 'planar_3link'
 NQ = 3
-COORDINATES = ("theta1", "theta2", "theta3", )
-PARAMETER_NAMES = ("m1", "m2", "m3", "l1", "l2", "l3", "g", )
+COORDINATES = ('theta1', 'theta2', 'theta3', )
+JOINTS = ('joint1', 'joint2', 'joint3', )
+PARAMETER_NAMES = ('m1', 'm2', 'm3', 'l1', 'l2', 'l3', 'g', )
 PARAMETERS = np.array([1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81, ], dtype=float)
 
 

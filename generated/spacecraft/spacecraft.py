@@ -6,9 +6,10 @@ Every function accepts a leading batch dimension on its inputs (shape (..., 12))
 """
 import numpy as np
 
-NAME = "spacecraft"
+NAME = 'spacecraft'
 NQ = 12
-COORDINATES = ("x11", "y11", "z11", "a11", "b11", "c11", "a12", "b12", "c12", "theta22", "theta23", "theta24", )
+COORDINATES = ('x11', 'y11', 'z11', 'a11', 'b11', 'c11', 'a12', 'b12', 'c12', 'theta22', 'theta23', 'theta24', )
+JOINTS = ('free_flight', 'free_flight', 'free_flight', 'free_flight', 'free_flight', 'free_flight', 'ball_joint', 'ball_joint', 'ball_joint', 'shoulder_roll', 'shoulder_pitch', 'elbow_yaw', )
 PARAMETER_NAMES = ()
 PARAMETERS = np.array([], dtype=float)
 
