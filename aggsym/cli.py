@@ -45,6 +45,9 @@ def _parser() -> argparse.ArgumentParser:
                        help="URDF only: give the root a free 6-coordinate pair (o1 o2 o3 theta4 theta5 theta6)")
         p.add_argument("--mimic", choices=["independent", "couple"], default="independent",
                        help="URDF only: <mimic> joints keep their own coordinate (default) or follow their master")
+        p.add_argument("--armature", metavar="VALUE", type=_armature, default=0.0,
+                       help="add a rotor inertia VALUE (kg m^2, or kg for a prismatic joint) on every coordinate, as "
+                            "Pinocchio's armature: A(q) + VALUE E (makes A regular where a joint moves no mass)")
         p.add_argument("--name", metavar="NAME",
                        help="the name of the generated code (C prefix, module and file names) instead of the model's")
         return p
@@ -84,7 +87,19 @@ def _load(args):
         if problem:
             raise AggsymError(f"--name: {problem}")
         model = dataclasses.replace(model, name=args.name)
+    if args.armature:
+        model = dataclasses.replace(model, armature=args.armature)
     return model
+
+
+def _armature(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (0.0 <= value < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text!r}: the armature is a finite number >= 0")
+    return value
 
 
 def _progress(quiet: bool, name: str):
@@ -97,12 +112,15 @@ def cmd_generate(args) -> int:
     t0 = time.perf_counter()
     model = _load(args)
     if args.list_routines:
-        from .contract import c_symbol, routines_for
+        from .contract import c_symbol, omitted_routines, routines_for
 
-        routines = routines_for(model)
+        omitted = omitted_routines(model)
+        routines = routines_for(model, omitted=omitted)
         width = max(len(c_symbol(model, r)) for r in routines)
         for r in routines:
             print(f"{c_symbol(model, r).ljust(width)}  {r.doc}")
+        for role, reason in omitted.items():
+            print(f"{(model.name + '_' + role).ljust(width)}  (left out: {reason})")
         return 0
     from .codegen.generate import generate, write
 

@@ -54,6 +54,7 @@ class Routine:
     doc: str  # one line: what it computes, with the book's equation
     layout: Callable | None = None  # model -> JSON-able description of the outputs' layout (manifest)
     applies: Callable | None = None  # model -> bool; None means every model has this routine
+    regular: bool = False  # defined only where A(q) is regular (left out, with the reason, where it is not)
     # with coupled coordinates: "force" (outputs reduce by J^T), "matrix" (J^T X J), "tree" (the tree's own
     # outputs), "forward" / "inverse" (q'' and A^-1 under the coupling), None (not emitted)
     coupled: str | None = "force"
@@ -315,15 +316,15 @@ register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_
                  lambda bound, kin, x: (transvective.forward_dynamics(
                      bound, kin, _minus(x["tau"], elastic.elastic_forces(bound, kin.q)), x["qd"]),),
                  "qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), "
-                 "evaluated in O(n)", coupled="forward"))
+                 "evaluated in O(n)", coupled="forward", regular=True))
 register(Routine("inertia_inverse", ("q", "p"), (Output("Ainv", nq_square),),
                  lambda bound, kin, x: (_flat(transvective.inertia_inverse(bound, kin)),),
-                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)", coupled="inverse"))
+                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)", coupled="inverse", regular=True))
 register(Routine("transvective_factors", ("q", "p"),
                  (Output("targs", transvection_count), Output("diag", nq_vector)),
                  lambda bound, kin, x: transvective.factor_outputs(bound, kin),
                  "the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k "
-                 "of T A(q) T^T = diag (3.11)", layout=transvective_layout, coupled=None))
+                 "of T A(q) T^T = diag (3.11)", layout=transvective_layout, coupled=None, regular=True))
 register(Routine("elastic_partition", ("q", "qd", "p"),
                  tuple(Output(name, partition_block_shape(name)) for name, _, _, _ in elastic.BLOCKS),
                  lambda bound, kin, x: elastic.partition(bound, kin, x["qd"]),
@@ -333,9 +334,47 @@ register(Routine("elastic_partition", ("q", "qd", "p"),
                  applies=lambda model: elastic.is_elastic(model) and not model.time_dependent, coupled=None))
 
 
-def routines_for(model, roles=None) -> list:
-    """The routines a model has (all of the contract's that apply, or those named), in emission order."""
-    return [r for role, r in ROUTINES.items() if (roles is None or role in roles) and r.exists_for(model)]
+def routines_for(model, roles=None, omitted=()) -> list:
+    """The routines a model has (all of the contract's that apply, or those named), in emission order, less the
+    ``omitted`` ones (:func:`omitted_routines`)."""
+    return [r for role, r in ROUTINES.items()
+            if (roles is None or role in roles) and r.exists_for(model) and role not in omitted]
+
+
+def massless_coordinates(model, samples: int = 2, tolerance: float = 1e-12) -> tuple:
+    """(coordinate indices with A_ii = 0, whether A(q) is singular), at the default parameters and a few fixed
+    random configurations: A_ii = psi_i^T A+ psi_i is the kinetic energy of a unit rate of coordinate i alone,
+    zero exactly when its joint moves no mass.  Zero and singular are judged relative to the largest entry."""
+    import numpy as np
+
+    from .core.backend import Numeric
+    from .mechanics.bound import bind
+
+    if model.nq == 0:
+        return (), False
+    bound = bind(model, Numeric())
+    rng = np.random.default_rng(0)
+    zero, singular = set(range(model.nq)), False
+    for _ in range(samples):
+        q = [float(x) for x in rng.uniform(-np.pi, np.pi, model.nq)]
+        A = np.array(run(ROUTINES["inertia"], bound, {"q": q})[0], dtype=float).reshape(model.nq, model.nq)
+        scale = max(float(np.abs(A).max()), 1e-300)
+        zero &= {i for i in range(model.nq) if abs(A[i, i]) <= tolerance * scale}
+        singular = singular or float(np.linalg.eigvalsh(A)[0]) <= tolerance * scale
+    return tuple(sorted(zero)), singular
+
+
+def omitted_routines(model) -> dict:
+    """{role: reason} of the routines left out because A(q) is singular at the default parameters (a coordinate
+    that moves no mass, e.g. a massless finger joint): forward dynamics, A^-1 and the factors are undefined there;
+    A, b, g, inverse dynamics and the joint wrenches stay defined and are emitted."""
+    zero, singular = massless_coordinates(model)
+    if not singular:
+        return {}
+    names = ", ".join(f"{model.coordinates[i].name} (joint {model.coordinates[i].joint!r})" for i in zero)
+    reason = (f"A(q) is singular at the default parameters: {'coordinate(s) ' + names + ' move(s) no mass' if zero else 'its smallest eigenvalue is zero'}; "
+              f"--armature VALUE adds a rotor inertia on every coordinate")
+    return {r.role: reason for r in ROUTINES.values() if r.regular and r.exists_for(model)}
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -377,8 +416,9 @@ def _coupled_outputs(routine, bound, inputs: dict) -> tuple:
 # the manifest
 
 
-def manifest(model, routines, ops: dict) -> dict:
-    """The JSON manifest of the generated code: ``routines`` those emitted, ``ops[role]`` their operation counts."""
+def manifest(model, routines, ops: dict, omitted=None) -> dict:
+    """The JSON manifest of the generated code: ``routines`` those emitted, ``ops[role]`` their operation counts,
+    ``omitted`` the routines left out and why."""
     out = {
         "name": model.name,
         "nq": model.nq,
@@ -394,6 +434,8 @@ def manifest(model, routines, ops: dict) -> dict:
                        "offset": c.offset} for c in model.couplings],
         "conservative": model.conservative,
         "ops": {r.role: ops[r.role] for r in routines},
+        "omitted": dict(omitted or {}),
+        "armature": model.armature,
         "bodies": len(model.bodies),
         "generator": f"aggsym {__version__}",
     }

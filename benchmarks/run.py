@@ -13,12 +13,13 @@ Settings (environment variables; defaults in brackets):
     AGGSYM_BENCH_RUNTIME_SECONDS   timing budget per routine pair and robot             [0.5]
     AGGSYM_BENCH_STATES            precomputed random states per robot                  [1000]
     AGGSYM_BENCH_CALLS             calls per timed batch (cycling through the states)  [100]
-    AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane             [all]
+    AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane,inputs      [all]
                                    (a section left out is read back from its JSON of an earlier run)
 
 Sections: 1. generation time and peak memory of every models/*.yaml, the four example-robot-data robots and
 the chains, with KanesMethod on the chains (generation.json, kane.json); 2. operation counts from the
-manifests (opcounts.json); 3. runtime of the generated C against Pinocchio C++ (runtime.json).
+manifests (opcounts.json); 3. runtime of the generated C against Pinocchio C++ (runtime.json); 4. reading and
+ordering a 2000-body YAML and URDF chain (inputs.json, :mod:`benchmarks.inputs`).
 """
 from __future__ import annotations
 
@@ -56,7 +57,7 @@ def config() -> dict:
         "AGGSYM_BENCH_RUNTIME_SECONDS": float(env.get("AGGSYM_BENCH_RUNTIME_SECONDS", "0.5")),
         "AGGSYM_BENCH_STATES": int(env.get("AGGSYM_BENCH_STATES", "1000")),
         "AGGSYM_BENCH_CALLS": int(env.get("AGGSYM_BENCH_CALLS", "100")),
-        "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS", "generation,runtime,kane"),
+        "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS", "generation,runtime,kane,inputs"),
     }
 
 
@@ -214,11 +215,20 @@ def main() -> int:
     kane = section_kane(cfg) if "kane" in sections else _load("kane")
     if "kane" in sections:
         _save("kane", kane)
+    if "inputs" in sections:
+        from .inputs import section as inputs_section
+
+        inputs = inputs_section(BUILD / "inputs")
+        _save("inputs", inputs)
+        for row in inputs["rows"]:
+            log(f"load {row['file']} of {row['bodies']} bodies: {row['seconds']:.3f} s")
+    else:
+        inputs = _load("inputs")
 
     env["load_average_end"] = load_average()
     env["bench_wall_seconds"] = round(time.perf_counter() - t_start, 1)
     results = {"environment": env, "config": cfg, "generation": generation, "kane": kane, "opcounts": opcounts,
-               "runtime": runtime}
+               "runtime": runtime, "inputs": inputs}
     _save("environment", {"environment": env, "config": cfg})
     path = report.write_report(results, HERE)
     log(f"wrote {path.relative_to(ROOT)} and the plots in {env['bench_wall_seconds']:.0f} s")

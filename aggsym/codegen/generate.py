@@ -14,6 +14,7 @@ import os
 import shutil
 import tempfile
 import time
+import warnings
 from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
@@ -22,7 +23,8 @@ import jinja2
 
 from .. import __version__
 from ..contract import (
-    INPUT_KINDS, ROUTINES, Routine, c_prototype, c_symbol, header_macros, input_length, manifest, python_parameters, routines_for,
+    INPUT_KINDS, ROUTINES, Routine, c_prototype, c_symbol, header_macros, input_length, manifest, omitted_routines,
+    python_parameters, routines_for,
     run, signature,
 )
 from ..core.backend import Symbolic
@@ -30,7 +32,7 @@ from ..core.program import COS, SIN, Node, straight_line
 from ..mechanics.bound import bind
 from ..mechanics.kinematics import TreeKinematics
 from ..model.tree import Tree
-from ..errors import AggsymError, ModelError
+from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import FILTERS, check_c_identifier, check_module_name
 from .printing import CPrinter, Converter, NumPyPrinter, _number, count_ops
 
@@ -86,9 +88,9 @@ class _Stages:
         self._t = now
 
 
-def symbolic_routines(model, tree=None, roles=None):
-    """Run the model's routines (all, or those named) on the symbolic backend: (program, {role: list of flat
-    output lists})."""
+def symbolic_routines(model, tree=None, roles=None, omitted=()):
+    """Run the model's routines (all, or those named, less the omitted) on the symbolic backend: (program,
+    {role: list of flat output lists})."""
     backend = Symbolic()
     prog = backend.program
     tree = tree or Tree(model)
@@ -96,7 +98,7 @@ def symbolic_routines(model, tree=None, roles=None):
     vectors = {k: prog.vector(k, input_length(model, k)) for k in INPUT_KINDS}
     kin = None if model.couplings else TreeKinematics(bound, vectors["q"])  # coupled: run() expands q first
     outputs = {}
-    for routine in routines_for(model, roles):
+    for routine in routines_for(model, roles, omitted):
         x = {k: vectors[k] for k in signature(routine, model) if k not in ("p", "t")}
         outputs[routine.role] = [list(o) for o in run(routine, bound, x, kin)]
     return prog, outputs
@@ -193,7 +195,11 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
     check_names(model)
     stages = _Stages(progress)
     tree = Tree(model)
-    prog, outputs = symbolic_routines(model, tree)
+    omitted = omitted_routines(model)
+    if omitted:
+        warnings.warn(ModelWarning(f"{model.source or model.name}: {next(iter(omitted.values()))}: "
+                                   f"{', '.join(omitted)} left out (see the manifest's 'omitted')"))
+    prog, outputs = symbolic_routines(model, tree, omitted=omitted)
     stages.done("recursions")
     emitted = [emit_routine(model, prog, ROUTINES[role], outs) for role, outs in outputs.items()]
     stages.done("printing")
@@ -220,7 +226,8 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
     gen.files[f"{model.name}.c"] = env.get_template("model.c.j2").render(ctx)
     gen.files[f"{model.name}.py"] = env.get_template("model.py.j2").render(ctx)
     gen.files[f"{model.name}.json"] = json.dumps(
-        manifest(model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted}), indent=2) + "\n"
+        manifest(model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted}, omitted),
+        indent=2) + "\n"
     stages.done("templates")
     if latex:
         gen.files[f"{model.name}.tex"] = latex_document(model, env, prog, outputs)

@@ -250,7 +250,7 @@ def latex_document(model, env, prog, outputs) -> str:
         "parameters": [(sp.latex(p.symbol), repr(p.value)) for p in model.parameters],
         "gravity": ", ".join(sp.latex(g) for g in model.gravity),
         "closed": closed_form(model) if small else None,
-        "cauchy": cauchy_form(model) if small else None,
+        "cauchy": cauchy_form(model) if small and "forward_dynamics" in outputs else None,
         "blocks": None if small else intermediate_form(model, prog, outputs),
         "nq": model.nq,
         "qdd": [names[s] for s in qdd],

@@ -14,6 +14,7 @@ import numpy as np
 import sympy as sp
 
 from ..core.backend import to_scalar
+from ..core.program import fold
 from ..model.tree import Tree
 from ..model.types import TIME, Model, code_index
 from .aggregates import General, Rigid
@@ -49,6 +50,7 @@ class Bound:
     gravity: tuple  # in the world frame
     params: list  # the backend scalars of p
     t: object = None  # the time (models with prescribed motions), a backend scalar
+    armature: object = 0  # the rotor inertia added on every coordinate's own axis (model.armature)
 
     def rational(self, num: int, den: int):
         """num/den as an exact constant on the symbolic backend, a float on the numeric one."""
@@ -121,7 +123,8 @@ def bind(model: Model, backend, p=None, tree: Tree | None = None, t=None) -> Bou
             rest = tuple(s(x) for x in pair.rest) if pair.rest is not None else (0,) * len(pair.coordinates)
         bodies.append(BoundBody(L0, pair.codes, mises, rigid, spin, stiffness, rest))
     gravity = tuple(s(x) for x in model.gravity)
-    return Bound(model, tree, backend, bodies, gravity, params, t)
+    armature = fold(model.armature) if backend.symbolic else float(model.armature)
+    return Bound(model, tree, backend, bodies, gravity, params, t, armature)
 
 
 def _prescribed(pair, L0, s, backend):

@@ -13,7 +13,7 @@ constant, and Pinocchio's computePotentialEnergy leaves them out too.
 from __future__ import annotations
 
 from .bias import gravity_accelerations
-from .linalg import dot
+from .linalg import dot, mul
 
 
 def kinetic_energy(bound, kin, qd):
@@ -22,6 +22,7 @@ def kinetic_energy(bound, kin, qd):
     for k, body in enumerate(bound.bodies):
         if body.mises is not None:
             acc = acc + dot(V[k], body.mises.apply(V[k]))
+    acc = acc + mul(bound.armature, dot(qd, qd))  # the rotors of the armature
     return bound.rational(1, 2) * acc
 
 

@@ -1,11 +1,14 @@
 """The inertia matrix A(q) = S A S^T: by composite bodies (2.32)-(2.34), and by S diag(Theta) S^T (2.30).
 
+A model's armature (a rotor inertia on every coordinate, as Pinocchio's) adds to the diagonal.
+
 Composite bodies (Prop. 2.16, 2.17): ``A+_lk = Theta_lk + sum over children L A+_child L^T`` (2.32),
 ``beta_lk = A+_lk M F`` (2.33), and the entry of rows st-alpha and columns lk-beta is ``s^{st-alpha}_{lk} beta``
 when lk is in (st)+ (2.34), computed by carrying ``beta`` towards the root with the wrench motions L.
 """
 from __future__ import annotations
 
+from ..core.program import is_zero
 from .linalg import dot
 
 
@@ -40,6 +43,14 @@ def inertia_matrix(bound, kin, plus=None):
                 a = tree.parent[a]
                 for i, row in zip(tree.coords[a], kin.psi[a]):
                     A[i][j] = A[j][i] = dot(row, beta)
+    return with_armature(bound, A)
+
+
+def with_armature(bound, A):
+    """A + armature E."""
+    if not is_zero(bound.armature):
+        for i in range(len(A)):
+            A[i][i] = A[i][i] + bound.armature
     return A
 
 
@@ -56,4 +67,4 @@ def inertia_matrix_sas(bound, kin):
                     continue
                 acc = acc + dot(S[i][p], body.mises.apply(S[j][p]))
             A[i][j] = A[j][i] = acc
-    return A
+    return with_armature(bound, A)

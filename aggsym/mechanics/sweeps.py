@@ -289,7 +289,8 @@ def inverse_dynamics(bound, kin, qd, qdd, H=None, gravity=True, transvect=None):
     ``transvect``: see :func:`generalized_forces_lumped`."""
     origins = origin_sweep(bound, kin, qd, qdd, _gravity(bound, gravity))
     rest = body_wrenches(bound, kin, qd, qdd, H, gravity, origins=origins, rest=True)
-    return generalized_forces_lumped(bound, kin, origins, rest, transvect)
+    tau = generalized_forces_lumped(bound, kin, origins, rest, transvect)
+    return [t + mul(bound.armature, a) for t, a in zip(tau, qdd)]  # a rotor on every axis: + armature q
 
 
 def d_vector(bound, kin, qd, H=None, gravity=True):

@@ -149,22 +149,24 @@ class Factors:
         return [self.args[pk] for pk in self.pairs]
 
 
-def _pivot(beta, psi):
-    """(beta,beta) = psi^T beta (3.12), its reciprocal and betabar = beta / (beta,beta) (3.13)."""
-    d = dot(psi, beta)
+def _pivot(beta, psi, armature=0):
+    """(beta,beta) = psi^T beta (3.12) (plus the armature's rotor inertia on the coordinate's own axis), its
+    reciprocal and betabar = beta / (beta,beta) (3.13)."""
+    d = dot(psi, beta) + armature
     r = 1 / d
     return d, r, scale(r, beta)
 
 
-def _eliminate(X, psi):
+def _eliminate(X, psi, armature=0):
     """One step of (3.7) inside a body: beta = X psi, and X - beta beta^T / (beta,beta) as a General.
 
-    Returns ``(beta, d, r, betabar, X')``.  When psi is the unit axis e_m, ``betabar_m = 1`` and row and column
-    m of X' are exactly zero (X' psi = beta - beta (psi^T beta)/(beta,beta) = 0); both are set structurally.
+    Returns ``(beta, d, r, betabar, X')``.  When psi is the unit axis e_m (and there is no armature),
+    ``betabar_m = 1`` and row and column m of X' are exactly zero (X' psi = beta - beta (psi^T beta)/(beta,beta)
+    = 0); both are set structurally.
     """
     beta = X.apply(psi)
-    d, r, bbar = _pivot(beta, psi)
-    m = _unit_axis(psi)
+    d, r, bbar = _pivot(beta, psi, armature)
+    m = _unit_axis(psi) if is_zero(armature) else None
     if m is not None:
         bbar = tuple(1 if i == m else x for i, x in enumerate(bbar))
     M = X.general().matrix()
@@ -215,10 +217,12 @@ def articulated_factors(bound, kin, arguments: bool = True) -> Factors:
         X = acc[k]
         coords = tree.coords[k]
         for pos in range(len(coords) - 1, -1, -1):
-            if X is None:
-                raise ZeroDivisionError(f"coordinate {coords[pos]} moves no mass: A(q) is singular")
+            if X is None:  # nothing moves beyond this axis: only the armature's rotor has inertia there
+                if is_zero(bound.armature):
+                    raise ZeroDivisionError(f"coordinate {coords[pos]} moves no mass: A(q) is singular")
+                X = General.from_rows([[0] * 6 for _ in range(6)])
             j = coords[pos]
-            beta[j], diag[j], recip[j], bbar, X = _eliminate(X, kin.psi[k][pos])
+            beta[j], diag[j], recip[j], bbar, X = _eliminate(X, kin.psi[k][pos], bound.armature)
             betabar[j] = bbar
             if arguments:
                 _record_arguments(tree, kin, args, k, pos, bbar, reach)
@@ -250,13 +254,13 @@ def corrected_factors(bound, kin) -> Factors:
         k = body_of[j]
         pos = tree.coords[k].index(j)
         psi = kin.psi[k][pos]
-        if plus[k] is None:
+        if plus[k] is None and is_zero(bound.armature):
             raise ZeroDivisionError(f"coordinate {j} moves no mass: A(q) is singular")
-        col = plus[k].apply(psi)  # beta^j+ (3.3)
+        col = (0,) * 6 if plus[k] is None else plus[k].apply(psi)  # beta^j+ (3.3)
         for p in below[j]:  # delta^j+ (3.15)
             col = sub(col, scale(args[(j, p)], moved[(k, p)]))
         beta[j] = col
-        diag[j], recip[j], bbar = _pivot(col, psi)
+        diag[j], recip[j], bbar = _pivot(col, psi, bound.armature)
         betabar[j] = bbar
         _record_arguments(tree, kin, args, k, pos, bbar, reach)
         w, a = col, k

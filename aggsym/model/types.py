@@ -170,6 +170,7 @@ class Model:
     description: str = ""
     meta: dict = field(default_factory=dict, compare=False, hash=False)
     couplings: tuple = ()  # Coupling: coordinates tied to others, not in q
+    armature: float = 0.0  # a rotor inertia on every coordinate (Pinocchio's armature): A(q) + armature E
 
     @property
     def pair_coordinates(self) -> tuple:
