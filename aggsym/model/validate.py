@@ -123,7 +123,7 @@ def motion_space(parent_space: np.ndarray, translation, rotation, codes) -> np.n
         e = np.zeros(3)
         e[i % 3] = 1.0
         G = np.zeros((6, 6))
-        if i < 3:  # translation along e: (v, w) -> (v - e x w... ) i.e. v' = v - q [e] w
+        if i < 3:  # translation by q along e: v' = v - q [e] w
             G[:3, 3:] = -_hat(e)
         else:  # rotation about e: both parts turn by R^T = exp(-q [e])
             G[:3, :3] = -_hat(e)
@@ -175,8 +175,7 @@ def kinetic_energy_problem(mass: float, com, inertia, space: np.ndarray, tol: fl
     worst = D @ basis @ vectors[:, 0]
     worst = worst / np.max(np.abs(worst))
     v, w = ", ".join(f"{x:.3g}" for x in worst[:3]), ", ".join(f"{x:.3g}" for x in worst[3:])
-    return (f"its kinetic energy is negative for a velocity its joints allow (v = ({v}), w = ({w}) in its axes): "
-            f"principal moments {_fmt(moments)} about the centre of mass")
+    return f"its kinetic energy is negative for a velocity its joints allow (v = ({v}), w = ({w}) in its axes)"
 
 
 # the shape of the tree ------------------------------------------------------------------------------------
