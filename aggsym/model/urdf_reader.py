@@ -266,7 +266,7 @@ def _angle(value: float) -> sp.Expr:
     k = round(float(value) / (math.pi / 2))
     if abs(float(value) - k * math.pi / 2) < ANGLE_SNAP:
         return sp.Integer(k) * sp.pi / 2
-    return _exact(value)
+    return sp.Float(value)  # (an integer angle kept exact would leave sin(7) unevaluated, growing along chains)
 
 
 def _rpy(rpy) -> list:
@@ -314,7 +314,7 @@ def _align(axis) -> tuple:
         return [(3 if i == 0 else 1, sp.pi)], i  # a half turn about an axis orthogonal to e_i
     theta = math.atan2(math.hypot(axis[0], axis[1]), axis[2])
     phi = math.atan2(axis[1], axis[0])
-    return _tidy([(3, _exact(phi)), (2, _exact(theta))]), 2
+    return _tidy([(3, sp.Float(phi)), (2, sp.Float(theta))]), 2
 
 
 def _mangle(name: str, prefix: str) -> str:
