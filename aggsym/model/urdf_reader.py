@@ -68,7 +68,7 @@ semi-definite but only turn about the hip's centre, where they are).  Pinocchio 
 Hostile files
 -------------
 No entity is ever expanded: a document type declaration that declares entities (internal, external or
-parameter) is refused, and nothing outside the file is read.  The file is at most :data:`MAX_BYTES`, with at most
+parameter) or names an external DTD is refused, and nothing outside the file is read.  The file is at most :data:`MAX_BYTES`, with at most
 :data:`MAX_LINKS` links, :data:`MAX_JOINTS` joints and :data:`MAX_ELEMENTS` XML elements; elements the reader does
 not use are skipped without being stored.  Ordering the tree and merging fixed links are O(n log n).
 """
@@ -190,6 +190,12 @@ def _parse(file: Path, data: bytes) -> _Element:
         refuse("<!DOCTYPE>", f"a reference to the external entity {system_id!r} is refused; nothing outside the "
                              f"file is read")
 
+    def doctype(name, system_id, public_id, has_internal_subset):
+        if system_id or public_id:
+            refuse("<!DOCTYPE>", f"a document type naming an external DTD ({system_id or public_id!r}) is refused; "
+                                 f"nothing outside the file is read")
+
+    parser.StartDoctypeDeclHandler = doctype
     parser.StartElementHandler = start
     parser.EndElementHandler = end
     parser.EntityDeclHandler = entity
@@ -200,6 +206,8 @@ def _parse(file: Path, data: bytes) -> _Element:
         parser.Parse(data, True)
     except expat.ExpatError as exc:
         raise ModelError(file, "", f"not XML: {expat.errors.messages[exc.code]}", exc.lineno) from None
+    except LookupError as exc:  # <?xml encoding="..."?> that Python does not know
+        raise ModelError(file, "<?xml?>", f"not XML that can be read: {exc}", parser.CurrentLineNumber) from None
     return top[0]
 
 
@@ -218,8 +226,10 @@ def _where(el: _Element) -> str:
 
 
 def _exact(value: float) -> sp.Expr:
-    """A float from the file as a SymPy number, integers exact (so structural zeros fold)."""
-    return sp.Integer(int(value)) if float(value).is_integer() else sp.Float(value)
+    """A float from the file as a SymPy number, integers exact (so structural zeros fold) while a double holds
+    them exactly (below 2^53; larger ones stay floats, not huge exact integers)."""
+    value = float(value)
+    return sp.Integer(int(value)) if value.is_integer() and abs(value) < 2 ** 53 else sp.Float(value)
 
 
 def _product(a, b) -> sp.Matrix:
