@@ -68,9 +68,10 @@ semi-definite but only turn about the hip's centre, where they are).  Pinocchio 
 Hostile files
 -------------
 No entity is ever expanded: a document type declaration that declares entities (internal, external or
-parameter) or names an external DTD is refused, and nothing outside the file is read.  The file is at most :data:`MAX_BYTES`, with at most
-:data:`MAX_LINKS` links, :data:`MAX_JOINTS` joints and :data:`MAX_ELEMENTS` XML elements; elements the reader does
-not use are skipped without being stored.  Ordering the tree and merging fixed links are O(n log n).
+parameter) or names an external DTD is refused, and nothing outside the file is read.  The file is at most
+:data:`MAX_BYTES`, with at most :data:`MAX_LINKS` links, :data:`MAX_JOINTS` joints and :data:`MAX_ELEMENTS` XML
+elements; elements the reader does not use are skipped without being stored.  Ordering the tree and merging fixed
+links are O(n log n).
 """
 from __future__ import annotations
 
@@ -755,8 +756,8 @@ class _Reader:
         couplings = tuple(Coupling(coordinate_of[j.name], coordinate_of[j.mimic["master"]],
                                    float(j.mimic["multiplier"]), float(j.mimic["offset"]))
                           for j in joints.values() if j.mimic is not None) if self.mimic == "couple" else ()
-        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY, parameters=(), source=str(self.file),
-                      description=f"URDF robot {robot_name!r}",
+        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY, parameters=(),
+                      source=str(self.file), description=f"URDF robot {robot_name!r}",
                       meta={"mimic": [{k: j.mimic[k] for k in ("joint", "master", "multiplier", "offset")}
                                       for j in joints.values() if j.mimic is not None],
                             "links": {link: rows[p.body]["name"] for link, p in place.items()},
