@@ -703,7 +703,8 @@ class _Reader:
             if data is None:
                 return
             R = _matrix(where.rotation + data.rotation) if data.rotation else where.R
-            com = where.t + _product(where.R, sp.Matrix(3, 3, lambda i, j: _exact(data.com[i]) if j == 0 else 0))[:, 0]
+            offset = sp.Matrix(3, 3, lambda i, j: _exact(data.com[i]) if j == 0 else 0)  # (a column, for _product)
+            com = where.t + _product(where.R, offset)[:, 0]
             J = sp.Matrix(3, 3, lambda i, j: _exact(data.inertia[i][j]))
             if data.rotation or where.rotation:
                 J = _product(_product(R, J), R.T)
@@ -820,7 +821,8 @@ class _Reader:
                 self.fail(link_el[rows[k]["link"]],
                           f"non-physical inertia of {of}: {problem}; {energy}"
                           + (f". Not physical: {which}" if which else "")
-                          + ". Fix the <inertia> (Pinocchio loads such files, but its dynamics is then wrong)")
+                          + ". Fix the <inertia> (Pinocchio loads it as given, and its equations then let this "
+                            "body's kinetic energy go negative)")
             verdict.append(f"its {of} keeps a non-negative kinetic energy for every motion its joints allow")
             if not bad:
                 self.warn(link_el[rows[k]["link"]], f"non-physical inertia of {of} accepted: {problem}; its kinetic "
