@@ -240,11 +240,28 @@ def test_inertia_missing_attribute(write):
           "missing attribute 'izz'")
 
 
-def test_inertia_not_positive_semidefinite(write):
+def test_inertia_not_positive_semidefinite_where_the_joints_see_it(write):
+    """Judged on the body, on the motions its joints allow: 'upper' turns about z only, where ixy does not matter
+    (a warning naming the link); with a free base it can move any way, and its kinetic energy can be negative."""
     text = arm().replace('<link name="upper"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0"',
                          '<link name="upper"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0.5"')
-    check(error(write(text)), '<link name="upper"> <inertial> <inertia>', line_of(text, 'name="upper"'),
-          "non-physical inertia", "not positive semi-definite")
+    path = write(text)
+    with pytest.warns(ModelWarning, match="not positive semi-definite") as record:
+        model = aggsym.load(path)
+    assert '<link name="upper"> <inertial> <inertia>' in str(record[0].message)
+    assert model.body("upper").inertial.inertia[0][1] == sp.Float(0.5)
+    err = error(path, floating_base=True)
+    check(err, '<link name="upper">', line_of(text, 'name="upper"'), "non-physical inertia of body 'upper'",
+          "not positive semi-definite", "kinetic energy is negative")
+
+
+def test_inertia_negative_about_the_joint_axis(write):
+    text = arm().replace('<link name="upper"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" '
+                         'iyy="0.1" iyz="0" izz="0.1"/>',
+                         '<link name="upper"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" '
+                         'iyy="0.1" iyz="0" izz="-0.1"/>')
+    check(error(write(text)), '<link name="upper">', line_of(text, 'name="upper"'),
+          "non-physical inertia of body 'upper'", "kinetic energy is negative", "link 'upper'")
 
 
 def test_inertia_violating_triangle_inequality_warns(write):
@@ -290,7 +307,8 @@ def mimic_arm(master="shoulder", extra=""):
 
 
 def test_mimic_is_independent_and_recorded(write):
-    model = aggsym.load(write(mimic_arm(extra='multiplier="-2" offset="0.5"')))
+    with pytest.warns(ModelWarning, match="'slide' mimics 'shoulder' .* keeps an independent coordinate.*couple"):
+        model = aggsym.load(write(mimic_arm(extra='multiplier="-2" offset="0.5"')))
     assert [c.name for c in model.coordinates] == ["shoulder", "elbow", "slide"]
     assert model.meta["mimic"] == [{"joint": "slide", "master": "shoulder", "multiplier": -2.0, "offset": 0.5}]
 
@@ -307,8 +325,12 @@ def test_mimic_couple_ties_the_coordinate(write):
 
 
 def test_mimic_of_missing_joint(write):
+    """A dangling <mimic> is only a warning while the joint stays independent; mimic='couple' needs it."""
     text = mimic_arm(master="wrist")
-    check(error(write(text)), '<joint name="slide"> <mimic>', line_of(text, "<mimic"),
+    with pytest.warns(ModelWarning, match="mimics joint 'wrist', which is not defined"):
+        model = aggsym.load(write(text))
+    assert model.nq == 3 and model.meta["mimic"] == []
+    check(error(write(text), mimic="couple"), '<joint name="slide"> <mimic>', line_of(text, "<mimic"),
           "mimics joint 'wrist', which is not defined")
 
 
@@ -404,14 +426,23 @@ def test_fixed_joints_merge_into_the_parent(write):
 
 def test_names_become_identifiers(write):
     text = robot(link("base-link"), link("1st"), link("pi"), link("world"),
-                 joint("elbow-1", "base-link", "1st"), joint("elbow_1", "1st", "pi"), joint("if", "pi", "world"),
+                 joint("elbow-1", "base-link", "1st"), joint("elbow_2", "1st", "pi"), joint("if", "pi", "world"),
                  name="my robot")
     model = load_urdf(write(text))
     assert model.name == "my_robot"
     assert [b.name for b in model.bodies] == ["base_link", "link_1st", "pi_", "world_"]
-    assert [c.name for c in model.coordinates] == ["elbow_1", "elbow_1_2", "if_"]
-    assert [c.joint for c in model.coordinates] == ["elbow-1", "elbow_1", "if"]
+    assert [c.name for c in model.coordinates] == ["elbow_1", "elbow_2", "if_"]
+    assert [c.joint for c in model.coordinates] == ["elbow-1", "elbow_2", "if"]
     assert model.bodies[0].where == '<link name="base-link">'
+
+
+def test_names_that_become_one_identifier(write):
+    """Two distinct names never become one identifier: an error names both (was: a silent _2 suffix)."""
+    text = robot(link("base-link"), link("1st"), link("pi"), joint("elbow-1", "base-link", "1st"),
+                 joint("elbow_1", "1st", "pi"))
+    first = line_of(text, 'name="elbow-1"')
+    check(error(write(text)), '<joint name="elbow_1">', line_of(text, 'name="elbow_1"'),
+          f"joint names 'elbow-1' (line {first}) and 'elbow_1' both become the identifier 'elbow_1'")
 
 
 def test_floating_base_pair(write):

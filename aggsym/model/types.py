@@ -71,12 +71,49 @@ class Parameter:
 
 
 @dataclass(frozen=True)
+class JointDynamics:
+    """A URDF joint's ``<dynamics damping= friction=>``: viscous damping d (N m s/rad, or N s/m for a prismatic
+    joint) and Coulomb friction f (N m, or N), each None where the file gives none.  They describe the generalized
+    force tau_f = -d qd - f sign(qd) along the coordinate (not yet emitted)."""
+
+    damping: float | None = None
+    friction: float | None = None
+
+    @property
+    def given(self) -> bool:
+        return self.damping is not None or self.friction is not None
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """A URDF joint's ``<limit lower= upper= velocity= effort=>``: position range (rad or m, in the coordinate's own
+    sense: q is the joint's angle or displacement about or along its URDF axis), largest speed and largest force
+    or torque, each None where the file gives none (and all None without ``<limit>``)."""
+
+    lower: float | None = None
+    upper: float | None = None
+    velocity: float | None = None
+    effort: float | None = None
+
+    def as_dict(self) -> dict:
+        """``{lower, upper, velocity, effort}``, None where absent (the manifest's ``limits`` entry)."""
+        return {"lower": self.lower, "upper": self.upper, "velocity": self.velocity, "effort": self.effort}
+
+
+@dataclass(frozen=True)
 class Coordinate:
-    """One generalized coordinate: a functional motion of a pair (1.26), (1.27)."""
+    """One generalized coordinate: a functional motion of a pair (1.26), (1.27).
+
+    ``joint`` is the pair's name as the source file spells it (the URDF joint name, whatever characters it has);
+    ``name`` is the identifier made from it.  ``dynamics`` and ``limits`` hold the URDF joint's ``<dynamics>`` and
+    ``<limit>`` values (all None for YAML models and for a floating base's coordinates).
+    """
 
     name: str
     code: str  # one of COORDINATE_CODES
     joint: str  # the pair's name
+    dynamics: JointDynamics = JointDynamics()
+    limits: JointLimits = JointLimits()
 
     @property
     def axis(self) -> int:
@@ -160,7 +197,12 @@ class Body:
 
 @dataclass(frozen=True)
 class Model:
-    """A tree of bodies, parents listed before children."""
+    """A tree of bodies, parents listed before children.
+
+    Per coordinate of q (in q order), read from the coordinates: ``joint_dynamics`` (a :class:`JointDynamics`:
+    URDF ``<dynamics>`` damping and friction, None where absent; ``has_joint_dynamics`` says whether any is given)
+    and ``limits`` (a dict ``{lower, upper, velocity, effort}`` from URDF ``<limit>``, None where absent).
+    """
 
     name: str
     bodies: tuple
@@ -186,6 +228,22 @@ class Model:
     @property
     def nq(self) -> int:
         return len(self.coordinates)
+
+    @property
+    def joint_dynamics(self) -> tuple:
+        """Per coordinate of q: its joint's :class:`JointDynamics` (damping, friction; None where absent)."""
+        return tuple(c.dynamics for c in self.coordinates)
+
+    @property
+    def has_joint_dynamics(self) -> bool:
+        """True when some coordinate of q has a damping or friction value (a URDF ``<dynamics>``)."""
+        return any(d.given for d in self.joint_dynamics)
+
+    @property
+    def limits(self) -> tuple:
+        """Per coordinate of q: ``{"lower", "upper", "velocity", "effort"}`` from its joint's ``<limit>``, None where
+        absent (fresh dicts: the model stays immutable)."""
+        return tuple(c.limits.as_dict() for c in self.coordinates)
 
     @property
     def time_dependent(self) -> bool:

@@ -20,7 +20,8 @@ The mapping
   link frame).
 * A ``fixed`` joint merges its child link into the parent's body: masses add, the centre of mass is the
   mass-weighted mean, and the inertia tensors (rotated into the body axes) are moved to the common centre of
-  mass by the parallel-axis theorem; the fixed transform is composed into the origins of the child's joints.
+  mass by the parallel-axis theorem; the fixed transform is composed into the origins of the child's joints
+  (long chains of fixed joints fold their rotations into one roll-pitch-yaw, so merging stays linear).
 * ``<inertial>``: mass, ``<origin>`` (the centre of mass and the axes of the inertia tensor, in the link frame)
   and the full tensor ixx..izz about the centre of mass, rotated into the body axes.  A link without
   ``<inertial>`` is massless.  A mass of 0 keeps its rotational inertia (Pinocchio does the same); a link with
@@ -32,18 +33,45 @@ The mapping
 * Bodies and coordinates are ordered as Pinocchio orders its joints for the same file: depth first from the
   root, the joints leaving a link in the byte order of their names (urdfdom keeps them in a ``std::map``),
   fixed joints walked through in place.  So q maps one-to-one onto Pinocchio's fixed-base model.
-* ``<mimic>``: by default the joint keeps an independent coordinate and the relation is only recorded in
-  ``model.meta["mimic"]``; with ``mimic="couple"`` the joint's coordinate becomes
-  ``multiplier * master + offset`` (``Model.couplings``): it leaves q, and the generated routines take and
-  return the remaining coordinates (:mod:`aggsym.coupling`), as Pinocchio's ``mimic=True`` models do.
+* ``<mimic>``: by default the joint keeps an independent coordinate, the relation is only recorded in
+  ``model.meta["mimic"]`` and a :class:`ModelWarning` says so; with ``mimic="couple"`` the joint's coordinate
+  becomes ``multiplier * master + offset`` (``Model.couplings``): it leaves q, and the generated routines take
+  and return the remaining coordinates (:mod:`aggsym.coupling`), as Pinocchio's ``mimic=True`` models do.  A
+  ``<mimic>`` that cannot be used (its joint or its master is fixed, its master does not exist, it names its own
+  joint) is ignored with a warning, unless ``mimic="couple"`` needs it (then it is an error).
+* ``<dynamics damping= friction=>`` and ``<limit lower= upper= velocity= effort=>`` of a movable joint are kept on
+  its coordinate (``Coordinate.dynamics``, ``Coordinate.limits``; ``Model.joint_dynamics``, ``Model.limits``),
+  None where absent.  Damping and friction must not be negative; a limit with lower > upper or a negative
+  velocity or effort is kept with a warning.
 * Coordinate names are the joint names made identifiers (``Coordinate.joint`` keeps the URDF name); body names
-  are the link names made identifiers; the model name is the robot's.  Gravity is (0, 0, -9.81) in the root
-  frame.  No parameters: every number is folded.  Visuals, collisions, meshes, transmissions, gazebo tags and
-  joint limits are ignored.
+  are the link names made identifiers (anything but ASCII letters, digits and ``_`` becomes ``_``; a leading
+  digit or ``_`` gets a prefix, a reserved word a trailing ``_``); two names that would become the same
+  identifier are an error naming both.  The model name is the robot's.  Gravity is (0, 0, -9.81) in the root
+  frame.  No parameters: every number is folded.  Visuals, collisions, meshes, transmissions and gazebo tags are
+  skipped unread.
 * ``model.meta``: ``mimic`` (above), ``links`` (each URDF link's body, merged links included),
-  ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`
-  (an inertia tensor that is positive semi-definite but violates the triangle inequality, as dummy links in
-  real files do; a ``<mimic>`` on a fixed joint).
+  ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`.
+
+Physical validity (where the dynamics sees it)
+----------------------------------------------
+Each moving body is judged after its welded links are merged, on the motions its joints allow
+(:func:`~aggsym.model.validate.kinetic_energy_problem`): a body whose kinetic energy can be negative for a
+velocity its joints give it (its inertia about the centre of mass not positive semi-definite, by more than 1e-6
+of its largest principal moment, in a direction it can turn about) is an error naming the body and its links.
+A link whose own inertia is not physical (not positive semi-definite, or principal moments violating the
+triangle inequality) is used as given with a warning naming it and its body: when the merged body is physical
+(tiago's ``base_antenna_left_link`` merges into its base), when the body is welded to the world (never judged:
+the dynamics never sees it), or when the body's kinetic energy stays non-negative for every motion its joints
+allow (romeo_small's shoulder violates the triangle inequality; romeo_laas_small's hips are not positive
+semi-definite but only turn about the hip's centre, where they are).  Pinocchio loads all of these.
+
+Hostile files
+-------------
+No entity is ever expanded: a document type declaration that declares entities (internal, external or
+parameter) or names an external DTD is refused, and nothing outside the file is read.  The file is at most
+:data:`MAX_BYTES`, with at most :data:`MAX_LINKS` links, :data:`MAX_JOINTS` joints and :data:`MAX_ELEMENTS` XML
+elements; elements the reader does not use are skipped without being stored.  Ordering the tree and merging fixed
+links are O(n log n).
 """
 from __future__ import annotations
 
@@ -60,8 +88,9 @@ import sympy as sp
 from ..errors import ModelError, ModelWarning
 from .expressions import check_identifier
 from .types import _snap as snap
-from .types import WORLD, Body, Coordinate, Coupling, Inertial, Model, Pair, elementary_rotation
-from .validate import inertia_problem
+from .types import (WORLD, Body, Coordinate, Coupling, Inertial, JointDynamics, JointLimits, Model, Pair,
+                    elementary_rotation)
+from .validate import kinetic_energy_problem, motion_space, principal_problem
 
 GRAVITY = (sp.Integer(0), sp.Integer(0), sp.Float(-9.81))
 MOVABLE = {"revolute": "theta", "continuous": "theta", "prismatic": "o"}
@@ -78,6 +107,21 @@ ROOT_PAIR = "root_joint"
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 _AXIS_TOL = 1e-12
 
+MAX_BYTES = 64 * 2 ** 20  # the largest URDF read (example-robot-data's largest is under 1 MiB)
+MAX_LINKS = 10_000
+MAX_JOINTS = 10_000
+MAX_ELEMENTS = 1_000_000  # every XML element, read or skipped
+MAX_ROTATIONS = 9  # elementary rotations a chain of fixed joints may pile up before they are folded into one rpy
+
+# The elements the reader uses, by parent; everything else (visual, collision, gazebo, transmission, ...) is
+# skipped without being stored.
+_USED = {
+    "robot": {"link", "joint"},
+    "link": {"inertial"},
+    "inertial": {"origin", "mass", "inertia"},
+    "joint": {"parent", "child", "origin", "axis", "limit", "dynamics", "mimic"},
+}
+
 
 @dataclass
 class _Element:
@@ -93,26 +137,78 @@ class _Element:
         return [c for c in self.children if c.tag == tag]
 
 
+def _named(tag: str, attrib: dict) -> str:
+    name = attrib.get("name")
+    return f'<{tag} name="{name}">' if name is not None else f"<{tag}>"
+
+
 def _parse(file: Path, data: bytes) -> _Element:
-    """Parse XML with expat, recording each element's line; raises ModelError for malformed XML."""
+    """Parse XML with expat, recording each element's line; raises ModelError for malformed XML, for entity
+    declarations and for a document over the element limits.
+
+    Only the elements of :data:`_USED` are stored, and of each tag at most two under one parent (a second one is
+    all the reader needs to report a duplicate); the others are only counted.
+    """
     parser = expat.ParserCreate()
-    stack: list[_Element] = []
+    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    stack: list = []  # _Element, or None inside a skipped element
     top: list[_Element] = []
+    counts = {"elements": 0, "link": 0, "joint": 0}
+
+    def refuse(where, message):
+        raise ModelError(file, where, message, parser.CurrentLineNumber)
 
     def start(tag, attrib):
-        el = _Element(tag, attrib, parser.CurrentLineNumber, stack[-1] if stack else None)
-        (stack[-1].children if stack else top).append(el)
+        counts["elements"] += 1
+        if counts["elements"] > MAX_ELEMENTS:
+            refuse(_named(tag, attrib), f"more than {MAX_ELEMENTS:,} XML elements; a URDF this large is not "
+                                        f"read (the limit guards against files made to exhaust memory)")
+        parent = stack[-1] if stack else None
+        if stack and (parent is None or tag not in _USED.get(parent.tag, ())
+                      or (parent.tag != "robot" and len(parent.all(tag)) >= 2)):
+            stack.append(None)
+            return
+        if parent is not None and parent.tag == "robot":
+            counts[tag] += 1
+            limit = MAX_LINKS if tag == "link" else MAX_JOINTS
+            if counts[tag] > limit:
+                refuse(_named(tag, attrib), f"more than {limit:,} <{tag}> elements; larger robots are not read "
+                                            f"(the limit guards against files made to exhaust time and memory)")
+        el = _Element(tag, attrib, parser.CurrentLineNumber, parent)
+        (parent.children if parent is not None else top).append(el)
         stack.append(el)
 
     def end(tag):
         stack.pop()
 
+    def entity(name, is_parameter, value, base, system_id, public_id, notation):
+        kind = "an external" if system_id or public_id else "a parameter" if is_parameter else "an"
+        refuse("<!DOCTYPE>", f"{kind} entity declaration (<!ENTITY {'% ' if is_parameter else ''}{name} ...>) is "
+                             f"refused: URDF needs no entities, and expanding them can exhaust memory or read "
+                             f"other files")
+
+    def external(context, base, system_id, public_id):
+        refuse("<!DOCTYPE>", f"a reference to the external entity {system_id!r} is refused; nothing outside the "
+                             f"file is read")
+
+    def doctype(name, system_id, public_id, has_internal_subset):
+        if system_id or public_id:
+            refuse("<!DOCTYPE>", f"a document type naming an external DTD ({system_id or public_id!r}) is refused; "
+                                 f"nothing outside the file is read")
+
+    parser.StartDoctypeDeclHandler = doctype
     parser.StartElementHandler = start
     parser.EndElementHandler = end
+    parser.EntityDeclHandler = entity
+    parser.UnparsedEntityDeclHandler = lambda name, base, system_id, public_id, notation: entity(
+        name, False, None, base, system_id, public_id, notation)
+    parser.ExternalEntityRefHandler = external
     try:
         parser.Parse(data, True)
     except expat.ExpatError as exc:
         raise ModelError(file, "", f"not XML: {expat.errors.messages[exc.code]}", exc.lineno) from None
+    except LookupError as exc:  # <?xml encoding="..."?> that Python does not know
+        raise ModelError(file, "<?xml?>", f"not XML that can be read: {exc}", parser.CurrentLineNumber) from None
     return top[0]
 
 
@@ -131,16 +227,28 @@ def _where(el: _Element) -> str:
 
 
 def _exact(value: float) -> sp.Expr:
-    """A float from the file as a SymPy number, integers exact (so structural zeros fold)."""
-    return sp.Integer(int(value)) if float(value).is_integer() else sp.Float(value)
+    """A float from the file as a SymPy number, integers exact (so structural zeros fold) while a double holds
+    them exactly (below 2^53; larger ones stay floats, not huge exact integers)."""
+    value = float(value)
+    return sp.Integer(int(value)) if value.is_integer() and abs(value) < 2 ** 53 else sp.Float(value)
+
+
+def _product(a, b) -> sp.Matrix:
+    """a b for 3x3 matrices of numbers, skipping the zero terms (much faster than SymPy's general product)."""
+    rows = [[a[i, k] for k in range(3)] for i in range(3)]
+    cols = [[b[k, j] for k in range(3)] for j in range(3)]
+    zero = sp.S.Zero  # exact zeros are this singleton (asking .is_zero of every Float is slow)
+    return sp.Matrix([[sp.Add(*[x * y for x, y in zip(row, col) if x is not zero and y is not zero])
+                       for col in cols] for row in rows])
 
 
 def _matrix(rotation) -> sp.Matrix:
     """The product of elementary rotations [(axis, angle), ...] (Prop. 1.17)."""
-    c = sp.eye(3)
+    c = None
     for axis, angle in rotation:
-        c = c * elementary_rotation(axis, angle)
-    return c.applyfunc(snap)
+        e = elementary_rotation(axis, angle)
+        c = e if c is None else _product(c, e)
+    return sp.eye(3) if c is None else c.applyfunc(snap)
 
 
 def _inverse(rotation) -> list:
@@ -153,8 +261,8 @@ def _tidy(rotation) -> list:
     for axis, angle in rotation:
         if out and out[-1][0] == axis:
             angle = out.pop()[1] + angle
-        if not (angle.is_zero or (angle / (2 * sp.pi)).is_integer):
-            out.append((axis, angle))
+        if not (angle.is_zero or (not isinstance(angle, sp.Float) and (angle / (2 * sp.pi)).is_integer)):
+            out.append((axis, angle))  # (a float from the file is never a non-zero multiple of 2 pi)
     return out
 
 
@@ -169,7 +277,7 @@ def _angle(value: float) -> sp.Expr:
     k = round(float(value) / (math.pi / 2))
     if abs(float(value) - k * math.pi / 2) < ANGLE_SNAP:
         return sp.Integer(k) * sp.pi / 2
-    return _exact(value)
+    return sp.Float(value)  # (an integer angle kept exact would leave sin(7) unevaluated, growing along chains)
 
 
 def _rpy(rpy) -> list:
@@ -180,15 +288,31 @@ def _rpy(rpy) -> list:
 
 def _quaternion_rpy(x, y, z, w) -> tuple:
     """roll, pitch, yaw of a unit quaternion (x, y, z, w), R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    R = np.array([
+    return _matrix_rpy(np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    ]))
+
+
+def _matrix_rpy(R) -> tuple:
+    """roll, pitch, yaw of a rotation matrix, R = Rz(yaw) Ry(pitch) Rx(roll)."""
     pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
     if math.hypot(R[0, 0], R[1, 0]) < 1e-12:  # gimbal lock: put everything into roll
         return math.atan2(-R[1, 2], R[1, 1]), pitch, 0.0
     return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
+
+
+def _fold(rotation: list) -> list:
+    """A product of elementary rotations folded into one roll-pitch-yaw (3 rotations, in floats; for a long chain of
+    fixed joints, whose rotations would otherwise pile up)."""
+    R = np.eye(3)
+    for axis, angle in rotation:
+        c, s = math.cos(float(angle)), math.sin(float(angle))
+        E = {1: [[1, 0, 0], [0, c, -s], [0, s, c]], 2: [[c, 0, s], [0, 1, 0], [-s, 0, c]],
+             3: [[c, -s, 0], [s, c, 0], [0, 0, 1]]}[axis]
+        R = R @ np.array(E)
+    return _rpy(_matrix_rpy(R))
 
 
 def _align(axis) -> tuple:
@@ -201,21 +325,54 @@ def _align(axis) -> tuple:
         return [(3 if i == 0 else 1, sp.pi)], i  # a half turn about an axis orthogonal to e_i
     theta = math.atan2(math.hypot(axis[0], axis[1]), axis[2])
     phi = math.atan2(axis[1], axis[0])
-    return _tidy([(3, _exact(phi)), (2, _exact(theta))]), 2
+    return _tidy([(3, sp.Float(phi)), (2, sp.Float(theta))]), 2
 
 
-def _identifier(name: str, used: set, prefix: str) -> str:
-    """``name`` made a unique identifier (letters, digits, _, not reserved)."""
+def _mangle(name: str, prefix: str) -> str:
+    """``name`` made an identifier (letters, digits, _, not reserved), deterministically: every other character
+    becomes ``_``, a name not starting with a letter gets ``prefix_``, a reserved word a trailing ``_``."""
     s = re.sub(r"[^A-Za-z0-9_]", "_", name)
     if not s or not s[0].isalpha():
         s = f"{prefix}_{s}" if s else prefix
     if check_identifier(s) is not None:
         s += "_"
+    return s
+
+
+def _identifier(name: str, used: set, prefix: str) -> str:
+    """``name`` made a unique identifier: :func:`_mangle`, then ``_2``, ``_3``, ... while taken (for the names the
+    reader makes itself)."""
+    s = _mangle(name, prefix)
     base, k = s, 2
     while s in used:
         s, k = f"{base}_{k}", k + 1
     used.add(s)
     return s
+
+
+class _Names:
+    """Identifiers made from a file's names: two distinct names never become one identifier (an error names both)."""
+
+    def __init__(self, reader: "_Reader", kind: str, prefix: str):
+        self.reader, self.kind, self.prefix = reader, kind, prefix
+        self.taken: dict[str, tuple] = {}  # identifier -> (original name, element or None for the reader's own)
+
+    def own(self, name: str) -> str:
+        """A name the reader makes (the floating base's coordinates): taken as is."""
+        self.taken[name] = (name, None)
+        return name
+
+    def claim(self, name: str, el: _Element) -> str:
+        s = _mangle(name, self.prefix)
+        if s in self.taken:
+            first, first_el = self.taken[s]
+            if first_el is None:
+                self.reader.fail(el, f"{self.kind} name {name!r} becomes the identifier {s!r}, which the floating "
+                                     f"base's coordinate {first!r} has; rename the {self.kind}")
+            self.reader.fail(el, f"{self.kind} names {first!r} (line {first_el.line}) and {name!r} both become the "
+                                 f"identifier {s!r} in the generated code; rename one of them")
+        self.taken[s] = (name, el)
+        return s
 
 
 @dataclass
@@ -226,6 +383,8 @@ class _Inertial:
     com: tuple
     rotation: list  # the inertial frame's axes, elementary rotations
     inertia: tuple  # 3x3 about the centre of mass, inertial-frame axes
+    el: _Element  # the <inertia> element
+    problem: str | None  # why the tensor is not physical, or None
 
 
 @dataclass
@@ -239,6 +398,8 @@ class _Joint:
     rotation: list
     axis: tuple | None
     mimic: dict | None
+    dynamics: JointDynamics = JointDynamics()
+    limits: JointLimits = JointLimits()
 
 
 @dataclass
@@ -293,19 +454,26 @@ class _Reader:
                 self.fail(el, f"missing attribute {name!r}")
             return default
         parts = text.split()
+        shown = text if len(text) <= 80 else text[:77] + "..."
         hint = " (an unexpanded xacro file? run xacro first)" if "$" in text else ""
         if len(parts) != n:
             what = "a number" if n == 1 else f"{n} numbers separated by spaces"
-            self.fail(el, f'{name}="{text}" must be {what}{hint}')
+            self.fail(el, f'{name}="{shown}" must be {what}{hint}')
         values = []
         for part in parts:
             if not _NUMBER.match(part):
-                self.fail(el, f'{name}="{text}": {part!r} is not a number{hint}')
+                self.fail(el, f'{name}="{shown}": {part[:40]!r} is not a number{hint}')
             value = float(part)
             if not math.isfinite(value):
-                self.fail(el, f'{name}="{text}": {part!r} is not finite')
+                self.fail(el, f'{name}="{shown}": {part[:40]!r} is not finite')
             values.append(0.0 if value == 0 else value)
         return tuple(values)
+
+    def number(self, el, name) -> float | None:
+        """An optional attribute holding one finite number; None when absent."""
+        if el is None or name not in el.attrib:
+            return None
+        return self.numbers(el, name, 1)[0]
 
     def origin(self, el) -> tuple:
         """(xyz, rotation) of an optional ``<origin>`` child: translation and elementary rotations."""
@@ -332,7 +500,7 @@ class _Reader:
             self.fail(robot, f"not a URDF file: the top element is <{robot.tag}>, expected <robot>")
         version = robot.attrib.get("version", "1.0")
         if not re.fullmatch(r"\d+\.\d+", version.strip()):
-            self.fail(robot, f'version="{version}" is not a version number like 1.0')
+            self.fail(robot, f'version="{version[:40]}" is not a version number like 1.0')
         self.version = tuple(int(x) for x in version.strip().split("."))
         robot_name = self.attribute(robot, "name")
         links, link_el = self.links(robot)
@@ -354,6 +522,7 @@ class _Reader:
         return links, link_el
 
     def inertial(self, link) -> _Inertial | None:
+        """A link's ``<inertial>``; a tensor that is not physical is kept, and judged on the link's body."""
         el = self.single(link, "inertial")
         if el is None:
             return None
@@ -366,13 +535,9 @@ class _Reader:
         inertia_el = self.single(el, "inertia", required=True)
         e = {k: self.numbers(inertia_el, k, 1)[0] for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
         J = ((e["ixx"], e["ixy"], e["ixz"]), (e["ixy"], e["iyy"], e["iyz"]), (e["ixz"], e["iyz"], e["izz"]))
-        problem = inertia_problem(J, triangle=False)
-        if problem:
-            self.fail(inertia_el, f"non-physical inertia: {problem}")
-        problem = inertia_problem(J)
-        if problem:  # harmless for the equations (A stays positive definite) and common in dummy links
-            self.warn(inertia_el, f"non-physical inertia accepted (as Pinocchio does): {problem}")
-        return _Inertial(mass, xyz, rotation, J)
+        if max(abs(x) for row in J for x in row) > 1e150:
+            self.fail(inertia_el, "the inertia's entries are too large to compute with (above 1e150)")
+        return _Inertial(mass, xyz, rotation, J, inertia_el, principal_problem(J))
 
     def joints(self, robot, links, link_el) -> dict:
         joints: dict[str, _Joint] = {}
@@ -384,7 +549,8 @@ class _Reader:
             if jtype in UNSUPPORTED:
                 self.fail(el, f"joint type {jtype!r}: {UNSUPPORTED[jtype]}")
             if jtype not in MOVABLE and jtype != "fixed":
-                self.fail(el, f"unknown joint type {jtype!r} (expected revolute, continuous, prismatic or fixed)")
+                self.fail(el, f"unknown joint type {jtype[:40]!r} (expected revolute, continuous, prismatic or "
+                              f"fixed)")
             ends = {}
             for end in ("parent", "child"):
                 e = self.single(el, end, required=True)
@@ -395,6 +561,7 @@ class _Reader:
                 self.fail(el, f"link {ends['child']!r} is both the parent and the child of the joint")
             xyz, rotation = self.origin(el)
             axis = None
+            dynamics, limits = JointDynamics(), JointLimits()
             if jtype in MOVABLE:
                 axis_el = self.single(el, "axis")
                 axis = (1.0, 0.0, 0.0)
@@ -405,34 +572,80 @@ class _Reader:
                         self.fail(axis_el, f'the axis xyz="{axis_el.attrib.get("xyz")}" has zero length; a joint '
                                            f"axis must be a non-zero vector")
                     axis = tuple(0.0 if x == 0 else x / norm for x in raw)
+                dynamics, limits = self.dynamics(el), self.limits(el)
             mimic = None
             mimic_el = self.single(el, "mimic")
             if mimic_el is not None:
                 mimic = {"joint": name, "master": self.attribute(mimic_el, "joint"),
                          "multiplier": self.numbers(mimic_el, "multiplier", 1, (1.0,))[0],
                          "offset": self.numbers(mimic_el, "offset", 1, (0.0,))[0], "el": mimic_el}
-            joints[name] = _Joint(el, name, jtype, ends["parent"], ends["child"], xyz, rotation, axis, mimic)
+            joints[name] = _Joint(el, name, jtype, ends["parent"], ends["child"], xyz, rotation, axis, mimic,
+                                  dynamics, limits)
+        self.mimics(joints)
+        return joints
+
+    def dynamics(self, joint) -> JointDynamics:
+        """``<dynamics damping= friction=>`` of a movable joint: non-negative numbers, None where absent."""
+        el = self.single(joint, "dynamics")
+        values = {}
+        for name in ("damping", "friction"):
+            values[name] = self.number(el, name)
+            if values[name] is not None and values[name] < 0:
+                self.fail(el, f'{name}="{el.attrib[name]}" is negative: a {name} coefficient takes energy out of '
+                              f"the joint, so it must be 0 or positive")
+        return JointDynamics(**values)
+
+    def limits(self, joint) -> JointLimits:
+        """``<limit lower= upper= velocity= effort=>`` of a movable joint, None where absent; kept as given, with a
+        warning when they contradict themselves."""
+        el = self.single(joint, "limit")
+        values = {name: self.number(el, name) for name in ("lower", "upper", "velocity", "effort")}
+        if values["lower"] is not None and values["upper"] is not None and values["lower"] > values["upper"]:
+            self.warn(el, f"lower={values['lower']:g} is above upper={values['upper']:g}; kept as given")
+        for name in ("velocity", "effort"):
+            if values[name] is not None and values[name] < 0:
+                self.warn(el, f"{name}={values[name]:g} is negative (a largest {name} is a magnitude); kept as given")
+        return JointLimits(**values)
+
+    def mimics(self, joints):
+        """Check the ``<mimic>`` tags: warn about those that are ignored (the joint stays independent), fail where
+        ``mimic="couple"`` needs one that cannot be used."""
+        couple = self.mimic == "couple"
         for joint in joints.values():
             if joint.mimic is None:
                 continue
-            el = joint.mimic["el"]
-            master = joints.get(joint.mimic["master"])
-            if master is None:
-                self.fail(el, f"mimics joint {joint.mimic['master']!r}, which is not defined")
-            if master.name == joint.name:
-                self.fail(el, "a joint cannot mimic itself")
-            if joint.type not in MOVABLE or master.type not in MOVABLE:
+            el, wanted = joint.mimic["el"], joint.mimic["master"]
+            master = joints.get(wanted)
+            problem = None
+            if joint.type not in MOVABLE:
                 # e.g. talos_reduced.urdf: gripper joints made fixed, their <mimic> tags left (Pinocchio ignores them)
-                which = joint if joint.type not in MOVABLE else master
-                self.warn(el, f"ignored: joint {which.name!r} is fixed, so there is nothing to couple")
-                joint.mimic = None
+                self.warn(el, f"ignored: joint {joint.name!r} is fixed, so there is nothing to couple")
+            elif master is None:
+                problem = f"mimics joint {wanted!r}, which is not defined"
+            elif master.name == joint.name:
+                problem = "a joint cannot mimic itself"
+            elif master.type not in MOVABLE:
+                self.warn(el, f"ignored: joint {master.name!r} is fixed, so there is nothing to couple")
+            else:
                 continue
-        if self.mimic == "couple":
+            if problem is not None:
+                if couple:
+                    self.fail(el, f"{problem}; mimic='couple' (--mimic couple) cannot tie joint {joint.name!r}")
+                self.warn(el, f"ignored: {problem} (joint {joint.name!r} keeps its own coordinate; with "
+                              f"mimic='couple' this is an error)")
+            joint.mimic = None
+        if couple:
             for joint in joints.values():
                 if joint.mimic is not None and joints[joint.mimic["master"]].mimic is not None:
                     self.fail(joint.mimic["el"], f"mimics joint {joint.mimic['master']!r}, which mimics another "
                                                  f"joint itself; couple to the primary joint")
-        return joints
+        else:
+            for joint in joints.values():
+                if joint.mimic is not None:
+                    m = joint.mimic
+                    self.warn(m["el"], f"joint {joint.name!r} mimics {m['master']!r} (multiplier {m['multiplier']:g}, "
+                                       f"offset {m['offset']:g}) but keeps an independent coordinate; load with "
+                                       f"mimic='couple' (--mimic couple) to tie it to {m['master']!r}")
 
     def tree(self, robot, link_el, joints):
         """The root link and each link's joints to its children (byte order of joint names); checks the shape."""
@@ -463,12 +676,13 @@ class _Reader:
                 stack.append(joint.child)
         if len(reached) < len(link_el):
             start = next(name for name in link_el if name not in reached)
-            chain = [start]
+            chain, seen = [start], {start: 0}
             while True:
                 nxt = parent_joint[chain[-1]].parent
-                if nxt in chain:
-                    chain = chain[chain.index(nxt):] + [nxt]
+                if nxt in seen:
+                    chain = chain[seen[nxt]:] + [nxt]
                     break
+                seen[nxt] = len(chain)
                 chain.append(nxt)
             loop = [parent_joint[name] for name in chain[:-1]]
             self.fail(loop[0].el, "loop in the kinematic tree: " + " -> ".join(f"{n!r}" for n in reversed(chain))
@@ -478,8 +692,8 @@ class _Reader:
 
     # the model ------------------------------------------------------------------------------------------
     def build(self, robot_name, root, links, link_el, joints, children) -> Model:
-        body_names: set = set()
-        coordinate_names: set = set()
+        bodies_names = _Names(self, "link", "link")
+        coordinate_names = _Names(self, "joint", "q")
         pair_names = set(joints)
         rows = []  # per body: dict with name, parent, pair, link, rotation, parts (inertial contributions)
         place: dict[str, _Place] = {}
@@ -488,19 +702,21 @@ class _Reader:
             data = links[link]
             if data is None:
                 return
-            R = where.R * _matrix(data.rotation)
-            com = where.t + where.R * sp.Matrix([_exact(x) for x in data.com])
-            J = R * sp.Matrix(3, 3, lambda i, j: _exact(data.inertia[i][j])) * R.T
+            R = _matrix(where.rotation + data.rotation) if data.rotation else where.R
+            offset = sp.Matrix(3, 3, lambda i, j: _exact(data.com[i]) if j == 0 else 0)  # (a column, for _product)
+            com = where.t + _product(where.R, offset)[:, 0]
+            J = sp.Matrix(3, 3, lambda i, j: _exact(data.inertia[i][j]))
+            if data.rotation or where.rotation:
+                J = _product(_product(R, J), R.T)
             rows[where.body]["parts"].append((_exact(data.mass), com, J.applyfunc(snap)))
 
         root_pair_name = _identifier(ROOT_PAIR, pair_names, "joint")
         if self.floating_base:
-            coords = tuple(Coordinate(_identifier(n, coordinate_names, "q"), code, root_pair_name)
-                           for n, code in FLOATING)
+            coords = tuple(Coordinate(coordinate_names.own(n), code, root_pair_name) for n, code in FLOATING)
         else:
             coords = ()
         zero = (sp.Integer(0),) * 3
-        rows.append({"name": _identifier(root, body_names, "link"), "parent": WORLD, "link": root,
+        rows.append({"name": bodies_names.claim(root, link_el[root]), "parent": WORLD, "link": root,
                      "pair": Pair(root_pair_name, zero, (), coords), "link_rotation": None, "parts": []})
         place[root] = _Place(0, [], sp.eye(3), sp.zeros(3, 1))
         add_inertial(root, place[root])
@@ -511,31 +727,38 @@ class _Reader:
             t = here.t + here.R * sp.Matrix([_exact(x) for x in joint.xyz])
             if joint.type == "fixed":
                 rotation = _tidy(here.rotation + joint.rotation)
-                place[joint.child] = _Place(here.body, rotation, _matrix(rotation), t)
+                if len(rotation) > MAX_ROTATIONS:
+                    rotation = _fold(rotation)
+                    R = _matrix(rotation)
+                else:  # R_here times the joint's own rotation: O(1) whatever the chain's length
+                    R = _product(here.R, _matrix(joint.rotation)).applyfunc(snap) if joint.rotation else here.R
+                place[joint.child] = _Place(here.body, rotation, R, t.applyfunc(snap))
             else:
                 align, i = _align(joint.axis)
                 code = CODES[MOVABLE[joint.type]][i]
-                name = _identifier(joint.name, coordinate_names, "q")
+                name = coordinate_names.claim(joint.name, joint.el)
                 pair = Pair(joint.name, tuple(t), tuple(_tidy(here.rotation + joint.rotation + align)),
-                            (Coordinate(name, code, joint.name),))
+                            (Coordinate(name, code, joint.name, joint.dynamics, joint.limits),))
                 back = _inverse(align)
                 R = _matrix(back)
                 link_rotation = tuple(tuple(R[r, c] for c in range(3)) for r in range(3)) if align else None
-                rows.append({"name": _identifier(joint.child, body_names, "link"), "parent": rows[here.body]["name"],
-                             "link": joint.child, "pair": pair, "link_rotation": link_rotation, "parts": []})
+                rows.append({"name": bodies_names.claim(joint.child, link_el[joint.child]),
+                             "parent": rows[here.body]["name"], "link": joint.child, "pair": pair,
+                             "link_rotation": link_rotation, "parts": []})
                 place[joint.child] = _Place(len(rows) - 1, back, R, sp.zeros(3, 1))
             add_inertial(joint.child, place[joint.child])
             stack.extend(reversed(children[joint.child]))
         bodies = tuple(Body(name=row["name"], parent=row["parent"], pair=row["pair"], inertial=_combine(row["parts"]),
                             where=_where(link_el[row["link"]]), link_rotation=row["link_rotation"])
                        for row in rows)
+        self.judge(bodies, rows, place, links, link_el)
         name = _identifier(robot_name, set(), "robot")
         coordinate_of = {c.joint: c.name for row in rows for c in row["pair"].coordinates}
         couplings = tuple(Coupling(coordinate_of[j.name], coordinate_of[j.mimic["master"]],
                                    float(j.mimic["multiplier"]), float(j.mimic["offset"]))
                           for j in joints.values() if j.mimic is not None) if self.mimic == "couple" else ()
-        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY, parameters=(), source=str(self.file),
-                      description=f"URDF robot {robot_name!r}",
+        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY, parameters=(),
+                      source=str(self.file), description=f"URDF robot {robot_name!r}",
                       meta={"mimic": [{k: j.mimic[k] for k in ("joint", "master", "multiplier", "offset")}
                                       for j in joints.values() if j.mimic is not None],
                             "links": {link: rows[p.body]["name"] for link, p in place.items()},
@@ -545,11 +768,86 @@ class _Reader:
                                  "no equations of motion (load with floating_base=True for a free body)")
         return model
 
+    def judge(self, bodies, rows, place, links, link_el):
+        """Physical validity where the dynamics sees it: each body's merged inertia on the velocities its joints
+        allow (an error when its kinetic energy can be negative); a warning for each link whose own inertia is not
+        physical, saying why it is used as given."""
+        members: list[list[str]] = [[] for _ in bodies]
+        for link, where in place.items():
+            members[where.body].append(link)
+        spaces: dict[int, np.ndarray] = {}
+
+        def space(k):
+            """The body's motion space (validate.motion_space), computed down from the nearest known ancestor."""
+            path, j = [], k
+            while j >= 0 and j not in spaces:
+                path.append(j)
+                j = parent_index[j]
+            for i in reversed(path):
+                pair = bodies[i].pair
+                spaces[i] = motion_space(spaces.get(parent_index[i]), pair.translation, pair.rotation, pair.codes)
+            return spaces[k]
+
+        position = {b.name: i for i, b in enumerate(bodies)}
+        parent_index = [position.get(b.parent, -1) for b in bodies]
+        verdict: list[str] = []
+        for k, body in enumerate(bodies):
+            shown = members[k][:6]
+            links_text = ", ".join(repr(link) for link in shown) + (
+                f" and {len(members[k]) - len(shown)} more" if len(members[k]) > len(shown) else "")
+            of = f"body {body.name!r} (links {links_text})" if len(members[k]) > 1 else f"body {body.name!r}"
+            if body.inertial is None:
+                verdict.append(f"its {of} is massless")
+                continue
+            mass = float(body.inertial.mass)
+            com = [float(x) for x in body.inertial.com]
+            J = np.array([[float(x) for x in row] for row in body.inertial.inertia])
+            if not (math.isfinite(mass) and all(math.isfinite(x) for x in com) and np.all(np.isfinite(J))):
+                self.fail(link_el[rows[k]["link"]], f"the merged mass, centre of mass or inertia of {of} overflows "
+                                                    f"a double (mass {mass:g}); the numbers are too large")
+            problem = principal_problem(J)
+            if problem is None:
+                verdict.append(f"its {of} is physical")
+                continue
+            W = space(k)
+            if W.shape[1] == 0:
+                verdict.append(f"its {of} is welded to the world, where the dynamics never sees it")
+                continue
+            energy = kinetic_energy_problem(mass, com, J, W)
+            bad = [link for link in members[k] if links[link] is not None and links[link].problem]
+            if energy is not None:
+                which = "; ".join(f"link {link!r}: {links[link].problem} (line {links[link].el.line})"
+                                  for link in bad)
+                self.fail(link_el[rows[k]["link"]],
+                          f"non-physical inertia of {of}: {problem}; {energy}"
+                          + (f". Not physical: {which}" if which else "")
+                          + ". Fix the <inertia> (Pinocchio loads it as given, and its equations then let this "
+                            "body's kinetic energy go negative)")
+            verdict.append(f"its {of} keeps a non-negative kinetic energy for every motion its joints allow")
+            if not bad:
+                self.warn(link_el[rows[k]["link"]], f"non-physical inertia of {of} accepted: {problem}; its kinetic "
+                                                    f"energy stays non-negative for every motion its joints allow")
+        owner = {link: where.body for link, where in place.items()}
+        for link in sorted((name for name, data in links.items() if data is not None and data.problem),
+                           key=lambda name: links[name].el.line):
+            data = links[link]
+            self.warn(data.el, f"non-physical inertia accepted (as Pinocchio does): {data.problem}; the link is used "
+                               f"as given, since {verdict[owner[link]]}")
+
 
 def _combine(parts) -> Inertial | None:
     """One rigid body from several (mass, centre of mass, inertia about it), all in body axes."""
     if not parts:
         return None
+    if len(parts) == 1:  # nothing to move
+        mass, com, J = parts[0]
+        com = com.applyfunc(lambda x: snap(sp.expand(x)))
+        J = J.applyfunc(lambda x: snap(sp.expand(x)))
+        if mass.is_zero:
+            com = sp.zeros(3, 1)
+            if all(x.is_zero for x in J):
+                return None
+        return Inertial(mass, tuple(com), tuple(tuple(J[i, j] for j in range(3)) for i in range(3)))
     mass = sum((m for m, _, _ in parts), sp.Integer(0))
     if mass.is_zero:
         com = sp.zeros(3, 1)
@@ -574,7 +872,11 @@ def load_urdf(path, floating_base: bool = False, mimic: str = "independent") -> 
     if not isinstance(floating_base, bool):
         raise TypeError(f"floating_base must be True or False, got {floating_base!r}")
     try:
-        data = path.read_bytes()
+        with open(path, "rb") as f:
+            data = f.read(MAX_BYTES + 1)
     except OSError as exc:
         raise ModelError(path, "", f"cannot read the file: {exc.strerror}") from None
+    if len(data) > MAX_BYTES:
+        raise ModelError(path, "", f"the file is larger than {MAX_BYTES // 2 ** 20} MiB; a URDF this large is not "
+                                   f"read (the limit guards against files made to exhaust memory)")
     return _Reader(path, _parse(path, data), floating_base, mimic).read()
