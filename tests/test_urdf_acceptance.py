@@ -16,7 +16,7 @@ import aggsym
 from aggsym.errors import ModelError, ModelWarning
 from aggsym.model.types import JointDynamics, JointLimits
 from aggsym.model.urdf_reader import MAX_ROTATIONS
-from pinocchio_reference import compare, joint_names, pinocchio_model, robots_directory
+from helpers import compare, joint_names, pinocchio_model, robots_directory
 
 ALL_URDFS = sorted(str(p.relative_to(robots_directory())) for p in robots_directory().rglob("*.urdf"))
 # Pinocchio's fixed-base model of these has no joint (nv = 0): no equations of motion until the base is free.
