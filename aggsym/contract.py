@@ -267,6 +267,20 @@ def _gravity(bound, kin, x):
     return (sweeps.inverse_dynamics(bound, kin, _zeros(kin), _zeros(kin)),)
 
 
+def _joint_friction(bound, kin, x):
+    """tau_f,i = -d_i qd_i - f_i sign(qd_i) for the joints with URDF <dynamics> (0 elsewhere), d_i and f_i the
+    runtime parameters damping_<coordinate> and friction_<coordinate>."""
+    index = {p.name: i for i, p in enumerate(bound.model.parameters)}
+    out = []
+    for c, rate in zip(bound.model.coordinates, x["qd"]):
+        if not c.dynamics.given:
+            out.append(0)
+            continue
+        d, f = bound.params[index[f"damping_{c.name}"]], bound.params[index[f"friction_{c.name}"]]
+        out.append(-(d * rate) - f * bound.backend.call("sign", rate))
+    return (out,)
+
+
 def _joint_wrenches(bound, kin, x):
     Z = sweeps.transmitted_wrenches(bound, kin, x["qd"], x["qdd"])
     return (_flat(sweeps.joint_wrench_rows(bound, Z)),)
@@ -312,6 +326,10 @@ register(Routine("potential_energy", ("q", "p"), (Output("U", scalar),),
 register(Routine("joint_wrenches", ("q", "qd", "qdd", "p"), (Output("W", joint_wrench_shape),), _joint_wrenches,
                  "W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)",
                  layout=joint_wrench_layout, coupled="tree"))
+register(Routine("joint_friction", ("qd", "p"), (Output("tau_f", nq_vector),), _joint_friction,
+                 "tau_f = -d qd - f sign(qd) per joint with URDF <dynamics> (damping d, Coulomb friction f: the "
+                 "parameters damping_<joint>, friction_<joint>), a generalized force on the right: "
+                 "A qdd + b + g = tau + tau_f", applies=lambda model: model.has_joint_dynamics, coupled=None))
 register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_vector),),
                  lambda bound, kin, x: (transvective.forward_dynamics(
                      bound, kin, _minus(x["tau"], elastic.elastic_forces(bound, kin.q)), x["qd"]),),
@@ -389,7 +407,8 @@ def run(routine: Routine, bound, inputs: dict, kin=None) -> tuple:
     Returns one flat list of scalars per output."""
     if bound.model.couplings:
         return _coupled_outputs(routine, bound, inputs)
-    kin = kin or TreeKinematics(bound, inputs["q"])
+    if kin is None and "q" in inputs:
+        kin = TreeKinematics(bound, inputs["q"])
     return routine.build(bound, kin, inputs)
 
 
@@ -435,6 +454,7 @@ def manifest(model, routines, ops: dict, omitted=None) -> dict:
         "conservative": model.conservative,
         "ops": {r.role: ops[r.role] for r in routines},
         "omitted": dict(omitted or {}),
+        "limits": [dict(limits) for limits in model.limits],
         "armature": model.armature,
         "bodies": len(model.bodies),
         "generator": f"aggsym {__version__}",

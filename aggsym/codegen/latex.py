@@ -162,7 +162,8 @@ class IntermediatePrinter(_Common, LatexPrinter):
     """LaTeX of aggsym's expression trees (a SymPy LaTeX printer subclass); names are LaTeX already."""
 
     functions = {"sin": "\\sin", "cos": "\\cos", "tan": "\\tan", "exp": "\\exp", "log": "\\log",
-                 "asin": "\\arcsin", "acos": "\\arccos", "atan": "\\arctan", "atan2": "\\operatorname{atan2}"}
+                 "asin": "\\arcsin", "acos": "\\arccos", "atan": "\\arctan", "atan2": "\\operatorname{atan2}",
+                 "sign": "\\operatorname{sign}"}
     times = " "
 
     def _print_Num(self, e):

@@ -223,10 +223,16 @@ class _Common:
 
 
 class CPrinter(_Common, C99CodePrinter):
-    """C99 for aggsym: round-trip float literals, sin/cos/sqrt from <math.h>."""
+    """C99 for aggsym: round-trip float literals, sin/cos/sqrt from <math.h>; sign(x) = (x > 0) - (x < 0)."""
 
     def __init__(self):
         super().__init__({"order": "none", "strict": False})
+
+    def _print_Call(self, e):
+        if e.name == "sign":
+            x = self._operand(e.args[0])
+            return f"((double)({x} > 0.0) - (double)({x} < 0.0))"
+        return super()._print_Call(e)
 
 
 class NumPyPrinter(_Common, _SympyNumPyPrinter):

@@ -42,7 +42,7 @@ SIN, COS, SQRT = "sin", "cos", "sqrt"
 FUNCTIONS = {
     SIN: (1, math.sin), COS: (1, math.cos), SQRT: (1, math.sqrt), "tan": (1, math.tan), "exp": (1, math.exp),
     "log": (1, math.log), "abs": (1, abs), "asin": (1, math.asin), "acos": (1, math.acos), "atan": (1, math.atan),
-    "atan2": (2, math.atan2),
+    "atan2": (2, math.atan2), "sign": (1, lambda x: (x > 0) - (x < 0)),
 }
 _COMMUTATIVE = (ADD, MUL)
 _NUMBERS = (int, float, Fraction)
@@ -392,11 +392,12 @@ class Program:
     def evaluate(self, outputs, values: dict, lib=math):
         """Evaluate outputs numerically; ``values[(kind, index)]`` gives the inputs (floats or arrays), ``lib`` the
         functions (``math`` or ``numpy``)."""
-        names = {"abs": "fabs" if lib is math else "abs", "asin": "asin" if lib is math else "arcsin",
-                 "acos": "acos" if lib is math else "arccos", "atan": "atan" if lib is math else "arctan",
-                 "atan2": "atan2" if lib is math else "arctan2"}
-        return self.interpret(outputs, lambda kind, i: values[(kind, i)],
-                              lambda code, *x: _arith(code, x, lambda f: getattr(lib, names.get(f, f))))
+        if lib is math:
+            function = lambda f: FUNCTIONS[f][1]  # noqa: E731
+        else:
+            names = {"asin": "arcsin", "acos": "arccos", "atan": "arctan", "atan2": "arctan2"}
+            function = lambda f: getattr(lib, names.get(f, f))  # noqa: E731
+        return self.interpret(outputs, lambda kind, i: values[(kind, i)], lambda code, *x: _arith(code, x, function))
 
 
 def _arith(code, x, function):
@@ -419,7 +420,8 @@ def to_sympy(program, outputs, symbols: dict):
     import sympy as sp
 
     functions = {"sin": sp.sin, "cos": sp.cos, "sqrt": sp.sqrt, "tan": sp.tan, "exp": sp.exp, "log": sp.log,
-                 "abs": sp.Abs, "asin": sp.asin, "acos": sp.acos, "atan": sp.atan, "atan2": sp.atan2}
+                 "abs": sp.Abs, "asin": sp.asin, "acos": sp.acos, "atan": sp.atan, "atan2": sp.atan2,
+                 "sign": sp.sign}
 
     def constant(x):
         if isinstance(x, Fraction):

@@ -88,7 +88,7 @@ import sympy as sp
 from ..errors import ModelError, ModelWarning
 from .expressions import check_identifier
 from .types import _snap as snap
-from .types import (WORLD, Body, Coordinate, Coupling, Inertial, JointDynamics, JointLimits, Model, Pair,
+from .types import (WORLD, Body, Coordinate, Coupling, Inertial, JointDynamics, JointLimits, Model, Pair, Parameter,
                     elementary_rotation)
 from .validate import kinetic_energy_problem, motion_space, principal_problem
 
@@ -757,7 +757,8 @@ class _Reader:
         couplings = tuple(Coupling(coordinate_of[j.name], coordinate_of[j.mimic["master"]],
                                    float(j.mimic["multiplier"]), float(j.mimic["offset"]))
                           for j in joints.values() if j.mimic is not None) if self.mimic == "couple" else ()
-        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY, parameters=(),
+        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY,
+                      parameters=friction_parameters(c for row in rows for c in row["pair"].coordinates),
                       source=str(self.file), description=f"URDF robot {robot_name!r}",
                       meta={"mimic": [{k: j.mimic[k] for k in ("joint", "master", "multiplier", "offset")}
                                       for j in joints.values() if j.mimic is not None],
@@ -862,6 +863,17 @@ def _combine(parts) -> Inertial | None:
     if mass.is_zero and all(x.is_zero for x in J):
         return None
     return Inertial(mass, tuple(com), tuple(tuple(J[i, j] for j in range(3)) for i in range(3)))
+
+
+def friction_parameters(coordinates) -> tuple:
+    """The runtime parameters of the joints that have a ``<dynamics>`` element: ``damping_<coordinate>`` and
+    ``friction_<coordinate>`` per joint, in joint (q) order, defaults from the file (0 where one is absent)."""
+    out = []
+    for c in coordinates:
+        if c.dynamics.given:
+            out.append(Parameter(f"damping_{c.name}", float(c.dynamics.damping or 0.0)))
+            out.append(Parameter(f"friction_{c.name}", float(c.dynamics.friction or 0.0)))
+    return tuple(out)
 
 
 def load_urdf(path, floating_base: bool = False, mimic: str = "independent") -> Model:
