@@ -178,3 +178,34 @@ def test_output_folders_that_cannot_be_written(where, tmp_path, capsys):
     if where == "file":
         assert target.read_text() == "keep me"
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".aggsym-")]
+
+
+def test_a_model_name_too_long_for_the_file_system_is_exit_2(tmp_path, capsys):
+    path = tmp_path / "long.yaml"
+    path.write_text(model_path("planar_2link").read_text().replace("name: planar_2link", "name: " + "n" * 300, 1))
+    out = tmp_path / "out"
+    assert cli.main(["generate", str(path), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert str(out) in err and "Traceback" not in err and not out.exists()
+
+
+def test_a_hostile_file_name_stays_in_its_docstring_and_comment(tmp_path):
+    """The model's file name reaches the NumPy docstring and the C comments escaped."""
+    folder = tmp_path / 'x"""; __import__("pathlib").Path("aggsym_pwned_marker").touch() #*'
+    folder.mkdir()
+    path = folder / 'evil *\\ """ name.yaml'
+    path.write_text(model_path("planar_2link").read_text())
+    model = aggsym.load(path)
+    lib, module, _ = generated_code(model, tmp_path / "out")
+    assert not os.path.exists("aggsym_pwned_marker") and module.NQ == model.nq
+
+
+def test_a_massless_floating_root_is_a_warning_not_an_internal_error(tmp_path, capsys):
+    path = tmp_path / "floater.urdf"
+    path.write_text(URDF.format(joint="j").replace('<link name="base"/>', '<link name="base"/>'))
+    out = tmp_path / "out"
+    assert cli.main(["generate", str(path), "--floating-base", "-o", str(out), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "singular" in err and "internal error" not in err
+    manifest = json.loads((out / "evil.json").read_text())
+    assert "forward_dynamics" in manifest["omitted"] and "inverse_dynamics" in manifest["functions"]
