@@ -199,8 +199,9 @@ def main(argv=None) -> int:
     except Exception as exc:  # an internal error: short message, traceback on request
         if os.environ.get("AGGSYM_DEBUG"):
             raise
-        print(f"aggsym: internal error: {exc.__class__.__name__}: {exc} (set AGGSYM_DEBUG=1 for a traceback)",
-              file=sys.stderr)
+        print(f"aggsym: internal error: {exc.__class__.__name__}: {exc}\n"
+              f"aggsym: this is a bug in aggsym, not in your model: please report it with the model file and the "
+              f"command (AGGSYM_DEBUG=1 shows the traceback)", file=sys.stderr)
         return 3
 
 

@@ -209,3 +209,16 @@ def test_a_massless_floating_root_is_a_warning_not_an_internal_error(tmp_path, c
     assert "singular" in err and "internal error" not in err
     manifest = json.loads((out / "evil.json").read_text())
     assert "forward_dynamics" in manifest["omitted"] and "inverse_dynamics" in manifest["functions"]
+
+
+def test_a_true_bug_is_exit_3_with_a_request_to_report_it(monkeypatch, capsys, tmp_path):
+    import aggsym.codegen.generate as generate_module
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("simulated bug")
+
+    monkeypatch.setattr(generate_module, "generate", broken)
+    assert cli.main(["generate", str(model_path("planar_2link")), "-o", str(tmp_path / "o")]) == 3
+    err = capsys.readouterr().err
+    assert "internal error: RuntimeError: simulated bug" in err and "please report it" in err
+    assert "Traceback" not in err and not (tmp_path / "o").exists()
