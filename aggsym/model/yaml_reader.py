@@ -77,8 +77,20 @@ def _path(parts) -> str:
     return out
 
 
+MAX_FILE_BYTES = 16 * 2 ** 20  # a model file
+MAX_NODES = 200_000  # YAML nodes after aliases are expanded (a billion-laughs file stops here)
+MAX_DEPTH = 64  # nesting of mappings and sequences
+_PLAIN_TAGS = {f"tag:yaml.org,2002:{t}" for t in ("str", "int", "float", "bool", "null", "map", "seq")}
+
+
 class _Doc:
-    """The YAML document as plain Python values, with the line of every path."""
+    """The YAML document as plain Python values, with the line of every path.
+
+    Safe by construction: PyYAML's safe composer builds the node graph (aliases are references there, nothing is
+    expanded or constructed yet); then every node is checked while it is turned into Python values: only the plain
+    types (text, numbers, booleans, null, mappings, sequences; explicit tags such as ``!!python/object`` or
+    ``!custom`` are refused), at most :data:`MAX_DEPTH` levels, at most :data:`MAX_NODES` nodes with aliases
+    expanded, and no alias inside itself."""
 
     def __init__(self, file: Path, text: str):
         self.file = file
@@ -89,16 +101,51 @@ class _Doc:
             mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
             problem = getattr(exc, "problem", None) or str(exc)
             raise ModelError(file, "", f"not valid YAML: {problem}", mark.line + 1 if mark else None) from None
+        except RecursionError:
+            raise ModelError(file, "", f"the YAML is nested too deeply (at most {MAX_DEPTH} levels)") from None
         if node is None:
             raise ModelError(file, "", "the file is empty")
         self._constructor = yaml.SafeLoader("")
+        self._nodes = 0
+        self._open: set = set()
         self.root = self._build(node, ())
 
     def _build(self, node, path):
-        self.lines[path] = node.start_mark.line + 1
+        line = node.start_mark.line + 1
+        self.lines[path] = line
+        self._nodes += 1
+        if self._nodes > MAX_NODES:
+            raise ModelError(self.file, _path(path), f"the YAML document is too large: more than {MAX_NODES} values "
+                                                     f"with its aliases expanded", line)
+        if len(path) > MAX_DEPTH:
+            raise ModelError(self.file, _path(path), f"the YAML is nested too deeply (at most {MAX_DEPTH} levels)",
+                             line)
+        if node.tag not in _PLAIN_TAGS:
+            raise ModelError(self.file, _path(path), f"YAML tag {node.tag!r} is not allowed: a model holds only "
+                                                     f"text, numbers, booleans, mappings and lists", line)
+        if id(node) in self._open:
+            raise ModelError(self.file, _path(path), "a YAML alias refers to a node that contains it (a recursive "
+                                                     "alias)", line)
+        if isinstance(node, (yaml.MappingNode, yaml.SequenceNode)):
+            self._open.add(id(node))
+            try:
+                return self._collection(node, path)
+            finally:
+                self._open.discard(id(node))
+        try:
+            return self._constructor.construct_object(node, deep=True)
+        except yaml.YAMLError as exc:
+            raise ModelError(self.file, _path(path), f"not valid YAML: {getattr(exc, 'problem', None) or exc}",
+                             line) from None
+
+    def _collection(self, node, path):
         if isinstance(node, yaml.MappingNode):
             out = {}
             for key_node, value_node in node.value:
+                if not isinstance(key_node, yaml.ScalarNode) or key_node.tag not in _PLAIN_TAGS or \
+                        key_node.tag == "tag:yaml.org,2002:map":
+                    raise ModelError(self.file, _path(path), "a key must be a name",
+                                     key_node.start_mark.line + 1)
                 key = self._constructor.construct_object(key_node, deep=True)
                 if not isinstance(key, (str, int)):
                     raise ModelError(self.file, _path(path), f"a key must be a name, got {key!r}",
@@ -493,6 +540,8 @@ def load_yaml(path) -> Model:
     """Read and validate a YAML model; raises :class:`ModelError` naming the place of the first problem."""
     path = Path(path)
     try:
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise ModelError(path, "", f"the file is larger than {MAX_FILE_BYTES // 2 ** 20} MiB")
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ModelError(path, "", f"cannot read the file: {exc.strerror}") from None
