@@ -271,7 +271,7 @@ BAD = {
     "no_time": ("spin: {prescribed: '3*m'}", "bodies[0].rotors[0].spin.prescribed", ["does not depend on the time"]),
     "unknown_symbol": ("spin: {prescribed: 'w*t'}", "bodies[0].rotors[0].spin.prescribed",
                        ["undefined parameter 'w'", "time t"]),
-    "bad_function": ("spin: {prescribed: 'exp(t)'}", "bodies[0].rotors[0].spin.prescribed", ["exp"]),
+    "bad_function": ("spin: {prescribed: 'floor(t)'}", "bodies[0].rotors[0].spin.prescribed", ["unknown function 'floor'"]),
     "no_mass": ("spin: {prescribed: 't'}\n        com: [0, 0, 0]", "bodies[0].rotors[0]", ["com given without mass"]),
     "no_inertial": ("spin: {prescribed: 't'}", "bodies[0].rotors[0]", ["a rotor needs mass properties"]),
     "unknown_key": ("spin: {prescribed: 't'}\n        colour: red", "bodies[0].rotors[0].colour",

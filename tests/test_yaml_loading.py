@@ -22,6 +22,10 @@ CASES = {
     "key_is_a_list": ("name: x\n? [a, b]\n: 1\n", "key must be a name"),
     "not_yaml": ("name: [unclosed\n", "not valid YAML"),
     "empty": ("", "empty"),
+    "too_many_bodies": ("name: x\nbodies:\n" + "".join(f"  - {{name: b{k}, parent: world}}\n" for k in range(10001)),
+                        "at most 10,000 are read"),
+    "too_many_parameters": ("name: x\nparameters:\n" + "".join(f"  p{k}: 1\n" for k in range(10001))
+                            + "bodies: []\n", "at most 10,000 are read"),
 }
 
 

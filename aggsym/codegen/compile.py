@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ctypes
 import importlib.util
+import json
 import os
 import shlex
 import shutil
@@ -122,7 +123,7 @@ def relative_error(a, b, scale=None) -> float:
 
 def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir=None, opt: str = "-O2"):
     """Compile the C (with ``opt``), import the NumPy module, compare both with the numeric twin on random states."""
-    manifest = __import__("json").loads(files[f"{model.name}.json"])
+    manifest = json.loads(files[f"{model.name}.json"])
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
         tmp = Path(tmp)
         for name, text in files.items():

@@ -61,7 +61,8 @@ class Numeric:
 
 # SymPy's functions that a model's expressions may hold, by the program's name for them
 _SYMPY_FUNCTIONS = {sp.sin: "sin", sp.cos: "cos", sp.tan: "tan", sp.exp: "exp", sp.log: "log", sp.Abs: "abs",
-                    sp.asin: "asin", sp.acos: "acos", sp.atan: "atan", sp.atan2: "atan2"}
+                    sp.asin: "asin", sp.acos: "acos", sp.atan: "atan", sp.atan2: "atan2",
+                    sp.sign: "sign"}
 
 
 def to_scalar(expr, values: dict, backend):

@@ -50,7 +50,7 @@ import sympy as sp
 import yaml
 
 from ..errors import ModelError
-from .expressions import ExpressionError, check_identifier, evaluate, parse_value
+from .expressions import ExpressionError, check_identifier, check_supported, evaluate, parse_value
 from .types import COORDINATE_CODES, TIME, WORLD, Body, Coordinate, Inertial, Model, Parameter, Pair
 from .validate import inertia_problem, mass_problem, order_tree
 
@@ -78,15 +78,20 @@ def _path(parts) -> str:
 
 
 MAX_FILE_BYTES = 16 * 2 ** 20  # a model file
+MAX_EXPRESSION_TEXT = 1_000_000  # characters of all expression strings of a model together (parsing costs time)
 MAX_NODES = 200_000  # YAML nodes after aliases are expanded (a billion-laughs file stops here)
 MAX_DEPTH = 64  # nesting of mappings and sequences
+MAX_BODIES = 10_000  # bodies (rotors included) of a model, as for a URDF's links
+MAX_PARAMETERS = 10_000
+# libyaml's composer (C, ten times faster; it refuses nesting beyond 1000 levels itself) where PyYAML has it
+_COMPOSER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 _PLAIN_TAGS = {f"tag:yaml.org,2002:{t}" for t in ("str", "int", "float", "bool", "null", "map", "seq")}
 
 
 class _Doc:
     """The YAML document as plain Python values, with the line of every path.
 
-    Safe by construction: PyYAML's safe composer builds the node graph (aliases are references there, nothing is
+    Safe by construction: PyYAML's safe composer (libyaml's where installed) builds the node graph (aliases are references there, nothing is
     expanded or constructed yet); then every node is checked while it is turned into Python values: only the plain
     types (text, numbers, booleans, null, mappings, sequences; explicit tags such as ``!!python/object`` or
     ``!custom`` are refused), at most :data:`MAX_DEPTH` levels, at most :data:`MAX_NODES` nodes with aliases
@@ -96,10 +101,12 @@ class _Doc:
         self.file = file
         self.lines: dict[tuple, int] = {}
         try:
-            node = yaml.compose(text, Loader=yaml.SafeLoader)
+            node = yaml.compose(text, Loader=_COMPOSER)
         except yaml.YAMLError as exc:
             mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
             problem = getattr(exc, "problem", None) or str(exc)
+            if "nesting depth" in problem:  # libyaml's own cap (1000 levels)
+                problem = f"the YAML is nested too deeply (at most {MAX_DEPTH} levels)"
             raise ModelError(file, "", f"not valid YAML: {problem}", mark.line + 1 if mark else None) from None
         except RecursionError:
             raise ModelError(file, "", f"the YAML is nested too deeply (at most {MAX_DEPTH} levels)") from None
@@ -175,6 +182,7 @@ class _Reader:
         self.file = file
         self.symbols: dict[str, sp.Symbol] = {}
         self.defaults: dict[sp.Symbol, float] = {}
+        self.text_budget = MAX_EXPRESSION_TEXT
 
     def fail(self, path, message):
         raise self.doc.error(path, message)
@@ -198,21 +206,26 @@ class _Reader:
             self.fail(path, f"expected {length} entries, got {len(value)}")
         return value
 
-    def expr(self, value, path):
+    def expr(self, value, path, symbols=None, hint=""):
+        if isinstance(value, str):
+            self.text_budget -= len(value)
+            if self.text_budget < 0:
+                self.fail(path, f"the model's expressions are too long in all (at most {MAX_EXPRESSION_TEXT} "
+                                f"characters)")
         try:
-            return parse_value(value, self.symbols)
+            expr = parse_value(value, self.symbols if symbols is None else symbols)
         except ExpressionError as exc:
-            self.fail(path, str(exc))
+            self.fail(path, f"{exc}{hint}")
+        if not expr.is_Number and not expr.has(TIME):
+            self.number(expr, path)  # every constant of the model is finite and real at the parameters' defaults
+        return expr
 
     def number(self, expr, path) -> float:
         """The value of an expression with parameters at their defaults (for validation)."""
         try:
-            value = evaluate(expr, self.defaults)
-        except (TypeError, ValueError):
-            self.fail(path, f"{expr} has no real value")
-        if not np.isfinite(value):
-            self.fail(path, f"{expr} is not finite")
-        return value
+            return evaluate(expr, self.defaults)
+        except ValueError as exc:
+            self.fail(path, f"{exc}" + (" (with the parameters at their defaults)" if expr.free_symbols else ""))
 
     def vector(self, value, path, length=3):
         self.sequence(value, path, length)
@@ -252,6 +265,8 @@ class _Reader:
         path = ("parameters",)
         if not isinstance(value, dict):
             self.fail(path, f"expected a mapping of names to default values, got {_kind(value)}")
+        if len(value) > MAX_PARAMETERS:
+            self.fail(path, f"{len(value):,} parameters; at most {MAX_PARAMETERS:,} are read")
         out = []
         for key, default in value.items():
             self.name(key, path + (key,), "parameter name")
@@ -260,9 +275,13 @@ class _Reader:
                 default = default["value"]
             if isinstance(default, bool) or not isinstance(default, (int, float)):
                 self.fail(path + (key,), f"the default of parameter {key!r} must be a number, got {_kind(default)}")
+            try:
+                default = float(default)
+            except OverflowError:
+                default = float("inf")
             if not np.isfinite(default):
                 self.fail(path + (key,), f"the default of parameter {key!r} is not finite")
-            param = Parameter(key, float(default))
+            param = Parameter(key, default)
             self.symbols[key] = param.symbol
             self.defaults[param.symbol] = float(default)
             out.append(param)
@@ -273,6 +292,9 @@ class _Reader:
         self.sequence(value, path)
         if not value:
             self.fail(path, "the model has no bodies")
+        rotors = sum(len(b["rotors"]) for b in value if isinstance(b, dict) and isinstance(b.get("rotors"), list))
+        if len(value) + rotors > MAX_BODIES:
+            self.fail(path, f"{len(value) + rotors:,} bodies with the rotors; at most {MAX_BODIES:,} are read")
         raw = []
         names: dict[str, int] = {}
         for i, entry in enumerate(value):
@@ -376,25 +398,21 @@ class _Reader:
             coordinates[cname] = where
             return (Coordinate(cname, "theta6", joint),), ()
         where = path + ("prescribed",)
-        try:
-            angle = parse_value(value["prescribed"], {**self.symbols, "t": TIME})
-        except ExpressionError as exc:
-            self.fail(where, f"{exc} (the prescribed spin may use the time t)")
+        angle = self.expr(value["prescribed"], where, {**self.symbols, "t": TIME},
+                          hint=" (the prescribed spin may use the time t)")
         if not angle.has(TIME):
             self.fail(where, f"the prescribed spin {angle} does not depend on the time t (a rotor at a fixed angle "
                              f"is a welded body: give it as a body without pair coordinates)")
-        from ..core.backend import Numeric, to_scalar
-
         values = {**self.defaults, TIME: 0.37}
-        for k in range(3):
+        for k, what in enumerate(("angle", "rate", "acceleration")):
             expr = sp.diff(angle, TIME, k)
+            problem = check_supported(expr)
+            if problem:
+                self.fail(where, f"the prescribed spin's {what} {expr} cannot be emitted ({problem})")
             try:
-                x = to_scalar(expr, values, Numeric())
-            except (ValueError, TypeError, ZeroDivisionError) as exc:
-                self.fail(where, f"the prescribed spin cannot be emitted ({'angle, rate, acceleration'.split(', ')[k]}"
-                                 f" {expr}: {exc}); use + - * /, integer powers, sqrt, sin, cos")
-            if not np.isfinite(float(x)):
-                self.fail(where, f"the prescribed spin is not finite at t = 0.37: {expr}")
+                evaluate(expr, values)
+            except ValueError as exc:
+                self.fail(where, f"the prescribed spin's {what} has no finite value at t = 0.37: {exc}")
         return (), (("theta6", angle),)
 
     def rotation(self, value, path):
@@ -531,9 +549,11 @@ def _kind(value) -> str:
         return "a mapping"
     if isinstance(value, list):
         return "a list"
+    text = repr(value)
+    text = text if len(text) <= 80 else text[:80] + "..."
     if isinstance(value, str):
-        return f"the text {value!r}"
-    return f"{type(value).__name__} {value!r}"
+        return f"the text {text}"
+    return f"{type(value).__name__} {text}"
 
 
 def load_yaml(path) -> Model:
