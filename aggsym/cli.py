@@ -48,6 +48,9 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--armature", metavar="VALUE", type=_armature, default=0.0,
                        help="add a rotor inertia VALUE (kg m^2, or kg for a prismatic joint) on every coordinate, as "
                             "Pinocchio's armature: A(q) + VALUE E (makes A regular where a joint moves no mass)")
+        p.add_argument("--constraints", metavar="FILE",
+                       help="URDF only: a YAML side file with the robot's 'constraints:' (contacts with the world, "
+                            "closed loops; bodies named by URDF link) and 'stabilization:'")
         p.add_argument("--name", metavar="NAME",
                        help="the name of the generated code (C prefix, module and file names) instead of the model's")
         return p
@@ -77,9 +80,14 @@ def _load(args):
     options = {"floating_base": True} if args.floating_base else {}
     if args.mimic != "independent":
         options["mimic"] = args.mimic
-    if options and path.suffix.lower() != ".urdf":
-        raise AggsymError(f"{path}: --floating-base and --mimic apply to URDF models only")
+    if (options or args.constraints) and path.suffix.lower() != ".urdf":
+        raise AggsymError(f"{path}: --floating-base, --mimic and --constraints apply to URDF models only (a YAML "
+                          f"model lists its constraints itself)")
     model = load(path, **options)
+    if args.constraints:
+        from .model.yaml_reader import load_constraints
+
+        model = load_constraints(args.constraints, model)
     if args.name is not None:
         from .codegen.escape import check_c_identifier, check_module_name
 

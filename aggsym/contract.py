@@ -22,11 +22,12 @@ The equations are ``A(q) q'' + b(q, q') + g(q) + c(q) = tau`` (2.17), (2.27):
 """
 from __future__ import annotations
 
+import keyword
 from dataclasses import dataclass
 from typing import Callable
 
 from . import __version__
-from .mechanics import elastic, sweeps, transvective
+from .mechanics import constraints, elastic, sweeps, transvective
 from .mechanics.bias import coriolis_matrix, gravity_vector
 from .mechanics.coupling import Coupler
 from .mechanics.energy import kinetic_energy, potential_energy
@@ -43,6 +44,13 @@ class Output:
 
     name: str
     shape: Callable  # model -> tuple
+    returned: bool = False  # the C function returns it as an int (nonzero: failed) instead of writing it; the NumPy
+    # function raises numpy.linalg.LinAlgError naming the states of the batch where it is nonzero
+
+    @property
+    def py(self) -> str:
+        """Its variable name in the NumPy module (a Python keyword such as ``lambda`` gets a trailing _)."""
+        return self.name + "_" if keyword.iskeyword(self.name) else self.name
 
 
 @dataclass(frozen=True)
@@ -58,6 +66,16 @@ class Routine:
     # with coupled coordinates: "force" (outputs reduce by J^T), "matrix" (J^T X J), "tree" (the tree's own
     # outputs), "forward" / "inverse" (q'' and A^-1 under the coupling), None (not emitted)
     coupled: str | None = "force"
+
+    @property
+    def written(self) -> tuple:
+        """The outputs written through pointer arguments (all but a returned status)."""
+        return tuple(o for o in self.outputs if not o.returned)
+
+    @property
+    def status(self):
+        """The returned status output, or None."""
+        return next((o for o in self.outputs if o.returned), None)
 
     def exists_for(self, model) -> bool:
         if model.couplings and self.coupled is None:
@@ -98,8 +116,8 @@ def c_symbol(model, routine: Routine) -> str:
 def c_prototype(model, routine: Routine) -> str:
     """``void NAME_role(const double *q, ..., double *out)``: inputs in the order q, qd, qdd|tau, t, p, then the
     outputs."""
-    args = [f"const double *{i}" for i in signature(routine, model)] + [f"double *{o.name}" for o in routine.outputs]
-    return f"void {c_symbol(model, routine)}({', '.join(args)})"
+    args = [f"const double *{i}" for i in signature(routine, model)] + [f"double *{o.name}" for o in routine.written]
+    return f"{'int' if routine.status else 'void'} {c_symbol(model, routine)}({', '.join(args)})"
 
 
 def python_parameters(model, routine: Routine) -> str:
@@ -109,7 +127,7 @@ def python_parameters(model, routine: Routine) -> str:
 
 def size_macro(model, routine: Routine, output: Output) -> str:
     """``NAME_ROLE_SIZE`` for a routine's only output, ``NAME_ROLE_OUTPUT_SIZE`` for one of several."""
-    parts = [model.name, routine.role] + ([output.name] if len(routine.outputs) > 1 else [])
+    parts = [model.name, routine.role] + ([output.name] if len(routine.written) > 1 else [])
     return "_".join(parts).upper() + "_SIZE"
 
 
@@ -126,7 +144,7 @@ def header_macros(model, routines) -> list:
     for i, p in enumerate(model.parameters):
         out.append((parameter_macro(model, p), i, "index in p"))
     for r in routines:
-        for o in r.outputs:
+        for o in r.written:
             shape = o.shape(model)
             size = 1
             for n in shape:
@@ -352,6 +370,66 @@ register(Routine("elastic_partition", ("q", "qd", "p"),
                  applies=lambda model: elastic.is_elastic(model) and not model.time_dependent, coupled=None))
 
 
+def constraint_rows_vector(model):
+    return (model.constraint_rows,)
+
+
+def constraint_jacobian_shape(model):
+    return (model.constraint_rows, model.nq)
+
+
+def constraint_square(model):
+    return (model.constraint_rows, model.constraint_rows)
+
+
+def constraint_row_labels(model) -> list:
+    return [f"{c.name}.{code}" for c in model.constraints for code in c.rows]
+
+
+def constraint_layout(model) -> dict:
+    return {"rows": constraint_row_labels(model), "columns": [c.name for c in model.coordinates],
+            "order": "row-major", "convention": "see the manifest's 'constraints'"}
+
+
+def _has_constraints(model) -> bool:
+    return bool(model.constraints)
+
+
+def _constrained_forward_dynamics(bound, kin, x):
+    qdd, lam, status = constraints.constrained_forward_dynamics(
+        bound, kin, x["qd"], _minus(x["tau"], elastic.elastic_forces(bound, kin.q)))
+    return qdd, lam, [status]
+
+
+register(Routine("constraint_residual", ("q", "p"), (Output("phi", constraint_rows_vector),),
+                 lambda bound, kin, x: (constraints.residual(bound, kin),),
+                 "phi(q): the constraints' holonomic residual, m rows (ch. 4): the contact point's offset from its "
+                 "attachment and the rotation vector of the relative orientation, in the reference axes",
+                 layout=constraint_layout, applies=_has_constraints, coupled=None))
+register(Routine("constraint_jacobian", ("q", "p"), (Output("J", constraint_jacobian_shape),),
+                 lambda bound, kin, x: (_flat(constraints.jacobian(bound, kin)),),
+                 "J(q) = D_lambda^T, m*n row-major: the forbidden relative motions per unit rate of each "
+                 "coordinate, rows of the parastrophic matrix S moved to the contact points (4.5)-(4.12)",
+                 layout=constraint_layout, applies=_has_constraints, coupled=None))
+register(Routine("constraint_bias", ("q", "qd", "p"), (Output("gamma", constraint_rows_vector),),
+                 lambda bound, kin, x: (constraints.bias(bound, kin, x["qd"]),),
+                 "gamma(q, qd) = J' qd: the relative accelerations at qdd = 0 (S'^T qd of (2.37) at the contact "
+                 "points), so that J qdd + gamma is the constraints' acceleration",
+                 layout=constraint_layout, applies=_has_constraints, coupled=None))
+register(Routine("delassus", ("q", "p"), (Output("G", constraint_square),),
+                 lambda bound, kin, x: (_flat(constraints.delassus(bound, kin)),),
+                 "G = J A^-1 J^T, m*m row-major, by the transvective factors: P = T J^T, G = P^T diag(1/(beta,beta)) "
+                 "P (3.19)", applies=_has_constraints, coupled=None, regular=True))
+register(Routine("constrained_forward_dynamics", ("q", "qd", "tau", "p"),
+                 (Output("qdd", nq_vector), Output("lambda", constraint_rows_vector),
+                  Output("status", scalar, returned=True)),
+                 _constrained_forward_dynamics,
+                 "qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) "
+                 "(4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 "
+                 "(T F + P lambda) (3.20); returns nonzero when G is singular",
+                 applies=_has_constraints, coupled=None, regular=True))
+
+
 def routines_for(model, roles=None, omitted=()) -> list:
     """The routines a model has (all of the contract's that apply, or those named), in emission order, less the
     ``omitted`` ones (:func:`omitted_routines`)."""
@@ -380,6 +458,41 @@ def massless_coordinates(model, samples: int = 2, tolerance: float = 1e-12) -> t
         zero &= {i for i in range(model.nq) if abs(A[i, i]) <= tolerance * scale}
         singular = singular or float(np.linalg.eigvalsh(A)[0]) <= tolerance * scale
     return tuple(sorted(zero)), singular
+
+
+def redundant_constraints(model, samples: int = 2, tolerance: float = 1e-9) -> list:
+    """The constraints with rows that depend on earlier rows (J rank-deficient) at q = 0 and at ``samples`` fixed
+    random configurations, all of them (a structural redundancy, such as a planar four-bar closed by a point
+    constraint, and not a singular configuration): [(constraint, [codes])]."""
+    import numpy as np
+
+    from .core.backend import Numeric
+    from .mechanics.bound import bind
+
+    if not model.constraints:
+        return []
+    bound = bind(model, Numeric())
+    rng = np.random.default_rng(0)
+    dependent = None
+    for q in [np.zeros(model.nq)] + [rng.uniform(-np.pi, np.pi, model.nq) for _ in range(samples)]:
+        J = np.array(run(ROUTINES["constraint_jacobian"], bound, {"q": [float(x) for x in q]})[0], dtype=float)
+        J = J.reshape(model.constraint_rows, model.nq)
+        scale = max(float(np.abs(J).max()), 1e-300)
+        rows, kept = set(), []
+        for r in range(J.shape[0]):
+            trial = kept + [J[r]]
+            if np.linalg.matrix_rank(np.array(trial), tol=tolerance * scale) > len(kept):
+                kept.append(J[r])
+            else:
+                rows.add(r)
+        dependent = rows if dependent is None else dependent & rows
+    out, start = [], 0
+    for c in model.constraints:
+        codes = [code for r, code in enumerate(c.rows, start) if r in dependent]
+        if codes:
+            out.append((c, codes))
+        start += len(c.rows)
+    return out
 
 
 def omitted_routines(model) -> dict:
@@ -446,7 +559,10 @@ def manifest(model, routines, ops: dict, omitted=None) -> dict:
         "functions": {r.role: c_symbol(model, r) for r in routines},
         "descriptions": {r.role: r.doc for r in routines},
         "signatures": {r.role: {"inputs": list(signature(r, model)),
-                                "outputs": [{"name": o.name, "shape": list(o.shape(model))} for o in r.outputs]}
+                                "outputs": [{"name": o.name, "shape": list(o.shape(model))} for o in r.written],
+                                "returns": "int: 0, or nonzero when the constraints are singular (J A^-1 J^T "
+                                           "has a pivot below 1e-12 of its mean diagonal, or is not finite)"
+                                if r.status else "void"}
                        for r in routines},
         "layouts": {r.role: r.layout(model) for r in routines if r.layout is not None},
         "couplings": [{"coordinate": c.coordinate, "master": c.master, "multiplier": c.multiplier,
@@ -463,7 +579,37 @@ def manifest(model, routines, ops: dict, omitted=None) -> dict:
         out["time"] = time_entry(model)
     if elastic.is_elastic(model):
         out["elastic"] = elastic_entry(model)
+    if model.constraints:
+        out["constraints"] = constraints_entry(model)
     return out
+
+
+def constraints_entry(model) -> dict:
+    """The manifest's description of the constraints (chapter 4): each one's rows and its slice of lambda."""
+    items, start = [], 0
+    for c in model.constraints:
+        items.append({"name": c.name, "body": c.body, "link": c.link or None, "medium": c.medium,
+                      "kind": c.kind or None, "rows": list(c.rows), "lambda": [start, start + len(c.rows)],
+                      "point": [str(x) for x in c.point], "at": None if c.at is None else [str(x) for x in c.at],
+                      "rotation": [[axis, str(angle)] for axis, angle in c.rotation]})
+        start += len(c.rows)
+    return {
+        "m": model.constraint_rows,
+        "equations": ("A(q) qdd + b + g + c = tau + J^T lambda,  J qdd + gamma = -(kd J qd + kp phi) "
+                      "(4.25)-(4.28); bilateral (no complementarity: a contact may pull)"),
+        "rows": ("row r of J, gamma, phi and lambda: the constraint's forbidden motion along (o1 o2 o3) or about "
+                 "(theta4 theta5 theta6) the axes of its reference frame, fixed in the medium at the contact "
+                 "point; translational rows: the contact point's velocity relative to the medium, rotational: the "
+                 "relative angular velocity; for ground contacts without rotation, Pinocchio's "
+                 "LOCAL_WORLD_ALIGNED"),
+        "lambda": ("the wrench (f, mu) the medium exerts on the body about the contact point, in the reference "
+                   "axes, the entries of the blocked rows; a loop's medium body gets -lambda"),
+        "phi": ("translational rows: the contact point's offset from 'at' (default: where it is at q = 0); "
+                "rotational rows: the rotation vector of the body's orientation relative to the one it has at "
+                "q = 0, both in the reference axes"),
+        "stabilization": {"kp": str(model.stabilization[0]), "kd": str(model.stabilization[1])},
+        "constraints": items,
+    }
 
 
 def time_entry(model) -> dict:

@@ -55,7 +55,9 @@ class NumericTwin:
             inputs[name] = [float(x) for x in arr]
         outs = run(routine, self.bound(p, t if self.model.time_dependent else None), inputs)
         arrays = tuple(np.array([float(x) for x in flat]).reshape(o.shape(self.model))
-                       for o, flat in zip(routine.outputs, outs))
+                       for o, flat in zip(routine.outputs, outs) if not o.returned)
+        if routine.status is not None and float(outs[-1][0]) != 0.0:
+            raise np.linalg.LinAlgError(f"{role}: J A^-1 J^T is singular (or not finite) at this state")
         return arrays[0] if len(arrays) == 1 else arrays
 
     def __getattr__(self, role):

@@ -24,6 +24,7 @@ import jinja2
 from .. import __version__
 from ..contract import (
     INPUT_KINDS, ROUTINES, Routine, c_prototype, c_symbol, header_macros, input_length, manifest, omitted_routines,
+    redundant_constraints,
     python_parameters, routines_for,
     run, signature,
 )
@@ -121,6 +122,9 @@ def emit_routine(model, prog, routine: Routine, outputs) -> EmittedRoutine:
     c_names = py_names = {**_input_symbols(sl), **temp_names}
     c_conv, py_conv = Converter(prog, c_names), Converter(prog, py_names)
     c_body, py_body = [], []
+    status = routine.status
+    if status is not None:
+        c_body.append(f"double {status.name}[1];")
     for kind in inputs:  # every input is read before any output is written: outputs may alias inputs
         used = [i for k, i in sl.inputs if k == kind]
         if not used:
@@ -147,7 +151,7 @@ def emit_routine(model, prog, routine: Routine, outputs) -> EmittedRoutine:
             rhs_py = pp._print(py_conv(x, top=not (isinstance(x, Node) and x.id in py_names)))
             c_body.append(f"{name}[{k}] = {rhs_c};")
             idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
-            py_body.append(f"{name}[..., {idx}] = {rhs_py}")
+            py_body.append(f"{routine.outputs[o].py}[..., {idx}] = {rhs_py}")
             continue
         i = step[1]
         node = prog.nodes[i]
@@ -163,6 +167,8 @@ def emit_routine(model, prog, routine: Routine, outputs) -> EmittedRoutine:
         c_name = c_names[cos_id] if cos_id is not None else c_names[sin_id] + "_cos"
         c_body.append(f"double {s_name}, {c_name};")
         c_body.append(f"aggsym_sincos({cp._print(c_conv(arg, top=False))}, &{s_name}, &{c_name});")
+    if status is not None:
+        c_body.append(f"return {status.name}[0] != 0.0;")
     ops = count_ops("\n".join(c_body))
     return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine),
                           python_parameters(model, routine), c_body, py_body, ops, len(sl.temps))
@@ -188,6 +194,19 @@ def _unravel(k, shape):
     return tuple(reversed(out))
 
 
+def check_constraints(model) -> None:
+    """Redundant constraint rows make J A^-1 J^T singular everywhere: an error naming them, with a hint."""
+    from ..errors import ModelError
+
+    found = redundant_constraints(model)
+    if found:
+        c, codes = found[0]
+        raise ModelError(c.source, c.path, f"constraint {c.name!r}: its row(s) {', '.join(codes)} depend on the rows "
+                                           f"before them (J is rank-deficient at every configuration tried), so J "
+                                           f"A^-1 J^T is singular: block only the independent motions (e.g. "
+                                           f"[o1, o2] for a point closing a planar loop)", c.line)
+
+
 def generate(model, progress=None, latex: bool = True) -> Generated:
     """Generate all files of a model in memory."""
     from .latex import latex_document
@@ -196,6 +215,7 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
     stages = _Stages(progress)
     tree = Tree(model)
     omitted = omitted_routines(model)
+    check_constraints(model)
     if omitted:
         warnings.warn(ModelWarning(f"{model.source or model.name}: {next(iter(omitted.values()))}: "
                                    f"{', '.join(omitted)} left out (see the manifest's 'omitted')"))

@@ -195,6 +195,38 @@ class Body:
     carrier: str | None = None  # for a rotor (2.13): the body that carries it (its parent)
 
 
+CONSTRAINT_KINDS = {  # block: kind -> the forbidden relative motions, in the reference frame (ch. 4)
+    "point": ("o1", "o2", "o3"),
+    "weld": COORDINATE_CODES,
+    "hinge3": ("o1", "o2", "o3", "theta4", "theta5"),
+    "cylinder3": ("o1", "o2", "theta4", "theta5"),
+    "normal": ("o3",),
+}
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """A bilateral constraint of a body with the medium (the world, or another body of the tree: a closed loop),
+    chapter 4: the relative motions ``rows`` (a subset of o1 o2 o3 theta4 theta5 theta6, in that order) of the
+    body's point ``point`` with respect to a reference frame fixed in the medium at ``at``, with axes
+    ``rotation`` (constant elementary rotations from the medium's axes), are forbidden.  Its multiplier is the
+    wrench (f, mu) the medium exerts on the body about the point, in the reference axes, one entry per row."""
+
+    name: str
+    body: str  # the constrained body (a body of the tree)
+    point: tuple  # 3 expressions: the contact point in the body's axes
+    rows: tuple  # codes, a subset of COORDINATE_CODES in their order
+    medium: str = WORLD  # WORLD or a body of the tree
+    at: tuple | None = None  # 3 expressions in the medium's axes; None: where the point is at q = 0
+    rotation: tuple = ()  # ((axis, angle expression), ...): the reference axes in the medium's axes
+    kind: str = ""  # the block kind named in the file (point, weld, ...), or "" for an explicit list
+    source: str = ""  # the file it was read from, its YAML path there and line, for messages
+    path: str = ""
+    line: int | None = None
+    link: str = ""  # for a URDF side file: the link named (its point is given in the link frame)
+    medium_axes: tuple | None = None  # 3x3: the axes of the medium's URDF link frame in its body's axes (None: same)
+
+
 @dataclass(frozen=True)
 class Model:
     """A tree of bodies, parents listed before children.
@@ -213,6 +245,13 @@ class Model:
     meta: dict = field(default_factory=dict, compare=False, hash=False)
     couplings: tuple = ()  # Coupling: coordinates tied to others, not in q
     armature: float = 0.0  # a rotor inertia on every coordinate (Pinocchio's armature): A(q) + armature E
+    constraints: tuple = ()  # Constraint: bilateral constraints with the medium and closed loops (chapter 4)
+    stabilization: tuple = (0, 0)  # (kp, kd) expressions: Baumgarte terms J qdd + gamma = -(kd J qd + kp phi)
+
+    @property
+    def constraint_rows(self) -> int:
+        """m: the number of rows of all constraints (the length of lambda)."""
+        return sum(len(c.rows) for c in self.constraints)
 
     @property
     def pair_coordinates(self) -> tuple:

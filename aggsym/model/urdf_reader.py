@@ -49,7 +49,8 @@ The mapping
   identifier are an error naming both.  The model name is the robot's.  Gravity is (0, 0, -9.81) in the root
   frame.  No parameters: every number is folded.  Visuals, collisions, meshes, transmissions and gazebo tags are
   skipped unread.
-* ``model.meta``: ``mimic`` (above), ``links`` (each URDF link's body, merged links included),
+* ``model.meta``: ``mimic`` (above), ``links`` (each URDF link's body, merged links included), ``link_frames``
+  (each link's body and placement there, (body, R, t) with x_body = R x_link + t, for constraints on links),
   ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`.
 
 Physical validity (where the dynamics sees it)
@@ -763,6 +764,9 @@ class _Reader:
                       meta={"mimic": [{k: j.mimic[k] for k in ("joint", "master", "multiplier", "offset")}
                                       for j in joints.values() if j.mimic is not None],
                             "links": {link: rows[p.body]["name"] for link, p in place.items()},
+                            "link_frames": {link: (rows[p.body]["name"], tuple(tuple(p.R[i, j] for j in range(3))
+                                                                              for i in range(3)), tuple(p.t))
+                                            for link, p in place.items()},
                             "floating_base": self.floating_base, "warnings": list(self.warnings)})
         if model.nq == 0:
             self.fail(self.root, "the robot has no movable joint (revolute, continuous or prismatic); there are "

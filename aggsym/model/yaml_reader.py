@@ -43,6 +43,7 @@ turns by the prescribed angle.
 """
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -51,10 +52,16 @@ import yaml
 
 from ..errors import ModelError
 from .expressions import ExpressionError, check_identifier, check_supported, evaluate, parse_value
-from .types import COORDINATE_CODES, TIME, WORLD, Body, Coordinate, Inertial, Model, Parameter, Pair
+from .types import (CONSTRAINT_KINDS, COORDINATE_CODES, TIME, WORLD, Body, Constraint, Coordinate, Inertial, Model,
+                    Parameter, Pair)
 from .validate import inertia_problem, mass_problem, order_tree
 
-TOP_KEYS = {"name", "description", "source", "notes", "gravity", "parameters", "bodies", "contacts", "loops"}
+TOP_KEYS = {"name", "description", "source", "notes", "gravity", "parameters", "bodies", "contacts", "loops",
+            "constraints", "stabilization"}
+CONSTRAINT_KEYS = {"name", "body", "point", "medium", "at", "rotation", "motion", "block", "friction", "wheel",
+                   "description", "notes"}
+SIDE_FILE_KEYS = {"constraints", "stabilization", "description", "notes"}
+STABILIZATION_KEYS = {"kp", "kd"}
 BODY_KEYS = {"name", "parent", "pair", "mass", "com", "inertia", "mises", "rotors", "added_mass", "description",
              "notes"}
 PAIR_KEYS = {"name", "translation", "rotation", "functional", "stiffness", "rest", "description"}
@@ -65,8 +72,13 @@ INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
 AXES = {1: 1, 2: 2, 3: 3, "x": 1, "y": 2, "z": 3, "1": 1, "2": 2, "3": 3}
 CODE_ALIASES = {"θ4": "theta4", "θ5": "theta5", "θ6": "theta6"}
 LATER = {
-    "contacts": "contacts with external bodies are not supported yet",
-    "loops": "kinematic loops are not supported yet",
+    "contacts": "'contacts' is not a key: contacts with the medium are entries of 'constraints' (medium: world)",
+    "loops": "'loops' is not a key: a closed loop is an entry of 'constraints' whose medium is a body of the tree",
+}
+CONSTRAINTS_LATER = {
+    "motion": "a prescribed motion of the medium (a moving platform) is not supported yet",
+    "friction": "friction on sliding contacts is not supported yet",
+    "wheel": "rolling contacts are not supported yet",
 }
 
 
@@ -258,8 +270,101 @@ class _Reader:
         for i, g in enumerate(gravity):
             self.number(g, ("gravity", i))
         bodies = self.bodies(top["bodies"])
+        frames = {b.name: (b.name, None, None) for b in bodies}
+        time_dependent = any(b.pair.prescribed for b in bodies)
+        constraints = self.constraints(top.get("constraints", []), frames, time_dependent)
+        stabilization = self.stabilization(top.get("stabilization"), constraints)
         return Model(name=name, bodies=bodies, gravity=gravity, parameters=parameters, source=str(self.file),
-                     description=description.strip())
+                     description=description.strip(), constraints=constraints, stabilization=stabilization)
+
+    # constraints (chapter 4) --------------------------------------------------------------------------
+    def constraints(self, value, frames: dict, time_dependent: bool = False) -> tuple:
+        """The ``constraints:`` list.  ``frames`` maps the names a constraint may use for its body and medium to
+        (body name, R, t): the frame's axes in the body's axes and its origin there (None, None: the body's own
+        frame; a URDF link merged into a body has its placement)."""
+        path = ("constraints",)
+        self.sequence(value, path)
+        if value and time_dependent:
+            self.fail(path, "constraints on a model with prescribed motions (rotors with a prescribed spin) are not "
+                            "supported yet")
+        out, names = [], {}
+        for i, entry in enumerate(value):
+            p = path + (i,)
+            self.mapping(entry, p, CONSTRAINT_KEYS, required=("name", "body", "block"))
+            for key, why in CONSTRAINTS_LATER.items():
+                if key in entry:
+                    self.fail(p + (key,), why)
+            name = self.name(entry["name"], p + ("name",), "constraint name")
+            if name in names:
+                self.fail(p + ("name",), f"duplicate constraint name {name!r} (also constraints[{names[name]}])")
+            names[name] = i
+            body, R, t = self.frame(entry["body"], p + ("body",), frames, "body")
+            if body == WORLD:
+                self.fail(p + ("body",), "the constrained body cannot be the world")
+            medium_name = entry.get("medium", WORLD)
+            medium, Rm, tm = (WORLD, None, None) if medium_name == WORLD else \
+                self.frame(medium_name, p + ("medium",), frames, "medium")
+            if medium == body:
+                self.fail(p + ("medium",), f"the medium {medium_name!r} is the constrained body itself (a loop joins "
+                                           f"two different bodies)")
+            point = self.vector(entry["point"], p + ("point",)) if "point" in entry else (sp.Integer(0),) * 3
+            at = self.vector(entry["at"], p + ("at",)) if "at" in entry else None
+            out.append(Constraint(
+                name=name, body=body, point=_placed(point, R, t), rows=self.block(entry["block"], p + ("block",)),
+                medium=medium, at=None if at is None else _placed(at, Rm, tm),
+                rotation=self.rotation(entry.get("rotation", []), p + ("rotation",)),
+                kind=entry["block"] if isinstance(entry["block"], str) else "", source=str(self.file),
+                path=_path(p), line=self.doc.line(p),
+                link=entry["body"] if R is not None or t is not None else "",
+                medium_axes=None if Rm is None else tuple(tuple(r) for r in Rm)))
+        return tuple(out)
+
+    def frame(self, value, path, frames, what):
+        if not isinstance(value, str):
+            self.fail(path, f"expected a {what} name, got {_kind(value)}")
+        if value == WORLD and what == "medium":
+            return WORLD, None, None
+        if value not in frames:
+            close = sorted(frames)[:8]
+            self.fail(path, f"unknown {what} {value!r} (the names are {', '.join(close)}{', ...' if len(frames) > 8 else ''})")
+        return frames[value]
+
+    def block(self, value, path) -> tuple:
+        if isinstance(value, str):
+            if value not in CONSTRAINT_KINDS:
+                if value == "rolling":
+                    self.fail(path, "rolling contacts are not supported yet")
+                self.fail(path, f"unknown constraint kind {value!r} (the kinds are {', '.join(CONSTRAINT_KINDS)}, or "
+                                f"a list of o1 o2 o3 theta4 theta5 theta6)")
+            return CONSTRAINT_KINDS[value]
+        self.sequence(value, path)
+        codes = set()
+        for i, code in enumerate(value):
+            code = CODE_ALIASES.get(code, code) if isinstance(code, str) else code
+            if code not in COORDINATE_CODES:
+                self.fail(path + (i,), f"expected one of {', '.join(COORDINATE_CODES)}, got {_kind(code)}")
+            if code in codes:
+                self.fail(path + (i,), f"{code} is listed twice")
+            codes.add(code)
+        if not codes:
+            self.fail(path, "a constraint must block at least one relative motion")
+        return tuple(c for c in COORDINATE_CODES if c in codes)
+
+    def stabilization(self, value, constraints) -> tuple:
+        if value is None:
+            return (sp.Integer(0), sp.Integer(0))
+        path = ("stabilization",)
+        self.mapping(value, path, STABILIZATION_KEYS)
+        if not constraints:
+            self.fail(path, "stabilization is given but the model has no constraints")
+        gains = []
+        for key in ("kp", "kd"):
+            gain = self.expr(value.get(key, 0), path + (key,))
+            if self.number(gain, path + (key,)) < 0:
+                self.fail(path + (key,), f"the Baumgarte gain {key} must not be negative")
+            gains.append(gain)
+        return tuple(gains)
+
 
     def parameters(self, value):
         path = ("parameters",)
@@ -540,6 +645,15 @@ class _Reader:
         return Inertial(m, com, J)
 
 
+def _placed(x, R, t) -> tuple:
+    """R x + t: a point given in a URDF link's frame, in its body's axes (R, t None: the body's own frame)."""
+    if R is not None:
+        x = tuple(sum((R[i][j] * x[j] for j in range(3)), sp.Integer(0)) for i in range(3))
+    if t is not None:
+        x = tuple(a + b for a, b in zip(x, t))
+    return x
+
+
 def _kind(value) -> str:
     if value is None:
         return "nothing"
@@ -568,3 +682,31 @@ def load_yaml(path) -> Model:
     except UnicodeDecodeError:
         raise ModelError(path, "", "not a text file (UTF-8)") from None
     return _Reader(path, text).read()
+
+
+def load_constraints(path, model: Model) -> Model:
+    """A URDF robot's constraints from a side file (``aggsym generate robot.urdf --constraints feet.yaml``):
+    ``constraints:`` as in a YAML model, bodies and media named by URDF link (a point in the link's frame), and
+    ``stabilization:``.  Returns the model with them."""
+    path = Path(path)
+    try:
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise ModelError(path, "", f"the file is larger than {MAX_FILE_BYTES // 2 ** 20} MiB")
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelError(path, "", f"cannot read the file: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise ModelError(path, "", "not a text file (UTF-8)") from None
+    reader = _Reader(path, text)
+    for p in model.parameters:
+        reader.symbols[p.name] = p.symbol
+        reader.defaults[p.symbol] = float(p.value)
+    top = reader.mapping(reader.doc.root, (), SIDE_FILE_KEYS, required=("constraints",))
+    if model.couplings:
+        reader.fail(("constraints",), "constraints on a model with coupled (mimic) coordinates are not supported yet")
+    frames = model.meta.get("link_frames")
+    if frames is None:
+        frames = {b.name: (b.name, None, None) for b in model.bodies}
+    constraints = reader.constraints(top["constraints"], frames, model.time_dependent)
+    stabilization = reader.stabilization(top.get("stabilization"), constraints)
+    return dataclasses.replace(model, constraints=constraints, stabilization=stabilization)

@@ -1,0 +1,284 @@
+"""Constraints with the medium and closed loops (chapter 4): residual, Jacobian D_lambda^T, its rate term, the
+Delassus matrix by the transvective factors, and the constrained forward dynamics.
+
+A constraint forbids some relative motions of a point P fixed on body k with respect to a reference frame fixed in
+the medium m (the world, or another body of the tree: a closed loop), with constant axes ``R_ref`` (in the
+medium's axes): the rows of (4.5)-(4.12) are the components of P's relative velocity (translations o1 o2 o3) and of
+the relative angular velocity (rotations theta4 theta5 theta6) along the reference axes.  In world vectors, with
+``B = R_ref^T R_m^T`` (R_m the medium's orientation, identity for the world)::
+
+    translational rows: B (v_P - v_C),   v_C the velocity of the point of m that coincides with P
+    rotational rows:    B (w_k - w_m)
+
+so ``J qd`` is the relative motion; a coordinate on the common path of k and m moves both alike and drops out.
+A column of J is the relative motion of a unit rate of one coordinate: for coordinate i of body s (its column
+psi = (v, w) of M F in s's axes, (1.30)), ``w_i = B R_s w`` and ``v_i = B R_s v + w_i x B (P - p_s)``, with a
+plus sign for the bodies on k's path and a minus sign on m's.  This is the row of the parastrophic matrix S of
+(1.42) moved to the contact point (the columns of S^T are the bodies' quasi-velocities per unit rate).
+
+``gamma = J' qd``: the relative acceleration at qdd = 0 (classical accelerations of points): with ``X = S'^T qd``
+(2.37) the quasi-acceleration of every body at qdd = 0, P's acceleration is ``R_k (a + alpha x r + w x (v + w x
+r))`` ((v, w), (a, alpha) body k's quasi-velocity and X, r = P in k's axes); against a moving medium,
+``d/dt [R_m^T u] = R_m^T (u' - w_m x u)`` with ``u = v_P - v_m - w_m x (P - p_m)``,
+``u' = a_P - a_m - alpha_m x (P - p_m) - w_m x (v_P - v_m)``; rotational rows ``alpha_k - alpha_m - w_m x
+(w_k - w_m)``.
+
+The residual phi: translational rows ``B (P - A)``, A the attachment point ``at`` fixed in the medium (by default
+where P is at q = 0); rotational rows the rotation vector (log map) of ``Q = B R_k C0``, ``C0 = R_k0^T R_m0 R_ref``
+(the body's orientation relative to the one it has at q = 0, in the reference axes): ``phi = theta/sin(theta)
+vee(Q - Q^T)/2`` with theta = atan2(|vee|, (tr Q - 1)/2), evaluated as ``(theta + eps)/(|vee| + eps)`` (exact in
+doubles at theta = 0 and everywhere else, no branch).
+
+The equations (4.25)-(4.28): ``A qdd + b + g + c = tau + J^T lambda``, ``J qdd + gamma = -(kd J qd + kp phi)``;
+lambda is the wrench the medium exerts on body k about P in the reference axes (the medium body gets -lambda).
+With the transvective factors (3.19), A^-1 = T^T D^-1 T: ``P = T J^T`` (one O(n) product per row,
+:func:`~aggsym.mechanics.transvective.apply_T_tree`), ``G = J A^-1 J^T = P^T D^-1 P`` (the Delassus matrix),
+``y = T (tau - b - g - c)`` from the sweeps, ``G lambda = -gamma - stab - P^T D^-1 y``,
+``qdd = T^T D^-1 (y + P lambda)``; G by an LDL^T factorization of m x m (no n x n inverse or LU).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..core.program import is_zero
+from ..model.types import WORLD, code_index
+from .group import Motion, rotation
+from .kinematics import TreeKinematics
+from .linalg import EYE3, add, cross, dot, mm, mtv, mul, mv, scale, sub, transpose
+from .transvective import apply_T_transpose_tree, apply_T_tree, articulated_factors, transvected_forces
+
+EPS = 1e-300  # the log map's guard at theta = 0: (theta + EPS) / (|s| + EPS) is theta/sin(theta) in doubles
+SINGULAR = 1e-12  # a pivot of G below SINGULAR * trace(G) / m makes constrained_forward_dynamics return nonzero
+
+
+@dataclass
+class BoundConstraint:
+    """One constraint's data as backend scalars."""
+
+    k: int  # the constrained body
+    m: int  # the medium's body, -1 for the world
+    r: tuple  # P in k's axes
+    at: tuple | None  # the attachment point in m's axes (world for the world), None: P at q = 0
+    R_ref: tuple  # 3x3: the reference axes in m's axes (columns)
+    rows: tuple  # indices 0..5 (o1 o2 o3 theta4 theta5 theta6)
+
+
+def bind_constraints(bound) -> list:
+    index = {name: k for k, name in enumerate(bound.tree.names)}
+    backend = bound.backend
+    out = []
+    for c in bound.model.constraints:
+        R = EYE3 if c.medium_axes is None else tuple(tuple(bound.scalar(x) for x in row) for row in c.medium_axes)
+        for axis, angle in c.rotation:
+            a = bound.scalar(angle)
+            R = mm(R, rotation(axis, backend.cos(a), backend.sin(a)))
+        out.append(BoundConstraint(
+            k=index[c.body], m=-1 if c.medium == WORLD else index[c.medium],
+            r=tuple(bound.scalar(x) for x in c.point),
+            at=None if c.at is None else tuple(bound.scalar(x) for x in c.at),
+            R_ref=R, rows=tuple(code_index(code) for code in c.rows)))
+    return out
+
+
+def world_poses(kin) -> list:
+    """Every body's pose in the world: Motion(R_k, p_k), x_world = R_k x_body + p_k (the L of (1.13) composed
+    from the root)."""
+    poses = []
+    for k, p in enumerate(kin.tree.parent):
+        poses.append(kin.L[k] if p < 0 else poses[p].compose(kin.L[k]))
+    return poses
+
+
+WORLD_POSE = Motion(EYE3, (0, 0, 0))
+
+
+class ConstraintKinematics:
+    """The constraints of a bound model at one configuration: poses, points, reference axes."""
+
+    def __init__(self, bound, kin):
+        self.bound, self.kin = bound, kin
+        self.items = bind_constraints(bound)
+        self.poses = world_poses(kin)
+        self.P, self.B = [], []
+        for c in self.items:
+            pose = self.poses[c.k]
+            self.P.append(add(pose.o, mv(pose.c, c.r)))
+            Rm = EYE3 if c.m < 0 else self.poses[c.m].c
+            self.B.append(transpose(mm(Rm, c.R_ref)))  # world vector -> reference axes
+
+    def pose(self, k):
+        return WORLD_POSE if k < 0 else self.poses[k]
+
+    def jacobian(self) -> list:
+        """J: one row (n entries) per constrained motion, constraints in order."""
+        tree, kin = self.kin.tree, self.kin
+        n = tree.nq
+        rows = []
+        for c, P, B in zip(self.items, self.P, self.B):
+            lin, ang = [[0] * n for _ in range(3)], [[0] * n for _ in range(3)]
+            on_k = set(tree.ancestors(c.k))
+            on_m = set(tree.ancestors(c.m)) if c.m >= 0 else set()
+            for s in sorted(on_k ^ on_m):
+                sign = 1 if s in on_k else -1
+                pose = self.poses[s]
+                M = mm(B, pose.c)
+                d = mv(B, sub(P, pose.o))
+                for i, psi in zip(tree.coords[s], kin.psi[s]):
+                    w = mv(M, psi[3:])
+                    v = add(mv(M, psi[:3]), cross(w, d))
+                    for a in range(3):
+                        lin[a][i] = v[a] if sign > 0 else -v[a]
+                        ang[a][i] = w[a] if sign > 0 else -w[a]
+            rows.extend((lin + ang)[j] for j in c.rows)
+        return rows
+
+    def bias(self, qd) -> list:
+        """gamma = J' qd: the relative acceleration of every row at qdd = 0."""
+        V = self.kin.velocities(qd)
+        X = self.kin.velocity_products(qd, V)
+        out = []
+        for c, P, B in zip(self.items, self.P, self.B):
+            vP, aP, wk, alk = self._point_motion(c.k, c.r, V, X)
+            if c.m < 0:
+                lin, ang = aP, alk
+            else:
+                pm = self.poses[c.m]
+                vm, am, wm, alm = self._point_motion(c.m, (0, 0, 0), V, X)
+                d = sub(P, pm.o)
+                dv = sub(vP, vm)
+                u = sub(dv, cross(wm, d))
+                du = sub(sub(sub(aP, am), cross(alm, d)), cross(wm, dv))
+                lin = sub(du, cross(wm, u))
+                dw = sub(wk, wm)
+                ang = sub(sub(alk, alm), cross(wm, dw))
+            row = mv(B, lin) + mv(B, ang)
+            out.extend(row[j] for j in c.rows)
+        return out
+
+    def _point_motion(self, k, r, V, X):
+        """(velocity, classical acceleration at qdd = 0) of the point r of body k, and the body's angular velocity
+        and acceleration, all in world axes."""
+        R = self.poses[k].c
+        v, w, a, al = V[k][:3], V[k][3:], X[k][:3], X[k][3:]
+        vb = add(v, cross(w, r))
+        ab = add(add(a, cross(al, r)), cross(w, vb))
+        return mv(R, vb), mv(R, ab), mv(R, w), mv(R, al)
+
+    def residual(self, rest: "ConstraintKinematics") -> list:
+        """phi, with ``rest`` the same constraints at q = 0 (the default attachment and orientation)."""
+        backend = self.bound.backend
+        out = []
+        for c, P, B, P0 in zip(self.items, self.P, self.B, rest.P):
+            pm, pm0 = self.pose(c.m), rest.pose(c.m)
+            local = c.at if c.at is not None else mtv(pm0.c, sub(P0, pm0.o))  # A in the medium's axes
+            lin = mv(B, sub(P, add(pm.o, mv(pm.c, local))))
+            ang = (0, 0, 0)
+            if any(j >= 3 for j in c.rows):
+                C0 = mm(transpose(rest.poses[c.k].c), mm(pm0.c, c.R_ref))
+                Q = mm(B, mm(self.poses[c.k].c, C0))
+                s = scale(backend.rational(1, 2), (Q[2][1] - Q[1][2], Q[0][2] - Q[2][0], Q[1][0] - Q[0][1]))
+                cos = (Q[0][0] + Q[1][1] + Q[2][2] - 1) * backend.rational(1, 2)
+                norm = backend.sqrt(dot(s, s))
+                theta = backend.call("atan2", norm, cos)
+                ang = scale((theta + EPS) / (norm + EPS), s)
+            row = tuple(lin) + tuple(ang)
+            out.extend(row[j] for j in c.rows)
+        return out
+
+
+def rest_kinematics(bound) -> ConstraintKinematics:
+    """The constraints at q = 0 (constants, or expressions in the parameters)."""
+    kin0 = TreeKinematics(bound, [0] * bound.tree.nq)
+    return ConstraintKinematics(bound, kin0)
+
+
+def residual(bound, kin) -> list:
+    return ConstraintKinematics(bound, kin).residual(rest_kinematics(bound))
+
+
+def jacobian(bound, kin) -> list:
+    return ConstraintKinematics(bound, kin).jacobian()
+
+
+def bias(bound, kin, qd) -> list:
+    return ConstraintKinematics(bound, kin).bias(qd)
+
+
+def _projected(kin, fac, J) -> list:
+    """P = T J^T, one column (an n-list) per row of J (3.9), in O(n) each."""
+    return [apply_T_tree(kin, fac, row) for row in J]
+
+
+def _delassus(fac, P) -> list:
+    """G = P^T D^-1 P (m x m, symmetric)."""
+    m = len(P)
+    G = [[0] * m for _ in range(m)]
+    for i in range(m):
+        scaled = [mul(r, x) for r, x in zip(fac.recip, P[i])]
+        for j in range(i, m):
+            G[i][j] = G[j][i] = dot(scaled, P[j])
+    return G
+
+
+def delassus(bound, kin) -> list:
+    """G = J A^-1 J^T = (T J^T)^T D^-1 (T J^T) by the transvective factors (3.19), rows."""
+    fac = articulated_factors(bound, kin, arguments=False)
+    return _delassus(fac, _projected(kin, fac, jacobian(bound, kin)))
+
+
+def ldl_solve(G, b, backend):
+    """x with G x = b for a small symmetric G by L D L^T (no pivoting), and the status: the number of pivots
+    below SINGULAR * trace(G) / m counted by sign() (nonzero when G is singular or not finite)."""
+    m = len(b)
+    L = [[0] * m for _ in range(m)]
+    d = [0] * m
+    for j in range(m):
+        acc = G[j][j]
+        for k in range(j):
+            acc = acc - mul(mul(L[j][k], L[j][k]), d[k])
+        d[j] = acc
+        inv = 1 / acc
+        for i in range(j + 1, m):
+            acc = G[i][j]
+            for k in range(j):
+                acc = acc - mul(mul(L[i][k], L[j][k]), d[k])
+            L[i][j] = mul(acc, inv)
+    y = list(b)
+    for i in range(m):
+        for k in range(i):
+            y[i] = y[i] - mul(L[i][k], y[k])
+    x = [y[i] / d[i] for i in range(m)]
+    for i in range(m - 1, -1, -1):
+        for k in range(i + 1, m):
+            x[i] = x[i] - mul(L[k][i], x[k])
+    trace = 0
+    for j in range(m):
+        trace = trace + G[j][j]
+    tol = trace * (SINGULAR / m)
+    status = 0
+    for j in range(m):
+        status = status + (backend.call("sign", tol - d[j]) + 1)
+    return x, status
+
+
+def constrained_forward_dynamics(bound, kin, qd, tau) -> tuple:
+    """(qdd, lambda, status) of (4.25)-(4.28) with the Baumgarte terms, ``tau`` already less the elastic force."""
+    ck = ConstraintKinematics(bound, kin)
+    J = ck.jacobian()
+    fac = articulated_factors(bound, kin, arguments=False)
+    P = _projected(kin, fac, J)
+    G = _delassus(fac, P)
+    y = transvected_forces(bound, kin, fac, tau, qd)
+    Dy = [mul(r, v) for r, v in zip(fac.recip, y)]
+    rhs = [-g - dot(p, Dy) for g, p in zip(ck.bias(qd), P)]
+    kp, kd = (bound.scalar(x) for x in bound.model.stabilization)
+    if not is_zero(kd):
+        rhs = [x - mul(kd, dot(row, qd)) for x, row in zip(rhs, J)]
+    if not is_zero(kp):
+        rhs = [x - mul(kp, f) for x, f in zip(rhs, ck.residual(rest_kinematics(bound)))]
+    lam, status = ldl_solve(G, rhs, bound.backend)
+    force = list(y)
+    for p, l in zip(P, lam):
+        force = [f + mul(x, l) for f, x in zip(force, p)]
+    qdd = apply_T_transpose_tree(kin, fac, [mul(r, v) for r, v in zip(fac.recip, force)])
+    return qdd, lam, status
