@@ -30,7 +30,7 @@ from . import __version__
 from .mechanics import constraints, elastic, sweeps, transvective
 from .mechanics.bias import coriolis_matrix, gravity_vector
 from .mechanics.coupling import Coupler
-from .mechanics.energy import kinetic_energy, potential_energy
+from .mechanics.energy import kinetic_energy, momentum, potential_energy
 from .mechanics.inertia import inertia_matrix
 from .mechanics.kinematics import TreeKinematics
 from .model.tree import Tree
@@ -168,6 +168,16 @@ def nq_square(model):
 
 def scalar(model):
     return (1,)
+
+
+def momentum_shape(model):
+    return (6,)
+
+
+def momentum_layout(model) -> dict:
+    return {"rows": ["px", "py", "pz", "Lx", "Ly", "Lz"],
+            "convention": "linear momentum, then angular momentum about the world origin, world axes (with added "
+                          "masses the medium's impulse included; the armature carries none)"}
 
 
 def joint_wrench_shape(model):
@@ -341,6 +351,11 @@ register(Routine("potential_energy", ("q", "p"), (Output("U", scalar),),
                  lambda bound, kin, x: ([potential_energy(bound, kin) + elastic.elastic_energy(bound, kin.q)],),
                  "U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs",
                  coupled="tree"))
+register(Routine("momentum", ("q", "qd", "p"), (Output("h", momentum_shape),),
+                 lambda bound, kin, x: (momentum(bound, kin, x["qd"]),),
+                 "h: the total linear momentum and angular momentum about the world origin, world axes: each "
+                 "body's A_lk V (2.3) moved to the world by its pose L (1.13)", layout=momentum_layout,
+                 coupled="tree"))
 register(Routine("joint_wrenches", ("q", "qd", "qdd", "p"), (Output("W", joint_wrench_shape),), _joint_wrenches,
                  "W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)",
                  layout=joint_wrench_layout, coupled="tree"))
@@ -395,6 +410,23 @@ def _has_constraints(model) -> bool:
     return bool(model.constraints)
 
 
+def slip_vector(model):
+    return (model.slip_rows,)
+
+
+def slip_labels(model) -> list:
+    return [f"{c.name}.{code}" for c in model.constraints for code in c.free_translations]
+
+
+def slip_layout(model) -> dict:
+    return {"rows": slip_labels(model), "order": "constraints in order, each one's free translations (o1 o2 o3 "
+            "not blocked) in the axes of its reference frame"}
+
+
+def _has_slip(model) -> bool:
+    return model.slip_rows > 0
+
+
 def _constrained_forward_dynamics(bound, kin, x):
     qdd, lam, status = constraints.constrained_forward_dynamics(
         bound, kin, x["qd"], _minus(x["tau"], elastic.elastic_forces(bound, kin.q)))
@@ -416,6 +448,11 @@ register(Routine("constraint_bias", ("q", "qd", "p"), (Output("gamma", constrain
                  "gamma(q, qd) = J' qd: the relative accelerations at qdd = 0 (S'^T qd of (2.37) at the contact "
                  "points), so that J qdd + gamma is the constraints' acceleration",
                  layout=constraint_layout, applies=_has_constraints, coupled=None))
+register(Routine("slip_velocities", ("q", "qd", "p"), (Output("w", slip_vector),),
+                 lambda bound, kin, x: (constraints.slip_velocities(bound, kin, x["qd"]),),
+                 "w(q, qd) = D_k+^T V (4.33)-(4.34): each contact point's velocity relative to the medium along "
+                 "the free translations of its constraint (the sliding velocities friction acts on)",
+                 layout=slip_layout, applies=_has_slip, coupled=None))
 register(Routine("delassus", ("q", "p"), (Output("G", constraint_square),),
                  lambda bound, kin, x: (_flat(constraints.delassus(bound, kin)),),
                  "G = J A^-1 J^T, m*m row-major, by the transvective factors: P = T J^T, G = P^T diag(1/(beta,beta)) "
@@ -426,7 +463,8 @@ register(Routine("constrained_forward_dynamics", ("q", "qd", "tau", "p"),
                  _constrained_forward_dynamics,
                  "qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) "
                  "(4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 "
-                 "(T F + P lambda) (3.20); returns nonzero when G is singular",
+                 "(T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); "
+                 "returns nonzero when G is singular (or Coulomb friction has no consistent solution)",
                  applies=_has_constraints, coupled=None, regular=True))
 
 
@@ -591,7 +629,9 @@ def constraints_entry(model) -> dict:
         items.append({"name": c.name, "body": c.body, "link": c.link or None, "medium": c.medium,
                       "kind": c.kind or None, "rows": list(c.rows), "lambda": [start, start + len(c.rows)],
                       "point": [str(x) for x in c.point], "at": None if c.at is None else [str(x) for x in c.at],
-                      "rotation": [[axis, str(angle)] for axis, angle in c.rotation]})
+                      "rotation": [[axis, str(angle)] for axis, angle in c.rotation],
+                      "free": list(c.free_translations),
+                      "friction": None if c.friction is None else {c.friction[0]: str(c.friction[1])}})
         start += len(c.rows)
     return {
         "m": model.constraint_rows,
@@ -608,6 +648,10 @@ def constraints_entry(model) -> dict:
                 "rotational rows: the rotation vector of the body's orientation relative to the one it has at "
                 "q = 0, both in the reference axes"),
         "stabilization": {"kp": str(model.stabilization[0]), "kd": str(model.stabilization[1])},
+        "friction": ("on the free translations of a sliding contact, from its slip velocities w (slip_velocities): "
+                     "viscous W = -c w; Coulomb W = -mu |lambda_n| w/|w| (zero where |w| < 1e-9), lambda_n the "
+                     "constraint's one blocked translation; W acts on the body at the contact point (the medium "
+                     "body gets -W)"),
         "constraints": items,
     }
 

@@ -57,7 +57,8 @@ class NumericTwin:
         arrays = tuple(np.array([float(x) for x in flat]).reshape(o.shape(self.model))
                        for o, flat in zip(routine.outputs, outs) if not o.returned)
         if routine.status is not None and float(outs[-1][0]) != 0.0:
-            raise np.linalg.LinAlgError(f"{role}: J A^-1 J^T is singular (or not finite) at this state")
+            raise np.linalg.LinAlgError(f"{role}: the constraints are singular (J A^-1 J^T), or Coulomb friction has "
+                                        f"no consistent solution, at this state")
         return arrays[0] if len(arrays) == 1 else arrays
 
     def __getattr__(self, role):

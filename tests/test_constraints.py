@@ -162,6 +162,8 @@ def test_singular_constraints_return_nonzero_in_c_and_raise_in_numpy(tmp_path):
     assert np.linalg.matrix_rank(J) < 2
     with pytest.raises(np.linalg.LinAlgError, match=r"states \(1,\)"):
         module.constrained_forward_dynamics(np.stack([q_dead + 0.3, q_dead]), np.zeros((2, 3)), np.zeros((2, 3)), p)
+    with pytest.raises(np.linalg.LinAlgError, match="at the state$"):  # one state, not a batch
+        module.constrained_forward_dynamics(q_dead, np.zeros(3), np.zeros(3), p)
     with pytest.raises(np.linalg.LinAlgError):
         lib.call("constrained_forward_dynamics", q_dead, np.zeros(3), np.zeros(3))
 
@@ -218,8 +220,20 @@ BAD = {
                      ["unknown constraint kind 'glue'", "weld"]),
     "rolling": ("constraints: [{name: a, body: shin, block: rolling}]\n", "constraints[0].block",
                 ["rolling contacts are not supported yet"]),
-    "friction": ("constraints: [{name: a, body: shin, block: normal, friction: {coulomb: 0.5}}]\n",
-                 "constraints[0].friction", ["not supported yet"]),
+    "friction_on_a_point": ("constraints: [{name: a, body: shin, block: point, friction: {viscous: 1}}]\n",
+                            "constraints[0].friction", ["blocks all three"]),
+    "coulomb_two_normals": ("constraints: [{name: a, body: shin, block: [o1, o3], friction: {coulomb: 0.5}}]\n",
+                            "constraints[0].friction.coulomb", ["exactly one blocked translation", "o1, o3"]),
+    "coulomb_no_normal": ("constraints: [{name: a, body: shin, block: [theta4], friction: {coulomb: 0.5}}]\n",
+                          "constraints[0].friction.coulomb", ["exactly one blocked translation", "none"]),
+    "negative_friction": ("constraints: [{name: a, body: shin, block: normal, friction: {viscous: -2}}]\n",
+                          "constraints[0].friction.viscous", ["must not be negative"]),
+    "two_laws": ("constraints: [{name: a, body: shin, block: normal, friction: {viscous: 1, coulomb: 1}}]\n",
+                 "constraints[0].friction", ["one friction law"]),
+    "unknown_law": ("constraints: [{name: a, body: shin, block: normal, friction: {stribeck: 1}}]\n",
+                    "constraints[0].friction.stribeck", ["unknown key", "coulomb, viscous"]),
+    "friction_code": ("constraints: [{name: a, body: shin, block: normal, friction: {coulomb: 'exp(__import__)'}}]\n",
+                      "constraints[0].friction.coulomb", ["__import__"]),
     "motion": ("constraints: [{name: a, body: shin, block: point, motion: {o1: 't'}}]\n",
                "constraints[0].motion", ["not supported yet"]),
     "duplicate": ("constraints: [{name: a, body: shin, block: point}, {name: a, body: leg, block: point}]\n",

@@ -43,12 +43,13 @@ from dataclasses import dataclass
 from ..core.program import is_zero
 from ..model.types import WORLD, code_index
 from .group import Motion, rotation
-from .kinematics import TreeKinematics
+from .kinematics import TreeKinematics, world_poses
 from .linalg import EYE3, add, cross, dot, mm, mtv, mul, mv, scale, sub, transpose
 from .transvective import apply_T_transpose_tree, apply_T_tree, articulated_factors, transvected_forces
 
 EPS = 1e-300  # the log map's guard at theta = 0: (theta + EPS) / (|s| + EPS) is theta/sin(theta) in doubles
 SINGULAR = 1e-12  # a pivot of G below SINGULAR * trace(G) / m makes constrained_forward_dynamics return nonzero
+SLIP = 1e-9  # Coulomb friction acts where the slip speed |w| is at least SLIP (m/s), and is zero below
 
 
 @dataclass
@@ -61,6 +62,10 @@ class BoundConstraint:
     at: tuple | None  # the attachment point in m's axes (world for the world), None: P at q = 0
     R_ref: tuple  # 3x3: the reference axes in m's axes (columns)
     rows: tuple  # indices 0..5 (o1 o2 o3 theta4 theta5 theta6)
+    free: tuple  # indices 0..2 of the free translations (the slip directions)
+    law: str | None  # friction: "viscous", "coulomb" or None
+    coefficient: object  # its c or mu
+    normal: int | None  # the normal row's place among this constraint's rows (Coulomb)
 
 
 def bind_constraints(bound) -> list:
@@ -76,17 +81,12 @@ def bind_constraints(bound) -> list:
             k=index[c.body], m=-1 if c.medium == WORLD else index[c.medium],
             r=tuple(bound.scalar(x) for x in c.point),
             at=None if c.at is None else tuple(bound.scalar(x) for x in c.at),
-            R_ref=R, rows=tuple(code_index(code) for code in c.rows)))
+            R_ref=R, rows=tuple(code_index(code) for code in c.rows),
+            free=tuple(code_index(code) for code in c.free_translations),
+            law=None if c.friction is None else c.friction[0],
+            coefficient=None if c.friction is None else bound.scalar(c.friction[1]),
+            normal=None if c.normal is None else c.rows.index(c.normal)))
     return out
-
-
-def world_poses(kin) -> list:
-    """Every body's pose in the world: Motion(R_k, p_k), x_world = R_k x_body + p_k (the L of (1.13) composed
-    from the root)."""
-    poses = []
-    for k, p in enumerate(kin.tree.parent):
-        poses.append(kin.L[k] if p < 0 else poses[p].compose(kin.L[k]))
-    return poses
 
 
 WORLD_POSE = Motion(EYE3, (0, 0, 0))
@@ -109,28 +109,38 @@ class ConstraintKinematics:
     def pose(self, k):
         return WORLD_POSE if k < 0 else self.poses[k]
 
-    def jacobian(self) -> list:
-        """J: one row (n entries) per constrained motion, constraints in order."""
+    def motion_rows(self, c, P, B) -> list:
+        """The six rows (o1 o2 o3 theta4 theta5 theta6, n entries each) of the relative motion of constraint c."""
         tree, kin = self.kin.tree, self.kin
         n = tree.nq
-        rows = []
-        for c, P, B in zip(self.items, self.P, self.B):
-            lin, ang = [[0] * n for _ in range(3)], [[0] * n for _ in range(3)]
-            on_k = set(tree.ancestors(c.k))
-            on_m = set(tree.ancestors(c.m)) if c.m >= 0 else set()
-            for s in sorted(on_k ^ on_m):
-                sign = 1 if s in on_k else -1
-                pose = self.poses[s]
-                M = mm(B, pose.c)
-                d = mv(B, sub(P, pose.o))
-                for i, psi in zip(tree.coords[s], kin.psi[s]):
-                    w = mv(M, psi[3:])
-                    v = add(mv(M, psi[:3]), cross(w, d))
-                    for a in range(3):
-                        lin[a][i] = v[a] if sign > 0 else -v[a]
-                        ang[a][i] = w[a] if sign > 0 else -w[a]
-            rows.extend((lin + ang)[j] for j in c.rows)
-        return rows
+        lin, ang = [[0] * n for _ in range(3)], [[0] * n for _ in range(3)]
+        on_k = set(tree.ancestors(c.k))
+        on_m = set(tree.ancestors(c.m)) if c.m >= 0 else set()
+        for s in sorted(on_k ^ on_m):
+            sign = 1 if s in on_k else -1
+            pose = self.poses[s]
+            M = mm(B, pose.c)
+            d = mv(B, sub(P, pose.o))
+            for i, psi in zip(tree.coords[s], kin.psi[s]):
+                w = mv(M, psi[3:])
+                v = add(mv(M, psi[:3]), cross(w, d))
+                for a in range(3):
+                    lin[a][i] = v[a] if sign > 0 else -v[a]
+                    ang[a][i] = w[a] if sign > 0 else -w[a]
+        return lin + ang
+
+    def jacobian(self) -> list:
+        """J (D_lambda^T of (4.27)): one row (n entries) per blocked motion, constraints in order."""
+        return [row for c, P, B in zip(self.items, self.P, self.B)
+                for row in self._selected(self.motion_rows(c, P, B), c.rows)]
+
+    def slip_jacobians(self) -> list:
+        """Per constraint, the rows of its free translations (D_k+^T of (4.33)-(4.34): the permitted motions)."""
+        return [self._selected(self.motion_rows(c, P, B), c.free) for c, P, B in zip(self.items, self.P, self.B)]
+
+    @staticmethod
+    def _selected(rows, indices) -> list:
+        return [rows[j] for j in indices]
 
     def bias(self, qd) -> list:
         """gamma = J' qd: the relative acceleration of every row at qdd = 0."""
@@ -204,6 +214,12 @@ def bias(bound, kin, qd) -> list:
     return ConstraintKinematics(bound, kin).bias(qd)
 
 
+def slip_velocities(bound, kin, qd) -> list:
+    """w (4.33): the contact points' velocities relative to the medium along each constraint's free translations,
+    constraints in order."""
+    return [dot(row, qd) for rows in ConstraintKinematics(bound, kin).slip_jacobians() for row in rows]
+
+
 def _projected(kin, fac, J) -> list:
     """P = T J^T, one column (an n-list) per row of J (3.9), in O(n) each."""
     return [apply_T_tree(kin, fac, row) for row in J]
@@ -261,14 +277,87 @@ def ldl_solve(G, b, backend):
     return x, status
 
 
+def _above(backend, x):
+    """1 where x > 0, else 0 (sign(x) + sign(x)^2)/2, exact at x = 0."""
+    s = backend.call("sign", x)
+    return (s + mul(s, s)) * backend.rational(1, 2)
+
+
+def lu_solve(M, b, backend):
+    """x with M x = b for a small square M by Gaussian elimination with partial pivoting (a row exchange is a
+    blend by :func:`_above`, so the program stays straight-line), and the status: the number of pivots below
+    SINGULAR * sum|M_ii| / m."""
+    m = len(b)
+    a = [list(row) + [r] for row, r in zip(M, b)]
+    pivots = []
+    for j in range(m):
+        for i in range(j + 1, m):
+            swap = _above(backend, backend.call("abs", a[i][j]) - backend.call("abs", a[j][j]))
+            for col in range(j, m + 1):
+                x, y = a[j][col], a[i][col]
+                change = mul(swap, y - x)
+                a[j][col], a[i][col] = x + change, y - change
+        pivots.append(a[j][j])
+        inv = 1 / a[j][j]
+        for i in range(j + 1, m):
+            f = mul(a[i][j], inv)
+            for col in range(j + 1, m + 1):
+                a[i][col] = a[i][col] - mul(f, a[j][col])
+    x = [0] * m
+    for i in range(m - 1, -1, -1):
+        acc = a[i][m]
+        for k in range(i + 1, m):
+            acc = acc - mul(a[i][k], x[k])
+        x[i] = acc / a[i][i]
+    size = 0
+    for j in range(m):
+        size = size + backend.call("abs", M[j][j])
+    tol = size * (SINGULAR / m)
+    status = 0
+    for piv in pivots:
+        status = status + _above(backend, tol - backend.call("abs", piv))
+    return x, status
+
+
+def _direction(backend, w):
+    """w/|w|, and 0 where |w| < SLIP (Coulomb friction's direction, (4.5) with (4.33))."""
+    norm = backend.sqrt(dot(w, w))
+    on = _above(backend, norm - SLIP)
+    return [mul(on, x) / (norm + 1 - on) for x in w]
+
+
+def _transpose_times(rows, x) -> list:
+    """rows^T x for rows of equal length (n), x one entry per row."""
+    out = [0] * len(rows[0])
+    for row, xi in zip(rows, x):
+        out = [o + mul(r, xi) for o, r in zip(out, row)]
+    return out
+
+
 def constrained_forward_dynamics(bound, kin, qd, tau) -> tuple:
-    """(qdd, lambda, status) of (4.25)-(4.28) with the Baumgarte terms, ``tau`` already less the elastic force."""
+    """(qdd, lambda, status) of (4.25)-(4.28) with the Baumgarte terms and friction, ``tau`` already less the
+    elastic force.
+
+    Friction acts on the free translations of a sliding contact ((4.5), W from the slip velocities w of (4.33)):
+    viscous ``W = -c w`` is a known generalized force ``-c Jf^T w``; Coulomb ``W = -mu |lambda_n| w/|w|`` adds to
+    lambda_n's column of J^T the column ``-mu s Jf^T w/|w|`` with s the sign of lambda_n, which makes the m x m
+    system ``J A^-1 H^T lambda = ...`` non-symmetric (solved by :func:`lu_solve`).  s is taken from the
+    frictionless solution (by the LDL^T of G); for one Coulomb contact this is exact: by Sherman-Morrison the
+    friction scales lambda_n by 1/(1 + mu s kappa), so either that sign is consistent or no solution exists
+    (Painleve's case).  Where the sign of the result disagrees with s, the status is nonzero."""
+    backend = bound.backend
     ck = ConstraintKinematics(bound, kin)
     J = ck.jacobian()
     fac = articulated_factors(bound, kin, arguments=False)
     P = _projected(kin, fac, J)
     G = _delassus(fac, P)
-    y = transvected_forces(bound, kin, fac, tau, qd)
+    slips = ck.slip_jacobians() if bound.model.has_friction else [()] * len(ck.items)
+    force = list(tau)
+    for c, Jf in zip(ck.items, slips):
+        if c.law == "viscous":
+            w = [dot(row, qd) for row in Jf]
+            force = [f - x for f, x in zip(force, _transpose_times(Jf, [mul(c.coefficient, v) for v in w]))]
+    y = transvected_forces(bound, kin, fac, force, qd)
     Dy = [mul(r, v) for r, v in zip(fac.recip, y)]
     rhs = [-g - dot(p, Dy) for g, p in zip(ck.bias(qd), P)]
     kp, kd = (bound.scalar(x) for x in bound.model.stabilization)
@@ -276,9 +365,25 @@ def constrained_forward_dynamics(bound, kin, qd, tau) -> tuple:
         rhs = [x - mul(kd, dot(row, qd)) for x, row in zip(rhs, J)]
     if not is_zero(kp):
         rhs = [x - mul(kp, f) for x, f in zip(rhs, ck.residual(rest_kinematics(bound)))]
-    lam, status = ldl_solve(G, rhs, bound.backend)
-    force = list(y)
+    lam, status = ldl_solve(G, rhs, backend)
+    coulomb, offset = [], 0
+    for c, Jf in zip(ck.items, slips):
+        if c.law == "coulomb":
+            j = offset + c.normal
+            s = backend.call("sign", lam[j])
+            column = _transpose_times(Jf, _direction(backend, [dot(row, qd) for row in Jf]))
+            coulomb.append((j, s, apply_T_tree(kin, fac, [mul(-mul(c.coefficient, s), x) for x in column])))
+        offset += len(c.rows)
+    if coulomb:
+        scaled = [[mul(r, x) for r, x in zip(fac.recip, p)] for p in P]  # D^-1 T J^T: the rows of J A^-1 T^-1
+        P = list(P)
+        for j, _, extra in coulomb:
+            P[j] = add(P[j], extra)  # T H^T: lambda_n's column carries the friction it causes
+        H = [[dot(scaled[i], P[j]) for j in range(len(P))] for i in range(len(P))]  # J A^-1 H^T
+        lam, status = lu_solve(H, rhs, backend)
+        for j, s, _ in coulomb:
+            status = status + _above(backend, -mul(s, lam[j]))
     for p, l in zip(P, lam):
-        force = [f + mul(x, l) for f, x in zip(force, p)]
-    qdd = apply_T_transpose_tree(kin, fac, [mul(r, v) for r, v in zip(fac.recip, force)])
+        y = [f + mul(x, l) for f, x in zip(y, p)]
+    qdd = apply_T_transpose_tree(kin, fac, [mul(r, v) for r, v in zip(fac.recip, y)])
     return qdd, lam, status

@@ -9,11 +9,18 @@ origin.  The heights ``-g . o_k`` are carried from the root: ``-g . o_k = -g . o
 Bodies welded to the world (no coordinate or prescribed spin on their path from the root) are left out of U: their potential is a
 constant, and Pinocchio's computePotentialEnergy leaves them out too.
 (The springs' 1/2 (q - q0)^T C (q - q0) is :func:`aggsym.elastic.elastic_energy`.)
+
+The momentum ``h = sum_k L_k (A_lk V_k)``: each body's momentum wrench (linear momentum, angular momentum about
+its origin, in its axes: the aggregate times the quasi-velocity, (2.3)) moved to the world origin and axes by its
+world pose L_k (1.13), as a wrench; T = 1/2 sum V_k . A_lk V_k is the same product.  With added masses it is the
+body's momentum plus the medium's impulse (Prop. 2.8); the armature's reflected inertia carries none (it is not a
+body), as in Pinocchio.
 """
 from __future__ import annotations
 
 from .bias import gravity_accelerations
-from .linalg import dot, mul
+from .kinematics import world_poses
+from .linalg import add, dot, mul
 
 
 def kinetic_energy(bound, kin, qd):
@@ -24,6 +31,17 @@ def kinetic_energy(bound, kin, qd):
             acc = acc + dot(V[k], body.mises.apply(V[k]))
     acc = acc + mul(bound.armature, dot(qd, qd))  # the rotors of the armature
     return bound.rational(1, 2) * acc
+
+
+def momentum(bound, kin, qd) -> list:
+    """h = (linear momentum, angular momentum about the world origin), world axes."""
+    V = kin.velocities(qd)
+    poses = world_poses(kin)
+    h = [0] * 6
+    for k, body in enumerate(bound.bodies):
+        if body.mises is not None:
+            h = add(h, poses[k].wrench(body.mises.apply(V[k])))
+    return list(h)
 
 
 def potential_energy(bound, kin):

@@ -231,6 +231,15 @@ class TreeKinematics:
         return rows
 
 
+def world_poses(kin) -> list:
+    """Every body's pose in the world: Motion(R_k, p_k), x_world = R_k x_body + p_k (the L of (1.13) composed
+    from the root, Prop. 1.8)."""
+    poses = []
+    for k, p in enumerate(kin.tree.parent):
+        poses.append(kin.L[k] if p < 0 else poses[p].compose(kin.L[k]))
+    return poses
+
+
 def world_frame_vectors(kin, vec_world):
     """A free vector given in the world frame, in every body's axes: c_k^T x (used for gravity)."""
     out = []
@@ -241,4 +250,4 @@ def world_frame_vectors(kin, vec_world):
 
 
 __all__ = ["TreeKinematics", "pair_functional", "pair_velocity_product", "pair_velocity_bilinear", "combine",
-           "project", "world_frame_vectors", "generalized", "ZERO6"]
+           "project", "world_frame_vectors", "world_poses", "generalized", "ZERO6"]

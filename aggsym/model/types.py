@@ -225,6 +225,19 @@ class Constraint:
     line: int | None = None
     link: str = ""  # for a URDF side file: the link named (its point is given in the link frame)
     medium_axes: tuple | None = None  # 3x3: the axes of the medium's URDF link frame in its body's axes (None: same)
+    friction: tuple | None = None  # ("viscous", c) or ("coulomb", mu): on the free translations, (4.33)-(4.34)
+
+    @property
+    def free_translations(self) -> tuple:
+        """The translations the constraint leaves free (the permitted motions f_k+ of (4.34) among o1 o2 o3):
+        the contact point's slip velocities are its relative velocity along these reference axes."""
+        return tuple(code for code in COORDINATE_CODES[:3] if code not in self.rows)
+
+    @property
+    def normal(self) -> str | None:
+        """The one blocked translation (the normal of a sliding contact), or None."""
+        blocked = [code for code in COORDINATE_CODES[:3] if code in self.rows]
+        return blocked[0] if len(blocked) == 1 else None
 
 
 @dataclass(frozen=True)
@@ -252,6 +265,15 @@ class Model:
     def constraint_rows(self) -> int:
         """m: the number of rows of all constraints (the length of lambda)."""
         return sum(len(c.rows) for c in self.constraints)
+
+    @property
+    def slip_rows(self) -> int:
+        """The number of slip velocities: the free translations of every constraint."""
+        return sum(len(c.free_translations) for c in self.constraints)
+
+    @property
+    def has_friction(self) -> bool:
+        return any(c.friction is not None for c in self.constraints)
 
     @property
     def pair_coordinates(self) -> tuple:
@@ -304,8 +326,9 @@ class Model:
     @property
     def conservative(self) -> bool:
         """True when tau = 0 conserves T + U: no prescribed motion (a prescribed spin injects energy); elastic
-        pairs and added masses keep it (U holds 1/2 q^T C q, T the medium's 1/2 V^T Lambda V)."""
-        return not self.time_dependent
+        pairs and added masses keep it (U holds 1/2 q^T C q, T the medium's 1/2 V^T Lambda V); friction on a
+        sliding contact (chapter 4) dissipates it."""
+        return not self.time_dependent and not self.has_friction
 
     @property
     def parameter_symbols(self) -> tuple:

@@ -62,6 +62,7 @@ CONSTRAINT_KEYS = {"name", "body", "point", "medium", "at", "rotation", "motion"
                    "description", "notes"}
 SIDE_FILE_KEYS = {"constraints", "stabilization", "description", "notes"}
 STABILIZATION_KEYS = {"kp", "kd"}
+FRICTION_LAWS = ("viscous", "coulomb")
 BODY_KEYS = {"name", "parent", "pair", "mass", "com", "inertia", "mises", "rotors", "added_mass", "description",
              "notes"}
 PAIR_KEYS = {"name", "translation", "rotation", "functional", "stiffness", "rest", "description"}
@@ -77,7 +78,6 @@ LATER = {
 }
 CONSTRAINTS_LATER = {
     "motion": "a prescribed motion of the medium (a moving platform) is not supported yet",
-    "friction": "friction on sliding contacts is not supported yet",
     "wheel": "rolling contacts are not supported yet",
 }
 
@@ -309,8 +309,10 @@ class _Reader:
                                            f"two different bodies)")
             point = self.vector(entry["point"], p + ("point",)) if "point" in entry else (sp.Integer(0),) * 3
             at = self.vector(entry["at"], p + ("at",)) if "at" in entry else None
+            rows = self.block(entry["block"], p + ("block",))
+            friction = self.friction(entry["friction"], p + ("friction",), rows) if "friction" in entry else None
             out.append(Constraint(
-                name=name, body=body, point=_placed(point, R, t), rows=self.block(entry["block"], p + ("block",)),
+                name=name, body=body, point=_placed(point, R, t), rows=rows, friction=friction,
                 medium=medium, at=None if at is None else _placed(at, Rm, tm),
                 rotation=self.rotation(entry.get("rotation", []), p + ("rotation",)),
                 kind=entry["block"] if isinstance(entry["block"], str) else "", source=str(self.file),
@@ -349,6 +351,25 @@ class _Reader:
         if not codes:
             self.fail(path, "a constraint must block at least one relative motion")
         return tuple(c for c in COORDINATE_CODES if c in codes)
+
+    def friction(self, value, path, rows) -> tuple:
+        """``{viscous: c}`` (W = -c w) or ``{coulomb: mu}`` (W = -mu |lambda_n| w/|w|) on the free translations."""
+        self.mapping(value, path, set(FRICTION_LAWS))
+        if len(value) != 1:
+            self.fail(path, "give one friction law: {viscous: c} or {coulomb: mu}")
+        (law, coefficient), = value.items()
+        free = [code for code in COORDINATE_CODES[:3] if code not in rows]
+        blocked = [code for code in COORDINATE_CODES[:3] if code in rows]
+        if not free:
+            self.fail(path, "friction acts on the free translations of a sliding contact, and this constraint "
+                            "blocks all three (o1 o2 o3)")
+        if law == "coulomb" and len(blocked) != 1:
+            self.fail(path + (law,), f"Coulomb friction needs exactly one blocked translation (the normal, e.g. "
+                                     f"block: normal), this constraint blocks {', '.join(blocked) or 'none'}")
+        expr = self.expr(coefficient, path + (law,))
+        if self.number(expr, path + (law,)) < 0:
+            self.fail(path + (law,), "a friction coefficient must not be negative")
+        return (law, expr)
 
     def stabilization(self, value, constraints) -> tuple:
         if value is None:

@@ -498,6 +498,56 @@ void added_mass_body_in_fluid_potential_energy(const double *q, const double *p,
     U[0] = 0.0;
 }
 
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)
+ * operations: 58 mul, 31 add, 0 div, 3 call */
+void added_mass_body_in_fluid_momentum(const double *q, const double *qd, const double *p, double *h)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double q_3 = q[3];
+    const double q_4 = q[4];
+    const double q_5 = q[5];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qd_3 = qd[3];
+    const double qd_4 = qd[4];
+    const double qd_5 = qd[5];
+    (void)p;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_4, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_5, &x5, &x4);
+    const double x6 = x1*x3;
+    const double x7 = x1*x2;
+    const double x8 = x0*x3;
+    const double x9 = x0*x2;
+    const double x10 = x2*x4;
+    const double x11 = x2*x5;
+    const double x12 = x4*x6 + x0*x5;
+    const double x13 = x0*x4 - x5*x6;
+    const double x14 = x1*x5 - x4*x8;
+    const double x15 = x5*x8 + x1*x4;
+    const double x16 = 22.182181931693595*(qd_0*x10 + qd_1*x12 + qd_2*x14);
+    const double x17 = 39.67329996836601*(qd_1*x13 - qd_0*x11 + qd_2*x15);
+    const double x18 = 39.67329996836601*(qd_0*x3 - qd_1*x7 + qd_2*x9);
+    const double x19 = 0.08377580409572785*(qd_3*x10 + qd_4*x5);
+    const double x20 = 1.8512830142411616*(qd_4*x4 - qd_3*x11);
+    const double x21 = 1.8512830142411616*(qd_5 + qd_3*x3);
+    const double x22 = x10*x16 - x11*x17 + x3*x18;
+    h[0] = x22;
+    const double x23 = x12*x16 + x13*x17 - x7*x18;
+    h[1] = x23;
+    const double x24 = x14*x16 + x15*x17 + x9*x18;
+    h[2] = x24;
+    h[3] = q_1*x24 - q_2*x23 + x10*x19 - x11*x20 + x3*x21;
+    h[4] = q_2*x22 - q_0*x24 + x12*x19 + x13*x20 - x7*x21;
+    h[5] = q_0*x23 - q_1*x22 + x14*x19 + x15*x20 + x9*x21;
+}
+
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
  * operations: 98 mul, 56 add, 0 div, 3 call */
 void added_mass_body_in_fluid_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)

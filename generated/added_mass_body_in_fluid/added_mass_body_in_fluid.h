@@ -30,6 +30,7 @@ extern "C" {
 #define ADDED_MASS_BODY_IN_FLUID_INVERSE_DYNAMICS_SIZE 6  /* inverse_dynamics: tau, 6 doubles */
 #define ADDED_MASS_BODY_IN_FLUID_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
 #define ADDED_MASS_BODY_IN_FLUID_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_MOMENTUM_SIZE 6  /* momentum: h, 6 doubles */
 #define ADDED_MASS_BODY_IN_FLUID_JOINT_WRENCHES_SIZE 6  /* joint_wrenches: W, 1 x 6 doubles */
 #define ADDED_MASS_BODY_IN_FLUID_FORWARD_DYNAMICS_SIZE 6  /* forward_dynamics: qdd, 6 doubles */
 #define ADDED_MASS_BODY_IN_FLUID_INERTIA_INVERSE_SIZE 36  /* inertia_inverse: Ainv, 6 x 6 doubles */
@@ -52,6 +53,8 @@ void added_mass_body_in_fluid_inverse_dynamics(const double *q, const double *qd
 void added_mass_body_in_fluid_kinetic_energy(const double *q, const double *qd, const double *p, double *T);
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs */
 void added_mass_body_in_fluid_potential_energy(const double *q, const double *p, double *U);
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13) */
+void added_mass_body_in_fluid_momentum(const double *q, const double *qd, const double *p, double *h);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void added_mass_body_in_fluid_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */

@@ -493,6 +493,59 @@ def potential_energy(q, p=None):
     return U[..., 0][()]
 
 
+def momentum(q, qd, p=None):
+    """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    h = np.empty(batch + (6,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    q_3 = q[..., 3]
+    q_4 = q[..., 4]
+    q_5 = q[..., 5]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    qd_3 = qd[..., 3]
+    qd_4 = qd[..., 4]
+    qd_5 = qd[..., 5]
+    x0 = np.cos(q_3)
+    x1 = np.sin(q_3)
+    x2 = np.cos(q_4)
+    x3 = np.sin(q_4)
+    x4 = np.cos(q_5)
+    x5 = np.sin(q_5)
+    x6 = x1*x3
+    x7 = x1*x2
+    x8 = x0*x3
+    x9 = x0*x2
+    x10 = x2*x4
+    x11 = x2*x5
+    x12 = x4*x6 + x0*x5
+    x13 = x0*x4 - x5*x6
+    x14 = x1*x5 - x4*x8
+    x15 = x5*x8 + x1*x4
+    x16 = 22.182181931693595*(qd_0*x10 + qd_1*x12 + qd_2*x14)
+    x17 = 39.67329996836601*(qd_1*x13 - qd_0*x11 + qd_2*x15)
+    x18 = 39.67329996836601*(qd_0*x3 - qd_1*x7 + qd_2*x9)
+    x19 = 0.08377580409572785*(qd_3*x10 + qd_4*x5)
+    x20 = 1.8512830142411616*(qd_4*x4 - qd_3*x11)
+    x21 = 1.8512830142411616*(qd_5 + qd_3*x3)
+    x22 = x10*x16 - x11*x17 + x3*x18
+    h[..., 0] = x22
+    x23 = x12*x16 + x13*x17 - x7*x18
+    h[..., 1] = x23
+    x24 = x14*x16 + x15*x17 + x9*x18
+    h[..., 2] = x24
+    h[..., 3] = q_1*x24 - q_2*x23 + x10*x19 - x11*x20 + x3*x21
+    h[..., 4] = q_2*x22 - q_0*x24 + x12*x19 + x13*x20 - x7*x21
+    h[..., 5] = q_0*x23 - q_1*x22 + x14*x19 + x15*x20 + x9*x21
+    return h
+
+
 def joint_wrenches(q, qd, qdd, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
     q = np.asarray(q, dtype=float)

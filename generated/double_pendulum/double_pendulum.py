@@ -299,6 +299,66 @@ def potential_energy(q, p=None):
     return U[..., 0][()]
 
 
+def momentum(q, qd, p=None):
+    """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    h = np.empty(batch + (6,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    p_6 = p[..., 6]
+    p_8 = p[..., 8]
+    p_9 = p[..., 9]
+    p_10 = p[..., 10]
+    x0 = p_0*p_2
+    x1 = p_1*p_3
+    x2 = p_1*p_3*p_3
+    x3 = np.cos(q_1)
+    x4 = np.sin(q_1)
+    x5 = np.cos(q_2)
+    x6 = np.sin(q_2)
+    x7 = qd_1*x5
+    x8 = p_4*qd_1
+    x9 = qd_0*x5
+    x10 = x0*qd_1
+    x11 = x0*qd_0
+    x12 = p_1*qd_0*x6
+    x13 = x1*qd_2 + p_1*x9
+    x14 = p_1*x8 + x1*x7
+    x15 = p_8*qd_1*x6
+    x16 = x1*x8 + (p_9 + x2)*x7
+    x17 = x1*x9 + (p_10 + x2)*qd_2
+    x18 = x3*x5
+    x19 = x3*x6
+    x20 = x4*x5
+    x21 = x4*x6
+    x22 = p_4*x3
+    x23 = p_4*x4
+    x24 = x4*x10
+    x25 = x3*x10
+    x26 = x12*x18 - x13*x19 - x4*x14
+    x27 = x6*x12 + x5*x13
+    x28 = x13*x21 - x12*x20 - x3*x14
+    h[..., 0] = x26 - x24
+    h[..., 1] = p_0*qd_0 + x27
+    h[..., 2] = x28 - x25
+    h[..., 3] = x4*x11 - q_0*x25 + q_0*x28 + x23*x27 + x15*x18 - x16*x19 + x4*x17
+    h[..., 4] = (p_6 + p_0*p_2*p_2)*qd_1 + x6*x15 + x5*x16 - x23*x26 - x22*x28
+    h[..., 5] = q_0*x24 + x3*x11 + x22*x27 - q_0*x26 + x16*x21 - x15*x20 + x3*x17
+    return h
+
+
 def joint_wrenches(q, qd, qdd, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
     q = np.asarray(q, dtype=float)

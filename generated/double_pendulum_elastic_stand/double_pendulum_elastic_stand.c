@@ -340,6 +340,64 @@ void double_pendulum_elastic_stand_potential_energy(const double *q, const doubl
     U[0] = 0.5*(q_0*(p_12*q_0 + p_13*q_1) + q_1*(p_13*q_0 + p_14*q_1)) - p_0*p_2*x2 - p_1*p_4*x2 - p_1*p_3*x1*x2;
 }
 
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)
+ * operations: 59 mul, 31 add, 0 div, 2 call */
+void double_pendulum_elastic_stand_momentum(const double *q, const double *qd, const double *p, double *h)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    static const double p_defaults[15] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81, 400.0, 20.0, 150.0};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_6 = p[6];
+    const double p_8 = p[8];
+    const double p_9 = p[9];
+    const double p_10 = p[10];
+    const double x0 = p_0*p_2;
+    const double x1 = p_1*p_3;
+    const double x2 = p_1*p_3*p_3;
+    double x4, x3;
+    aggsym_sincos(q_1, &x4, &x3);
+    double x6, x5;
+    aggsym_sincos(q_2, &x6, &x5);
+    const double x7 = qd_1*x5;
+    const double x8 = p_4*qd_1;
+    const double x9 = qd_0*x5;
+    const double x10 = x0*qd_1;
+    const double x11 = x0*qd_0;
+    const double x12 = p_1*qd_0*x6;
+    const double x13 = x1*qd_2 + p_1*x9;
+    const double x14 = p_1*x8 + x1*x7;
+    const double x15 = p_8*qd_1*x6;
+    const double x16 = x1*x8 + (p_9 + x2)*x7;
+    const double x17 = x1*x9 + (p_10 + x2)*qd_2;
+    const double x18 = x3*x5;
+    const double x19 = x3*x6;
+    const double x20 = x4*x5;
+    const double x21 = x4*x6;
+    const double x22 = p_4*x3;
+    const double x23 = p_4*x4;
+    const double x24 = x4*x10;
+    const double x25 = x3*x10;
+    const double x26 = x12*x18 - x13*x19 - x4*x14;
+    const double x27 = x6*x12 + x5*x13;
+    const double x28 = x13*x21 - x12*x20 - x3*x14;
+    h[0] = x26 - x24;
+    h[1] = p_0*qd_0 + x27;
+    h[2] = x28 - x25;
+    h[3] = x4*x11 - q_0*x25 + q_0*x28 + x23*x27 + x15*x18 - x16*x19 + x4*x17;
+    h[4] = (p_6 + p_0*p_2*p_2)*qd_1 + x6*x15 + x5*x16 - x23*x26 - x22*x28;
+    h[5] = q_0*x24 + x3*x11 + x22*x27 - q_0*x26 + x16*x21 - x15*x20 + x3*x17;
+}
+
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
  * operations: 56 mul, 39 add, 0 div, 2 call */
 void double_pendulum_elastic_stand_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)

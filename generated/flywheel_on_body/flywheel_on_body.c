@@ -515,6 +515,94 @@ void flywheel_on_body_potential_energy(const double *q, const double *t, const d
     U[0] = x16 - 14.715*x10 + 1.5*(x16 + 0.1962*x12 - 2.4525*x10) + 0.0045000000000000005*(0.984807753012208*x1*x13 + (0.9659258262890682*x2 - 0.04494345552754777*x1)*x14 + (0.1677312594965206*x1 + 0.2588190451025207*x2)*x15) - 0.003*((0.04494345552754777*x2 + 0.9659258262890682*x1)*x14 - 0.984807753012208*x2*x13 + (0.2588190451025207*x1 - 0.1677312594965206*x2)*x15) + 0.0015*(9.331774689554779*x10 - 1.7034886229125867*x11 - 2.5004414920153932*x12);
 }
 
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)
+ * operations: 169 mul, 112 add, 0 div, 4 call */
+void flywheel_on_body_momentum(const double *q, const double *qd, const double *t, const double *p, double *h)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double t_0 = t[0];
+    static const double p_defaults[2] = {60.0, 5.0};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
+    double x2, x1;
+    aggsym_sincos(x0, &x2, &x1);
+    const double x3 = 0.984807753012208*x1;
+    const double x4 = 0.984807753012208*x2;
+    const double x5 = 0.9659258262890682*x2 - 0.04494345552754777*x1;
+    const double x6 = 0.04494345552754777*x2 + 0.9659258262890682*x1;
+    const double x7 = 0.1677312594965206*x1 + 0.2588190451025207*x2;
+    const double x8 = 0.2588190451025207*x1 - 0.1677312594965206*x2;
+    double x10, x9;
+    aggsym_sincos(q_0, &x10, &x9);
+    double x12, x11;
+    aggsym_sincos(q_1, &x12, &x11);
+    double x14, x13;
+    aggsym_sincos(q_2, &x14, &x13);
+    const double x15 = x10*x12;
+    const double x16 = x10*x11;
+    const double x17 = x9*x12;
+    const double x18 = x9*x11;
+    const double x19 = x11*x13;
+    const double x20 = x11*x14;
+    const double x21 = x13*x15 + x9*x14;
+    const double x22 = x9*x13 - x14*x15;
+    const double x23 = x10*x14 - x13*x17;
+    const double x24 = x14*x17 + x10*x13;
+    const double x25 = qd_0*x19 + qd_1*x14;
+    const double x26 = qd_1*x13 - qd_0*x20;
+    const double x27 = qd_2 + qd_0*x12;
+    const double x28 = x3*x25 + x5*x26 + x7*x27;
+    const double x29 = x6*x26 - x4*x25 + x8*x27;
+    const double x30 = p_0 + p_1*t_0 + 0.9512512425641976*x27 - 0.17364817766693033*x25 - 0.2548870022441787*x26;
+    const double x31 = 0.25*x26 + 0.02*x27;
+    const double x32 = 0.05*x27;
+    const double x33 = x32 + 0.25*x25;
+    const double x34 = 0.05*x26;
+    const double x35 = 0.02*x25 - x34;
+    const double x36 = x5*x33 - x3*x31 + x7*x35;
+    const double x37 = x4*x31 + x6*x33 + x8*x35;
+    const double x38 = 0.17364817766693033*x31 - 0.2548870022441787*x33 + 0.9512512425641976*x35;
+    const double x39 = 1.5*x26;
+    const double x40 = x32 + 1.5*x25;
+    const double x41 = 0.6499999999999999*x25 + 0.01*x26 + 0.015*x27;
+    const double x42 = 0.01*x25 + 0.7005*x26;
+    const double x43 = 0.015*x25 + 0.15050000000000002*x27;
+    const double x44 = 1.5*x36 + 0.0015*x29 + 0.003*x30;
+    const double x45 = 1.5*x37 + 0.0045000000000000005*x30 - 0.0015*x28;
+    const double x46 = 1.5*x38 - 0.003*x28 - 0.0045000000000000005*x29;
+    const double x47 = 0.0100075*x28 + 0.000509*x29 - 4.5e-06*x30 - 0.003*x38 - 0.0015*x37;
+    const double x48 = 0.0015*x36 - 0.0045000000000000005*x38 + 0.000509*x28 + 0.012015*x29 + 3e-06*x30;
+    const double x49 = 0.0045000000000000005*x37 + 0.003*x36 + 3e-06*x29 - 4.5e-06*x28 + 0.0200195*x30;
+    const double x50 = x3*x19 - x5*x20 + x7*x12;
+    const double x51 = x8*x12 - x4*x19 - x6*x20;
+    const double x52 = 0.2548870022441787*x20 - 0.17364817766693033*x19 + 0.9512512425641976*x12;
+    const double x53 = x3*x21 + x5*x22 - x7*x16;
+    const double x54 = x6*x22 - x4*x21 - x8*x16;
+    const double x55 = 0.17364817766693033*x21 + 0.2548870022441787*x22 + 0.9512512425641976*x16;
+    const double x56 = x3*x23 + x5*x24 + x7*x18;
+    const double x57 = x6*x24 - x4*x23 + x8*x18;
+    const double x58 = 0.9512512425641976*x18 - 0.17364817766693033*x23 - 0.2548870022441787*x24;
+    const double x59 = 0.05*x19 - 0.02*x20 - 0.25*x12;
+    const double x60 = 0.05*x21 + 0.02*x22 + 0.25*x16;
+    const double x61 = 0.05*x23 + 0.02*x24 - 0.25*x18;
+    const double x62 = x44*x50 + x45*x51 + x46*x52;
+    const double x63 = x44*x53 + x45*x54 - x46*x55;
+    const double x64 = x44*x56 + x45*x57 + x46*x58;
+    h[0] = x62 - x19*x39 - x20*x40 - x12*x34;
+    h[1] = x22*x40 - x21*x39 + x16*x34 + x63;
+    h[2] = x24*x40 - x23*x39 - x18*x34 + x64;
+    h[3] = x19*x41 - x20*x42 + x12*x43 + x60*x64 - x61*x63 + x47*x50 + x48*x51 + x49*x52;
+    h[4] = x21*x41 + x22*x42 - x16*x43 + x61*x62 - x59*x64 + x47*x53 + x48*x54 - x49*x55;
+    h[5] = x23*x41 + x24*x42 + x18*x43 + x59*x63 - x60*x62 + x47*x56 + x48*x57 + x49*x58;
+}
+
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
  * operations: 172 mul, 147 add, 0 div, 4 call */
 void flywheel_on_body_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *W)

@@ -32,6 +32,7 @@ extern "C" {
 #define FLYWHEEL_ON_BODY_INVERSE_DYNAMICS_SIZE 3  /* inverse_dynamics: tau, 3 doubles */
 #define FLYWHEEL_ON_BODY_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
 #define FLYWHEEL_ON_BODY_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define FLYWHEEL_ON_BODY_MOMENTUM_SIZE 6  /* momentum: h, 6 doubles */
 #define FLYWHEEL_ON_BODY_JOINT_WRENCHES_SIZE 6  /* joint_wrenches: W, 1 x 6 doubles */
 #define FLYWHEEL_ON_BODY_FORWARD_DYNAMICS_SIZE 3  /* forward_dynamics: qdd, 3 doubles */
 #define FLYWHEEL_ON_BODY_INERTIA_INVERSE_SIZE 9  /* inertia_inverse: Ainv, 3 x 3 doubles */
@@ -53,6 +54,8 @@ void flywheel_on_body_inverse_dynamics(const double *q, const double *qd, const 
 void flywheel_on_body_kinetic_energy(const double *q, const double *qd, const double *t, const double *p, double *T);
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs */
 void flywheel_on_body_potential_energy(const double *q, const double *t, const double *p, double *U);
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13) */
+void flywheel_on_body_momentum(const double *q, const double *qd, const double *t, const double *p, double *h);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void flywheel_on_body_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */

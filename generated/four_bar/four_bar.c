@@ -360,6 +360,59 @@ void four_bar_potential_energy(const double *q, const double *p, double *U)
     U[0] = 0.1*p_0*x6 + 0.5*x9 + 0.25*p_1*x8 + 0.4*(x9 + p_1*x8) + 0.2*p_2*(x4*x8 + x5*(x2*x7 - x3*x6));
 }
 
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)
+ * operations: 55 mul, 32 add, 0 div, 3 call */
+void four_bar_momentum(const double *q, const double *qd, const double *p, double *h)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    static const double p_defaults[4] = {0.1, 0.3, 0.25, 0.3};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    h[2] = 0;
+    h[3] = 0;
+    h[4] = 0;
+    const double x0 = 0.25*p_1;
+    const double x1 = 0.2*p_2;
+    double x3, x2;
+    aggsym_sincos(q_0, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_1, &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q_2, &x7, &x6);
+    const double x8 = qd_0 + qd_1;
+    const double x9 = qd_2 + x8;
+    const double x10 = p_0*qd_0;
+    const double x11 = x5*x10;
+    const double x12 = x4*x10;
+    const double x13 = x12 + p_1*x8;
+    const double x14 = x6*x13 - x7*x11;
+    const double x15 = 0.1*p_0*qd_0;
+    const double x16 = 0.5*x11;
+    const double x17 = 0.4*(x6*x11 + x7*x13);
+    const double x18 = x0*x8 + 0.5*x12;
+    const double x19 = x1*x9 + 0.4*x14;
+    const double x20 = x2*x4 - x3*x5;
+    const double x21 = x2*x5 + x3*x4;
+    const double x22 = p_0*x2;
+    const double x23 = p_0*x3;
+    const double x24 = x6*x20 - x7*x21;
+    const double x25 = x7*x20 + x6*x21;
+    const double x26 = x16*x20 - x18*x21;
+    const double x27 = x16*x21 + x18*x20;
+    const double x28 = x17*x24 - x19*x25;
+    const double x29 = x17*x25 + x19*x24;
+    h[0] = x26 - x3*x15 + x28;
+    h[1] = x2*x15 + x27 + x29;
+    h[5] = (0.0002 + 0.05*p_0*p_0)*qd_0 + x0*x12 + (0.004 + 0.125*p_1*p_1)*x8 + x22*x27 - x23*x26 + x1*x14 + (0.002 + 0.1*p_2*p_2)*x9 + (x22 + p_1*x20)*x29 - (x23 + p_1*x21)*x28;
+}
+
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
  * operations: 54 mul, 36 add, 0 div, 3 call */
 void four_bar_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)
@@ -691,6 +744,16 @@ void four_bar_constraint_bias(const double *q, const double *qd, const double *p
     gamma[1] = x17*x20 + x16*x21;
 }
 
+/* w(q, qd) = D_k+^T V (4.33)-(4.34): each contact point's velocity relative to the medium along the free translations of its constraint (the sliding velocities friction acts on)
+ * operations: 0 mul, 0 add, 0 div, 0 call */
+void four_bar_slip_velocities(const double *q, const double *qd, const double *p, double *w)
+{
+    (void)q;
+    (void)qd;
+    (void)p;
+    w[0] = 0;
+}
+
 /* G = J A^-1 J^T, m*m row-major, by the transvective factors: P = T J^T, G = P^T diag(1/(beta,beta)) P (3.19)
  * operations: 75 mul, 52 add, 3 div, 3 call */
 void four_bar_delassus(const double *q, const double *p, double *G)
@@ -710,53 +773,53 @@ void four_bar_delassus(const double *q, const double *p, double *G)
     aggsym_sincos(q_1, &x4, &x3);
     double x6, x5;
     aggsym_sincos(q_2, &x6, &x5);
-    const double x7 = 1/(0.002 + 0.1*p_2*p_2);
-    const double x8 = x0*x7;
-    const double x9 = 0.4 - x0*x8;
-    const double x10 = 0.4 - x9;
-    const double x11 = x6*x6*x10;
-    const double x12 = x5*x6*x10;
-    const double x13 = x9 + x11;
-    const double x14 = p_1*x12;
-    const double x15 = p_1*x13;
-    const double x16 = 0.25*p_1 + x15;
-    const double x17 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x15);
-    const double x18 = x14*x17;
-    const double x19 = x16*x17;
-    const double x20 = x12 - x14*x19;
-    const double x21 = 0.5 + x13 - x16*x19;
-    const double x22 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x21 + x4*x4*(0.9 - x11 - x14*x18 - x21) + x3*x4*(x20 + x20)));
-    const double x23 = x1*x3 - x2*x4;
-    const double x24 = x1*x4 + x2*x3;
-    const double x25 = p_0*x1;
-    const double x26 = p_0*x2;
-    const double x27 = x25 + p_1*x23;
-    const double x28 = x26 + p_1*x24;
-    const double x29 = x27 + p_2*(x5*x23 - x6*x24);
-    const double x30 = x28 + p_2*(x6*x23 + x5*x24);
-    const double x31 = x29 - x27;
-    const double x32 = x28 - x30;
-    const double x33 = x8*x32;
+    const double x7 = x1*x3 - x2*x4;
+    const double x8 = x1*x4 + x2*x3;
+    const double x9 = p_0*x1;
+    const double x10 = p_0*x2;
+    const double x11 = x9 + p_1*x7;
+    const double x12 = x10 + p_1*x8;
+    const double x13 = 1/(0.002 + 0.1*p_2*p_2);
+    const double x14 = x0*x13;
+    const double x15 = 0.4 - x0*x14;
+    const double x16 = 0.4 - x15;
+    const double x17 = x6*x6*x16;
+    const double x18 = x5*x6*x16;
+    const double x19 = x15 + x17;
+    const double x20 = p_1*x18;
+    const double x21 = p_1*x19;
+    const double x22 = 0.25*p_1 + x21;
+    const double x23 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x21);
+    const double x24 = x20*x23;
+    const double x25 = x22*x23;
+    const double x26 = x18 - x20*x25;
+    const double x27 = 0.5 + x19 - x22*x25;
+    const double x28 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x27 + x4*x4*(0.9 - x17 - x20*x24 - x27) + x3*x4*(x26 + x26)));
+    const double x29 = x11 + p_2*(x5*x7 - x6*x8);
+    const double x30 = x12 + p_2*(x6*x7 + x5*x8);
+    const double x31 = x29 - x11;
+    const double x32 = x12 - x30;
+    const double x33 = x14*x32;
     const double x34 = x5*x33;
     const double x35 = x32 + p_1*x34;
-    const double x36 = x26 - x30 - x35;
-    const double x37 = x30 + x35 + x36 + p_0*(x4*(x18*x36 - x6*x33) + x3*(x34 + x19*x36));
-    const double x38 = x8*x31;
+    const double x36 = x10 - x30 - x35;
+    const double x37 = x30 + x35 + x36 + p_0*(x4*(x24*x36 - x6*x33) + x3*(x34 + x25*x36));
+    const double x38 = x14*x31;
     const double x39 = x5*x38;
     const double x40 = x31 + p_1*x39;
-    const double x41 = x29 - x25 - x40;
-    const double x42 = x29 - x40 - x41 - p_0*(x4*(x18*x41 - x6*x38) + x3*(x39 + x19*x41));
-    const double x43 = x22*x37;
-    const double x44 = x17*x36;
-    const double x45 = x7*x32;
+    const double x41 = x29 - x9 - x40;
+    const double x42 = x29 - x40 - x41 - p_0*(x4*(x24*x41 - x6*x38) + x3*(x39 + x25*x41));
+    const double x43 = x28*x37;
+    const double x44 = x23*x36;
+    const double x45 = x13*x32;
     G[0] = x37*x43 + x36*x44 + x32*x45;
     const double x46 = x41*x44 - x42*x43 + x31*x45;
     G[1] = x46;
     G[2] = x46;
-    G[3] = x42*x22*x42 + x41*x17*x41 + x31*x7*x31;
+    G[3] = x42*x28*x42 + x41*x23*x41 + x31*x13*x31;
 }
 
-/* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); returns nonzero when G is singular
+/* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution)
  * operations: 177 mul, 132 add, 6 div, 3 call */
 int four_bar_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd, double *lambda)
 {
@@ -801,68 +864,68 @@ int four_bar_constrained_forward_dynamics(const double *q, const double *qd, con
     const double x22 = x6*x20 - x7*x21;
     const double x23 = 0.4*(x6*x21 + x7*x20) - x1*x10*x10;
     const double x24 = x1*x22;
-    const double x25 = 1/(0.002 + 0.1*p_2*p_2);
-    const double x26 = x1*x25;
-    const double x27 = 0.4 - x1*x26;
-    const double x28 = 0.4 - x27;
-    const double x29 = x7*x7*x28;
-    const double x30 = x6*x7*x28;
-    const double x31 = x27 + x29;
-    const double x32 = p_1*x30;
-    const double x33 = p_1*x31;
-    const double x34 = x0 + x33;
-    const double x35 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x33);
-    const double x36 = x32*x35;
-    const double x37 = x34*x35;
-    const double x38 = x30 - x32*x37;
-    const double x39 = 0.5 + x31 - x34*x37;
-    const double x40 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x39 + x5*x5*(0.9 - x29 - x32*x36 - x39) + x4*x5*(x38 + x38)));
-    const double x41 = tau_2 - x24;
-    const double x42 = 0.4*x22 + x26*x41;
-    const double x43 = x7*x23 + x6*x42;
-    const double x44 = x0*x20 + x24 + x41 + p_1*x43;
-    const double x45 = tau_1 - x44;
-    const double x46 = tau_0 - 0.1*p_0*x17 - x44 - x45 - p_0*(x5*(0.5*x19 + x6*x23 - x7*x42 - x0*x9 + x36*x45) + x4*(0.5*x20 + x43 + x37*x45));
-    const double x47 = x40*x46;
-    const double x48 = x35*x45;
-    const double x49 = x25*x41;
-    const double x50 = x2*x4 - x3*x5;
-    const double x51 = x2*x5 + x3*x4;
-    const double x52 = p_0*x2;
-    const double x53 = p_0*x3;
-    const double x54 = x6*x50 - x7*x51;
-    const double x55 = x7*x50 + x6*x51;
-    const double x56 = x52 + p_1*x50;
-    const double x57 = x53 + p_1*x51;
-    const double x58 = x56 + p_2*x54;
-    const double x59 = x57 + p_2*x55;
-    const double x60 = x58 - x52;
-    const double x61 = x53 - x59;
-    const double x62 = x58 - x56;
-    const double x63 = x57 - x59;
+    const double x25 = x2*x4 - x3*x5;
+    const double x26 = x2*x5 + x3*x4;
+    const double x27 = p_0*x2;
+    const double x28 = p_0*x3;
+    const double x29 = x6*x25 - x7*x26;
+    const double x30 = x7*x25 + x6*x26;
+    const double x31 = x27 + p_1*x25;
+    const double x32 = x28 + p_1*x26;
+    const double x33 = 1/(0.002 + 0.1*p_2*p_2);
+    const double x34 = x1*x33;
+    const double x35 = 0.4 - x1*x34;
+    const double x36 = 0.4 - x35;
+    const double x37 = x7*x7*x36;
+    const double x38 = x6*x7*x36;
+    const double x39 = x35 + x37;
+    const double x40 = p_1*x38;
+    const double x41 = p_1*x39;
+    const double x42 = x0 + x41;
+    const double x43 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x41);
+    const double x44 = x40*x43;
+    const double x45 = x42*x43;
+    const double x46 = x38 - x40*x45;
+    const double x47 = 0.5 + x39 - x42*x45;
+    const double x48 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x47 + x5*x5*(0.9 - x37 - x40*x44 - x47) + x4*x5*(x46 + x46)));
+    const double x49 = tau_2 - x24;
+    const double x50 = 0.4*x22 + x34*x49;
+    const double x51 = x7*x23 + x6*x50;
+    const double x52 = x0*x20 + x24 + x49 + p_1*x51;
+    const double x53 = tau_1 - x52;
+    const double x54 = tau_0 - 0.1*p_0*x17 - x52 - x53 - p_0*(x5*(0.5*x19 + x6*x23 - x7*x50 - x0*x9 + x44*x53) + x4*(0.5*x20 + x51 + x45*x53));
+    const double x55 = x48*x54;
+    const double x56 = x43*x53;
+    const double x57 = x33*x49;
+    const double x58 = x31 + p_2*x29;
+    const double x59 = x32 + p_2*x30;
+    const double x60 = x58 - x27;
+    const double x61 = x28 - x59;
+    const double x62 = x58 - x31;
+    const double x63 = x32 - x59;
     const double x64 = qd_1*x13;
     const double x65 = qd_1*x12;
     const double x66 = x6*x64 - x7*x65 + qd_2*x16 - x10*(x16 + p_2*x10);
     const double x67 = x10*x15 - x7*x64 - x6*x65 - qd_2*x15;
-    const double x68 = x26*x63;
+    const double x68 = x34*x63;
     const double x69 = x6*x68;
     const double x70 = x63 + p_1*x69;
     const double x71 = x61 - x70;
-    const double x72 = x59 + x70 + x71 + p_0*(x5*(x36*x71 - x7*x68) + x4*(x69 + x37*x71));
-    const double x73 = x26*x62;
+    const double x72 = x59 + x70 + x71 + p_0*(x5*(x44*x71 - x7*x68) + x4*(x69 + x45*x71));
+    const double x73 = x34*x62;
     const double x74 = x6*x73;
     const double x75 = x62 + p_1*x74;
     const double x76 = x60 - x75;
-    const double x77 = x58 - x75 - x76 - p_0*(x5*(x36*x76 - x7*x73) + x4*(x74 + x37*x76));
-    const double x78 = x40*x72;
-    const double x79 = x35*x71;
-    const double x80 = x25*x63;
+    const double x77 = x58 - x75 - x76 - p_0*(x5*(x44*x76 - x7*x73) + x4*(x74 + x45*x76));
+    const double x78 = x48*x72;
+    const double x79 = x43*x71;
+    const double x80 = x33*x63;
     const double x81 = x72*x78 + x71*x79 + x63*x80;
-    const double x82 = x77*x40*x77 + x76*x35*x76 + x62*x25*x62;
-    const double x83 = x55*x67 - x54*x66 - x48*x71 + x47*x72 - x49*x63 - 20*(qd_1*x61 - qd_0*x59 + qd_2*x63) - 100*(x58 - p_3);
+    const double x82 = x77*x48*x77 + x76*x43*x76 + x62*x33*x62;
+    const double x83 = x30*x67 - x29*x66 - x56*x71 + x55*x72 - x57*x63 - 20*(qd_1*x61 - qd_0*x59 + qd_2*x63) - 100*(x58 - p_3);
     const double x84 = (x76*x79 - x77*x78 + x62*x80)*1/x81;
     const double x85 = x82 - x81*x84*x84;
-    const double x86 = (x55*x66 + x54*x67 + x47*x77 + x48*x76 + x49*x62 + 20*(qd_0*x58 + qd_1*x60 + qd_2*x62) + 100*x59 + x83*x84)/x85;
+    const double x86 = (x30*x66 + x29*x67 + x55*x77 + x56*x76 + x57*x62 + 20*(qd_0*x58 + qd_1*x60 + qd_2*x62) + 100*x59 + x83*x84)/x85;
     lambda[1] = -x86;
     const double x87 = x83/x81 + x84*x86;
     lambda[0] = x87;
@@ -870,14 +933,14 @@ int four_bar_constrained_forward_dynamics(const double *q, const double *qd, con
     const double x89 = ((double)((x88 - x81) > 0.0) - (double)((x88 - x81) < 0.0));
     const double x90 = ((double)((x88 - x85) > 0.0) - (double)((x88 - x85) < 0.0));
     status[0] = 2 + x89 + x90;
-    const double x91 = x40*(x46 - x72*x87 - x77*x86);
+    const double x91 = x48*(x54 - x72*x87 - x77*x86);
     qdd[0] = x91;
     const double x92 = p_0*x91;
     const double x93 = x5*x92;
     const double x94 = x4*x92;
-    const double x95 = x35*(x45 + x71*x87 - x76*x86) - x91 - x36*x93 - x37*x94;
+    const double x95 = x43*(x53 + x71*x87 - x76*x86) - x91 - x44*x93 - x45*x94;
     qdd[1] = x95;
     const double x96 = x91 + x95;
-    qdd[2] = x25*(x41 + x63*x87 - x62*x86) - x96 - x26*(x6*(x94 + p_1*x96) - x7*x93);
+    qdd[2] = x33*(x49 + x63*x87 - x62*x86) - x96 - x34*(x6*(x94 + p_1*x96) - x7*x93);
     return status[0] != 0.0;
 }

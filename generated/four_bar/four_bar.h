@@ -36,6 +36,7 @@ extern "C" {
 #define FOUR_BAR_INVERSE_DYNAMICS_SIZE 3  /* inverse_dynamics: tau, 3 doubles */
 #define FOUR_BAR_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
 #define FOUR_BAR_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define FOUR_BAR_MOMENTUM_SIZE 6  /* momentum: h, 6 doubles */
 #define FOUR_BAR_JOINT_WRENCHES_SIZE 18  /* joint_wrenches: W, 3 x 6 doubles */
 #define FOUR_BAR_FORWARD_DYNAMICS_SIZE 3  /* forward_dynamics: qdd, 3 doubles */
 #define FOUR_BAR_INERTIA_INVERSE_SIZE 9  /* inertia_inverse: Ainv, 3 x 3 doubles */
@@ -44,6 +45,7 @@ extern "C" {
 #define FOUR_BAR_CONSTRAINT_RESIDUAL_SIZE 2  /* constraint_residual: phi, 2 doubles */
 #define FOUR_BAR_CONSTRAINT_JACOBIAN_SIZE 6  /* constraint_jacobian: J, 2 x 3 doubles */
 #define FOUR_BAR_CONSTRAINT_BIAS_SIZE 2  /* constraint_bias: gamma, 2 doubles */
+#define FOUR_BAR_SLIP_VELOCITIES_SIZE 1  /* slip_velocities: w, 1 doubles */
 #define FOUR_BAR_DELASSUS_SIZE 4  /* delassus: G, 2 x 2 doubles */
 #define FOUR_BAR_CONSTRAINED_FORWARD_DYNAMICS_QDD_SIZE 3  /* constrained_forward_dynamics: qdd, 3 doubles */
 #define FOUR_BAR_CONSTRAINED_FORWARD_DYNAMICS_LAMBDA_SIZE 2  /* constrained_forward_dynamics: lambda, 2 doubles */
@@ -65,6 +67,8 @@ void four_bar_inverse_dynamics(const double *q, const double *qd, const double *
 void four_bar_kinetic_energy(const double *q, const double *qd, const double *p, double *T);
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs */
 void four_bar_potential_energy(const double *q, const double *p, double *U);
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13) */
+void four_bar_momentum(const double *q, const double *qd, const double *p, double *h);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void four_bar_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */
@@ -79,9 +83,11 @@ void four_bar_constraint_residual(const double *q, const double *p, double *phi)
 void four_bar_constraint_jacobian(const double *q, const double *p, double *J);
 /* gamma(q, qd) = J' qd: the relative accelerations at qdd = 0 (S'^T qd of (2.37) at the contact points), so that J qdd + gamma is the constraints' acceleration */
 void four_bar_constraint_bias(const double *q, const double *qd, const double *p, double *gamma);
+/* w(q, qd) = D_k+^T V (4.33)-(4.34): each contact point's velocity relative to the medium along the free translations of its constraint (the sliding velocities friction acts on) */
+void four_bar_slip_velocities(const double *q, const double *qd, const double *p, double *w);
 /* G = J A^-1 J^T, m*m row-major, by the transvective factors: P = T J^T, G = P^T diag(1/(beta,beta)) P (3.19) */
 void four_bar_delassus(const double *q, const double *p, double *G);
-/* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); returns nonzero when G is singular */
+/* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution) */
 int four_bar_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd, double *lambda);
 
 #ifdef __cplusplus

@@ -349,6 +349,61 @@ def potential_energy(q, p=None):
     return U[..., 0][()]
 
 
+def momentum(q, qd, p=None):
+    """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    h = np.empty(batch + (6,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    h[..., 2] = 0
+    h[..., 3] = 0
+    h[..., 4] = 0
+    x0 = 0.25*p_1
+    x1 = 0.2*p_2
+    x2 = np.cos(q_0)
+    x3 = np.sin(q_0)
+    x4 = np.cos(q_1)
+    x5 = np.sin(q_1)
+    x6 = np.cos(q_2)
+    x7 = np.sin(q_2)
+    x8 = qd_0 + qd_1
+    x9 = qd_2 + x8
+    x10 = p_0*qd_0
+    x11 = x5*x10
+    x12 = x4*x10
+    x13 = x12 + p_1*x8
+    x14 = x6*x13 - x7*x11
+    x15 = 0.1*p_0*qd_0
+    x16 = 0.5*x11
+    x17 = 0.4*(x6*x11 + x7*x13)
+    x18 = x0*x8 + 0.5*x12
+    x19 = x1*x9 + 0.4*x14
+    x20 = x2*x4 - x3*x5
+    x21 = x2*x5 + x3*x4
+    x22 = p_0*x2
+    x23 = p_0*x3
+    x24 = x6*x20 - x7*x21
+    x25 = x7*x20 + x6*x21
+    x26 = x16*x20 - x18*x21
+    x27 = x16*x21 + x18*x20
+    x28 = x17*x24 - x19*x25
+    x29 = x17*x25 + x19*x24
+    h[..., 0] = x26 - x3*x15 + x28
+    h[..., 1] = x2*x15 + x27 + x29
+    h[..., 5] = (0.0002 + 0.05*p_0*p_0)*qd_0 + x0*x12 + (0.004 + 0.125*p_1*p_1)*x8 + x22*x27 - x23*x26 + x1*x14 + (0.002 + 0.1*p_2*p_2)*x9 + (x22 + p_1*x20)*x29 - (x23 + p_1*x21)*x28
+    return h
+
+
 def joint_wrenches(q, qd, qdd, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
     q = np.asarray(q, dtype=float)
@@ -693,6 +748,17 @@ def constraint_bias(q, qd, p=None):
     return gamma
 
 
+def slip_velocities(q, qd, p=None):
+    """w(q, qd) = D_k+^T V (4.33)-(4.34): each contact point's velocity relative to the medium along the free translations of its constraint (the sliding velocities friction acts on)"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    w = np.empty(batch + (1,))
+    w[..., 0] = 0
+    return w[..., 0][()]
+
+
 def delassus(q, p=None):
     """G = J A^-1 J^T, m*m row-major, by the transvective factors: P = T J^T, G = P^T diag(1/(beta,beta)) P (3.19)"""
     q = np.asarray(q, dtype=float)
@@ -712,55 +778,55 @@ def delassus(q, p=None):
     x4 = np.sin(q_1)
     x5 = np.cos(q_2)
     x6 = np.sin(q_2)
-    x7 = 1/(0.002 + 0.1*p_2*p_2)
-    x8 = x0*x7
-    x9 = 0.4 - x0*x8
-    x10 = 0.4 - x9
-    x11 = x6*x6*x10
-    x12 = x5*x6*x10
-    x13 = x9 + x11
-    x14 = p_1*x12
-    x15 = p_1*x13
-    x16 = 0.25*p_1 + x15
-    x17 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x15)
-    x18 = x14*x17
-    x19 = x16*x17
-    x20 = x12 - x14*x19
-    x21 = 0.5 + x13 - x16*x19
-    x22 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x21 + x4*x4*(0.9 - x11 - x14*x18 - x21) + x3*x4*(x20 + x20)))
-    x23 = x1*x3 - x2*x4
-    x24 = x1*x4 + x2*x3
-    x25 = p_0*x1
-    x26 = p_0*x2
-    x27 = x25 + p_1*x23
-    x28 = x26 + p_1*x24
-    x29 = x27 + p_2*(x5*x23 - x6*x24)
-    x30 = x28 + p_2*(x6*x23 + x5*x24)
-    x31 = x29 - x27
-    x32 = x28 - x30
-    x33 = x8*x32
+    x7 = x1*x3 - x2*x4
+    x8 = x1*x4 + x2*x3
+    x9 = p_0*x1
+    x10 = p_0*x2
+    x11 = x9 + p_1*x7
+    x12 = x10 + p_1*x8
+    x13 = 1/(0.002 + 0.1*p_2*p_2)
+    x14 = x0*x13
+    x15 = 0.4 - x0*x14
+    x16 = 0.4 - x15
+    x17 = x6*x6*x16
+    x18 = x5*x6*x16
+    x19 = x15 + x17
+    x20 = p_1*x18
+    x21 = p_1*x19
+    x22 = 0.25*p_1 + x21
+    x23 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x21)
+    x24 = x20*x23
+    x25 = x22*x23
+    x26 = x18 - x20*x25
+    x27 = 0.5 + x19 - x22*x25
+    x28 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x27 + x4*x4*(0.9 - x17 - x20*x24 - x27) + x3*x4*(x26 + x26)))
+    x29 = x11 + p_2*(x5*x7 - x6*x8)
+    x30 = x12 + p_2*(x6*x7 + x5*x8)
+    x31 = x29 - x11
+    x32 = x12 - x30
+    x33 = x14*x32
     x34 = x5*x33
     x35 = x32 + p_1*x34
-    x36 = x26 - x30 - x35
-    x37 = x30 + x35 + x36 + p_0*(x4*(x18*x36 - x6*x33) + x3*(x34 + x19*x36))
-    x38 = x8*x31
+    x36 = x10 - x30 - x35
+    x37 = x30 + x35 + x36 + p_0*(x4*(x24*x36 - x6*x33) + x3*(x34 + x25*x36))
+    x38 = x14*x31
     x39 = x5*x38
     x40 = x31 + p_1*x39
-    x41 = x29 - x25 - x40
-    x42 = x29 - x40 - x41 - p_0*(x4*(x18*x41 - x6*x38) + x3*(x39 + x19*x41))
-    x43 = x22*x37
-    x44 = x17*x36
-    x45 = x7*x32
+    x41 = x29 - x9 - x40
+    x42 = x29 - x40 - x41 - p_0*(x4*(x24*x41 - x6*x38) + x3*(x39 + x25*x41))
+    x43 = x28*x37
+    x44 = x23*x36
+    x45 = x13*x32
     G[..., 0, 0] = x37*x43 + x36*x44 + x32*x45
     x46 = x41*x44 - x42*x43 + x31*x45
     G[..., 0, 1] = x46
     G[..., 1, 0] = x46
-    G[..., 1, 1] = x42*x22*x42 + x41*x17*x41 + x31*x7*x31
+    G[..., 1, 1] = x42*x28*x42 + x41*x23*x41 + x31*x13*x31
     return G
 
 
 def constrained_forward_dynamics(q, qd, tau, p=None):
-    """qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); returns nonzero when G is singular"""
+    """qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution)"""
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     tau = np.asarray(tau, dtype=float)
@@ -807,68 +873,68 @@ def constrained_forward_dynamics(q, qd, tau, p=None):
     x22 = x6*x20 - x7*x21
     x23 = 0.4*(x6*x21 + x7*x20) - x1*x10*x10
     x24 = x1*x22
-    x25 = 1/(0.002 + 0.1*p_2*p_2)
-    x26 = x1*x25
-    x27 = 0.4 - x1*x26
-    x28 = 0.4 - x27
-    x29 = x7*x7*x28
-    x30 = x6*x7*x28
-    x31 = x27 + x29
-    x32 = p_1*x30
-    x33 = p_1*x31
-    x34 = x0 + x33
-    x35 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x33)
-    x36 = x32*x35
-    x37 = x34*x35
-    x38 = x30 - x32*x37
-    x39 = 0.5 + x31 - x34*x37
-    x40 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x39 + x5*x5*(0.9 - x29 - x32*x36 - x39) + x4*x5*(x38 + x38)))
-    x41 = tau_2 - x24
-    x42 = 0.4*x22 + x26*x41
-    x43 = x7*x23 + x6*x42
-    x44 = x0*x20 + x24 + x41 + p_1*x43
-    x45 = tau_1 - x44
-    x46 = tau_0 - 0.1*p_0*x17 - x44 - x45 - p_0*(x5*(0.5*x19 + x6*x23 - x7*x42 - x0*x9 + x36*x45) + x4*(0.5*x20 + x43 + x37*x45))
-    x47 = x40*x46
-    x48 = x35*x45
-    x49 = x25*x41
-    x50 = x2*x4 - x3*x5
-    x51 = x2*x5 + x3*x4
-    x52 = p_0*x2
-    x53 = p_0*x3
-    x54 = x6*x50 - x7*x51
-    x55 = x7*x50 + x6*x51
-    x56 = x52 + p_1*x50
-    x57 = x53 + p_1*x51
-    x58 = x56 + p_2*x54
-    x59 = x57 + p_2*x55
-    x60 = x58 - x52
-    x61 = x53 - x59
-    x62 = x58 - x56
-    x63 = x57 - x59
+    x25 = x2*x4 - x3*x5
+    x26 = x2*x5 + x3*x4
+    x27 = p_0*x2
+    x28 = p_0*x3
+    x29 = x6*x25 - x7*x26
+    x30 = x7*x25 + x6*x26
+    x31 = x27 + p_1*x25
+    x32 = x28 + p_1*x26
+    x33 = 1/(0.002 + 0.1*p_2*p_2)
+    x34 = x1*x33
+    x35 = 0.4 - x1*x34
+    x36 = 0.4 - x35
+    x37 = x7*x7*x36
+    x38 = x6*x7*x36
+    x39 = x35 + x37
+    x40 = p_1*x38
+    x41 = p_1*x39
+    x42 = x0 + x41
+    x43 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x41)
+    x44 = x40*x43
+    x45 = x42*x43
+    x46 = x38 - x40*x45
+    x47 = 0.5 + x39 - x42*x45
+    x48 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x47 + x5*x5*(0.9 - x37 - x40*x44 - x47) + x4*x5*(x46 + x46)))
+    x49 = tau_2 - x24
+    x50 = 0.4*x22 + x34*x49
+    x51 = x7*x23 + x6*x50
+    x52 = x0*x20 + x24 + x49 + p_1*x51
+    x53 = tau_1 - x52
+    x54 = tau_0 - 0.1*p_0*x17 - x52 - x53 - p_0*(x5*(0.5*x19 + x6*x23 - x7*x50 - x0*x9 + x44*x53) + x4*(0.5*x20 + x51 + x45*x53))
+    x55 = x48*x54
+    x56 = x43*x53
+    x57 = x33*x49
+    x58 = x31 + p_2*x29
+    x59 = x32 + p_2*x30
+    x60 = x58 - x27
+    x61 = x28 - x59
+    x62 = x58 - x31
+    x63 = x32 - x59
     x64 = qd_1*x13
     x65 = qd_1*x12
     x66 = x6*x64 - x7*x65 + qd_2*x16 - x10*(x16 + p_2*x10)
     x67 = x10*x15 - x7*x64 - x6*x65 - qd_2*x15
-    x68 = x26*x63
+    x68 = x34*x63
     x69 = x6*x68
     x70 = x63 + p_1*x69
     x71 = x61 - x70
-    x72 = x59 + x70 + x71 + p_0*(x5*(x36*x71 - x7*x68) + x4*(x69 + x37*x71))
-    x73 = x26*x62
+    x72 = x59 + x70 + x71 + p_0*(x5*(x44*x71 - x7*x68) + x4*(x69 + x45*x71))
+    x73 = x34*x62
     x74 = x6*x73
     x75 = x62 + p_1*x74
     x76 = x60 - x75
-    x77 = x58 - x75 - x76 - p_0*(x5*(x36*x76 - x7*x73) + x4*(x74 + x37*x76))
-    x78 = x40*x72
-    x79 = x35*x71
-    x80 = x25*x63
+    x77 = x58 - x75 - x76 - p_0*(x5*(x44*x76 - x7*x73) + x4*(x74 + x45*x76))
+    x78 = x48*x72
+    x79 = x43*x71
+    x80 = x33*x63
     x81 = x72*x78 + x71*x79 + x63*x80
-    x82 = x77*x40*x77 + x76*x35*x76 + x62*x25*x62
-    x83 = x55*x67 - x54*x66 - x48*x71 + x47*x72 - x49*x63 - 20*(qd_1*x61 - qd_0*x59 + qd_2*x63) - 100*(x58 - p_3)
+    x82 = x77*x48*x77 + x76*x43*x76 + x62*x33*x62
+    x83 = x30*x67 - x29*x66 - x56*x71 + x55*x72 - x57*x63 - 20*(qd_1*x61 - qd_0*x59 + qd_2*x63) - 100*(x58 - p_3)
     x84 = (x76*x79 - x77*x78 + x62*x80)*1/x81
     x85 = x82 - x81*x84*x84
-    x86 = (x55*x66 + x54*x67 + x47*x77 + x48*x76 + x49*x62 + 20*(qd_0*x58 + qd_1*x60 + qd_2*x62) + 100*x59 + x83*x84)/x85
+    x86 = (x30*x66 + x29*x67 + x55*x77 + x56*x76 + x57*x62 + 20*(qd_0*x58 + qd_1*x60 + qd_2*x62) + 100*x59 + x83*x84)/x85
     lambda_[..., 1] = -x86
     x87 = x83/x81 + x84*x86
     lambda_[..., 0] = x87
@@ -876,17 +942,18 @@ def constrained_forward_dynamics(q, qd, tau, p=None):
     x89 = np.sign(x88 - x81)
     x90 = np.sign(x88 - x85)
     status[..., 0] = 2 + x89 + x90
-    x91 = x40*(x46 - x72*x87 - x77*x86)
+    x91 = x48*(x54 - x72*x87 - x77*x86)
     qdd[..., 0] = x91
     x92 = p_0*x91
     x93 = x5*x92
     x94 = x4*x92
-    x95 = x35*(x45 + x71*x87 - x76*x86) - x91 - x36*x93 - x37*x94
+    x95 = x43*(x53 + x71*x87 - x76*x86) - x91 - x44*x93 - x45*x94
     qdd[..., 1] = x95
     x96 = x91 + x95
-    qdd[..., 2] = x25*(x41 + x63*x87 - x62*x86) - x96 - x26*(x6*(x94 + p_1*x96) - x7*x93)
-    bad = np.argwhere(np.reshape(status[..., 0] != 0.0, batch))
-    if bad.size:
-        raise np.linalg.LinAlgError("constrained_forward_dynamics: J A^-1 J^T is singular (or not finite) at "
+    qdd[..., 2] = x33*(x49 + x63*x87 - x62*x86) - x96 - x34*(x6*(x94 + p_1*x96) - x7*x93)
+    failed = np.reshape(status[..., 0] != 0.0, batch)
+    if np.any(failed):
+        bad = np.argwhere(failed)
+        raise np.linalg.LinAlgError("constrained_forward_dynamics: the constraints are singular (J A^-1 J^T), or Coulomb friction has no consistent solution, at "
                                     + ("the state" if not batch else "the states " + ", ".join(str(tuple(int(i) for i in b)) for b in bad[:10]) + (" ..." if len(bad) > 10 else "")))
     return qdd, lambda_

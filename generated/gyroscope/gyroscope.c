@@ -251,6 +251,61 @@ void gyroscope_potential_energy(const double *q, const double *p, double *U)
     U[0] = 0.0024*(x2*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1) - 2.7484333610096403*x3);
 }
 
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)
+ * operations: 75 mul, 40 add, 0 div, 3 call */
+void gyroscope_momentum(const double *q, const double *qd, const double *p, double *h)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    (void)p;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    const double x2 = 0.3420201433256687*x1 - 0.5389855446957562*x0;
+    const double x3 = 0.5389855446957562*x1 + 0.3420201433256687*x0;
+    const double x4 = 0.8191520442889918*x0;
+    const double x5 = 0.8191520442889918*x1;
+    const double x6 = 0.19617469496901108*x0 + 0.9396926207859084*x1;
+    const double x7 = 0.9396926207859084*x0 - 0.19617469496901108*x1;
+    double x9, x8;
+    aggsym_sincos(q_1, &x9, &x8);
+    double x11, x10;
+    aggsym_sincos(q_2, &x11, &x10);
+    const double x12 = qd_0*x8;
+    const double x13 = qd_0*x9;
+    const double x14 = x10*x12 + qd_1*x11;
+    const double x15 = qd_1*x10 - x11*x12;
+    const double x16 = 0.0015*x13;
+    const double x17 = 0.0015*x12;
+    const double x18 = 0.0024*x14;
+    const double x19 = 0.0024*x15;
+    const double x20 = 0.0011048*x15;
+    const double x21 = 0.0011048*x14;
+    const double x22 = 0.002*qd_1;
+    const double x23 = 0.002*(qd_2 + x13);
+    const double x24 = 0.7697511313200572*x8 - x3*x9;
+    const double x25 = 0.7697511313200572*x9 + x3*x8;
+    const double x26 = 0.573576436351046*x8 + x5*x9;
+    const double x27 = 0.573576436351046*x9 - x5*x8;
+    const double x28 = 0.2801664995932355*x8 + x7*x9;
+    const double x29 = x7*x8 - 0.2801664995932355*x9;
+    const double x30 = x10*x24 + x2*x11;
+    const double x31 = x2*x10 - x11*x24;
+    const double x32 = x10*x26 + x4*x11;
+    const double x33 = x4*x10 - x11*x26;
+    const double x34 = x6*x11 - x10*x28;
+    const double x35 = x11*x28 + x6*x10;
+    h[0] = x19*x30 - x18*x31;
+    h[1] = x19*x32 - x18*x33;
+    h[2] = x19*x34 - x18*x35;
+    h[3] = 0.003079004525280229*qd_0 + x17*x24 + x2*x22 + x16*x25 + x21*x30 + x20*x31 + x23*x25;
+    h[4] = 0.002294305745404184*qd_0 + x17*x26 + x4*x22 + x16*x27 + x21*x32 + x20*x33 + x23*x27;
+    h[5] = x6*x22 - x17*x28 + x16*x29 - 0.001120665998372942*qd_0 + x21*x34 + x20*x35 + x23*x29;
+}
+
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
  * operations: 74 mul, 46 add, 0 div, 3 call */
 void gyroscope_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)

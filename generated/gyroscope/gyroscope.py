@@ -247,6 +247,64 @@ def potential_energy(q, p=None):
     return U[..., 0][()]
 
 
+def momentum(q, qd, p=None):
+    """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    h = np.empty(batch + (6,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = 0.3420201433256687*x1 - 0.5389855446957562*x0
+    x3 = 0.5389855446957562*x1 + 0.3420201433256687*x0
+    x4 = 0.8191520442889918*x0
+    x5 = 0.8191520442889918*x1
+    x6 = 0.19617469496901108*x0 + 0.9396926207859084*x1
+    x7 = 0.9396926207859084*x0 - 0.19617469496901108*x1
+    x8 = np.cos(q_1)
+    x9 = np.sin(q_1)
+    x10 = np.cos(q_2)
+    x11 = np.sin(q_2)
+    x12 = qd_0*x8
+    x13 = qd_0*x9
+    x14 = x10*x12 + qd_1*x11
+    x15 = qd_1*x10 - x11*x12
+    x16 = 0.0015*x13
+    x17 = 0.0015*x12
+    x18 = 0.0024*x14
+    x19 = 0.0024*x15
+    x20 = 0.0011048*x15
+    x21 = 0.0011048*x14
+    x22 = 0.002*qd_1
+    x23 = 0.002*(qd_2 + x13)
+    x24 = 0.7697511313200572*x8 - x3*x9
+    x25 = 0.7697511313200572*x9 + x3*x8
+    x26 = 0.573576436351046*x8 + x5*x9
+    x27 = 0.573576436351046*x9 - x5*x8
+    x28 = 0.2801664995932355*x8 + x7*x9
+    x29 = x7*x8 - 0.2801664995932355*x9
+    x30 = x10*x24 + x2*x11
+    x31 = x2*x10 - x11*x24
+    x32 = x10*x26 + x4*x11
+    x33 = x4*x10 - x11*x26
+    x34 = x6*x11 - x10*x28
+    x35 = x11*x28 + x6*x10
+    h[..., 0] = x19*x30 - x18*x31
+    h[..., 1] = x19*x32 - x18*x33
+    h[..., 2] = x19*x34 - x18*x35
+    h[..., 3] = 0.003079004525280229*qd_0 + x17*x24 + x2*x22 + x16*x25 + x21*x30 + x20*x31 + x23*x25
+    h[..., 4] = 0.002294305745404184*qd_0 + x17*x26 + x4*x22 + x16*x27 + x21*x32 + x20*x33 + x23*x27
+    h[..., 5] = x6*x22 - x17*x28 + x16*x29 - 0.001120665998372942*qd_0 + x21*x34 + x20*x35 + x23*x29
+    return h
+
+
 def joint_wrenches(q, qd, qdd, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
     q = np.asarray(q, dtype=float)

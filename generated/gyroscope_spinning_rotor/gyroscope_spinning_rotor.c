@@ -222,6 +222,63 @@ void gyroscope_spinning_rotor_potential_energy(const double *q, const double *t,
     U[0] = 0.0024*(x2*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1) - 2.7484333610096403*x3);
 }
 
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)
+ * operations: 76 mul, 40 add, 0 div, 3 call */
+void gyroscope_spinning_rotor_momentum(const double *q, const double *qd, const double *t, const double *p, double *h)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double t_0 = t[0];
+    static const double p_defaults[1] = {300.0};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double x0 = p_0*t_0;
+    double x2, x1;
+    aggsym_sincos(x0, &x2, &x1);
+    double x4, x3;
+    aggsym_sincos(q_0, &x4, &x3);
+    const double x5 = 0.3420201433256687*x4 - 0.5389855446957562*x3;
+    const double x6 = 0.5389855446957562*x4 + 0.3420201433256687*x3;
+    const double x7 = 0.8191520442889918*x3;
+    const double x8 = 0.8191520442889918*x4;
+    const double x9 = 0.19617469496901108*x3 + 0.9396926207859084*x4;
+    const double x10 = 0.9396926207859084*x3 - 0.19617469496901108*x4;
+    double x12, x11;
+    aggsym_sincos(q_1, &x12, &x11);
+    const double x13 = qd_0*x11;
+    const double x14 = qd_0*x12;
+    const double x15 = x1*x13 + x2*qd_1;
+    const double x16 = x1*qd_1 - x2*x13;
+    const double x17 = 0.0015*x13;
+    const double x18 = 0.002*qd_1;
+    const double x19 = 0.0015*x14;
+    const double x20 = 0.0024*x16;
+    const double x21 = 0.0024*x15;
+    const double x22 = 0.0011048*x15;
+    const double x23 = 0.0011048*x16;
+    const double x24 = 0.002*(p_0 + x14);
+    const double x25 = 0.7697511313200572*x11 - x6*x12;
+    const double x26 = 0.7697511313200572*x12 + x6*x11;
+    const double x27 = 0.573576436351046*x11 + x8*x12;
+    const double x28 = 0.573576436351046*x12 - x8*x11;
+    const double x29 = 0.2801664995932355*x11 + x10*x12;
+    const double x30 = x10*x11 - 0.2801664995932355*x12;
+    const double x31 = x1*x25 + x2*x5;
+    const double x32 = x1*x5 - x2*x25;
+    const double x33 = x1*x27 + x2*x7;
+    const double x34 = x1*x7 - x2*x27;
+    const double x35 = x2*x9 - x1*x29;
+    const double x36 = x2*x29 + x1*x9;
+    h[0] = x20*x31 - x21*x32;
+    h[1] = x20*x33 - x21*x34;
+    h[2] = x20*x35 - x21*x36;
+    h[3] = 0.003079004525280229*qd_0 + x17*x25 + x5*x18 + x19*x26 + x22*x31 + x23*x32 + x24*x26;
+    h[4] = 0.002294305745404184*qd_0 + x17*x27 + x7*x18 + x19*x28 + x22*x33 + x23*x34 + x24*x28;
+    h[5] = x9*x18 - x17*x29 + x19*x30 - 0.001120665998372942*qd_0 + x22*x35 + x23*x36 + x24*x30;
+}
+
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
  * operations: 75 mul, 45 add, 0 div, 3 call */
 void gyroscope_spinning_rotor_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *W)

@@ -29,6 +29,7 @@ extern "C" {
 #define GYROSCOPE_SPINNING_ROTOR_INVERSE_DYNAMICS_SIZE 2  /* inverse_dynamics: tau, 2 doubles */
 #define GYROSCOPE_SPINNING_ROTOR_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
 #define GYROSCOPE_SPINNING_ROTOR_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_MOMENTUM_SIZE 6  /* momentum: h, 6 doubles */
 #define GYROSCOPE_SPINNING_ROTOR_JOINT_WRENCHES_SIZE 12  /* joint_wrenches: W, 2 x 6 doubles */
 #define GYROSCOPE_SPINNING_ROTOR_FORWARD_DYNAMICS_SIZE 2  /* forward_dynamics: qdd, 2 doubles */
 #define GYROSCOPE_SPINNING_ROTOR_INERTIA_INVERSE_SIZE 4  /* inertia_inverse: Ainv, 2 x 2 doubles */
@@ -50,6 +51,8 @@ void gyroscope_spinning_rotor_inverse_dynamics(const double *q, const double *qd
 void gyroscope_spinning_rotor_kinetic_energy(const double *q, const double *qd, const double *t, const double *p, double *T);
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs */
 void gyroscope_spinning_rotor_potential_energy(const double *q, const double *t, const double *p, double *U);
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13) */
+void gyroscope_spinning_rotor_momentum(const double *q, const double *qd, const double *t, const double *p, double *h);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void gyroscope_spinning_rotor_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */

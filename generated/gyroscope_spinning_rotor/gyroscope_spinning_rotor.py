@@ -217,6 +217,66 @@ def potential_energy(q, t, p=None):
     return U[..., 0][()]
 
 
+def momentum(q, qd, t, p=None):
+    """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], t.shape[:-1], )
+    h = np.empty(batch + (6,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    t_0 = t[..., 0]
+    p_0 = p[..., 0]
+    x0 = p_0*t_0
+    x1 = np.cos(x0)
+    x2 = np.sin(x0)
+    x3 = np.cos(q_0)
+    x4 = np.sin(q_0)
+    x5 = 0.3420201433256687*x4 - 0.5389855446957562*x3
+    x6 = 0.5389855446957562*x4 + 0.3420201433256687*x3
+    x7 = 0.8191520442889918*x3
+    x8 = 0.8191520442889918*x4
+    x9 = 0.19617469496901108*x3 + 0.9396926207859084*x4
+    x10 = 0.9396926207859084*x3 - 0.19617469496901108*x4
+    x11 = np.cos(q_1)
+    x12 = np.sin(q_1)
+    x13 = qd_0*x11
+    x14 = qd_0*x12
+    x15 = x1*x13 + x2*qd_1
+    x16 = x1*qd_1 - x2*x13
+    x17 = 0.0015*x13
+    x18 = 0.002*qd_1
+    x19 = 0.0015*x14
+    x20 = 0.0024*x16
+    x21 = 0.0024*x15
+    x22 = 0.0011048*x15
+    x23 = 0.0011048*x16
+    x24 = 0.002*(p_0 + x14)
+    x25 = 0.7697511313200572*x11 - x6*x12
+    x26 = 0.7697511313200572*x12 + x6*x11
+    x27 = 0.573576436351046*x11 + x8*x12
+    x28 = 0.573576436351046*x12 - x8*x11
+    x29 = 0.2801664995932355*x11 + x10*x12
+    x30 = x10*x11 - 0.2801664995932355*x12
+    x31 = x1*x25 + x2*x5
+    x32 = x1*x5 - x2*x25
+    x33 = x1*x27 + x2*x7
+    x34 = x1*x7 - x2*x27
+    x35 = x2*x9 - x1*x29
+    x36 = x2*x29 + x1*x9
+    h[..., 0] = x20*x31 - x21*x32
+    h[..., 1] = x20*x33 - x21*x34
+    h[..., 2] = x20*x35 - x21*x36
+    h[..., 3] = 0.003079004525280229*qd_0 + x17*x25 + x5*x18 + x19*x26 + x22*x31 + x23*x32 + x24*x26
+    h[..., 4] = 0.002294305745404184*qd_0 + x17*x27 + x7*x18 + x19*x28 + x22*x33 + x23*x34 + x24*x28
+    h[..., 5] = x9*x18 - x17*x29 + x19*x30 - 0.001120665998372942*qd_0 + x22*x35 + x23*x36 + x24*x30
+    return h
+
+
 def joint_wrenches(q, qd, qdd, t, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
     q = np.asarray(q, dtype=float)

@@ -30,6 +30,7 @@ extern "C" {
 #define MANIPULATOR6_INVERSE_DYNAMICS_SIZE 6  /* inverse_dynamics: tau, 6 doubles */
 #define MANIPULATOR6_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
 #define MANIPULATOR6_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define MANIPULATOR6_MOMENTUM_SIZE 6  /* momentum: h, 6 doubles */
 #define MANIPULATOR6_JOINT_WRENCHES_SIZE 36  /* joint_wrenches: W, 6 x 6 doubles */
 #define MANIPULATOR6_FORWARD_DYNAMICS_SIZE 6  /* forward_dynamics: qdd, 6 doubles */
 #define MANIPULATOR6_INERTIA_INVERSE_SIZE 36  /* inertia_inverse: Ainv, 6 x 6 doubles */
@@ -52,6 +53,8 @@ void manipulator6_inverse_dynamics(const double *q, const double *qd, const doub
 void manipulator6_kinetic_energy(const double *q, const double *qd, const double *p, double *T);
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs */
 void manipulator6_potential_energy(const double *q, const double *p, double *U);
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13) */
+void manipulator6_momentum(const double *q, const double *qd, const double *p, double *h);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void manipulator6_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */

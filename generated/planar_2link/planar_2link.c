@@ -244,6 +244,43 @@ void planar_2link_potential_energy(const double *q, const double *p, double *U)
     U[0] = p_0*0.5*p_2*x4 + p_1*p_2*x4 + p_1*0.5*p_3*(x2*x4 + x3*p_4*x0);
 }
 
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)
+ * operations: 34 mul, 12 add, 0 div, 2 call */
+void planar_2link_momentum(const double *q, const double *qd, const double *p, double *h)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    h[2] = 0;
+    h[3] = 0;
+    h[4] = 0;
+    const double x0 = p_1*0.5*p_3;
+    double x2, x1;
+    aggsym_sincos(q_0, &x2, &x1);
+    double x4, x3;
+    aggsym_sincos(q_1, &x4, &x3);
+    const double x5 = qd_0 + qd_1;
+    const double x6 = p_2*qd_0;
+    const double x7 = x3*x6;
+    const double x8 = p_0*0.5*p_2*qd_0;
+    const double x9 = p_1*x4*x6;
+    const double x10 = x0*x5 + p_1*x7;
+    const double x11 = x1*x3 - x2*x4;
+    const double x12 = x1*x4 + x2*x3;
+    const double x13 = x9*x11 - x10*x12;
+    const double x14 = x9*x12 + x10*x11;
+    h[0] = x13 - x2*x8;
+    h[1] = x1*x8 + x14;
+    h[5] = p_2*p_2*0.3333333333333333*p_0*qd_0 + x0*x7 + p_3*p_3*0.3333333333333333*p_1*x5 + p_2*x1*x14 - p_2*x2*x13;
+}
+
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
  * operations: 37 mul, 18 add, 0 div, 2 call */
 void planar_2link_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)

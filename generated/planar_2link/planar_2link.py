@@ -232,6 +232,45 @@ def potential_energy(q, p=None):
     return U[..., 0][()]
 
 
+def momentum(q, qd, p=None):
+    """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    h = np.empty(batch + (6,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    h[..., 2] = 0
+    h[..., 3] = 0
+    h[..., 4] = 0
+    x0 = p_1*0.5*p_3
+    x1 = np.cos(q_0)
+    x2 = np.sin(q_0)
+    x3 = np.cos(q_1)
+    x4 = np.sin(q_1)
+    x5 = qd_0 + qd_1
+    x6 = p_2*qd_0
+    x7 = x3*x6
+    x8 = p_0*0.5*p_2*qd_0
+    x9 = p_1*x4*x6
+    x10 = x0*x5 + p_1*x7
+    x11 = x1*x3 - x2*x4
+    x12 = x1*x4 + x2*x3
+    x13 = x9*x11 - x10*x12
+    x14 = x9*x12 + x10*x11
+    h[..., 0] = x13 - x2*x8
+    h[..., 1] = x1*x8 + x14
+    h[..., 5] = p_2*p_2*0.3333333333333333*p_0*qd_0 + x0*x7 + p_3*p_3*0.3333333333333333*p_1*x5 + p_2*x1*x14 - p_2*x2*x13
+    return h
+
+
 def joint_wrenches(q, qd, qdd, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
     q = np.asarray(q, dtype=float)

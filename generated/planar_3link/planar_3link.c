@@ -386,6 +386,62 @@ void planar_3link_potential_energy(const double *q, const double *p, double *U)
     U[0] = p_0*0.5*p_3*x6 + p_1*x9 + p_1*0.5*p_4*x8 + p_2*(x9 + p_4*x8) + p_2*0.5*p_5*(x4*x8 + x5*(x2*x7 - x3*x6));
 }
 
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)
+ * operations: 61 mul, 29 add, 0 div, 3 call */
+void planar_3link_momentum(const double *q, const double *qd, const double *p, double *h)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_5 = p[5];
+    h[2] = 0;
+    h[3] = 0;
+    h[4] = 0;
+    const double x0 = p_1*0.5*p_4;
+    const double x1 = p_2*0.5*p_5;
+    double x3, x2;
+    aggsym_sincos(q_0, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_1, &x5, &x4);
+    double x7, x6;
+    aggsym_sincos(q_2, &x7, &x6);
+    const double x8 = qd_0 + qd_1;
+    const double x9 = qd_2 + x8;
+    const double x10 = p_3*qd_0;
+    const double x11 = x5*x10;
+    const double x12 = x4*x10;
+    const double x13 = x12 + p_4*x8;
+    const double x14 = x6*x13 - x7*x11;
+    const double x15 = p_0*0.5*p_3*qd_0;
+    const double x16 = p_1*x11;
+    const double x17 = p_2*(x6*x11 + x7*x13);
+    const double x18 = x0*x8 + p_1*x12;
+    const double x19 = x1*x9 + p_2*x14;
+    const double x20 = x2*x4 - x3*x5;
+    const double x21 = x2*x5 + x3*x4;
+    const double x22 = p_3*x2;
+    const double x23 = p_3*x3;
+    const double x24 = x6*x20 - x7*x21;
+    const double x25 = x7*x20 + x6*x21;
+    const double x26 = x16*x20 - x18*x21;
+    const double x27 = x16*x21 + x18*x20;
+    const double x28 = x17*x24 - x19*x25;
+    const double x29 = x17*x25 + x19*x24;
+    h[0] = x26 - x3*x15 + x28;
+    h[1] = x2*x15 + x27 + x29;
+    h[5] = p_3*p_3*0.3333333333333333*p_0*qd_0 + x0*x12 + p_4*p_4*0.3333333333333333*p_1*x8 + x22*x27 - x23*x26 + x1*x14 + p_5*p_5*0.3333333333333333*p_2*x9 + (x22 + p_4*x20)*x29 - (x23 + p_4*x21)*x28;
+}
+
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
  * operations: 60 mul, 33 add, 0 div, 3 call */
 void planar_3link_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)

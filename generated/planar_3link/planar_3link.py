@@ -375,6 +375,64 @@ def potential_energy(q, p=None):
     return U[..., 0][()]
 
 
+def momentum(q, qd, p=None):
+    """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
+    h = np.empty(batch + (6,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    p_5 = p[..., 5]
+    h[..., 2] = 0
+    h[..., 3] = 0
+    h[..., 4] = 0
+    x0 = p_1*0.5*p_4
+    x1 = p_2*0.5*p_5
+    x2 = np.cos(q_0)
+    x3 = np.sin(q_0)
+    x4 = np.cos(q_1)
+    x5 = np.sin(q_1)
+    x6 = np.cos(q_2)
+    x7 = np.sin(q_2)
+    x8 = qd_0 + qd_1
+    x9 = qd_2 + x8
+    x10 = p_3*qd_0
+    x11 = x5*x10
+    x12 = x4*x10
+    x13 = x12 + p_4*x8
+    x14 = x6*x13 - x7*x11
+    x15 = p_0*0.5*p_3*qd_0
+    x16 = p_1*x11
+    x17 = p_2*(x6*x11 + x7*x13)
+    x18 = x0*x8 + p_1*x12
+    x19 = x1*x9 + p_2*x14
+    x20 = x2*x4 - x3*x5
+    x21 = x2*x5 + x3*x4
+    x22 = p_3*x2
+    x23 = p_3*x3
+    x24 = x6*x20 - x7*x21
+    x25 = x7*x20 + x6*x21
+    x26 = x16*x20 - x18*x21
+    x27 = x16*x21 + x18*x20
+    x28 = x17*x24 - x19*x25
+    x29 = x17*x25 + x19*x24
+    h[..., 0] = x26 - x3*x15 + x28
+    h[..., 1] = x2*x15 + x27 + x29
+    h[..., 5] = p_3*p_3*0.3333333333333333*p_0*qd_0 + x0*x12 + p_4*p_4*0.3333333333333333*p_1*x8 + x22*x27 - x23*x26 + x1*x14 + p_5*p_5*0.3333333333333333*p_2*x9 + (x22 + p_4*x20)*x29 - (x23 + p_4*x21)*x28
+    return h
+
+
 def joint_wrenches(q, qd, qdd, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
     q = np.asarray(q, dtype=float)

@@ -36,6 +36,7 @@ extern "C" {
 #define SPACECRAFT_INVERSE_DYNAMICS_SIZE 12  /* inverse_dynamics: tau, 12 doubles */
 #define SPACECRAFT_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
 #define SPACECRAFT_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define SPACECRAFT_MOMENTUM_SIZE 6  /* momentum: h, 6 doubles */
 #define SPACECRAFT_JOINT_WRENCHES_SIZE 30  /* joint_wrenches: W, 5 x 6 doubles */
 #define SPACECRAFT_FORWARD_DYNAMICS_SIZE 12  /* forward_dynamics: qdd, 12 doubles */
 #define SPACECRAFT_INERTIA_INVERSE_SIZE 144  /* inertia_inverse: Ainv, 12 x 12 doubles */
@@ -58,6 +59,8 @@ void spacecraft_inverse_dynamics(const double *q, const double *qd, const double
 void spacecraft_kinetic_energy(const double *q, const double *qd, const double *p, double *T);
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs */
 void spacecraft_potential_energy(const double *q, const double *p, double *U);
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13) */
+void spacecraft_momentum(const double *q, const double *qd, const double *p, double *h);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void spacecraft_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */

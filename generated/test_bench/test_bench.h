@@ -72,6 +72,7 @@ extern "C" {
 #define TEST_BENCH_INVERSE_DYNAMICS_SIZE 48  /* inverse_dynamics: tau, 48 doubles */
 #define TEST_BENCH_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
 #define TEST_BENCH_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define TEST_BENCH_MOMENTUM_SIZE 6  /* momentum: h, 6 doubles */
 #define TEST_BENCH_JOINT_WRENCHES_SIZE 288  /* joint_wrenches: W, 48 x 6 doubles */
 #define TEST_BENCH_FORWARD_DYNAMICS_SIZE 48  /* forward_dynamics: qdd, 48 doubles */
 #define TEST_BENCH_INERTIA_INVERSE_SIZE 2304  /* inertia_inverse: Ainv, 48 x 48 doubles */
@@ -94,6 +95,8 @@ void test_bench_inverse_dynamics(const double *q, const double *qd, const double
 void test_bench_kinetic_energy(const double *q, const double *qd, const double *p, double *T);
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs */
 void test_bench_potential_energy(const double *q, const double *p, double *U);
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13) */
+void test_bench_momentum(const double *q, const double *qd, const double *p, double *h);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void test_bench_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */

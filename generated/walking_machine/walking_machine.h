@@ -48,6 +48,7 @@ extern "C" {
 #define WALKING_MACHINE_INVERSE_DYNAMICS_SIZE 24  /* inverse_dynamics: tau, 24 doubles */
 #define WALKING_MACHINE_KINETIC_ENERGY_SIZE 1  /* kinetic_energy: T, 1 doubles */
 #define WALKING_MACHINE_POTENTIAL_ENERGY_SIZE 1  /* potential_energy: U, 1 doubles */
+#define WALKING_MACHINE_MOMENTUM_SIZE 6  /* momentum: h, 6 doubles */
 #define WALKING_MACHINE_JOINT_WRENCHES_SIZE 114  /* joint_wrenches: W, 19 x 6 doubles */
 #define WALKING_MACHINE_FORWARD_DYNAMICS_SIZE 24  /* forward_dynamics: qdd, 24 doubles */
 #define WALKING_MACHINE_INERTIA_INVERSE_SIZE 576  /* inertia_inverse: Ainv, 24 x 24 doubles */
@@ -70,6 +71,8 @@ void walking_machine_inverse_dynamics(const double *q, const double *qd, const d
 void walking_machine_kinetic_energy(const double *q, const double *qd, const double *p, double *T);
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs */
 void walking_machine_potential_energy(const double *q, const double *p, double *U);
+/* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13) */
+void walking_machine_momentum(const double *q, const double *qd, const double *p, double *h);
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void walking_machine_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */
