@@ -69,7 +69,8 @@ def pdflatex(tex: Path):
                           cwd=tex.parent, capture_output=True, text=True)
 
 
-@pytest.mark.parametrize("name", ["double_pendulum", "planar_3link", "manipulator6", "spacecraft"])
+@pytest.mark.parametrize("name", ["double_pendulum", "planar_3link", "manipulator6", "spacecraft", "four_bar",
+                                  "double_pendulum_sliding_friction"])
 def test_latex_compiles(name, tmp_path):
     """Closed forms (small models) and the intermediate-variable form (larger ones) compile with pdflatex."""
     model = aggsym.load(model_path(name))
@@ -78,6 +79,19 @@ def test_latex_compiles(name, tmp_path):
     proc = pdflatex(tex)
     assert proc.returncode == 0, proc.stdout[-2000:]
     assert (tmp_path / f"{name}.pdf").stat().st_size > 1000
+
+
+def test_latex_shows_the_constraints_of_small_models():
+    """The four-bar's D_lambda^T is the rate of its rocker's end (a cos q1 + b cos(q1 + q2) + c cos(q1 + q2 + q3),
+    a sin q1 + ...) per coordinate: its entries in closed form, and the constrained equations (4.25)-(4.28)."""
+    text = generate(aggsym.load(model_path("four_bar"))).files["four_bar.tex"]
+    assert r"\section*{Constraints (chapter 4)}" in text and r"D_\lambda \lambda" in text
+    assert r"(D_\lambda^T)_{13} &= - c \sin{\left(q_{1} + q_{2} + q_{3} \right)}" in text
+    assert r"(D_\lambda^T)_{21} &= a \cos{\left(q_{1} \right)} + b \cos{\left(q_{1} + q_{2} \right)} + c \cos{" in text
+    assert "pin & rocker & world & o1 o2" in text
+    sliding = generate(aggsym.load(model_path("double_pendulum_sliding_friction"))).files[
+        "double_pendulum_sliding_friction.tex"]
+    assert "foot & arm2 & world & o1 & coulomb mu" in sliding
 
 
 def test_broken_latex_fails_the_same_check(tmp_path):

@@ -12,7 +12,7 @@ from __future__ import annotations
 import sympy as sp
 from sympy.printing.latex import LatexPrinter
 
-from ..core.program import expanded_terms, straight_line
+from ..core.program import expanded_terms, straight_line, to_sympy
 from ..symbolic import Equations, coordinate_symbols
 from .printing import Converter, LinComb, Num, Prod, _Common
 
@@ -236,6 +236,38 @@ def intermediate_form(model, prog, outputs, roles=("inertia", "bias", "gravity")
     return blocks
 
 
+def constraint_section(model, prog, outputs, small: bool):
+    """The constraints (chapter 4): a table of them and, for small models, the nonzero entries of
+    D_lambda^T = J (4.27) and of gamma = J' qd, simplified."""
+    if not model.constraints:
+        return None
+    rows = []
+    for c in model.constraints:
+        law = "" if c.friction is None else f"{c.friction[0]} {c.friction[1]}"
+        rows.append((c.name, c.body, c.medium, " ".join(c.rows), law))
+    entries = []
+    if small and "constraint_jacobian" in outputs and "constraint_bias" in outputs:
+        names = symbol_names(model)
+        q, qd, _ = coordinate_symbols(model)
+        symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
+        symbols.update({("q", i): s for i, s in enumerate(q)})
+        symbols.update({("qd", i): s for i, s in enumerate(qd)})
+        J = to_sympy(prog, outputs["constraint_jacobian"][0], symbols)
+        gamma = to_sympy(prog, outputs["constraint_bias"][0], symbols)
+        n = model.nq
+        for r in range(model.constraint_rows):
+            for j in range(n):
+                x = sp.trigsimp(J[r * n + j])
+                if x != 0:
+                    entries.append(broken(f"(D_\\lambda^T)_{{{r + 1}{j + 1}}}", _terms(x, names)))
+        for r in range(model.constraint_rows):
+            x = sp.trigsimp(sp.expand(gamma[r]))
+            if x != 0:
+                entries.append(broken(f"\\gamma_{{{r + 1}}}", _terms(x, names)))
+    return {"table": rows, "entries": entries, "m": model.constraint_rows,
+            "stabilization": [sp.latex(x) for x in model.stabilization]}
+
+
 def latex_document(model, env, prog, outputs) -> str:
     """The standalone LaTeX document (rendered through templates/model.tex.j2)."""
     flat = [x for role in ("inertia", "bias", "gravity") if role in outputs for o in outputs[role] for x in o]
@@ -253,6 +285,7 @@ def latex_document(model, env, prog, outputs) -> str:
         "closed": closed_form(model) if small else None,
         "cauchy": cauchy_form(model) if small and "forward_dynamics" in outputs else None,
         "blocks": None if small else intermediate_form(model, prog, outputs),
+        "constraints": constraint_section(model, prog, outputs, small),
         "nq": model.nq,
         "qdd": [names[s] for s in qdd],
     }
