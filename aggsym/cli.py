@@ -51,6 +51,9 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--constraints", metavar="FILE",
                        help="URDF only: a YAML side file with the robot's 'constraints:' (contacts with the world, "
                             "closed loops; bodies named by URDF link) and 'stabilization:'")
+        p.add_argument("--support", action="store_true",
+                       help="URDF only, with --floating-base: the free root is the support of the support equation "
+                            "(3.1); its 6 coordinates are q, the joints gamma (support_* routines)")
         p.add_argument("--name", metavar="NAME",
                        help="the name of the generated code (C prefix, module and file names) instead of the model's")
         return p
@@ -80,14 +83,24 @@ def _load(args):
     options = {"floating_base": True} if args.floating_base else {}
     if args.mimic != "independent":
         options["mimic"] = args.mimic
-    if (options or args.constraints) and path.suffix.lower() != ".urdf":
-        raise AggsymError(f"{path}: --floating-base, --mimic and --constraints apply to URDF models only (a YAML "
-                          f"model lists its constraints itself)")
+    if (options or args.constraints or args.support) and path.suffix.lower() != ".urdf":
+        raise AggsymError(f"{path}: --floating-base, --mimic, --constraints and --support apply to URDF models only "
+                          f"(a YAML model lists its constraints and support itself)")
+    if args.support and not args.floating_base:
+        raise AggsymError(f"{path}: --support needs --floating-base (the support is the free root)")
     model = load(path, **options)
     if args.constraints:
         from .model.yaml_reader import load_constraints
 
         model = load_constraints(args.constraints, model)
+    if args.support:
+        from .model.validate import support_problem
+
+        root = model.bodies[0].name
+        problem = support_problem(model, root)
+        if problem:
+            raise AggsymError(f"{path}: --support: {problem}")
+        model = dataclasses.replace(model, support=root)
     if args.name is not None:
         from .codegen.escape import check_c_identifier, check_module_name
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from . import __version__
-from .mechanics import constraints, elastic, sweeps, transvective
+from .mechanics import constraints, elastic, support, sweeps, transvective
 from .mechanics.bias import coriolis_matrix, gravity_vector
 from .mechanics.coupling import Coupler
 from .mechanics.energy import kinetic_energy, momentum, potential_energy
@@ -35,7 +35,8 @@ from .mechanics.inertia import inertia_matrix
 from .mechanics.kinematics import TreeKinematics
 from .model.tree import Tree
 
-INPUT_KINDS = ("q", "qd", "qdd", "tau", "t")  # in argument order; t: the time of models with prescribed motions
+INPUT_KINDS = ("q", "qd", "qdd", "tau", "gamma", "gammad", "gammadd", "T", "t")  # t: the time of models with
+# prescribed motions; gamma, gammad, gammadd (the mechanism's coordinates) and T (a wrench) of the support routines
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,7 @@ class Output:
     shape: Callable  # model -> tuple
     returned: bool = False  # the C function returns it as an int (nonzero: failed) instead of writing it; the NumPy
     # function raises numpy.linalg.LinAlgError naming the states of the batch where it is nonzero
+    failure: str = ""  # for a returned status: what a nonzero value means
 
     @property
     def py(self) -> str:
@@ -66,6 +68,7 @@ class Routine:
     # with coupled coordinates: "force" (outputs reduce by J^T), "matrix" (J^T X J), "tree" (the tree's own
     # outputs), "forward" / "inverse" (q'' and A^-1 under the coupling), None (not emitted)
     coupled: str | None = "force"
+    input_lengths: Callable | None = None  # model -> {input: length} where it is not q's (the support routines)
 
     @property
     def written(self) -> tuple:
@@ -105,8 +108,12 @@ def signature(routine: Routine, model) -> tuple:
     return tuple(ins + ["t"] + (["p"] if "p" in routine.inputs else []))
 
 
-def input_length(model, name: str) -> int:
-    return len(model.parameters) if name == "p" else 1 if name == "t" else model.nq
+def input_length(model, name: str, routine: Routine | None = None) -> int:
+    if routine is not None and routine.input_lengths is not None and name in routine.input_lengths(model):
+        return routine.input_lengths(model)[name]
+    if name in ("gamma", "gammad", "gammadd"):
+        return model.mechanism_coordinates
+    return len(model.parameters) if name == "p" else 1 if name == "t" else 6 if name == "T" else model.nq
 
 
 def c_symbol(model, routine: Routine) -> str:
@@ -290,7 +297,7 @@ def _zeros(kin):
 def _gravity(bound, kin, x):
     """g = -S G: the sweeps at rest, or, when prescribed spins keep rotors turning at rest, the backward recurrence
     of -S G itself (:func:`aggsym.mechanics.bias.gravity_vector`), which leaves their motion out."""
-    if bound.model.time_dependent:
+    if bound.model.has_prescribed_spins:
         return (gravity_vector(bound, kin),)
     return (sweeps.inverse_dynamics(bound, kin, _zeros(kin), _zeros(kin)),)
 
@@ -326,7 +333,7 @@ register(Routine("coriolis", ("q", "qd", "p"), (Output("C", nq_square),),
                  lambda bound, kin, x: (_flat(coriolis_matrix(bound, kin, x["qd"], skew=True)),),
                  "C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew "
                  "(S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based "
-                 "control", applies=lambda model: not model.time_dependent, coupled="matrix"))
+                 "control", applies=lambda model: not model.has_prescribed_spins, coupled="matrix"))
 register(Routine("gravity", ("q", "p"), (Output("g", nq_vector),), _gravity,
                  "g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"))
 register(Routine("nonlinear_effects", ("q", "qd", "p"), (Output("d", nq_vector),),
@@ -382,7 +389,7 @@ register(Routine("elastic_partition", ("q", "qd", "p"),
                  "the slow/fast partition of Prop. 2.14: blocks of A(q), B(q, qd) (b = B qd) and C, slow (+) "
                  "and fast (-, elastic) coordinates, see the manifest's layout",
                  layout=partition_layout,
-                 applies=lambda model: elastic.is_elastic(model) and not model.time_dependent, coupled=None))
+                 applies=lambda model: elastic.is_elastic(model) and not model.has_prescribed_spins, coupled=None))
 
 
 def constraint_rows_vector(model):
@@ -427,6 +434,10 @@ def _has_slip(model) -> bool:
     return model.slip_rows > 0
 
 
+CONSTRAINT_FAILURE = ("the constraints are singular (J A^-1 J^T has a pivot below 1e-12 of its mean diagonal, or "
+                      "is not finite), or Coulomb friction has no consistent solution")
+
+
 def _constrained_forward_dynamics(bound, kin, x):
     qdd, lam, status = constraints.constrained_forward_dynamics(
         bound, kin, x["qd"], _minus(x["tau"], elastic.elastic_forces(bound, kin.q)))
@@ -459,13 +470,94 @@ register(Routine("delassus", ("q", "p"), (Output("G", constraint_square),),
                  "P (3.19)", applies=_has_constraints, coupled=None, regular=True))
 register(Routine("constrained_forward_dynamics", ("q", "qd", "tau", "p"),
                  (Output("qdd", nq_vector), Output("lambda", constraint_rows_vector),
-                  Output("status", scalar, returned=True)),
+                  Output("status", scalar, returned=True, failure=CONSTRAINT_FAILURE)),
                  _constrained_forward_dynamics,
                  "qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) "
                  "(4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 "
                  "(T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); "
                  "returns nonzero when G is singular (or Coulomb friction has no consistent solution)",
                  applies=_has_constraints, coupled=None, regular=True))
+
+
+# --------------------------------------------------------------------------------------------------------------
+# support dynamics (the support paper, (3.1)-(3.4)): q is the support's six coordinates, gamma the mechanism's k
+
+def _has_support(model) -> bool:
+    return model.support is not None
+
+
+def support_lengths(model) -> dict:
+    return {"q": 6, "qd": 6, "qdd": 6}
+
+
+def support_block(columns):
+    def shape(model):
+        return (6, model.mechanism_coordinates if columns == "k" else 6)
+    return shape
+
+
+def six(model):
+    return (6,)
+
+
+def mechanism_vector(model):
+    return (model.mechanism_coordinates,)
+
+
+SUPPORT_OUTPUTS = (("support_A", "6"), ("support_B", "6"), ("support_I", "k"), ("support_J", "k"),
+                   ("support_L", "6"))
+SUPPORT_FAILURE = "the support's A = A+ M is singular (its pair's angles at a singularity: cos theta5 = 0)"
+
+
+def support_layout(model) -> dict:
+    support = next(b for b in model.bodies if b.name == model.support)
+    return {"support": model.support, "q": [c.name for c in support.pair.coordinates],
+            "gamma": [c.name for c in model.coordinates[6:]],
+            "equation": "support_A qdd + support_B qd + support_I gammadd + support_J gammad + support_g = "
+                        "support_L T (3.1): a wrench balance at the support's origin, its axes",
+            "T": "the external wrench on the support: (f, mu) about the world origin, world axes",
+            "B_J": "column j of B (of J) is the support-side wrench of column j of the book's B(q, qd) (2.17) "
+                   "(B qd = b), before the projection M^T: B multiplies the support's rates, J the mechanism's",
+            "order": "row-major"}
+
+
+def _support_coefficients(bound, kin, x):
+    c = support.support_coefficients(bound, x)
+    return _flat(c["A"]), _flat(c["B"]), _flat(c["I"]), _flat(c["J"]), _flat(c["L"]), c["g"]
+
+
+def _support_direct(bound, kin, x):
+    qdd, status = support.support_direct(bound, x)
+    return qdd, [status]
+
+
+def _support_inverse(bound, kin, x):
+    gammadd, residual, status = support.support_inverse(bound, x)
+    return gammadd, residual, [status]
+
+
+register(Routine("support_coefficients", ("q", "qd", "gamma", "gammad", "p"),
+                 tuple(Output(name, support_block(cols)) for name, cols in SUPPORT_OUTPUTS) +
+                 (Output("support_g", six),), _support_coefficients,
+                 "the coefficients of the support equation A qdd + B qd + I gammadd + J gammad + g = L T (3.1)-(3.3): "
+                 "A = A+_11 M, I_beta = L A+_lk M f_beta, B and J the support-side columns of B(q, qd) (2.17), g "
+                 "the weights at the support, L the world wrench T moved to the support",
+                 layout=support_layout, applies=_has_support, coupled=None, input_lengths=support_lengths))
+register(Routine("support_direct", ("q", "qd", "gamma", "gammad", "gammadd", "T", "p"),
+                 (Output("qdd", six), Output("status", scalar, returned=True, failure=SUPPORT_FAILURE)),
+                 _support_direct,
+                 "the direct problem (3.4) 1: the support's qdd from its state, the mechanism's motion gamma(t) and "
+                 "the external wrench T", layout=support_layout, applies=_has_support, coupled=None,
+                 input_lengths=support_lengths))
+register(Routine("support_inverse", ("q", "qd", "qdd", "gamma", "gammad", "T", "p"),
+                 (Output("gammadd", mechanism_vector), Output("residual", six),
+                  Output("status", scalar, returned=True,
+                         failure="I (6 x k) is rank-deficient at the point (I I^T singular when k >= 6, I^T I when "
+                                 "k < 6)")),
+                 _support_inverse,
+                 "the inverse problem (3.4) 2: the mechanism's gammadd that gives the support a wanted qdd: exact "
+                 "(minimum norm when k > 6) when rank I = 6, least squares with the 6-residual when k < 6",
+                 layout=support_layout, applies=_has_support, coupled=None, input_lengths=support_lengths))
 
 
 def routines_for(model, roles=None, omitted=()) -> list:
@@ -499,9 +591,11 @@ def massless_coordinates(model, samples: int = 2, tolerance: float = 1e-12) -> t
 
 
 def redundant_constraints(model, samples: int = 2, tolerance: float = 1e-9) -> list:
-    """The constraints with rows that depend on earlier rows (J rank-deficient) at q = 0 and at ``samples`` fixed
-    random configurations, all of them (a structural redundancy, such as a planar four-bar closed by a point
-    constraint, and not a singular configuration): [(constraint, [codes])]."""
+    """The constraints with rows that depend on other rows when J is rank-deficient at q = 0 and at ``samples``
+    fixed random configurations, all of them (a structural redundancy, such as a planar four-bar closed by a point
+    constraint, and not a singular configuration): [(constraint, [codes])].  Which rows are named is a choice
+    (any row of a dependent set could go): those a greedy scan in row order finds dependent at the last sample.
+    A model whose J has full rank at any one of the samples has no structural redundancy: []."""
     import numpy as np
 
     from .core.backend import Numeric
@@ -511,19 +605,20 @@ def redundant_constraints(model, samples: int = 2, tolerance: float = 1e-9) -> l
         return []
     bound = bind(model, Numeric())
     rng = np.random.default_rng(0)
-    dependent = None
+    dependent = set()
     for q in [np.zeros(model.nq)] + [rng.uniform(-np.pi, np.pi, model.nq) for _ in range(samples)]:
         J = np.array(run(ROUTINES["constraint_jacobian"], bound, {"q": [float(x) for x in q]})[0], dtype=float)
         J = J.reshape(model.constraint_rows, model.nq)
         scale = max(float(np.abs(J).max()), 1e-300)
-        rows, kept = set(), []
+        dependent, kept = set(), []
         for r in range(J.shape[0]):
             trial = kept + [J[r]]
             if np.linalg.matrix_rank(np.array(trial), tol=tolerance * scale) > len(kept):
                 kept.append(J[r])
             else:
-                rows.add(r)
-        dependent = rows if dependent is None else dependent & rows
+                dependent.add(r)
+        if not dependent:
+            return []
     out, start = [], 0
     for c in model.constraints:
         codes = [code for r, code in enumerate(c.rows, start) if r in dependent]
@@ -558,7 +653,7 @@ def run(routine: Routine, bound, inputs: dict, kin=None) -> tuple:
     Returns one flat list of scalars per output."""
     if bound.model.couplings:
         return _coupled_outputs(routine, bound, inputs)
-    if kin is None and "q" in inputs:
+    if kin is None and "q" in inputs and routine.input_lengths is None:
         kin = TreeKinematics(bound, inputs["q"])
     return routine.build(bound, kin, inputs)
 
@@ -598,9 +693,8 @@ def manifest(model, routines, ops: dict, omitted=None) -> dict:
         "descriptions": {r.role: r.doc for r in routines},
         "signatures": {r.role: {"inputs": list(signature(r, model)),
                                 "outputs": [{"name": o.name, "shape": list(o.shape(model))} for o in r.written],
-                                "returns": "int: 0, or nonzero when the constraints are singular (J A^-1 J^T "
-                                           "has a pivot below 1e-12 of its mean diagonal, or is not finite)"
-                                if r.status else "void"}
+                                "input_sizes": {i: input_length(model, i, r) for i in signature(r, model)},
+                                "returns": f"int: 0, or nonzero when {r.status.failure}" if r.status else "void"}
                        for r in routines},
         "layouts": {r.role: r.layout(model) for r in routines if r.layout is not None},
         "couplings": [{"coordinate": c.coordinate, "master": c.master, "multiplier": c.multiplier,
@@ -631,7 +725,9 @@ def constraints_entry(model) -> dict:
                       "point": [str(x) for x in c.point], "at": None if c.at is None else [str(x) for x in c.at],
                       "rotation": [[axis, str(angle)] for axis, angle in c.rotation],
                       "free": list(c.free_translations),
-                      "friction": None if c.friction is None else {c.friction[0]: str(c.friction[1])}})
+                      "friction": None if c.friction is None else {c.friction[0]: str(c.friction[1])},
+                      "wheel": None if c.wheel is None else {"radius": str(c.wheel[0]),
+                                                             "axle": [str(x) for x in c.wheel[1]]}})
         start += len(c.rows)
     return {
         "m": model.constraint_rows,
@@ -648,6 +744,10 @@ def constraints_entry(model) -> dict:
                 "rotational rows: the rotation vector of the body's orientation relative to the one it has at "
                 "q = 0, both in the reference axes"),
         "stabilization": {"kp": str(model.stabilization[0]), "kd": str(model.stabilization[1])},
+        "regularization": str(model.regularization),
+        "rolling": ("a wheel (kind 'rolling'): its rows are the velocity of the disc's material point at the "
+                    "contact, centre + radius * (axle x e), e = (axle x normal)/|axle x normal|; only o3 is "
+                    "holonomic (phi: the contact point's height over the plane; the o1, o2 entries of phi are 0)"),
         "friction": ("on the free translations of a sliding contact, from its slip velocities w (slip_velocities): "
                      "viscous W = -c w; Coulomb W = -mu |lambda_n| w/|w| (zero where |w| < 1e-9), lambda_n the "
                      "constraint's one blocked translation; W acts on the body at the contact point (the medium "
@@ -671,6 +771,8 @@ def time_entry(model) -> dict:
                     "their first and second derivatives (taken symbolically) are evaluated at t; the carrier's "
                     "motion does not act on them (Prop. 2.7).  bias holds all their rate and acceleration terms."),
         "prescribed": rotors,
+        "constraint_motions": [{"constraint": c.name, "motion": {code: str(expr) for code, expr in c.motion}}
+                               for c in model.constraints if c.motion],
     }
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .contract import ROUTINES, run, signature
+from .contract import ROUTINES, input_length, run, signature
 from .core.backend import Numeric
 from .mechanics.bound import bind
 from .model.tree import Tree
@@ -50,15 +50,15 @@ class NumericTwin:
                     raise ValueError(f"{role}: t is one number, got {arr.size}")
                 t = float(arr[0])
                 continue
-            if arr.size != self.model.nq:
-                raise ValueError(f"{role}: {name} has {arr.size} entries, the model has {self.model.nq} coordinates")
+            length = input_length(self.model, name, routine)
+            if arr.size != length:
+                raise ValueError(f"{role}: {name} has {arr.size} entries, expected {length}")
             inputs[name] = [float(x) for x in arr]
         outs = run(routine, self.bound(p, t if self.model.time_dependent else None), inputs)
         arrays = tuple(np.array([float(x) for x in flat]).reshape(o.shape(self.model))
                        for o, flat in zip(routine.outputs, outs) if not o.returned)
         if routine.status is not None and float(outs[-1][0]) != 0.0:
-            raise np.linalg.LinAlgError(f"{role}: the constraints are singular (J A^-1 J^T), or Coulomb friction has "
-                                        f"no consistent solution, at this state")
+            raise np.linalg.LinAlgError(f"{role}: {routine.status.failure}, at this state")
         return arrays[0] if len(arrays) == 1 else arrays
 
     def __getattr__(self, role):

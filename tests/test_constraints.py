@@ -166,6 +166,11 @@ def test_singular_constraints_return_nonzero_in_c_and_raise_in_numpy(tmp_path):
         module.constrained_forward_dynamics(q_dead, np.zeros(3), np.zeros(3), p)
     with pytest.raises(np.linalg.LinAlgError):
         lib.call("constrained_forward_dynamics", q_dead, np.zeros(3), np.zeros(3))
+    nan = np.array([np.nan, 0.3, 0.3])  # a NaN in the state is a failure too, in C as in NumPy
+    with pytest.raises(np.linalg.LinAlgError):
+        lib.call("constrained_forward_dynamics", nan, np.zeros(3), np.zeros(3))
+    with pytest.raises(np.linalg.LinAlgError):
+        module.constrained_forward_dynamics(nan, np.zeros(3), np.zeros(3), p)
 
 
 def consistent_state(twin, q, qd, model):
@@ -218,8 +223,7 @@ BAD = {
                        "constraints[0].medium", ["unknown medium 'floor'"]),
     "unknown_kind": ("constraints: [{name: a, body: shin, block: glue}]\n", "constraints[0].block",
                      ["unknown constraint kind 'glue'", "weld"]),
-    "rolling": ("constraints: [{name: a, body: shin, block: rolling}]\n", "constraints[0].block",
-                ["rolling contacts are not supported yet"]),
+    "rolling": ("constraints: [{name: a, body: shin, block: rolling}]\n", "constraints[0]", ["needs 'wheel"]),
     "friction_on_a_point": ("constraints: [{name: a, body: shin, block: point, friction: {viscous: 1}}]\n",
                             "constraints[0].friction", ["blocks all three"]),
     "coulomb_two_normals": ("constraints: [{name: a, body: shin, block: [o1, o3], friction: {coulomb: 0.5}}]\n",
@@ -234,8 +238,6 @@ BAD = {
                     "constraints[0].friction.stribeck", ["unknown key", "coulomb, viscous"]),
     "friction_code": ("constraints: [{name: a, body: shin, block: normal, friction: {coulomb: 'exp(__import__)'}}]\n",
                       "constraints[0].friction.coulomb", ["__import__"]),
-    "motion": ("constraints: [{name: a, body: shin, block: point, motion: {o1: 't'}}]\n",
-               "constraints[0].motion", ["not supported yet"]),
     "duplicate": ("constraints: [{name: a, body: shin, block: point}, {name: a, body: leg, block: point}]\n",
                   "constraints[1].name", ["duplicate constraint name 'a'"]),
     "bad_name": ("constraints: [{name: 'a b', body: shin, block: point}]\n", "constraints[0].name",
@@ -286,6 +288,42 @@ def test_redundant_rows_are_an_error_with_a_hint(tmp_path):
     code, err = run_cli(["generate", str(path), "-o", str(tmp_path / "out"), "-q"])
     assert code == 2 and "constraints[0]" in err and "o3" in err and "[o1, o2]" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_redundancy_is_found_when_the_dependent_row_changes_with_q(tmp_path):
+    """J = [[0, -sin q1], [0, cos q1]] (a revolute about e2 carried by a revolute about e3; theta4 and theta5 of
+    the outer body blocked) has rank 1 everywhere, but which row a scan in order finds dependent changes: theta4
+    at q = 0 (a zero row), theta5 elsewhere.  The check calls it redundant all the same."""
+    path = tmp_path / "turning.yaml"
+    path.write_text("name: turning\ngravity: [0, 0, -9.81]\nbodies:\n"
+                    "  - {name: b1, parent: world, pair: {functional: {theta6: q1}}, mass: 1, "
+                    "inertia: {xx: 1, yy: 1, zz: 1}}\n"
+                    "  - {name: b2, parent: b1, pair: {translation: [0, 0, 1], functional: {theta5: q2}}, mass: 1, "
+                    "com: [0.1, 0, 0], inertia: {xx: 1, yy: 2, zz: 3}}\n"
+                    "constraints:\n  - {name: c, body: b2, block: [theta4, theta5]}\n")
+    code, err = run_cli(["generate", str(path), "-o", str(tmp_path / "out"), "-q"])
+    assert code == 2 and "constraints[0]" in err and "row(s) theta5 depend" in err, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_explicit_regularization_allows_redundant_rows(tmp_path):
+    """The four-bar closed by a full point (its o3 row is zero: redundant) with regularization: 1e-10 generates,
+    and its qdd is the one of the independent rows [o1, o2]: (G + eps E) lambda = rhs gives lambda_o3 = 0."""
+    text = model_path("four_bar").read_text().replace("block: [o1, o2]", "block: point")
+    path = tmp_path / "four_bar.yaml"
+    path.write_text(text + "regularization: 1e-10\n")
+    model = aggsym.load(path)
+    _, regular, manifest = generated_code(model, tmp_path / "reg", c=False)
+    assert manifest["constraints"]["regularization"] == "1.00000000000000e-10"
+    _, plain, _ = generated_code(aggsym.load(model_path("four_bar")), tmp_path / "plain", c=False)
+    q, qd, tau = np.array([1.2, -0.9, 2.0]), np.array([0.3, -0.2, 0.5]), np.array([0.1, 0.0, -0.2])
+    qdd, lam = regular.constrained_forward_dynamics(q, qd, tau)
+    ref, ref_lam = plain.constrained_forward_dynamics(q, qd, tau)
+    assert np.abs(qdd - ref).max() <= 1e-6 * np.abs(ref).max() and abs(lam[2]) <= 1e-12
+    assert np.abs(lam[:2] - ref_lam).max() <= 1e-6 * np.abs(ref_lam).max()
+    path.write_text(text + "regularization: -1\n")
+    with pytest.raises(aggsym.ModelError, match="must not be negative"):
+        aggsym.load(path)
 
 
 def test_a_urdf_side_file_names_links_and_is_checked(tmp_path):

@@ -193,7 +193,8 @@ def test_manifest_of_an_elastic_model():
     m = json.loads(generate(model, latex=False).files[f"{ELASTIC}.json"])
     assert m["conservative"] is True
     assert m["functions"]["elastic"] == f"{ELASTIC}_elastic"
-    assert m["signatures"]["elastic"] == {"inputs": ["q", "p"], "outputs": [{"name": "c", "shape": [3]}], "returns": "void"}
+    assert m["signatures"]["elastic"] == {"inputs": ["q", "p"], "outputs": [{"name": "c", "shape": [3]}],
+                                          "input_sizes": {"q": 3, "p": len(m["parameters"])}, "returns": "void"}
     assert m["elastic"]["pairs"] == [{"joint": "stand", "coordinates": ["delta12", "delta15"],
                                       "stiffness": [["k22", "k25"], ["k25", "k55"]], "rest": ["0", "0"]}]
     assert [o["name"] for o in m["signatures"]["elastic_partition"]["outputs"]] == [b[0] for b in BLOCKS]

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..contract import ROUTINES, signature
+from ..contract import ROUTINES, input_length, signature
 from ..errors import AggsymError
 from ..twin import NumericTwin
 
@@ -73,6 +73,9 @@ class CLibrary:
                 arr = np.ascontiguousarray(pv, dtype=float)
             else:
                 arr = np.ascontiguousarray(values[name], dtype=float)
+                size = sig.get("input_sizes", {}).get(name)
+                if size is not None and arr.size != size:
+                    raise ValueError(f"{role}: {name} has {arr.size} entries, expected {size}")
             keep.append(arr)
             cargs.append(arr.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
         outs = [np.zeros(o["shape"]) for o in sig["outputs"]]
@@ -81,8 +84,7 @@ class CLibrary:
         if sig.get("returns", "void") != "void":
             fn.restype = ctypes.c_int
             if fn(*cargs):
-                raise np.linalg.LinAlgError(f"{role}: the C function returned nonzero (singular constraints, or "
-                                            f"no consistent Coulomb friction)")
+                raise np.linalg.LinAlgError(f"{role}: the C function returned nonzero: {sig['returns']}")
         else:
             fn(*cargs)
         return outs[0] if len(outs) == 1 else tuple(outs)
@@ -110,12 +112,13 @@ def random_inputs(model, role, rng):
     for name in signature(routine, model):
         if name == "p":
             continue
-        if name == "q":
-            args.append(rng.uniform(-np.pi, np.pi, model.nq))
+        size = input_length(model, name, routine)
+        if name in ("q", "gamma"):
+            args.append(rng.uniform(-np.pi, np.pi, size))
         elif name == "t":
             args.append(float(rng.uniform(0, 10)))
         else:
-            args.append(rng.normal(size=model.nq))
+            args.append(rng.normal(size=size))
     return args
 
 
@@ -126,6 +129,20 @@ def relative_error(a, b, scale=None) -> float:
         return 0.0
     scale = float(np.max(np.abs(b))) if scale is None else scale
     return float(np.max(np.abs(a - b)) / (scale if scale > 0 else 1.0))
+
+
+def _support_matrices(twin, role, args):
+    """A and I of the support equation at the state of a support routine's arguments."""
+    x = dict(zip([n for n in signature(ROUTINES[role], twin.model) if n != "p"], args))
+    A, _, I, _, _, _ = twin.call("support_coefficients", x["q"], x["qd"], x["gamma"], x["gammad"])
+    return A, I
+
+
+CONDITIONING = {  # role -> (twin, role, args) -> the condition number that the routine's solve multiplies rounding by
+    "constrained_forward_dynamics": lambda twin, role, args: float(np.linalg.cond(twin.call("delassus", args[0]))),
+    "support_direct": lambda twin, role, args: float(np.linalg.cond(_support_matrices(twin, role, args)[0])),
+    "support_inverse": lambda twin, role, args: float(np.linalg.cond(_support_matrices(twin, role, args)[1])) ** 2,
+}
 
 
 def _fails(call) -> bool:
@@ -168,8 +185,8 @@ def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir
                 cs = got_c if isinstance(got_c, tuple) else (got_c,)
                 pys = got_py if isinstance(got_py, tuple) else (got_py,)
                 scale = max(float(np.max(np.abs(r))) if np.size(r) else 0.0 for r in refs)
-                if ROUTINES[role].status is not None:  # a solve with J A^-1 J^T: its rounding grows with cond(G)
-                    scale *= float(np.linalg.cond(twin.call("delassus", args[0])))
+                if role in CONDITIONING:  # a solve: its rounding grows with the condition number of its matrix
+                    scale *= CONDITIONING[role](twin, role, args)
                 for r, c, p in zip(refs, cs, pys):  # relative to the largest value the routine returns
                     worst_c = max(worst_c, relative_error(c, r, scale))
                     worst_py = max(worst_py, relative_error(p, r, scale))

@@ -198,13 +198,14 @@ def check_constraints(model) -> None:
     """Redundant constraint rows make J A^-1 J^T singular everywhere: an error naming them, with a hint."""
     from ..errors import ModelError
 
-    found = redundant_constraints(model)
+    found = [] if model.regularization != 0 else redundant_constraints(model)
     if found:
         c, codes = found[0]
         raise ModelError(c.source, c.path, f"constraint {c.name!r}: its row(s) {', '.join(codes)} depend on the rows "
                                            f"before them (J is rank-deficient at every configuration tried), so J "
                                            f"A^-1 J^T is singular: block only the independent motions (e.g. "
-                                           f"[o1, o2] for a point closing a planar loop)", c.line)
+                                           f"[o1, o2] for a point closing a planar loop), or give the model a "
+                                           f"'regularization: epsilon' (J A^-1 J^T + epsilon E)", c.line)
 
 
 def generate(model, progress=None, latex: bool = True) -> Generated:
@@ -238,6 +239,7 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
         "macros": header_macros(model, [e.routine for e in emitted]),
         "coordinates": model.coordinates,
         "sincos": any("aggsym_sincos(" in line for r in emitted for line in r.c_body),
+        "sign": any("aggsym_sign(" in line for r in emitted for line in r.c_body),
         "time": model.time_dependent,
         "elastic": any(b.pair.elastic for b in model.bodies),
     }

@@ -13,6 +13,7 @@ import sympy as sp
 from sympy.printing.latex import LatexPrinter
 
 from ..core.program import expanded_terms, straight_line, to_sympy
+from ..model.types import TIME
 from ..symbolic import Equations, coordinate_symbols
 from .printing import Converter, LinComb, Num, Prod, _Common
 
@@ -252,6 +253,7 @@ def constraint_section(model, prog, outputs, small: bool):
         symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
         symbols.update({("q", i): s for i, s in enumerate(q)})
         symbols.update({("qd", i): s for i, s in enumerate(qd)})
+        symbols[("t", 0)] = TIME
         J = to_sympy(prog, outputs["constraint_jacobian"][0], symbols)
         gamma = to_sympy(prog, outputs["constraint_bias"][0], symbols)
         n = model.nq
@@ -261,10 +263,10 @@ def constraint_section(model, prog, outputs, small: bool):
                 if x != 0:
                     entries.append(broken(f"(D_\\lambda^T)_{{{r + 1}{j + 1}}}", _terms(x, names)))
         for r in range(model.constraint_rows):
-            x = sp.trigsimp(sp.expand(gamma[r]))
+            x = sp.expand(gamma[r]) if model.time_dependent else sp.trigsimp(sp.expand(gamma[r]))
             if x != 0:
                 entries.append(broken(f"\\gamma_{{{r + 1}}}", _terms(x, names)))
-    return {"table": rows, "entries": entries, "m": model.constraint_rows,
+    return {"table": rows, "entries": entries, "m": model.constraint_rows, "moving": model.time_dependent,
             "stabilization": [sp.latex(x) for x in model.stabilization]}
 
 

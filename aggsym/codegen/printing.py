@@ -223,15 +223,16 @@ class _Common:
 
 
 class CPrinter(_Common, C99CodePrinter):
-    """C99 for aggsym: round-trip float literals, sin/cos/sqrt from <math.h>; sign(x) = (x > 0) - (x < 0)."""
+    """C99 for aggsym: round-trip float literals, sin/cos/sqrt from <math.h>; sign(x) is the emitted
+    ``aggsym_sign``: (x > 0) - (x < 0), and NaN for NaN as NumPy's sign (a returned status then stays nonzero when
+    a solve meets a NaN)."""
 
     def __init__(self):
         super().__init__({"order": "none", "strict": False})
 
     def _print_Call(self, e):
         if e.name == "sign":
-            x = self._operand(e.args[0])
-            return f"((double)({x} > 0.0) - (double)({x} < 0.0))"
+            return f"aggsym_sign({self._print(e.args[0])})"
         return super()._print_Call(e)
 
 

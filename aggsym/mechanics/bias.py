@@ -33,9 +33,14 @@ def gravity_accelerations(bound, kin):
 
 def gravity_vector(bound, kin):
     """g(q) = -S G (see the module docstring): a list of n scalars."""
+    return generalized(kin, gravity_wrenches(bound, kin))
+
+
+def gravity_wrenches(bound, kin):
+    """-G accumulated towards the root, Z = L Y_g (before the projection F^T M^T): Z[0] at the root."""
     gam = gravity_accelerations(bound, kin)
     Y = [ZERO6 if b.rigid is None else b.rigid.apply(gam[k]) for k, b in enumerate(bound.bodies)]
-    return generalized(kin, kin.backward(Y))
+    return kin.backward(Y)
 
 
 def coriolis_matrix(bound, kin, qd, skew=False):
@@ -61,11 +66,22 @@ def coriolis_matrix(bound, kin, qd, skew=False):
 
     O(n) per column; n x n rows.  For models without prescribed motions: a prescribed spin's terms in b are not
     of the form B q' (the partition and coriolis routines are not emitted for them)."""
+    n = kin.tree.nq
+    B = [[0] * n for _ in range(n)]
+    for j, Z in enumerate(coriolis_wrenches(bound, kin, qd, skew)):
+        col = generalized(kin, Z)
+        for i in range(n):
+            B[i][j] = col[i]
+    return B
+
+
+def coriolis_wrenches(bound, kin, qd, skew=False):
+    """Per column j of :func:`coriolis_matrix`, the wrenches Z = L Y accumulated towards the root (before the
+    projection F^T M^T): Z[0] is the column's wrench at the root, in the root's axes."""
     tree = kin.tree
     n = tree.nq
     V = kin.velocities(qd)
     S = kin.parastrophic()
-    B = [[0] * n for _ in range(n)]
     for j in range(n):
         st = tree.body_of[j]
         W = S[j]
@@ -86,7 +102,4 @@ def coriolis_matrix(bound, kin, qd, skew=False):
             th = bound.bodies[k].mises
             if th is not None:
                 Y[k] = add(phi_force(V[k], th.apply(W[k])), th.apply(x))
-        col = generalized(kin, kin.backward(Y))
-        for i in range(n):
-            B[i][j] = col[i]
-    return B
+        yield kin.backward(Y)

@@ -29,7 +29,11 @@ where P is at q = 0); rotational rows the rotation vector (log map) of ``Q = B R
 vee(Q - Q^T)/2`` with theta = atan2(|vee|, (tr Q - 1)/2), evaluated as ``(theta + eps)/(|vee| + eps)`` (exact in
 doubles at theta = 0 and everywhere else, no branch).
 
-The equations (4.25)-(4.28): ``A qdd + b + g + c = tau + J^T lambda``, ``J qdd + gamma = -(kd J qd + kp phi)``;
+A prescribed motion of the world-side frame (``motion:``, Prop. 4.5-4.8) makes the world a moving medium with
+known pose, velocity and acceleration (:class:`MovingFrame`): J is unchanged, the rows' relative velocity is
+``J qd + F(t)`` (4.35) (:meth:`ConstraintKinematics.time_terms`), and gamma holds every time term.
+
+The equations (4.25)-(4.28): ``A qdd + b + g + c = tau + J^T lambda``, ``J qdd + gamma = -(kd (J qd + F) + kp phi)``;
 lambda is the wrench the medium exerts on body k about P in the reference axes (the medium body gets -lambda).
 With the transvective factors (3.19), A^-1 = T^T D^-1 T: ``P = T J^T`` (one O(n) product per row,
 :func:`~aggsym.mechanics.transvective.apply_T_tree`), ``G = J A^-1 J^T = P^T D^-1 P`` (the Delassus matrix),
@@ -66,6 +70,8 @@ class BoundConstraint:
     law: str | None  # friction: "viscous", "coulomb" or None
     coefficient: object  # its c or mu
     normal: int | None  # the normal row's place among this constraint's rows (Coulomb)
+    wheel: tuple | None = None  # (radius, axle in k's axes) of a rolling disc, its centre at r
+    frame: "MovingFrame | None" = None  # the world-side frame's prescribed motion (motion:), None: at rest
 
 
 def bind_constraints(bound) -> list:
@@ -85,8 +91,45 @@ def bind_constraints(bound) -> list:
             free=tuple(code_index(code) for code in c.free_translations),
             law=None if c.friction is None else c.friction[0],
             coefficient=None if c.friction is None else bound.scalar(c.friction[1]),
-            normal=None if c.normal is None else c.rows.index(c.normal)))
+            normal=None if c.normal is None else c.rows.index(c.normal),
+            wheel=None if c.wheel is None else (bound.scalar(c.wheel[0]), tuple(bound.scalar(x) for x in c.wheel[1])),
+            frame=None if not c.motion else MovingFrame(bound, c.motion)))
     return out
+
+
+class MovingFrame:
+    """The prescribed functional motion of a constraint's world-side frame (``motion:``, Prop. 4.5-4.8):
+    ``F(t) = T(o(t)) C(c1(theta4) c2(theta5) c3(theta6))`` as a pair's functional motion (1.30); its pose, the
+    velocity and classical acceleration of its origin and its angular velocity and acceleration (world axes),
+    from SymPy's derivatives of the model's expressions in t (``omega = vee(C' C^T)``), at the bound time, and
+    its pose at t = 0 (the default attachment)."""
+
+    def __init__(self, bound, motion):
+        import sympy as sp
+
+        from ..model.types import TIME
+
+        o = sp.zeros(3, 1)
+        C = sp.eye(3)
+        for code, expr in motion:
+            i = code_index(code)
+            if i < 3:
+                o[i] = expr
+            else:
+                C = C * sp.Matrix(rotation(i - 2, sp.cos(expr), sp.sin(expr)))
+        W = C.diff(TIME) * C.T
+        w = sp.Matrix([W[2, 1], W[0, 2], W[1, 0]])
+
+        def vector(m):
+            return tuple(bound.scalar(x) for x in m)
+
+        def pose(at_zero):
+            c, x = (C.subs(TIME, 0), o.subs(TIME, 0)) if at_zero else (C, o)
+            return Motion(tuple(tuple(bound.scalar(c[r, k]) for k in range(3)) for r in range(3)), vector(x))
+
+        self.pose, self.pose0 = pose(False), pose(True)
+        self.v, self.a = vector(o.diff(TIME)), vector(o.diff(TIME, 2))
+        self.w, self.alpha = vector(w), vector(w.diff(TIME))
 
 
 WORLD_POSE = Motion(EYE3, (0, 0, 0))
@@ -95,19 +138,27 @@ WORLD_POSE = Motion(EYE3, (0, 0, 0))
 class ConstraintKinematics:
     """The constraints of a bound model at one configuration: poses, points, reference axes."""
 
-    def __init__(self, bound, kin):
-        self.bound, self.kin = bound, kin
+    def __init__(self, bound, kin, rest: bool = False):
+        self.bound, self.kin, self.rest = bound, kin, rest
         self.items = bind_constraints(bound)
         self.poses = world_poses(kin)
-        self.P, self.B = [], []
+        self.P, self.B, self.discs = [], [], []
         for c in self.items:
             pose = self.poses[c.k]
-            self.P.append(add(pose.o, mv(pose.c, c.r)))
-            Rm = EYE3 if c.m < 0 else self.poses[c.m].c
-            self.B.append(transpose(mm(Rm, c.R_ref)))  # world vector -> reference axes
+            B = transpose(mm(self.medium_pose(c).c, c.R_ref))  # world vector -> reference axes
+            self.B.append(B)
+            centre = add(pose.o, mv(pose.c, c.r))
+            disc = None if c.wheel is None else Disc(bound.backend, c.wheel[0], mv(pose.c, c.wheel[1]), B[2])
+            self.discs.append(disc)
+            self.P.append(centre if disc is None else add(centre, disc.offset))
 
-    def pose(self, k):
-        return WORLD_POSE if k < 0 else self.poses[k]
+    def medium_pose(self, c):
+        """The medium's pose: a body's, the world's, or the moving frame's (at t = 0 for the rest kinematics)."""
+        if c.m >= 0:
+            return self.poses[c.m]
+        if c.frame is None:
+            return WORLD_POSE
+        return c.frame.pose0 if self.rest else c.frame.pose
 
     def motion_rows(self, c, P, B) -> list:
         """The six rows (o1 o2 o3 theta4 theta5 theta6, n entries each) of the relative motion of constraint c."""
@@ -147,13 +198,18 @@ class ConstraintKinematics:
         V = self.kin.velocities(qd)
         X = self.kin.velocity_products(qd, V)
         out = []
-        for c, P, B in zip(self.items, self.P, self.B):
+        for c, P, B, disc in zip(self.items, self.P, self.B, self.discs):
             vP, aP, wk, alk = self._point_motion(c.k, c.r, V, X)
-            if c.m < 0:
+            if disc is not None:  # the material point at the contact: d/dt (v_C + w x r u) at qdd = 0
+                lin, ang = add(add(aP, cross(alk, disc.offset)), cross(wk, disc.offset_rate(wk))), alk
+            elif c.m < 0 and c.frame is None:
                 lin, ang = aP, alk
-            else:
-                pm = self.poses[c.m]
-                vm, am, wm, alm = self._point_motion(c.m, (0, 0, 0), V, X)
+            else:  # relative to a moving medium: d/dt of B (v_P - v_m - w_m x (P - p_m)) and of B (w_k - w_m)
+                pm = self.medium_pose(c)
+                if c.frame is not None:
+                    vm, am, wm, alm = c.frame.v, c.frame.a, c.frame.w, c.frame.alpha
+                else:
+                    vm, am, wm, alm = self._point_motion(c.m, (0, 0, 0), V, X)
                 d = sub(P, pm.o)
                 dv = sub(vP, vm)
                 u = sub(dv, cross(wm, d))
@@ -162,6 +218,20 @@ class ConstraintKinematics:
                 dw = sub(wk, wm)
                 ang = sub(sub(alk, alm), cross(wm, dw))
             row = mv(B, lin) + mv(B, ang)
+            out.extend(row[j] for j in c.rows)
+        return out
+
+    def time_terms(self) -> list:
+        """F(t) of (4.35): per row, the part of the relative velocity that the frame's prescribed motion makes,
+        so that the rows' relative velocity is J qd + F: ``-B (v_F + w_F x (P - o_F))``, ``-B w_F``; 0 at rest."""
+        out = []
+        for c, P, B in zip(self.items, self.P, self.B):
+            if c.frame is None:
+                out.extend(0 for _ in c.rows)
+                continue
+            f = c.frame
+            lin = mv(B, add(f.v, cross(f.w, sub(P, f.pose.o))))
+            row = tuple(-x for x in lin) + tuple(-x for x in mv(B, f.w))
             out.extend(row[j] for j in c.rows)
         return out
 
@@ -179,7 +249,7 @@ class ConstraintKinematics:
         backend = self.bound.backend
         out = []
         for c, P, B, P0 in zip(self.items, self.P, self.B, rest.P):
-            pm, pm0 = self.pose(c.m), rest.pose(c.m)
+            pm, pm0 = self.medium_pose(c), rest.medium_pose(c)
             local = c.at if c.at is not None else mtv(pm0.c, sub(P0, pm0.o))  # A in the medium's axes
             lin = mv(B, sub(P, add(pm.o, mv(pm.c, local))))
             ang = (0, 0, 0)
@@ -191,15 +261,39 @@ class ConstraintKinematics:
                 norm = backend.sqrt(dot(s, s))
                 theta = backend.call("atan2", norm, cos)
                 ang = scale((theta + EPS) / (norm + EPS), s)
+            if c.wheel is not None:  # rolling: only the height of the contact point over the plane is holonomic
+                lin = (0, 0, lin[2])
             row = tuple(lin) + tuple(ang)
             out.extend(row[j] for j in c.rows)
         return out
 
 
+class Disc:
+    """A disc of radius r about the unit axle a (world axes) touching the plane with unit normal n (world axes):
+    the contact point is the centre plus ``r u`` with ``u = a x e``, ``e = (a x n)/|a x n|`` the direction of
+    rolling (u points from the centre towards the plane, in the disc's plane).  Not defined for a disc lying flat
+    (a parallel to n)."""
+
+    def __init__(self, backend, radius, a, n):
+        self.radius, self.a, self.n = radius, a, n
+        b = cross(a, n)
+        self.s = backend.sqrt(dot(b, b))
+        self.e = scale(1 / self.s, b)
+        self.offset = scale(radius, cross(a, self.e))
+
+    def offset_rate(self, w) -> tuple:
+        """d/dt (r u) for the disc turning with angular velocity w (world axes), the plane fixed: a' = w x a,
+        e' = (b' - e (e . b'))/|b| with b = a x n, u' = a' x e + a x e'."""
+        da = cross(w, self.a)
+        db = cross(da, self.n)
+        de = scale(1 / self.s, sub(db, scale(dot(self.e, db), self.e)))
+        return scale(self.radius, add(cross(da, self.e), cross(self.a, de)))
+
+
 def rest_kinematics(bound) -> ConstraintKinematics:
-    """The constraints at q = 0 (constants, or expressions in the parameters)."""
+    """The constraints at q = 0 and t = 0 (constants, or expressions in the parameters)."""
     kin0 = TreeKinematics(bound, [0] * bound.tree.nq)
-    return ConstraintKinematics(bound, kin0)
+    return ConstraintKinematics(bound, kin0, rest=True)
 
 
 def residual(bound, kin) -> list:
@@ -351,6 +445,9 @@ def constrained_forward_dynamics(bound, kin, qd, tau) -> tuple:
     fac = articulated_factors(bound, kin, arguments=False)
     P = _projected(kin, fac, J)
     G = _delassus(fac, P)
+    eps = bound.scalar(bound.model.regularization)
+    if not is_zero(eps):  # the explicit regularization: G + epsilon E (redundant rows share lambda)
+        G = [[g + eps if i == j else g for j, g in enumerate(row)] for i, row in enumerate(G)]
     slips = ck.slip_jacobians() if bound.model.has_friction else [()] * len(ck.items)
     force = list(tau)
     for c, Jf in zip(ck.items, slips):
@@ -361,8 +458,8 @@ def constrained_forward_dynamics(bound, kin, qd, tau) -> tuple:
     Dy = [mul(r, v) for r, v in zip(fac.recip, y)]
     rhs = [-g - dot(p, Dy) for g, p in zip(ck.bias(qd), P)]
     kp, kd = (bound.scalar(x) for x in bound.model.stabilization)
-    if not is_zero(kd):
-        rhs = [x - mul(kd, dot(row, qd)) for x, row in zip(rhs, J)]
+    if not is_zero(kd):  # the relative velocity J qd + F(t)
+        rhs = [x - mul(kd, dot(row, qd) + f) for x, row, f in zip(rhs, J, ck.time_terms())]
     if not is_zero(kp):
         rhs = [x - mul(kp, f) for x, f in zip(rhs, ck.residual(rest_kinematics(bound)))]
     lam, status = ldl_solve(G, rhs, backend)
@@ -379,7 +476,8 @@ def constrained_forward_dynamics(bound, kin, qd, tau) -> tuple:
         P = list(P)
         for j, _, extra in coulomb:
             P[j] = add(P[j], extra)  # T H^T: lambda_n's column carries the friction it causes
-        H = [[dot(scaled[i], P[j]) for j in range(len(P))] for i in range(len(P))]  # J A^-1 H^T
+        H = [[dot(scaled[i], P[j]) + (eps if i == j else 0) for j in range(len(P))]
+             for i in range(len(P))]  # J A^-1 H^T (+ epsilon E)
         lam, status = lu_solve(H, rhs, backend)
         for j, s, _ in coulomb:
             status = status + _above(backend, -mul(s, lam[j]))

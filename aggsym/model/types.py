@@ -201,6 +201,7 @@ CONSTRAINT_KINDS = {  # block: kind -> the forbidden relative motions, in the re
     "hinge3": ("o1", "o2", "o3", "theta4", "theta5"),
     "cylinder3": ("o1", "o2", "theta4", "theta5"),
     "normal": ("o3",),
+    "rolling": ("o1", "o2", "o3"),  # the material point of a wheel at its contact: zero velocity (non-holonomic)
 }
 
 
@@ -226,6 +227,8 @@ class Constraint:
     link: str = ""  # for a URDF side file: the link named (its point is given in the link frame)
     medium_axes: tuple | None = None  # 3x3: the axes of the medium's URDF link frame in its body's axes (None: same)
     friction: tuple | None = None  # ("viscous", c) or ("coulomb", mu): on the free translations, (4.33)-(4.34)
+    wheel: tuple | None = None  # (radius, axle: 3 expressions, unit, body axes) for block: rolling
+    motion: tuple = ()  # ((code, expression in TIME), ...): the world-side frame's prescribed functional motion
 
     @property
     def free_translations(self) -> tuple:
@@ -260,11 +263,18 @@ class Model:
     armature: float = 0.0  # a rotor inertia on every coordinate (Pinocchio's armature): A(q) + armature E
     constraints: tuple = ()  # Constraint: bilateral constraints with the medium and closed loops (chapter 4)
     stabilization: tuple = (0, 0)  # (kp, kd) expressions: Baumgarte terms J qdd + gamma = -(kd J qd + kp phi)
+    support: str | None = None  # the support body (the support paper): its 6 coordinates are q, the others gamma
+    regularization: object = 0  # epsilon: constrained forward dynamics solves (J A^-1 J^T + epsilon E) lambda = ...
 
     @property
     def constraint_rows(self) -> int:
         """m: the number of rows of all constraints (the length of lambda)."""
         return sum(len(c.rows) for c in self.constraints)
+
+    @property
+    def mechanism_coordinates(self) -> int:
+        """k: the coordinates gamma of the mechanism carried by the support (nq - 6), 0 without a support."""
+        return self.nq - 6 if self.support else 0
 
     @property
     def slip_rows(self) -> int:
@@ -307,10 +317,15 @@ class Model:
         return tuple(c.limits.as_dict() for c in self.coordinates)
 
     @property
-    def time_dependent(self) -> bool:
-        """True when some pair moves as a prescribed function of time (a rotor's spin): then every routine takes
-        the time t as an input."""
+    def has_prescribed_spins(self) -> bool:
+        """True when some pair of the tree moves as a prescribed function of time (a rotor's spin, (2.13))."""
         return any(b.pair.prescribed for b in self.bodies)
+
+    @property
+    def time_dependent(self) -> bool:
+        """True when some pair moves as a prescribed function of time (a rotor's spin), or a constraint's
+        reference frame does (``motion:``, a moving platform): then every routine takes the time t as an input."""
+        return self.has_prescribed_spins or any(c.motion for c in self.constraints)
 
     @property
     def elastic_coordinates(self) -> tuple:

@@ -231,3 +231,36 @@ def order_tree(names: list, parents: list, world: str):
             passes[child] = passes[k] + (1 if k > child else 0)
             stack.append(child)
     return sorted(range(n), key=lambda i: (passes[i], i)), None, None
+
+
+SUPPORT_CODES = ("o1", "o2", "o3", "theta4", "theta5", "theta6")
+
+
+def support_problem(model, name: str) -> str | None:
+    """Why body ``name`` cannot be the support of the support paper's equation (3.1), or None: it must be the one
+    root of the tree, on a free pair (the six coordinates o1 o2 o3 theta4 theta5 theta6, first in q), carry at
+    least one other coordinate, and the model must have no prescribed motions, coupled coordinates or
+    constraints (not supported with a support yet)."""
+    bodies = {b.name: b for b in model.bodies}
+    if name not in bodies:
+        return f"unknown body {name!r}"
+    body = bodies[name]
+    roots = [b.name for b in model.bodies if b.parent == "world"]
+    if body.parent != "world" or roots != [name]:
+        return (f"the support must be the one body on the world (the root of the tree), and {name!r} is not"
+                + (f" (the roots are {', '.join(roots)})" if body.parent == "world" else f" (its parent is "
+                                                                                         f"{body.parent!r})"))
+    if tuple(body.pair.codes) != SUPPORT_CODES:
+        return (f"the support's pair must be free: the six coordinates o1 o2 o3 theta4 theta5 theta6, and "
+                f"{name!r} has {', '.join(body.pair.codes) or 'none'}")
+    if body.pair.stiffness is not None:
+        return "the support's pair cannot be elastic"
+    if model.nq <= 6:
+        return "the support carries no mechanism (no coordinate besides its six)"
+    if model.time_dependent:
+        return "a support with prescribed motions (rotors with a prescribed spin) is not supported yet"
+    if model.couplings:
+        return "a support with coupled (mimic) coordinates is not supported yet"
+    if model.constraints:
+        return "a support with constraints is not supported yet"
+    return None

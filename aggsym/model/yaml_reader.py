@@ -54,13 +54,13 @@ from ..errors import ModelError
 from .expressions import ExpressionError, check_identifier, check_supported, evaluate, parse_value
 from .types import (CONSTRAINT_KINDS, COORDINATE_CODES, TIME, WORLD, Body, Constraint, Coordinate, Inertial, Model,
                     Parameter, Pair)
-from .validate import inertia_problem, mass_problem, order_tree
+from .validate import inertia_problem, mass_problem, order_tree, support_problem
 
 TOP_KEYS = {"name", "description", "source", "notes", "gravity", "parameters", "bodies", "contacts", "loops",
-            "constraints", "stabilization"}
+            "constraints", "stabilization", "support", "regularization"}
 CONSTRAINT_KEYS = {"name", "body", "point", "medium", "at", "rotation", "motion", "block", "friction", "wheel",
                    "description", "notes"}
-SIDE_FILE_KEYS = {"constraints", "stabilization", "description", "notes"}
+SIDE_FILE_KEYS = {"constraints", "stabilization", "regularization", "description", "notes"}
 STABILIZATION_KEYS = {"kp", "kd"}
 FRICTION_LAWS = ("viscous", "coulomb")
 BODY_KEYS = {"name", "parent", "pair", "mass", "com", "inertia", "mises", "rotors", "added_mass", "description",
@@ -76,10 +76,12 @@ LATER = {
     "contacts": "'contacts' is not a key: contacts with the medium are entries of 'constraints' (medium: world)",
     "loops": "'loops' is not a key: a closed loop is an entry of 'constraints' whose medium is a body of the tree",
 }
-CONSTRAINTS_LATER = {
-    "motion": "a prescribed motion of the medium (a moving platform) is not supported yet",
-    "wheel": "rolling contacts are not supported yet",
-}
+
+
+def _axle_in_body(index: int, R) -> tuple:
+    """The wheel's axle (a unit vector) in the body's axes: e_index of the named frame (a URDF link's axes R)."""
+    e = tuple(sp.Integer(1) if i == index else sp.Integer(0) for i in range(3))
+    return e if R is None else tuple(sum((R[r][c] * e[c] for c in range(3)), sp.Integer(0)) for r in range(3))
 
 
 def _path(parts) -> str:
@@ -274,8 +276,18 @@ class _Reader:
         time_dependent = any(b.pair.prescribed for b in bodies)
         constraints = self.constraints(top.get("constraints", []), frames, time_dependent)
         stabilization = self.stabilization(top.get("stabilization"), constraints)
-        return Model(name=name, bodies=bodies, gravity=gravity, parameters=parameters, source=str(self.file),
-                     description=description.strip(), constraints=constraints, stabilization=stabilization)
+        model = Model(name=name, bodies=bodies, gravity=gravity, parameters=parameters, source=str(self.file),
+                      description=description.strip(), constraints=constraints, stabilization=stabilization,
+                      regularization=self.regularization(top.get("regularization"), constraints))
+        if "support" in top:
+            support = top["support"]
+            if not isinstance(support, str):
+                self.fail(("support",), f"expected a body name, got {_kind(support)}")
+            problem = support_problem(model, support)
+            if problem:
+                self.fail(("support",), problem)
+            model = dataclasses.replace(model, support=support)
+        return model
 
     # constraints (chapter 4) --------------------------------------------------------------------------
     def constraints(self, value, frames: dict, time_dependent: bool = False) -> tuple:
@@ -291,9 +303,6 @@ class _Reader:
         for i, entry in enumerate(value):
             p = path + (i,)
             self.mapping(entry, p, CONSTRAINT_KEYS, required=("name", "body", "block"))
-            for key, why in CONSTRAINTS_LATER.items():
-                if key in entry:
-                    self.fail(p + (key,), why)
             name = self.name(entry["name"], p + ("name",), "constraint name")
             if name in names:
                 self.fail(p + ("name",), f"duplicate constraint name {name!r} (also constraints[{names[name]}])")
@@ -311,8 +320,11 @@ class _Reader:
             at = self.vector(entry["at"], p + ("at",)) if "at" in entry else None
             rows = self.block(entry["block"], p + ("block",))
             friction = self.friction(entry["friction"], p + ("friction",), rows) if "friction" in entry else None
+            wheel = self.wheel(entry, p, medium, friction)
+            motion = self.motion(entry["motion"], p + ("motion",), medium) if "motion" in entry else ()
             out.append(Constraint(
                 name=name, body=body, point=_placed(point, R, t), rows=rows, friction=friction,
+                wheel=None if wheel is None else (wheel[0], _axle_in_body(wheel[1], R)), motion=motion,
                 medium=medium, at=None if at is None else _placed(at, Rm, tm),
                 rotation=self.rotation(entry.get("rotation", []), p + ("rotation",)),
                 kind=entry["block"] if isinstance(entry["block"], str) else "", source=str(self.file),
@@ -334,8 +346,6 @@ class _Reader:
     def block(self, value, path) -> tuple:
         if isinstance(value, str):
             if value not in CONSTRAINT_KINDS:
-                if value == "rolling":
-                    self.fail(path, "rolling contacts are not supported yet")
                 self.fail(path, f"unknown constraint kind {value!r} (the kinds are {', '.join(CONSTRAINT_KINDS)}, or "
                                 f"a list of o1 o2 o3 theta4 theta5 theta6)")
             return CONSTRAINT_KINDS[value]
@@ -351,6 +361,46 @@ class _Reader:
         if not codes:
             self.fail(path, "a constraint must block at least one relative motion")
         return tuple(c for c in COORDINATE_CODES if c in codes)
+
+    def motion(self, value, path, medium) -> tuple:
+        """``motion: {o1: f(t), ..., theta6: f(t)}``: the prescribed functional motion of the world-side frame
+        (Prop. 4.5-4.8), ((code, expression), ...) in code order."""
+        self.mapping(value, path, set(COORDINATE_CODES) | set(CODE_ALIASES))
+        if medium != WORLD:
+            self.fail(path, "a prescribed motion of a medium that is a body of the tree is not supported yet "
+                            "(medium: world)")
+        if not value:
+            self.fail(path, "an empty motion: give at least one of o1 o2 o3 theta4 theta5 theta6")
+        items = {}
+        for key, expr in value.items():
+            code = CODE_ALIASES.get(key, key)
+            if code in items:
+                self.fail(path + (key,), f"{code} is given twice")
+            items[code] = self.time_function(expr, path + (key,), "the prescribed motion")
+        return tuple((code, items[code]) for code in COORDINATE_CODES if code in items)
+
+    def wheel(self, entry, path, medium, friction):
+        """``block: rolling`` with ``wheel: {radius: r, axle: 1|2|3|x|y|z}``: (radius, axle index 0..2), or None."""
+        rolling = entry["block"] == "rolling"
+        if "wheel" in entry and not rolling:
+            self.fail(path + ("wheel",), "a wheel is given but the constraint is not 'block: rolling'")
+        if not rolling:
+            return None
+        if "wheel" not in entry:
+            self.fail(path, "a rolling constraint needs 'wheel: {radius: r, axle: 1|2|3}' (the disc about its body "
+                            "axis e_axle)")
+        value = self.mapping(entry["wheel"], path + ("wheel",), {"radius", "axle"}, required=("radius", "axle"))
+        radius = self.expr(value["radius"], path + ("wheel", "radius"))
+        if self.number(radius, path + ("wheel", "radius")) <= 0:
+            self.fail(path + ("wheel", "radius"), "the wheel's radius must be positive")
+        axle = AXES.get(value["axle"]) if not isinstance(value["axle"], bool) else None
+        if axle is None:
+            self.fail(path + ("wheel", "axle"), f"expected 1, 2, 3 (or x, y, z), got {_kind(value['axle'])}")
+        if medium != WORLD:
+            self.fail(path + ("medium",), "a wheel rolling on a body of the tree is not supported yet (medium: world)")
+        if friction is not None:
+            self.fail(path + ("friction",), "a rolling contact does not slide: no friction")
+        return radius, axle - 1
 
     def friction(self, value, path, rows) -> tuple:
         """``{viscous: c}`` (W = -c w) or ``{coulomb: mu}`` (W = -mu |lambda_n| w/|w|) on the free translations."""
@@ -370,6 +420,17 @@ class _Reader:
         if self.number(expr, path + (law,)) < 0:
             self.fail(path + (law,), "a friction coefficient must not be negative")
         return (law, expr)
+
+    def regularization(self, value, constraints):
+        """``regularization: epsilon``: G + epsilon E in the constrained forward dynamics (redundant rows allowed)."""
+        if value is None:
+            return sp.Integer(0)
+        if not constraints:
+            self.fail(("regularization",), "regularization is given but the model has no constraints")
+        eps = self.expr(value, ("regularization",))
+        if self.number(eps, ("regularization",)) < 0:
+            self.fail(("regularization",), "the regularization must not be negative")
+        return eps
 
     def stabilization(self, value, constraints) -> tuple:
         if value is None:
@@ -524,22 +585,27 @@ class _Reader:
             coordinates[cname] = where
             return (Coordinate(cname, "theta6", joint),), ()
         where = path + ("prescribed",)
-        angle = self.expr(value["prescribed"], where, {**self.symbols, "t": TIME},
-                          hint=" (the prescribed spin may use the time t)")
+        angle = self.time_function(value["prescribed"], where, "the prescribed spin")
         if not angle.has(TIME):
             self.fail(where, f"the prescribed spin {angle} does not depend on the time t (a rotor at a fixed angle "
                              f"is a welded body: give it as a body without pair coordinates)")
-        values = {**self.defaults, TIME: 0.37}
-        for k, what in enumerate(("angle", "rate", "acceleration")):
-            expr = sp.diff(angle, TIME, k)
-            problem = check_supported(expr)
-            if problem:
-                self.fail(where, f"the prescribed spin's {what} {expr} cannot be emitted ({problem})")
-            try:
-                evaluate(expr, values)
-            except ValueError as exc:
-                self.fail(where, f"the prescribed spin's {what} has no finite value at t = 0.37: {exc}")
         return (), (("theta6", angle),)
+
+    def time_function(self, value, where, what):
+        """An expression that may use the time t, whose first two derivatives (derived symbolically) can be
+        emitted and are finite at t = 0.37 with the parameters at their defaults."""
+        expr = self.expr(value, where, {**self.symbols, "t": TIME}, hint=f" ({what} may use the time t)")
+        values = {**self.defaults, TIME: 0.37}
+        for k, name in enumerate(("value", "rate", "acceleration")):
+            derivative = sp.diff(expr, TIME, k)
+            problem = check_supported(derivative)
+            if problem:
+                self.fail(where, f"{what}'s {name} {derivative} cannot be emitted ({problem})")
+            try:
+                evaluate(derivative, values)
+            except ValueError as exc:
+                self.fail(where, f"{what}'s {name} has no finite value at t = 0.37: {exc}")
+        return expr
 
     def rotation(self, value, path):
         rotation = []
@@ -730,4 +796,5 @@ def load_constraints(path, model: Model) -> Model:
         frames = {b.name: (b.name, None, None) for b in model.bodies}
     constraints = reader.constraints(top["constraints"], frames, model.time_dependent)
     stabilization = reader.stabilization(top.get("stabilization"), constraints)
-    return dataclasses.replace(model, constraints=constraints, stabilization=stabilization)
+    return dataclasses.replace(model, constraints=constraints, stabilization=stabilization,
+                               regularization=reader.regularization(top.get("regularization"), constraints))

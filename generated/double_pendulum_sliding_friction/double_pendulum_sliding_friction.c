@@ -2,6 +2,12 @@
 #include <math.h>
 #include "double_pendulum_sliding_friction.h"
 
+/* sign(x): -1, 0 or 1, and nan for nan (a returned status then stays nonzero when a solve meets a nan) */
+static double aggsym_sign(double x)
+{
+    return x != x ? x : (double)(x > 0.0) - (double)(x < 0.0);
+}
+
 /* sin(x) and cos(x) together: x = k pi/2 + r with |r| <= pi/4 (Cody-Waite: pi/2 split into three doubles whose
  * first two have 33 significant bits, so k*hi and k*mid are exact for |k| < 2^20), then the Taylor series of sin r
  * to r^17 and cos r to r^18 (truncation below 1e-19 at r = pi/4); the quadrant k mod 4 swaps and signs them.
@@ -689,7 +695,7 @@ void double_pendulum_sliding_friction_delassus(const double *q, const double *p,
 }
 
 /* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution)
- * operations: 133 mul, 88 add, 8 div, 4 call */
+ * operations: 128 mul, 80 add, 7 div, 8 call */
 int double_pendulum_sliding_friction_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd, double *lambda)
 {
     double status[1];
@@ -764,9 +770,9 @@ int double_pendulum_sliding_friction_constrained_forward_dynamics(const double *
     const double x44 = x26*x32;
     const double x45 = x23*x34;
     const double x46 = 20*(qd_1*x32 + qd_2*x34) - x20*(qd_2*x16 - x12*x39 - qd_2*x38) + x4*x7*(x37 + x11*x39 - x37) - x5*(p_5*x13 + x11*x38 - x12*x15) - x27*x29*x42 + x26*x30*x32 + x23*x28*x34 - 100*(x31 - p_6);
-    const double x47 = ((double)(x46/(x42*x43 + x32*x44 + x34*x45) > 0.0) - (double)(x46/(x42*x43 + x32*x44 + x34*x45) < 0.0));
+    const double x47 = aggsym_sign(x46/(x42*x43 + x32*x44 + x34*x45));
     const double x48 = sqrt(x40*x40 + x41*x41);
-    const double x49 = ((double)((x48 - 1e-09) > 0.0) - (double)((x48 - 1e-09) < 0.0));
+    const double x49 = aggsym_sign(x48 - 1e-09);
     const double x50 = 0.5*(x49 + x49*x49);
     const double x51 = 1 + x48 - x50;
     const double x52 = x40*x50/x51;
@@ -780,8 +786,8 @@ int double_pendulum_sliding_friction_constrained_forward_dynamics(const double *
     const double x60 = x46/x59;
     lambda[0] = x60;
     const double x61 = fabs(x59);
-    const double x62 = ((double)((1e-12*x61 - x61) > 0.0) - (double)((1e-12*x61 - x61) < 0.0));
-    const double x63 = ((double)((-x47*x60) > 0.0) - (double)((-x47*x60) < 0.0));
+    const double x62 = aggsym_sign(1e-12*x61 - x61);
+    const double x63 = aggsym_sign(-x47*x60);
     status[0] = 0.5*(x62 + x62*x62) + 0.5*(x63 + x63*x63);
     const double x64 = x27*(x29 + x56*x60);
     qdd[0] = x64;

@@ -796,6 +796,6 @@ def constrained_forward_dynamics(q, qd, tau, p=None):
     failed = np.reshape(status[..., 0] != 0.0, batch)
     if np.any(failed):
         bad = np.argwhere(failed)
-        raise np.linalg.LinAlgError("constrained_forward_dynamics: the constraints are singular (J A^-1 J^T), or Coulomb friction has no consistent solution, at "
+        raise np.linalg.LinAlgError('constrained_forward_dynamics: the constraints are singular (J A^-1 J^T has a pivot below 1e-12 of its mean diagonal, or is not finite), or Coulomb friction has no consistent solution, at '
                                     + ("the state" if not batch else "the states " + ", ".join(str(tuple(int(i) for i in b)) for b in bad[:10]) + (" ..." if len(bad) > 10 else "")))
     return qdd, lambda_[..., 0][()]

@@ -42,6 +42,15 @@ extern "C" {
 #define SPACECRAFT_INERTIA_INVERSE_SIZE 144  /* inertia_inverse: Ainv, 12 x 12 doubles */
 #define SPACECRAFT_TRANSVECTIVE_FACTORS_TARGS_SIZE 57  /* transvective_factors: targs, 57 doubles */
 #define SPACECRAFT_TRANSVECTIVE_FACTORS_DIAG_SIZE 12  /* transvective_factors: diag, 12 doubles */
+#define SPACECRAFT_SUPPORT_COEFFICIENTS_SUPPORT_A_SIZE 36  /* support_coefficients: support_A, 6 x 6 doubles */
+#define SPACECRAFT_SUPPORT_COEFFICIENTS_SUPPORT_B_SIZE 36  /* support_coefficients: support_B, 6 x 6 doubles */
+#define SPACECRAFT_SUPPORT_COEFFICIENTS_SUPPORT_I_SIZE 36  /* support_coefficients: support_I, 6 x 6 doubles */
+#define SPACECRAFT_SUPPORT_COEFFICIENTS_SUPPORT_J_SIZE 36  /* support_coefficients: support_J, 6 x 6 doubles */
+#define SPACECRAFT_SUPPORT_COEFFICIENTS_SUPPORT_L_SIZE 36  /* support_coefficients: support_L, 6 x 6 doubles */
+#define SPACECRAFT_SUPPORT_COEFFICIENTS_SUPPORT_G_SIZE 6  /* support_coefficients: support_g, 6 doubles */
+#define SPACECRAFT_SUPPORT_DIRECT_SIZE 6  /* support_direct: qdd, 6 doubles */
+#define SPACECRAFT_SUPPORT_INVERSE_GAMMADD_SIZE 6  /* support_inverse: gammadd, 6 doubles */
+#define SPACECRAFT_SUPPORT_INVERSE_RESIDUAL_SIZE 6  /* support_inverse: residual, 6 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void spacecraft_inertia(const double *q, const double *p, double *A);
@@ -69,6 +78,12 @@ void spacecraft_forward_dynamics(const double *q, const double *qd, const double
 void spacecraft_inertia_inverse(const double *q, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
 void spacecraft_transvective_factors(const double *q, const double *p, double *targs, double *diag);
+/* the coefficients of the support equation A qdd + B qd + I gammadd + J gammad + g = L T (3.1)-(3.3): A = A+_11 M, I_beta = L A+_lk M f_beta, B and J the support-side columns of B(q, qd) (2.17), g the weights at the support, L the world wrench T moved to the support */
+void spacecraft_support_coefficients(const double *q, const double *qd, const double *gamma, const double *gammad, const double *p, double *support_A, double *support_B, double *support_I, double *support_J, double *support_L, double *support_g);
+/* the direct problem (3.4) 1: the support's qdd from its state, the mechanism's motion gamma(t) and the external wrench T */
+int spacecraft_support_direct(const double *q, const double *qd, const double *gamma, const double *gammad, const double *gammadd, const double *T, const double *p, double *qdd);
+/* the inverse problem (3.4) 2: the mechanism's gammadd that gives the support a wanted qdd: exact (minimum norm when k > 6) when rank I = 6, least squares with the 6-residual when k < 6 */
+int spacecraft_support_inverse(const double *q, const double *qd, const double *qdd, const double *gamma, const double *gammad, const double *T, const double *p, double *gammadd, double *residual);
 
 #ifdef __cplusplus
 }
