@@ -20,6 +20,7 @@ DESIGN_PINOCCHIO_NS = {"ur5": {"inertia": 300, "nonlinear_effects": 660, "forwar
                        "talos": {"inertia": 1800, "nonlinear_effects": 3600, "forward_dynamics": 7500}}
 GEN_TARGETS = (("panda", 5.0, None), ("chain12", 10.0, None), ("talos", 60.0, 2 * 2 ** 20))  # label, s, KiB
 RUNTIME_RATIO_TARGET = 0.5
+CONSTRAINED_RATIO_TARGET = 1.0  # solo12 on four point feet, constrained_forward_dynamics vs constraintDynamics
 OPS_TARGET_MODEL = "manipulator6"
 
 
@@ -97,6 +98,16 @@ def targets(results) -> list:
             continue
         measured = ", ".join(f"{robot} {p['ratio']:.2f}" for robot, p in got)
         rows.append((what, measured, all(p["ratio"] <= RUNTIME_RATIO_TARGET for _, p in got)))
+    rt = results.get("runtime", {})
+    if "constrained" in rt or "constrained_error" in rt:
+        what = (f"runtime constrained dynamics, solo12 on 4 point feet ↔ constraintDynamics: generated/Pinocchio "
+                f"< {CONSTRAINED_RATIO_TARGET:g}")
+        got = [(r, p) for r in rt.get("constrained", []) for p in r["pairs"]]
+        if not got:
+            rows.append((what, "not measured", None))
+        for r, p in got:
+            measured = f"{r['name']} {p['ratio']:.2f} ({p['generated_ns']:.0f} ns vs {p['pinocchio_ns']:.0f} ns)"
+            rows.append((what, measured, p["ratio"] < CONSTRAINED_RATIO_TARGET))
     inputs = results.get("inputs", {})
     for row in inputs.get("rows", []):
         what = f"read and order a {row['bodies']}-body {row['file']} ≤ {inputs['target_seconds']:g} s"
@@ -160,6 +171,13 @@ def diagnose(results) -> list:
                 if o else ""
             notes.append(f"runtime {robot} {role}: {p['generated_ns']:.0f} ns against {p['pinocchio']} "
                          f"{p['pinocchio_ns']:.0f} ns (ratio {p['ratio']:.2f}, target {RUNTIME_RATIO_TARGET:g}){ops}")
+    for r in results.get("runtime", {}).get("constrained", []):
+        for p in r["pairs"]:
+            if p["ratio"] >= CONSTRAINED_RATIO_TARGET:
+                o = r.get("ops") or {}
+                notes.append(f"runtime {r['name']} {p['role']}: {p['generated_ns']:.0f} ns against {p['pinocchio']} "
+                             f"{p['pinocchio_ns']:.0f} ns (ratio {p['ratio']:.2f}); the routine's C has "
+                             f"{o.get('mul')} mul + {o.get('add')} add + {o.get('div')} div, {o.get('call')} calls")
     ops = results.get("opcounts", {}).get(OPS_TARGET_MODEL)
     for row in (ops or {}).get("rows", []):
         if row.get("reference") and row.get("target") and row["ours"] >= row["ref_total"]:
@@ -494,6 +512,7 @@ def _runtime(results) -> str:
                   table(("pair", "Pinocchio function", "generated ns", "Pinocchio ns", "ratio", "CPU-time ratio",
                          "rel. error", "batches"),
                         rows), ""]
+    lines += _constrained(rt)
     comp = rt.get("compile_seconds", {})
     if comp:
         lines += ["Compile times in this run: " + ", ".join(f"{k}: {v:.1f} s" for k, v in comp.items()) + ".", ""]
@@ -516,6 +535,42 @@ def _runtime(results) -> str:
                          "generated / DESIGN.md"), rows), ""]
     lines += ["![runtime ratios](runtime.png)", ""]
     return "\n".join(lines)
+
+
+def _constrained(rt) -> list:
+    """The constrained forward dynamics of solo12 on its four feet (benchmarks/constrained.py), as lines."""
+    if "constrained" not in rt and "constrained_error" not in rt:
+        return []
+    lines = ["### solo12 standing on its four feet: constrained forward dynamics", ""]
+    if not rt.get("constrained"):
+        return lines + [f"Not run. {rt.get('constrained_error', '')}".rstrip(), ""]
+    lines += ["`aggsym generate solo12.urdf --floating-base --constraints feet.yaml` (example-robot-data "
+              "`solo_description/robots/solo12.urdf`; the feet FL_FOOT, FR_FOOT, HL_FOOT, HR_FOOT each `block: point` "
+              "with the world, 12 constraint rows), routine `constrained_forward_dynamics` (q̈ and λ), against "
+              "Pinocchio's `constraintDynamics` on the same URDF with the composite root joint PX, PY, PZ, RX, RY, RZ "
+              "(aggsym's `--floating-base`, coordinate for coordinate, so q is the same vector): one "
+              "`RigidConstraintModel` CONTACT_3D per foot frame, `initConstraintDynamics` once, default "
+              "`ProximalSettings` (μ = 0, one exact solve), in LOCAL_WORLD_ALIGNED (λ in world axes, as aggsym's) "
+              "and LOCAL, the faster shown.  Same states and batches as above, except that q̇ is projected onto the "
+              "null space of the feet's Jacobian: Pinocchio's drift term equals J̇q̇ only where the feet are at rest, "
+              "so only there do both sides solve the same equations.  Before timing, the generated NumPy module is "
+              "compared with `pin.constraintDynamics` on a few such states (*pin check*), and the C with "
+              "Pinocchio C++ on the first states (*rel. error* of q̈ / of λ).  *ops*: the routine's operation "
+              "count from the manifest (mul + add + div, and calls).", ""]
+    rows = []
+    for r in rt["constrained"]:
+        o, check = r.get("ops") or {}, r.get("pinocchio_check") or {}
+        for p in r["pairs"]:
+            rows.append((f"{r['name']} (n = {r['nq']}, m = {r['nc']})", p["pinocchio"],
+                         f"{p['generated_ns']:.0f} [{p['generated_ns_q10']:.0f}–{p['generated_ns_q90']:.0f}]",
+                         f"{p['pinocchio_ns']:.0f} [{p['pinocchio_ns_q10']:.0f}–{p['pinocchio_ns_q90']:.0f}]",
+                         f"{p['ratio']:.3f}", _fmt(p.get("cpu_ratio"), 3),
+                         f"{p['relative_error']:.1e} / {p.get('lambda_relative_error', float('nan')):.1e}",
+                         f"{check.get('qdd_relative_error', float('nan')):.1e} ({check.get('states', 0)} states)",
+                         f"{o['mul'] + o['add'] + o['div']} ({o['call']} calls)" if o else "—", str(p["batches"])))
+    lines += [table(("model", "Pinocchio function", "generated ns", "Pinocchio ns", "ratio", "CPU-time ratio",
+                     "rel. error q̈ / λ", "pin check q̈", "ops", "batches"), rows), ""]
+    return lines
 
 
 def _targets(results) -> str:

@@ -45,7 +45,22 @@ typedef struct {
     bench_timer t_inertia_inverse;
 } bench_model;
 
+/* A model with constraints (generated with --constraints): its constrained forward dynamics alone. */
+typedef int (*bench_fn_cfd)(const double *q, const double *qd, const double *tau, const double *p, double *qdd,
+                            double *lambda);
+typedef struct {
+    const char *name;
+    int nq;
+    int nc;                     /* constraint rows: the length of lambda */
+    int np;
+    const double *p;            /* default parameters or NULL */
+    const char *const *joints;  /* the joint name of each coordinate, in q order */
+    bench_fn_cfd constrained_forward_dynamics; /* (q, qd, tau) -> qdd, lambda; nonzero when singular */
+    bench_timer t_constrained_forward_dynamics; /* out: nq + nc doubles (qdd, then lambda) */
+} bench_constrained_model;
+
 extern const bench_model *const bench_models[]; /* NULL-terminated, bench_models.c */
+extern const bench_constrained_model *const bench_constrained_models[]; /* NULL-terminated, bench_models.c */
 extern volatile double bench_sink;
 double bench_now_ns(void);      /* CLOCK_MONOTONIC */
 double bench_cpu_now_ns(void);  /* CLOCK_THREAD_CPUTIME_ID */
@@ -91,6 +106,14 @@ double bench_cpu_now_ns(void);  /* CLOCK_THREAD_CPUTIME_ID */
         NAME##_forward_dynamics, NAME##_inertia_inverse,                                        \
         NAME##_t_inertia, NAME##_t_nonlinear_effects, NAME##_t_inverse_dynamics,                \
         NAME##_t_forward_dynamics, NAME##_t_inertia_inverse};
+/* A constrained model: its timer (qdd into out, lambda after it) and its bench_constrained_model record. */
+#define BENCH_CONSTRAINED_MODEL(NAME, NQ, NC, NP, P, JOINTS)                                    \
+    BENCH_TIMER(NAME##_t_constrained_forward_dynamics,                                          \
+                NAME##_constrained_forward_dynamics(s->q + at, s->qd + at, s->tau + at, s->p,   \
+                                                    out, out + n))                              \
+    static const bench_constrained_model NAME##_constrained_bench = {                           \
+        #NAME, NQ, NC, NP, P, JOINTS, NAME##_constrained_forward_dynamics,                      \
+        NAME##_t_constrained_forward_dynamics};
 #endif
 
 #endif

@@ -1,6 +1,6 @@
 // Runtime benchmark: aggsym's generated C against Pinocchio C++ (the `pin` wheel), same states, same process.
 //
-//   pinocchio_bench SECONDS STATES CALLS OUT.json NAME URDF [NAME URDF ...]
+//   pinocchio_bench SECONDS STATES CALLS OUT.json NAME URDF [NAME URDF ...] [--constrained NAME URDF FRAMES ...]
 //
 // For each robot: the Pinocchio fixed-base model of the URDF (pinocchio::urdf::buildModel(path, model)); the
 // joint order is checked against the generated code's coordinates; STATES random states (q uniform in
@@ -12,8 +12,20 @@
 // timed in both of Pinocchio's conventions (LOCAL, its default, and WORLD) and the faster one is reported.  Batches are short
 // (tens of microseconds) so that most hold no preemption on a shared machine and the median ignores those that
 // do.
+//
+// --constrained NAME URDF FRAME,FRAME,...: a model generated with --floating-base and --constraints, each listed
+// frame a point contact with the world; its constrained forward dynamics is timed against
+// pinocchio::constraintDynamics.  Pinocchio's model has the composite root joint PX, PY, PZ, RX, RY, RZ (aggsym's
+// free root, coordinate for coordinate), one RigidConstraintModel CONTACT_3D at each frame
+// (initConstraintDynamics once; default ProximalSettings: mu = 0, one exact solve), in LOCAL_WORLD_ALIGNED
+// (lambda in world axes, as aggsym's) and LOCAL; the faster is reported.  The states' qd are projected onto the
+// null space of the contacts' Jacobian: Pinocchio's drift is J' qd only where the contact points are at rest.
+#define PINOCCHIO_DISABLE_UNSUPPORTED_WARNINGS  // constraintDynamics is marked "the API will change"
 #include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/constrained-dynamics.hpp>
 #include <pinocchio/algorithm/crba.hpp>
+#include <pinocchio/algorithm/frames.hpp>
+#include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody.hpp>
 #include <pinocchio/parsers/urdf.hpp>
@@ -26,6 +38,7 @@
 #include <functional>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bench.h"
@@ -38,14 +51,22 @@ const char *const PAIRS[] = {"inertia", "nonlinear_effects", "inverse_dynamics",
 const char *const PINOCCHIO[] = {"crba", "nonLinearEffects", "rnea", "aba", "computeMinverse"};
 const int NPAIRS = 5;
 // crba and aba take a convention (default LOCAL); both are timed and the faster one is Pinocchio's time.
-const int NVARIANTS[] = {2, 1, 1, 2, 1};
 const char *const VARIANT[][2] = {{"LOCAL", "WORLD"}, {"", ""}, {"", ""}, {"LOCAL", "WORLD"}, {"", ""}};
+// constraintDynamics: the contacts' reference frame (LOCAL_WORLD_ALIGNED is aggsym's lambda); the faster counts.
+const pinocchio::ReferenceFrame CONTACT_FRAME[] = {pinocchio::LOCAL_WORLD_ALIGNED, pinocchio::LOCAL};
+const char *const CONTACT_FRAME_NAME[] = {"LOCAL_WORLD_ALIGNED", "LOCAL"};
 
 struct States {
   int count = 0, nq = 0;
   std::vector<double> q, qd, qdd, tau;       // ours, count x nq
   std::vector<Eigen::VectorXd> Q, V, Vd, T;  // Pinocchio's
 };
+
+using Timer = std::function<double(int, double *)>;
+using ConstraintModels =
+    std::vector<pinocchio::RigidConstraintModel, Eigen::aligned_allocator<pinocchio::RigidConstraintModel>>;
+using ConstraintDatas =
+    std::vector<pinocchio::RigidConstraintData, Eigen::aligned_allocator<pinocchio::RigidConstraintData>>;
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -86,11 +107,361 @@ std::string json_escape(const std::string &s) {
   return out;
 }
 
+// The generated coordinates must be Pinocchio's joints in the same order; continuous[i] = 1 where coordinate i is
+// a continuous joint ((cos, sin) in Pinocchio's q).  False (with a message) when they are not.
+bool same_joints(const pinocchio::Model &model, const char *const *joints, const std::string &name,
+                 std::vector<int> &continuous) {
+  continuous.assign(model.nv, 0);
+  for (pinocchio::JointIndex j = 1; j < (pinocchio::JointIndex)model.njoints; ++j) {
+    const auto &joint = model.joints[j];
+    for (int k = 0; k < joint.nv(); ++k) {
+      const int i = joint.idx_v() + k;
+      if (model.names[j] != joints[i]) {
+        std::fprintf(stderr, "%s: coordinate %d is joint %s in the generated code, %s in Pinocchio\n", name.c_str(),
+                     i, joints[i], model.names[j].c_str());
+        return false;
+      }
+    }
+    if (joint.nq() == 2 && joint.nv() == 1) {
+      continuous[joint.idx_v()] = 1;
+    } else if (joint.nq() != joint.nv()) {
+      std::fprintf(stderr, "%s: joint %s has nq %d, nv %d\n", name.c_str(), model.names[j].c_str(), joint.nq(),
+                   joint.nv());
+      return false;
+    }
+  }
+  return true;
+}
+
+// Random states: q uniform in [-pi, pi], qd, qdd, tau standard normal; Pinocchio's q from ours.
+States random_states(const pinocchio::Model &model, const std::vector<int> &continuous, int nstates, unsigned seed) {
+  const int n = (int)model.nv;
+  States s;
+  s.count = nstates;
+  s.nq = n;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int k = 0; k < nstates; ++k) {
+    Eigen::VectorXd Q(model.nq), V(n), Vd(n), T(n);
+    for (int i = 0; i < n; ++i) {
+      s.q.push_back(angle(rng));
+      s.qd.push_back(V[i] = normal(rng));
+      s.qdd.push_back(Vd[i] = normal(rng));
+      s.tau.push_back(T[i] = normal(rng));
+    }
+    for (pinocchio::JointIndex j = 1; j < (pinocchio::JointIndex)model.njoints; ++j) {
+      const auto &joint = model.joints[j];
+      const int iv = joint.idx_v(), iq = joint.idx_q();
+      if (continuous[iv]) {
+        Q[iq] = std::cos(s.q[(size_t)k * n + iv]);
+        Q[iq + 1] = std::sin(s.q[(size_t)k * n + iv]);
+      } else {
+        for (int i = 0; i < joint.nv(); ++i) Q[iq + i] = s.q[(size_t)k * n + iv + i];
+      }
+    }
+    s.Q.push_back(Q);
+    s.V.push_back(V);
+    s.Vd.push_back(Vd);
+    s.T.push_back(T);
+  }
+  return s;
+}
+
+// Pinocchio's batch timer: the same loop shape as the C ones (bench.h).
+template <typename Call>
+double batch(int count, int calls, int first, double *cpu_ns, Call &&call) {
+  double acc = 0.0;
+  int i = first;
+  const double c0 = bench_cpu_now_ns(), t0 = bench_now_ns();
+  for (int k = 0; k < calls; ++k) {
+    acc += call(i);
+    if (++i == count) i = 0;
+  }
+  const double t1 = bench_now_ns(), c1 = bench_cpu_now_ns();
+  bench_sink += acc;
+  *cpu_ns = (c1 - c0) / calls;
+  return (t1 - t0) / calls;
+}
+
+// One pair timed in interleaved batches (the generated timer, then each Pinocchio variant, on the same states);
+// writes the pair's JSON object (with `extra` fields appended) and a line on stderr.
+void time_pair(FILE *out, bool first_pair, const std::string &robot, const char *role, const char *pinocchio,
+               const std::vector<std::pair<std::string, Timer>> &pin_timer, bench_timer ours,
+               const bench_states &cs, double *buf, double seconds, int calls, double err,
+               const std::string &extra = "") {
+  const int nv = (int)pin_timer.size(), nstates = cs.count;
+  // warm-up and calibration: once through all states on each side
+  double cpu = 0.0, tg = 0.0, tp = 0.0;
+  for (int first = 0; first < nstates; first += calls) {
+    tg += ours(&cs, first, calls, buf, &cpu) * calls;
+    for (int v = 0; v < nv; ++v) tp += pin_timer[v].second(first, &cpu) * calls;
+  }
+  const double per_batch = (tg + tp) / nstates * calls;  // ns for one generated + one Pinocchio batch each
+  int batches = (int)std::ceil(seconds * 1e9 / per_batch);
+  batches = std::max(51, std::min(batches, 400001));
+  std::vector<double> g(batches), gc(batches);
+  std::vector<std::vector<double>> p(nv, std::vector<double>(batches)), pc(nv, std::vector<double>(batches));
+  for (int b = 0; b < batches; ++b) {
+    const int first = (int)(((long long)b * calls) % nstates);
+    g[b] = ours(&cs, first, calls, buf, &gc[b]);
+    for (int v = 0; v < nv; ++v) p[v][b] = pin_timer[v].second(first, &pc[v][b]);
+  }
+  int best = 0;
+  for (int v = 1; v < nv; ++v)
+    if (median(p[v]) < median(p[best])) best = v;
+  const double mg = median(g), mp = median(p[best]), mgc = median(gc), mpc = median(pc[best]);
+  std::string label = pinocchio;
+  if (nv > 1) label += " (" + pin_timer[best].first + ")";
+  std::string variants = "{";
+  for (int v = 0; v < nv; ++v)
+    variants += std::string(v ? ", " : "") + "\"" + (nv > 1 ? pin_timer[v].first : "default") + "\": " +
+                std::to_string(median(p[v]));
+  variants += "}";
+  std::fprintf(out,
+               "%s{\"role\": \"%s\", \"pinocchio\": \"%s\", \"batches\": %d, \"generated_ns\": %.3f, "
+               "\"pinocchio_ns\": %.3f, \"ratio\": %.5f, \"generated_ns_q10\": %.3f, \"generated_ns_q90\": %.3f, "
+               "\"pinocchio_ns_q10\": %.3f, \"pinocchio_ns_q90\": %.3f, \"generated_cpu_ns\": %.3f, "
+               "\"pinocchio_cpu_ns\": %.3f, \"cpu_ratio\": %.5f, \"pinocchio_variants_ns\": %s, "
+               "\"check_states\": %d, \"relative_error\": %.3e%s}",
+               first_pair ? "" : ", ", role, label.c_str(), batches, mg, mp, mg / mp, quantile(g, 0.1),
+               quantile(g, 0.9), quantile(p[best], 0.1), quantile(p[best], 0.9), mgc, mpc, mgc / mpc,
+               variants.c_str(), std::min(CHECK_STATES, nstates), err, extra.c_str());
+  std::fprintf(stderr,
+               "%s %-18s generated %9.1f ns  Pinocchio %-24s %9.1f ns  ratio %.3f  (CPU-time ratio %.3f, "
+               "err %.1e, %d batches of %d)\n",
+               robot.c_str(), role, mg, label.c_str(), mp, mg / mp, mgc / mpc, err, batches, calls);
+}
+
+// The five pairs of one fixed-base robot; returns nonzero on an error (after a message).
+int bench_robot(FILE *out, const std::string &name, const std::string &path, unsigned seed, double seconds,
+                int nstates, int calls) {
+  const bench_model *bm = nullptr;
+  for (int k = 0; bench_models[k]; ++k)
+    if (name == bench_models[k]->name) bm = bench_models[k];
+  if (!bm) {
+    std::fprintf(stderr, "no generated model %s linked in\n", name.c_str());
+    return 2;
+  }
+  pinocchio::Model model;
+  pinocchio::urdf::buildModel(path, model);
+  pinocchio::Data data(model);
+  const int n = bm->nq;
+  if (model.nv != n) {
+    std::fprintf(stderr, "%s: Pinocchio nv = %d, generated nq = %d\n", name.c_str(), (int)model.nv, n);
+    return 1;
+  }
+  std::vector<int> continuous;
+  if (!same_joints(model, bm->joints, name, continuous)) return 1;
+  States s = random_states(model, continuous, nstates, seed);
+  bench_states cs = {s.count, n, s.q.data(), s.qd.data(), s.qdd.data(), s.tau.data(), bm->p};
+  std::vector<double> buf((size_t)n * n);
+
+  // Agreement on the first states.
+  double err[NPAIRS] = {0, 0, 0, 0, 0};
+  for (int k = 0; k < std::min(CHECK_STATES, nstates); ++k) {
+    const double *q = &s.q[(size_t)k * n], *qd = &s.qd[(size_t)k * n];
+    const double *qdd = &s.qdd[(size_t)k * n], *tau = &s.tau[(size_t)k * n];
+    bm->inertia(q, bm->p, buf.data());
+    pinocchio::crba(model, data, s.Q[k], pinocchio::Convention::LOCAL);
+    err[0] = std::max(err[0], relative_error(buf.data(), symmetric_from_upper(data.M).data(), n * n));
+    pinocchio::crba(model, data, s.Q[k], pinocchio::Convention::WORLD);
+    err[0] = std::max(err[0], relative_error(buf.data(), symmetric_from_upper(data.M).data(), n * n));
+    bm->nonlinear_effects(q, qd, bm->p, buf.data());
+    pinocchio::nonLinearEffects(model, data, s.Q[k], s.V[k]);
+    err[1] = std::max(err[1], relative_error(buf.data(), data.nle.data(), n));
+    bm->inverse_dynamics(q, qd, qdd, bm->p, buf.data());
+    pinocchio::rnea(model, data, s.Q[k], s.V[k], s.Vd[k]);
+    err[2] = std::max(err[2], relative_error(buf.data(), data.tau.data(), n));
+    bm->forward_dynamics(q, qd, tau, bm->p, buf.data());
+    pinocchio::aba(model, data, s.Q[k], s.V[k], s.T[k], pinocchio::Convention::LOCAL);
+    err[3] = std::max(err[3], relative_error(buf.data(), data.ddq.data(), n));
+    pinocchio::aba(model, data, s.Q[k], s.V[k], s.T[k], pinocchio::Convention::WORLD);
+    err[3] = std::max(err[3], relative_error(buf.data(), data.ddq.data(), n));
+    bm->inertia_inverse(q, bm->p, buf.data());
+    pinocchio::computeMinverse(model, data, s.Q[k]);
+    err[4] = std::max(err[4], relative_error(buf.data(), symmetric_from_upper(data.Minv).data(), n * n));
+  }
+
+  auto timer = [&](auto &&call) -> Timer {
+    return [&, call](int first, double *cpu) { return batch(s.count, calls, first, cpu, call); };
+  };
+  auto crba_call = [&](pinocchio::Convention c) {
+    return [&, c](int i) {
+      pinocchio::crba(model, data, s.Q[i], c);
+      return data.M(0, 0);
+    };
+  };
+  auto aba_call = [&](pinocchio::Convention c) {
+    return [&, c](int i) {
+      pinocchio::aba(model, data, s.Q[i], s.V[i], s.T[i], c);
+      return data.ddq[0];
+    };
+  };
+  std::vector<std::pair<std::string, Timer>> pin_timer[NPAIRS] = {
+      {{VARIANT[0][0], timer(crba_call(pinocchio::Convention::LOCAL))},
+       {VARIANT[0][1], timer(crba_call(pinocchio::Convention::WORLD))}},
+      {{"", timer([&](int i) {
+          pinocchio::nonLinearEffects(model, data, s.Q[i], s.V[i]);
+          return data.nle[0];
+        })}},
+      {{"", timer([&](int i) {
+          pinocchio::rnea(model, data, s.Q[i], s.V[i], s.Vd[i]);
+          return data.tau[0];
+        })}},
+      {{VARIANT[3][0], timer(aba_call(pinocchio::Convention::LOCAL))},
+       {VARIANT[3][1], timer(aba_call(pinocchio::Convention::WORLD))}},
+      {{"", timer([&](int i) {
+          pinocchio::computeMinverse(model, data, s.Q[i]);
+          return data.Minv(0, 0);
+        })}},
+  };
+  bench_timer ours_timer[NPAIRS] = {bm->t_inertia, bm->t_nonlinear_effects, bm->t_inverse_dynamics,
+                                    bm->t_forward_dynamics, bm->t_inertia_inverse};
+
+  std::fprintf(out, "{\"name\": \"%s\", \"urdf\": \"%s\", \"nq\": %d, \"pinocchio_nq\": %d, \"pairs\": [",
+               json_escape(name).c_str(), json_escape(path).c_str(), n, (int)model.nq);
+  for (int k = 0; k < NPAIRS; ++k) {
+    time_pair(out, k == 0, name, PAIRS[k], PINOCCHIO[k], pin_timer[k], ours_timer[k], cs, buf.data(), seconds,
+              calls, err[k]);
+  }
+  std::fprintf(out, "]}");
+  return 0;
+}
+
+// Constrained forward dynamics of a floating-base robot on point contacts (the frames, comma-separated) against
+// constraintDynamics; returns nonzero on an error (after a message).
+int bench_constrained(FILE *out, const std::string &name, const std::string &path, const std::string &frame_list,
+                      unsigned seed, double seconds, int nstates, int calls) {
+  const bench_constrained_model *bm = nullptr;
+  for (int k = 0; bench_constrained_models[k]; ++k)
+    if (name == bench_constrained_models[k]->name) bm = bench_constrained_models[k];
+  if (!bm) {
+    std::fprintf(stderr, "no generated constrained model %s linked in\n", name.c_str());
+    return 2;
+  }
+  // aggsym's --floating-base: o1 o2 o3 theta4 theta5 theta6 of the root = PX, PY, PZ, RX, RY, RZ in sequence
+  pinocchio::JointModelComposite root;
+  root.addJoint(pinocchio::JointModelPX());
+  root.addJoint(pinocchio::JointModelPY());
+  root.addJoint(pinocchio::JointModelPZ());
+  root.addJoint(pinocchio::JointModelRX());
+  root.addJoint(pinocchio::JointModelRY());
+  root.addJoint(pinocchio::JointModelRZ());
+  pinocchio::Model model;
+  pinocchio::urdf::buildModel(path, root, "root_joint", model);
+  const int n = bm->nq, nc = bm->nc;
+  if (model.nv != n) {
+    std::fprintf(stderr, "%s: Pinocchio nv = %d, generated nq = %d\n", name.c_str(), (int)model.nv, n);
+    return 1;
+  }
+  std::vector<int> continuous;
+  if (!same_joints(model, bm->joints, name, continuous)) return 1;
+  std::vector<std::string> frames;
+  for (size_t at = 0; at <= frame_list.size();) {
+    const size_t end = std::min(frame_list.find(',', at), frame_list.size());
+    frames.push_back(frame_list.substr(at, end - at));
+    at = end + 1;
+  }
+  if (3 * (int)frames.size() != nc) {
+    std::fprintf(stderr, "%s: %d contact frames, %d constraint rows in the generated code\n", name.c_str(),
+                 (int)frames.size(), nc);
+    return 1;
+  }
+  ConstraintModels contacts[2];
+  ConstraintDatas contact_datas[2];
+  pinocchio::Data data[2] = {pinocchio::Data(model), pinocchio::Data(model)};
+  pinocchio::ProximalSettings settings[2];  // default: mu = 0, one iteration (an exact solve)
+  for (const std::string &frame : frames) {
+    if (!model.existFrame(frame)) {
+      std::fprintf(stderr, "%s: Pinocchio's model has no frame %s\n", name.c_str(), frame.c_str());
+      return 1;
+    }
+    const pinocchio::Frame &f = model.frames[model.getFrameId(frame)];
+    for (int v = 0; v < 2; ++v)
+      contacts[v].emplace_back(pinocchio::CONTACT_3D, model, f.parentJoint, f.placement, CONTACT_FRAME[v]);
+  }
+  for (int v = 0; v < 2; ++v) {
+    for (const auto &c : contacts[v]) contact_datas[v].emplace_back(c);
+    pinocchio::initConstraintDynamics(model, data[v], contacts[v], contact_datas[v]);
+  }
+
+  // Consistent states: qd projected onto the null space of the contact points' Jacobian (world axes).
+  States s = random_states(model, continuous, nstates, seed);
+  pinocchio::Data kin(model);
+  Eigen::MatrixXd J(nc, n), J6(6, n);
+  for (int k = 0; k < nstates; ++k) {
+    pinocchio::computeJointJacobians(model, kin, s.Q[k]);
+    for (size_t c = 0; c < contacts[0].size(); ++c) {
+      J6.setZero();
+      pinocchio::getFrameJacobian(model, kin, contacts[0][c].joint1_id, contacts[0][c].joint1_placement,
+                                  pinocchio::LOCAL_WORLD_ALIGNED, J6);
+      J.middleRows(3 * (int)c, 3) = J6.topRows(3);
+    }
+    const Eigen::VectorXd Jv = J * s.V[k];
+    s.V[k] -= J.transpose() * (J * J.transpose()).ldlt().solve(Jv);
+    for (int i = 0; i < n; ++i) s.qd[(size_t)k * n + i] = s.V[k][i];
+  }
+  bench_states cs = {s.count, n, s.q.data(), s.qd.data(), s.qdd.data(), s.tau.data(), bm->p};
+  std::vector<double> buf((size_t)(n + nc));
+
+  // Agreement on the first states: qdd for both reference frames, lambda in LOCAL_WORLD_ALIGNED (world axes).
+  double err = 0.0, err_lambda = 0.0;
+  int singular = 0;
+  for (int k = 0; k < std::min(CHECK_STATES, nstates); ++k) {
+    const size_t at = (size_t)k * n;
+    if (bm->constrained_forward_dynamics(&s.q[at], &s.qd[at], &s.tau[at], bm->p, buf.data(), buf.data() + n))
+      ++singular;
+    for (int v = 0; v < 2; ++v) {
+      pinocchio::constraintDynamics(model, data[v], s.Q[k], s.V[k], s.T[k], contacts[v], contact_datas[v],
+                                    settings[v]);
+      err = std::max(err, relative_error(buf.data(), data[v].ddq.data(), n));
+    }
+    err_lambda = std::max(err_lambda, relative_error(buf.data() + n, data[0].lambda_c.data(), nc));
+  }
+  auto timer = [&](int v) -> Timer {
+    return [&, v](int first, double *cpu) {
+      return batch(s.count, calls, first, cpu, [&, v](int i) {
+        pinocchio::constraintDynamics(model, data[v], s.Q[i], s.V[i], s.T[i], contacts[v], contact_datas[v],
+                                      settings[v]);
+        return data[v].ddq[0];
+      });
+    };
+  };
+  std::vector<std::pair<std::string, Timer>> pin_timer = {{CONTACT_FRAME_NAME[0], timer(0)},
+                                                          {CONTACT_FRAME_NAME[1], timer(1)}};
+  std::string frames_json;
+  for (const std::string &f : frames) frames_json += (frames_json.empty() ? "\"" : ", \"") + json_escape(f) + "\"";
+  std::fprintf(out,
+               "{\"name\": \"%s\", \"urdf\": \"%s\", \"frames\": [%s], \"nq\": %d, \"nc\": %d, \"pinocchio_nq\": %d, "
+               "\"pairs\": [",
+               json_escape(name).c_str(), json_escape(path).c_str(), frames_json.c_str(), n, nc, (int)model.nq);
+  char extra[160];
+  std::snprintf(extra, sizeof extra, ", \"lambda_relative_error\": %.3e, \"singular_check_states\": %d", err_lambda,
+                singular);
+  time_pair(out, true, name, "constrained_forward_dynamics", "constraintDynamics", pin_timer,
+            bm->t_constrained_forward_dynamics, cs, buf.data(), seconds, calls, err, extra);
+  std::fprintf(out, "]}");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
-  if (argc < 7 || (argc - 5) % 2) {
-    std::fprintf(stderr, "usage: %s SECONDS STATES CALLS OUT.json NAME URDF [NAME URDF ...]\n", argv[0]);
+  std::vector<std::vector<std::string>> robots, constrained;  // (NAME, URDF), (NAME, URDF, FRAMES)
+  bool usage = argc < 7;
+  for (int i = 5; i < argc && !usage;) {
+    const bool c = std::strcmp(argv[i], "--constrained") == 0;
+    const int take = c ? 3 : 2;
+    usage = i + c + take > argc;
+    if (!usage) (c ? constrained : robots).emplace_back(argv + i + c, argv + i + c + take);
+    i += c + take;
+  }
+  if (usage) {
+    std::fprintf(stderr,
+                 "usage: %s SECONDS STATES CALLS OUT.json NAME URDF [NAME URDF ...] "
+                 "[--constrained NAME URDF FRAME,FRAME,... ...]\n",
+                 argv[0]);
     return 2;
   }
   const double seconds = std::atof(argv[1]);
@@ -103,207 +474,19 @@ int main(int argc, char **argv) {
   }
   std::fprintf(out, "{\"seconds_per_pair\": %g, \"states\": %d, \"calls_per_batch\": %d, \"robots\": [", seconds,
                nstates, calls);
-  for (int r = 5; r < argc; r += 2) {
-    const std::string name = argv[r], path = argv[r + 1];
-    const bench_model *bm = nullptr;
-    for (int k = 0; bench_models[k]; ++k)
-      if (name == bench_models[k]->name) bm = bench_models[k];
-    if (!bm) {
-      std::fprintf(stderr, "no generated model %s linked in\n", name.c_str());
-      return 2;
-    }
-    pinocchio::Model model;
-    pinocchio::urdf::buildModel(path, model);
-    pinocchio::Data data(model);
-    const int n = bm->nq;
-    if (model.nv != n) {
-      std::fprintf(stderr, "%s: Pinocchio nv = %d, generated nq = %d\n", name.c_str(), (int)model.nv, n);
-      return 1;
-    }
-    // The generated coordinates must be Pinocchio's joints in the same order.
-    std::vector<int> continuous(n, 0);
-    for (pinocchio::JointIndex j = 1; j < (pinocchio::JointIndex)model.njoints; ++j) {
-      const auto &joint = model.joints[j];
-      for (int k = 0; k < joint.nv(); ++k) {
-        const int i = joint.idx_v() + k;
-        if (model.names[j] != bm->joints[i]) {
-          std::fprintf(stderr, "%s: coordinate %d is joint %s in the generated code, %s in Pinocchio\n",
-                       name.c_str(), i, bm->joints[i], model.names[j].c_str());
-          return 1;
-        }
-      }
-      if (joint.nq() == 2 && joint.nv() == 1) {
-        continuous[joint.idx_v()] = 1;
-      } else if (joint.nq() != joint.nv()) {
-        std::fprintf(stderr, "%s: joint %s has nq %d, nv %d\n", name.c_str(), model.names[j].c_str(), joint.nq(),
-                     joint.nv());
-        return 1;
-      }
-    }
-    // States.
-    States s;
-    s.count = nstates;
-    s.nq = n;
-    std::mt19937_64 rng(20240611u + (unsigned)r);
-    std::uniform_real_distribution<double> angle(-M_PI, M_PI);
-    std::normal_distribution<double> normal(0.0, 1.0);
-    for (int k = 0; k < nstates; ++k) {
-      Eigen::VectorXd Q(model.nq), V(n), Vd(n), T(n);
-      for (int i = 0; i < n; ++i) {
-        s.q.push_back(angle(rng));
-        s.qd.push_back(V[i] = normal(rng));
-        s.qdd.push_back(Vd[i] = normal(rng));
-        s.tau.push_back(T[i] = normal(rng));
-      }
-      for (pinocchio::JointIndex j = 1; j < (pinocchio::JointIndex)model.njoints; ++j) {
-        const auto &joint = model.joints[j];
-        const int iv = joint.idx_v(), iq = joint.idx_q();
-        if (continuous[iv]) {
-          Q[iq] = std::cos(s.q[(size_t)k * n + iv]);
-          Q[iq + 1] = std::sin(s.q[(size_t)k * n + iv]);
-        } else {
-          for (int i = 0; i < joint.nv(); ++i) Q[iq + i] = s.q[(size_t)k * n + iv + i];
-        }
-      }
-      s.Q.push_back(Q);
-      s.V.push_back(V);
-      s.Vd.push_back(Vd);
-      s.T.push_back(T);
-    }
-    bench_states cs = {s.count, n, s.q.data(), s.qd.data(), s.qdd.data(), s.tau.data(), bm->p};
-    std::vector<double> buf((size_t)n * n);
-
-    // Agreement on the first states.
-    double err[NPAIRS] = {0, 0, 0, 0, 0};
-    for (int k = 0; k < std::min(CHECK_STATES, nstates); ++k) {
-      const double *q = &s.q[(size_t)k * n], *qd = &s.qd[(size_t)k * n];
-      const double *qdd = &s.qdd[(size_t)k * n], *tau = &s.tau[(size_t)k * n];
-      bm->inertia(q, bm->p, buf.data());
-      pinocchio::crba(model, data, s.Q[k], pinocchio::Convention::LOCAL);
-      err[0] = std::max(err[0], relative_error(buf.data(), symmetric_from_upper(data.M).data(), n * n));
-      pinocchio::crba(model, data, s.Q[k], pinocchio::Convention::WORLD);
-      err[0] = std::max(err[0], relative_error(buf.data(), symmetric_from_upper(data.M).data(), n * n));
-      bm->nonlinear_effects(q, qd, bm->p, buf.data());
-      pinocchio::nonLinearEffects(model, data, s.Q[k], s.V[k]);
-      err[1] = std::max(err[1], relative_error(buf.data(), data.nle.data(), n));
-      bm->inverse_dynamics(q, qd, qdd, bm->p, buf.data());
-      pinocchio::rnea(model, data, s.Q[k], s.V[k], s.Vd[k]);
-      err[2] = std::max(err[2], relative_error(buf.data(), data.tau.data(), n));
-      bm->forward_dynamics(q, qd, tau, bm->p, buf.data());
-      pinocchio::aba(model, data, s.Q[k], s.V[k], s.T[k], pinocchio::Convention::LOCAL);
-      err[3] = std::max(err[3], relative_error(buf.data(), data.ddq.data(), n));
-      pinocchio::aba(model, data, s.Q[k], s.V[k], s.T[k], pinocchio::Convention::WORLD);
-      err[3] = std::max(err[3], relative_error(buf.data(), data.ddq.data(), n));
-      bm->inertia_inverse(q, bm->p, buf.data());
-      pinocchio::computeMinverse(model, data, s.Q[k]);
-      err[4] = std::max(err[4], relative_error(buf.data(), symmetric_from_upper(data.Minv).data(), n * n));
-    }
-
-    // Pinocchio's batch timers: the same loop shape as the C ones (bench.h).
-    auto batch = [&](int first, double *cpu_ns, auto &&call) {
-      double acc = 0.0;
-      int i = first;
-      const double c0 = bench_cpu_now_ns(), t0 = bench_now_ns();
-      for (int k = 0; k < calls; ++k) {
-        acc += call(i);
-        if (++i == s.count) i = 0;
-      }
-      const double t1 = bench_now_ns(), c1 = bench_cpu_now_ns();
-      bench_sink += acc;
-      *cpu_ns = (c1 - c0) / calls;
-      return (t1 - t0) / calls;
-    };
-    using Timer = std::function<double(int, double *)>;
-    auto crba_timer = [&](pinocchio::Convention c) -> Timer {
-      return [&, c](int first, double *cpu) {
-        return batch(first, cpu, [&](int i) {
-          pinocchio::crba(model, data, s.Q[i], c);
-          return data.M(0, 0);
-        });
-      };
-    };
-    auto aba_timer = [&](pinocchio::Convention c) -> Timer {
-      return [&, c](int first, double *cpu) {
-        return batch(first, cpu, [&](int i) {
-          pinocchio::aba(model, data, s.Q[i], s.V[i], s.T[i], c);
-          return data.ddq[0];
-        });
-      };
-    };
-    Timer pin_timer[NPAIRS][2] = {
-        {crba_timer(pinocchio::Convention::LOCAL), crba_timer(pinocchio::Convention::WORLD)},
-        {[&](int first, double *cpu) {
-           return batch(first, cpu, [&](int i) {
-             pinocchio::nonLinearEffects(model, data, s.Q[i], s.V[i]);
-             return data.nle[0];
-           });
-         },
-         nullptr},
-        {[&](int first, double *cpu) {
-           return batch(first, cpu, [&](int i) {
-             pinocchio::rnea(model, data, s.Q[i], s.V[i], s.Vd[i]);
-             return data.tau[0];
-           });
-         },
-         nullptr},
-        {aba_timer(pinocchio::Convention::LOCAL), aba_timer(pinocchio::Convention::WORLD)},
-        {[&](int first, double *cpu) {
-           return batch(first, cpu, [&](int i) {
-             pinocchio::computeMinverse(model, data, s.Q[i]);
-             return data.Minv(0, 0);
-           });
-         },
-         nullptr},
-    };
-    bench_timer ours_timer[NPAIRS] = {bm->t_inertia, bm->t_nonlinear_effects, bm->t_inverse_dynamics,
-                                      bm->t_forward_dynamics, bm->t_inertia_inverse};
-
-    std::fprintf(out, "%s{\"name\": \"%s\", \"urdf\": \"%s\", \"nq\": %d, \"pinocchio_nq\": %d, \"pairs\": [",
-                 r == 5 ? "" : ", ", json_escape(name).c_str(), json_escape(path).c_str(), n, (int)model.nq);
-    for (int k = 0; k < NPAIRS; ++k) {
-      const int nv = NVARIANTS[k];
-      // warm-up and calibration: once through all states on each side
-      double cpu = 0.0, tg = 0.0, tp = 0.0;
-      for (int first = 0; first < nstates; first += calls) {
-        tg += ours_timer[k](&cs, first, calls, buf.data(), &cpu) * calls;
-        for (int v = 0; v < nv; ++v) tp += pin_timer[k][v](first, &cpu) * calls;
-      }
-      const double per_batch = (tg + tp) / nstates * calls;  // ns for one generated + one Pinocchio batch each
-      int batches = (int)std::ceil(seconds * 1e9 / per_batch);
-      batches = std::max(51, std::min(batches, 400001));
-      std::vector<double> g(batches), gc(batches);
-      std::vector<std::vector<double>> p(nv, std::vector<double>(batches)), pc(nv, std::vector<double>(batches));
-      for (int b = 0; b < batches; ++b) {
-        const int first = (int)(((long long)b * calls) % nstates);
-        g[b] = ours_timer[k](&cs, first, calls, buf.data(), &gc[b]);
-        for (int v = 0; v < nv; ++v) p[v][b] = pin_timer[k][v](first, &pc[v][b]);
-      }
-      int best = 0;
-      for (int v = 1; v < nv; ++v)
-        if (median(p[v]) < median(p[best])) best = v;
-      const double mg = median(g), mp = median(p[best]), mgc = median(gc), mpc = median(pc[best]);
-      std::string label = PINOCCHIO[k];
-      if (nv > 1) label += std::string(" (") + VARIANT[k][best] + ")";
-      std::string variants = "{";
-      for (int v = 0; v < nv; ++v)
-        variants += std::string(v ? ", " : "") + "\"" + (nv > 1 ? VARIANT[k][v] : "default") + "\": " +
-                    std::to_string(median(p[v]));
-      variants += "}";
-      std::fprintf(out,
-                   "%s{\"role\": \"%s\", \"pinocchio\": \"%s\", \"batches\": %d, \"generated_ns\": %.3f, "
-                   "\"pinocchio_ns\": %.3f, \"ratio\": %.5f, \"generated_ns_q10\": %.3f, \"generated_ns_q90\": %.3f, "
-                   "\"pinocchio_ns_q10\": %.3f, \"pinocchio_ns_q90\": %.3f, \"generated_cpu_ns\": %.3f, "
-                   "\"pinocchio_cpu_ns\": %.3f, \"cpu_ratio\": %.5f, \"pinocchio_variants_ns\": %s, "
-                   "\"check_states\": %d, \"relative_error\": %.3e}",
-                   k ? ", " : "", PAIRS[k], label.c_str(), batches, mg, mp, mg / mp, quantile(g, 0.1),
-                   quantile(g, 0.9), quantile(p[best], 0.1), quantile(p[best], 0.9), mgc, mpc, mgc / mpc,
-                   variants.c_str(), std::min(CHECK_STATES, nstates), err[k]);
-      std::fprintf(stderr,
-                   "%s %-18s generated %9.1f ns  Pinocchio %-24s %9.1f ns  ratio %.3f  (CPU-time ratio %.3f, "
-                   "err %.1e, %d batches of %d)\n",
-                   name.c_str(), PAIRS[k], mg, label.c_str(), mp, mg / mp, mgc / mpc, err[k], batches, calls);
-    }
-    std::fprintf(out, "]}");
+  for (size_t r = 0; r < robots.size(); ++r) {
+    if (r) std::fprintf(out, ", ");
+    const int rc = bench_robot(out, robots[r][0], robots[r][1], 20240611u + 5u + 2u * (unsigned)r, seconds, nstates,
+                               calls);
+    if (rc) return rc;
+    std::fflush(out);
+  }
+  std::fprintf(out, "], \"constrained\": [");
+  for (size_t r = 0; r < constrained.size(); ++r) {
+    if (r) std::fprintf(out, ", ");
+    const int rc = bench_constrained(out, constrained[r][0], constrained[r][1], constrained[r][2],
+                                     20240612u + (unsigned)r, seconds, nstates, calls);
+    if (rc) return rc;
     std::fflush(out);
   }
   std::fprintf(out, "], \"sink\": %g}\n", (double)bench_sink);
