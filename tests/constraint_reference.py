@@ -96,9 +96,10 @@ class Constraint:
 
 
 def _frame_id(pm, name: str) -> int:
-    if not pm.existFrame(name):
-        raise ValueError(f"the model has no frame {name!r}")
-    return pm.getFrameId(name)
+    for kind in (pin.FrameType.BODY, pin.FrameType.OP_FRAME):  # a URDF link, or a frame added by name
+        if pm.existFrame(name, kind):
+            return pm.getFrameId(name, kind)
+    raise ValueError(f"the model has no link or operational frame {name!r}")
 
 
 class _Point:

@@ -33,6 +33,7 @@ from aggsym.mechanics.elastic import elastic_forces
 from aggsym.mechanics.inertia import inertia_matrix
 from aggsym.mechanics.kinematics import TreeKinematics
 from aggsym.mechanics.linalg import dot
+from reference import NumericModel
 
 # The files example-robot-data's loaders open for these robots (robots_loader.py: path, urdf_subpath, urdf_filename).
 ROBOTS = {
@@ -253,3 +254,32 @@ def assert_model_error(path, where: str, words) -> ModelError:
     for w in words:
         assert w in str(err), str(err)
     return err
+
+
+def pinocchio_tree(model):
+    """The model as a Pinocchio model, one joint per coordinate (multi-coordinate pairs as chains of joints with
+    massless frames between, variant 1 of the book; welded bodies appended to their parent's joint).  The first
+    joint of a pair is placed at SE3(R0, p) of the constructive configuration, so its frame after the joint
+    motion is our body frame; inertias are given in it.  Returns the model and, per body, the index of the joint
+    whose frame is the body frame (the parent's joint for a welded body, with the body's placement in it).
+    Each body is also a Pinocchio frame of its name (for frame Jacobians, constraints)."""
+    nm = NumericModel(model)
+    pm = pin.Model()
+    pm.gravity = pin.Motion(np.concatenate([nm.gravity, np.zeros(3)]))
+    frame = []  # per body: (joint id, placement of the body frame in that joint's frame)
+    kinds = {0: pin.JointModelPX, 1: pin.JointModelPY, 2: pin.JointModelPZ,
+             3: pin.JointModelRX, 4: pin.JointModelRY, 5: pin.JointModelRZ}
+    for b, body in zip(nm.bodies, model.bodies):
+        parent, above = (0, pin.SE3.Identity()) if b["parent"] < 0 else frame[b["parent"]]
+        placement = above * pin.SE3(b["R0"], b["p"])
+        for j, (_, axis) in enumerate(b["coords"]):
+            name = body.pair.name if j == len(b["coords"]) - 1 else f"{body.pair.name}_{j}"
+            parent = pm.addJoint(parent, kinds[axis](), placement, name)
+            placement = pin.SE3.Identity()
+        frame.append((parent, placement))
+        inertia = pin.Inertia(b["m"], b["c"], b["I"]) if "m" in b else pin.Inertia.Zero()
+        pm.appendBodyToJoint(parent, inertia, placement)
+        pm.addFrame(pin.Frame(body.name, parent, placement, pin.FrameType.OP_FRAME))
+    assert pm.nq == model.nq
+    joint_of = [j for j, _ in frame]
+    return pm, joint_of

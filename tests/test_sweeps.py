@@ -23,7 +23,7 @@ from aggsym.mechanics.sweeps import (
     keeps_origin, origin_sweep, pair_bodies, transmitted_wrenches,
 )
 from conftest import MODELS, ROOT, model_path
-from helpers import inverse_dynamics_by_equations, states as random_states
+from helpers import inverse_dynamics_by_equations, pinocchio_tree, states as random_states
 from reference import NumericModel, newton_euler_full, pair_wrenches, rot
 
 DATA = ROOT / "tests" / "data"
@@ -289,33 +289,6 @@ def test_gravity_wrench_is_weight_at_the_centre_of_mass(rng):
 
 # Pinocchio -----------------------------------------------------------------------------------------------------
 
-def pinocchio_model(model):
-    """The model as a Pinocchio model, one joint per coordinate (multi-coordinate pairs as chains of joints with
-    massless frames between, variant 1 of the book; welded bodies appended to their parent's joint).  The first
-    joint of a pair is placed at SE3(R0, p) of the constructive configuration, so its frame after the joint
-    motion is our body frame; inertias are given in it.  Returns the model and, per body, the index of the joint
-    whose frame is the body frame (the parent's joint for a welded body, with the body's placement in it)."""
-    nm = NumericModel(model)
-    pm = pin.Model()
-    pm.gravity = pin.Motion(np.concatenate([nm.gravity, np.zeros(3)]))
-    frame = []  # per body: (joint id, placement of the body frame in that joint's frame)
-    kinds = {0: pin.JointModelPX, 1: pin.JointModelPY, 2: pin.JointModelPZ,
-             3: pin.JointModelRX, 4: pin.JointModelRY, 5: pin.JointModelRZ}
-    for b, body in zip(nm.bodies, model.bodies):
-        parent, above = (0, pin.SE3.Identity()) if b["parent"] < 0 else frame[b["parent"]]
-        placement = above * pin.SE3(b["R0"], b["p"])
-        for j, (_, axis) in enumerate(b["coords"]):
-            name = body.pair.name if j == len(b["coords"]) - 1 else f"{body.pair.name}_{j}"
-            parent = pm.addJoint(parent, kinds[axis](), placement, name)
-            placement = pin.SE3.Identity()
-        frame.append((parent, placement))
-        inertia = pin.Inertia(b["m"], b["c"], b["I"]) if "m" in b else pin.Inertia.Zero()
-        pm.appendBodyToJoint(parent, inertia, placement)
-    assert pm.nq == model.nq
-    joint_of = [j for j, _ in frame]
-    return pm, joint_of
-
-
 PINOCCHIO_MODELS = [model_path(n) for n in (
     "manipulator6", "planar_3link", "gyroscope", "test_bench", "double_pendulum", "double_pendulum_variant2",
     "walking_machine", "spacecraft")] + [DATA / "branching_tree.yaml", DATA / "shared_origins.yaml"]
@@ -327,7 +300,7 @@ def test_against_pinocchio_rnea_and_joint_forces(path, rng):
     model = aggsym.load(path)
     twin = aggsym.NumericTwin(model)
     nm = NumericModel(model)
-    pm, joint_of = pinocchio_model(model)
+    pm, joint_of = pinocchio_tree(model)
     data = pm.createData()
     for q, qd, qdd in states(model, rng, 3):
         tau = pin.rnea(pm, data, q, qd, qdd)
@@ -347,7 +320,7 @@ def test_against_pinocchio_rnea_and_joint_forces(path, rng):
 def test_pinocchio_frames_sanity():
     """A check of the comparison itself: a wrong placement (rotation dropped) must show in data.f."""
     model = aggsym.load(model_path("gyroscope"))
-    pm, joint_of = pinocchio_model(model)
+    pm, joint_of = pinocchio_tree(model)
     pm.jointPlacements[1] = pin.SE3(np.eye(3), pm.jointPlacements[1].translation)
     data = pm.createData()
     q = np.array([0.3, -0.4, 0.5])

@@ -27,7 +27,7 @@ from aggsym.mechanics.transvective import (
 from aggsym.contract import transvective_layout as layout
 from aggsym.symbolic import factored_form
 from conftest import MODELS, model_path
-from helpers import routine_program, routine_sympy
+from helpers import pinocchio_tree, routine_program, routine_sympy
 from test_variants import chain_of_elementary_frames
 
 DATA = Path(__file__).resolve().parent / "data"
@@ -305,39 +305,6 @@ def test_book_cauchy_form_example():
 # Pinocchio, models built through its API
 
 
-PIN_JOINTS = {"o1": pin.JointModelPX, "o2": pin.JointModelPY, "o3": pin.JointModelPZ,
-              "theta4": pin.JointModelRX, "theta5": pin.JointModelRY, "theta6": pin.JointModelRZ}
-
-
-def pinocchio_model(model):
-    """The same tree as a Pinocchio model: each pair's constructive motion is the joint placement, its coordinates
-    a chain of one-axis joints in f order (translations, then c1 c2 c3), parameters at their defaults."""
-    values = dict(zip(model.parameter_symbols, model.parameter_values))
-
-    def num(e):
-        return float(sp.sympify(e).subs(values))
-
-    pm = pin.Model()
-    pm.gravity = pin.Motion(np.array([num(x) for x in model.gravity]), np.zeros(3))
-    joint_of = {"world": 0}
-    for body in model.bodies:
-        pair = body.pair
-        assert pair.coordinates, "welded pairs are not used by the models here"
-        R = np.array(pair.constructive_rotation().subs(values), dtype=float)
-        placement = pin.SE3(R, np.array([num(x) for x in pair.translation]))
-        joint = joint_of[body.parent]
-        for c in pair.coordinates:
-            joint = pm.addJoint(joint, PIN_JOINTS[c.code](), placement, c.name)
-            placement = pin.SE3.Identity()
-        if body.inertial is not None:
-            ine = body.inertial
-            inertia = np.array(sp.Matrix(ine.inertia).subs(values), dtype=float)
-            pm.appendBodyToJoint(joint, pin.Inertia(num(ine.mass), np.array([num(x) for x in ine.com]), inertia),
-                                 pin.SE3.Identity())
-        joint_of[body.name] = joint
-    return pm
-
-
 def rigid_tree(path) -> bool:
     """A model Pinocchio can hold: no prescribed spins, no added masses (springs are added to tau)."""
     model = aggsym.load(path)
@@ -350,7 +317,7 @@ def test_against_pinocchio(path, rng):
     springs of elastic pairs are the generalized force -C q given to aba."""
     model = aggsym.load(path)
     twin = aggsym.NumericTwin(model)
-    pm = pinocchio_model(model)
+    pm, _ = pinocchio_tree(model)
     assert pm.nq == model.nq
     data = pm.createData()
     for q, qd, tau in states(model, rng):
