@@ -54,6 +54,13 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--support", action="store_true",
                        help="URDF only, with --floating-base: the free root is the support of the support equation "
                             "(3.1); its 6 coordinates are q, the joints gamma (support_* routines)")
+        p.add_argument("--frames", metavar="A,B,...",
+                       help="the frames of the frame routines, in this order: URDF link names, or a YAML model's "
+                            "bodies and 'frames:' (default: the links or bodies without a child, then 'frames:')")
+        p.add_argument("--routines", metavar="A,B,...",
+                       help="emit only these routines (names as --list-routines shows them, without the model's "
+                            "prefix; 'default': those emitted when none are named; 'all': every routine, with those "
+                            "on request: derivatives, regressor)")
         p.add_argument("--name", metavar="NAME",
                        help="the name of the generated code (C prefix, module and file names) instead of the model's")
         return p
@@ -101,6 +108,14 @@ def _load(args):
         if problem:
             raise AggsymError(f"{path}: --support: {problem}")
         model = dataclasses.replace(model, support=root)
+    if args.frames is not None:
+        from .model.frames import select_frames
+
+        model = select_frames(model, [name.strip() for name in args.frames.split(",") if name.strip()])
+    if args.routines is not None:
+        from .contract import select_routines
+
+        model = select_routines(model, [name.strip() for name in args.routines.split(",") if name.strip()])
     if args.name is not None:
         from .codegen.escape import check_c_identifier, check_module_name
 
@@ -135,13 +150,18 @@ def cmd_generate(args) -> int:
     if args.list_routines:
         from .contract import c_symbol, omitted_routines, routines_for
 
+        from .contract import ROUTINES
+
         omitted = omitted_routines(model)
         routines = routines_for(model, omitted=omitted)
-        width = max(len(c_symbol(model, r)) for r in routines)
+        extra = [r for r in ROUTINES.values() if r.exists_for(model) and r not in routines and r.role not in omitted]
+        width = max(len(c_symbol(model, r)) for r in list(routines) + extra)
         for r in routines:
             print(f"{c_symbol(model, r).ljust(width)}  {r.doc}")
         for role, reason in omitted.items():
             print(f"{(model.name + '_' + role).ljust(width)}  (left out: {reason})")
+        for r in extra:
+            print(f"{c_symbol(model, r).ljust(width)}  (on request: --routines {r.role}) {r.doc}")
         return 0
     from .codegen.generate import generate, write
 

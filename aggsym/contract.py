@@ -22,12 +22,13 @@ The equations are ``A(q) q'' + b(q, q') + g(q) + c(q) = tau`` (2.17), (2.27):
 """
 from __future__ import annotations
 
+import functools
 import keyword
 from dataclasses import dataclass
 from typing import Callable
 
 from . import __version__
-from .mechanics import constraints, elastic, support, sweeps, transvective
+from .mechanics import constraints, derivatives, elastic, frames, regressor, support, sweeps, transvective
 from .mechanics.bias import coriolis_matrix, gravity_vector
 from .mechanics.coupling import Coupler
 from .mechanics.energy import kinetic_energy, momentum, potential_energy
@@ -65,10 +66,12 @@ class Routine:
     layout: Callable | None = None  # model -> JSON-able description of the outputs' layout (manifest)
     applies: Callable | None = None  # model -> bool; None means every model has this routine
     regular: bool = False  # defined only where A(q) is regular (left out, with the reason, where it is not)
-    # with coupled coordinates: "force" (outputs reduce by J^T), "matrix" (J^T X J), "tree" (the tree's own
-    # outputs), "forward" / "inverse" (q'' and A^-1 under the coupling), None (not emitted)
+    # with coupled coordinates: "force" (outputs reduce by J^T), "matrix" (J^T X J), "rows" (each row of an
+    # m x n Jacobian times J), "columns" (J^T Y for an n x m matrix Y), "tree" (the tree's own outputs), "forward" / "inverse" (q'' and A^-1 under the
+    # coupling), None (not emitted)
     coupled: str | None = "force"
     input_lengths: Callable | None = None  # model -> {input: length} where it is not q's (the support routines)
+    on_request: bool = False  # emitted only when named (--routines): large outputs that few users need
 
     @property
     def written(self) -> tuple:
@@ -560,11 +563,288 @@ register(Routine("support_inverse", ("q", "qd", "qdd", "gamma", "gammad", "T", "
                  layout=support_layout, applies=_has_support, coupled=None, input_lengths=support_lengths))
 
 
+def _inverse_dynamics_derivatives(bound, kin, x):
+    dq, dqd = derivatives.inverse_dynamics_derivatives(bound, kin, x["qd"], x["qdd"])
+    return _flat(dq), _flat(dqd)
+
+
+def _forward_dynamics_derivatives(bound, kin, x):
+    dq, dqd = derivatives.forward_dynamics_derivatives(
+        bound, kin, x["qd"], _minus(x["tau"], elastic.elastic_forces(bound, kin.q)))
+    return _flat(dq), _flat(dqd)
+
+
+register(Routine("inverse_dynamics_derivatives", ("q", "qd", "qdd", "p"),
+                 (Output("dtau_dq", nq_square), Output("dtau_dqd", nq_square)), _inverse_dynamics_derivatives,
+                 "d tau / d q and d tau / d qd, n*n row-major (entry (i, j): d tau_i / d x_j; d tau / d qdd is A): "
+                 "the sweeps (2.39)-(2.46) differentiated in forward mode, reusing their intermediates",
+                 coupled="matrix", on_request=True))
+register(Routine("forward_dynamics_derivatives", ("q", "qd", "tau", "p"),
+                 (Output("dqdd_dq", nq_square), Output("dqdd_dqd", nq_square)), _forward_dynamics_derivatives,
+                 "d qdd / d q and d qdd / d qd, n*n row-major (d qdd / d tau is A^-1): -A^-1 d tau_ID / d x at the "
+                 "forward dynamics' qdd, A^-1 applied column by column by the transvective factors (3.19)-(3.20)",
+                 coupled=None, regular=True, on_request=True))
+
+
+def frame_count(model) -> int:
+    return len(model.frames)
+
+
+def frames_entry(model) -> list:
+    """The manifest's list of the emitted frames, in output order: name, body, origin and axes in the body."""
+    return [{"name": f.name, "body": f.body, "point": [str(x) for x in f.point],
+             "axes": None if f.axes is None else [[str(x) for x in row] for row in f.axes],
+             "rotation": [[axis, str(angle)] for axis, angle in f.rotation]} for f in model.frames]
+
+
+def frame_layout(per_frame: list, convention: str):
+    def layout(model) -> dict:
+        return {"frames": [f.name for f in model.frames], "per_frame": per_frame, "order": "row-major, frames in "
+                "the order of 'frames'", "convention": convention}
+    return layout
+
+
+def _has_frames(model) -> bool:
+    return bool(model.frames)
+
+
+def _has_free_root(model) -> bool:
+    """A floating base: the root body's pair has all six coordinates."""
+    return len(model.bodies[0].pair.coordinates) == 6
+
+
+COM_CONVENTION = ("the bodies that move (a body welded to the world is left out, as Pinocchio's centerOfMass "
+                  "leaves out the universe), their own inertia (no added mass, no armature), world axes")
+
+register(Routine("frame_poses", ("q", "p"), (Output("X", lambda model: (frame_count(model), 12)),),
+                 lambda bound, kin, x: (frames.frame_poses(bound, kin),),
+                 "per frame: its origin in the world, then the rotation matrix from frame axes to world axes "
+                 "(Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)",
+                 layout=frame_layout(["x", "y", "z", "R00", "R01", "R02", "R10", "R11", "R12", "R20", "R21", "R22"],
+                                     "origin in world axes, then R row-major: x_world = R x_frame + origin"),
+                 applies=_has_frames, coupled="tree"))
+register(Routine("frame_jacobians", ("q", "p"),
+                 (Output("J", lambda model: (frame_count(model), 6, model.nq)),),
+                 lambda bound, kin, x: (_flat(frames.frame_jacobians(bound, kin)),),
+                 "per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each "
+                 "coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the "
+                 "frame's origin",
+                 layout=frame_layout(["vx", "vy", "vz", "wx", "wy", "wz"],
+                                     "rows of each block: (v, w) of the frame origin, world axes; columns: q"),
+                 applies=_has_frames, coupled="rows"))
+register(Routine("frame_accelerations", ("q", "qd", "qdd", "p"),
+                 (Output("a", lambda model: (frame_count(model), 6)),),
+                 lambda bound, kin, x: (frames.frame_accelerations(bound, kin, x["qd"], x["qdd"]),),
+                 "per frame the classical acceleration of its origin and its angular acceleration, world axes, from "
+                 "the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd",
+                 layout=frame_layout(["ax", "ay", "az", "alphax", "alphay", "alphaz"],
+                                     "classical (not spatial) acceleration of the origin, then the angular "
+                                     "acceleration, world axes (Pinocchio's getFrameClassicalAcceleration, "
+                                     "LOCAL_WORLD_ALIGNED)"),
+                 applies=_has_frames, coupled="tree"))
+register(Routine("center_of_mass", ("q", "p"), (Output("c", lambda model: (3,)),),
+                 lambda bound, kin, x: (frames.center_of_mass(bound, kin),),
+                 "the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first "
+                 "moment of Theta_lk (2.3)",
+                 layout=lambda model: {"rows": ["x", "y", "z"], "convention": COM_CONVENTION}, coupled="tree"))
+register(Routine("com_jacobian", ("q", "p"), (Output("Jc", lambda model: (3, model.nq)),),
+                 lambda bound, kin, x: (_flat(frames.com_jacobian(bound, kin)),),
+                 "the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the "
+                 "subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the "
+                 "subtrees' mass and first moment)",
+                 layout=lambda model: {"rows": ["x", "y", "z"], "columns": [c.name for c in model.coordinates],
+                                       "order": "row-major", "convention": COM_CONVENTION}, coupled="rows"))
+register(Routine("centroidal_map", ("q", "p"), (Output("Ag", lambda model: (6, model.nq)),),
+                 lambda bound, kin, x: (_flat(frames.centroidal_map(bound, kin)),),
+                 "the centroidal momentum matrix A_G, 6 x n row-major: h_G = A_G qd, the linear momentum and the "
+                 "angular momentum about the centre of mass, world axes (Pinocchio's computeCentroidalMap)",
+                 layout=lambda model: {"rows": ["px", "py", "pz", "Lx", "Ly", "Lz"],
+                                       "columns": [c.name for c in model.coordinates], "order": "row-major",
+                                       "convention": COM_CONVENTION + "; angular momentum about the centre of mass"},
+                 applies=_has_free_root, coupled="rows"))
+
+
+def regressor_shape(model):
+    return (model.nq, 10 * len(regressor.blocks(model)))
+
+
+def regressor_layout(model) -> dict:
+    exprs = regressor.standard_parameters(model)
+    defaults = dict(zip(model.parameter_symbols, model.parameter_values))
+    out = []
+    for b, k in enumerate(regressor.blocks(model)):
+        body = model.bodies[k]
+        block = exprs[10 * b:10 * b + 10]
+        item = {"body": body.name, "columns": [10 * b, 10 * b + 10],
+                "frame": "link" if body.link_rotation is not None else "body",
+                "values": {name: float(v.subs(defaults)) for name, v in zip(regressor.PARAMETERS, block)}}
+        if any(v.free_symbols for v in block):
+            item["expressions"] = {name: str(v) for name, v in zip(regressor.PARAMETERS, block)}
+        out.append(item)
+    return {"Y": {"shape": list(regressor_shape(model)), "order": "row-major", "rows": [c.name for c in model.coordinates]},
+            "parameters": list(regressor.PARAMETERS),
+            "convention": ("tau = Y pi (inverse_dynamics), pi per block (m, m cx, m cy, m cz, Ixx, Ixy, Iyy, Ixz, Iyz, "
+                           "Izz): mass, first moment and inertia about the body (URDF: link) frame's origin, in its "
+                           "axes (Pinocchio's order and frame); one block per moving body, links welded by fixed "
+                           "joints merged into it; 'values': the model's own pi at the default parameters ('expressions': in the "
+                           "parameters, where they enter); with an armature a, tau = Y pi + a qdd (the armature is "
+                           "not a body: Pinocchio's regressor leaves it out too)"),
+            "blocks": out}
+
+
+def regressor_problem(model) -> str | None:
+    """Why tau = Y pi does not hold for a model (the regressor is then omitted), or None."""
+    if elastic.is_elastic(model):
+        return "the elastic force C (q - q0) of (2.27) is in tau and not linear in the inertial parameters"
+    if any(b.added_mass is not None for b in model.bodies):
+        return "added masses (Prop. 2.8) act in tau and are not among the inertial parameters"
+    return None
+
+
+BASE_SEED = 0  # the random states of the base-parameter reduction
+BASE_RANK_TOLERANCE = "max(rows, columns) * 2.2e-16 * the largest singular value (numpy.linalg.matrix_rank's)"
+
+
+@functools.lru_cache(maxsize=8)
+def base_parameters(model) -> tuple:
+    """The base-parameter reduction at the default parameters: (independent columns of Y, beta, samples) such that
+    ``Y[:, dependent] = Y[:, independent] beta`` on every state, so that tau = Y_b pi_b with ``Y_b = Y[:, independent]``
+    and ``pi_b = pi[independent] + beta pi[dependent]``.  Found numerically as identification practice does: Y at
+    ``samples`` random states (seed :data:`BASE_SEED`: q uniform in [-pi, pi], qd and qdd standard normal) stacked,
+    its rank r with the tolerance of :data:`BASE_RANK_TOLERANCE`, and the first r pivots of a QR factorization
+    with column pivoting (Householder, largest remaining column first: Gautier's choice), listed in column
+    order; beta by least squares, entries below 1e-10 of the largest set to 0, the others rounded to 12 digits."""
+    import numpy as np
+
+    from .core.backend import Numeric
+    from .mechanics.bound import bind
+
+    n, P = regressor_shape(model)
+    samples = max(8, -(-4 * P // max(n, 1)))
+    rng = np.random.default_rng(BASE_SEED)
+    bound = bind(model, Numeric())
+    x = {"q": list(rng.uniform(-np.pi, np.pi, (n, samples))), "qd": list(rng.normal(size=(n, samples))),
+         "qdd": list(rng.normal(size=(n, samples)))}
+    flat = run(ROUTINES["regressor"], bound, x)[0]
+    Y = np.stack([np.broadcast_to(np.asarray(v, dtype=float), (samples,)) for v in flat]).reshape(n, P, samples)
+    Y = Y.transpose(2, 0, 1).reshape(samples * n, P)
+    sv = np.linalg.svd(Y, compute_uv=False)
+    tol = sv[0] * max(Y.shape) * np.finfo(float).eps if sv.size else 0.0
+    rank = int((sv > tol).sum())
+    independent = sorted(pivoted_columns(Y)[:rank])
+    dependent = [j for j in range(P) if j not in set(independent)]
+    beta = np.linalg.lstsq(Y[:, independent], Y[:, dependent], rcond=None)[0] if dependent else np.zeros((rank, 0))
+    scale = max(float(np.abs(beta).max()), 1.0) if beta.size else 1.0
+    beta[np.abs(beta) < 1e-10 * scale] = 0.0
+    beta = np.vectorize(lambda v: float(f"{v:.12g}"))(beta) if beta.size else beta  # least squares' last digits
+    return tuple(independent), tuple(dependent), beta, samples
+
+
+def pivoted_columns(Y) -> list:
+    """The column order of a Householder QR factorization of Y with column pivoting (at each step the column of
+    largest norm in the remaining rows first): its first r entries are r well-conditioned independent columns."""
+    import numpy as np
+
+    R = np.array(Y, dtype=float, copy=True)
+    rows, cols = R.shape
+    order = list(range(cols))
+    for k in range(min(rows, cols)):
+        norms = np.einsum("ij,ij->j", R[k:, k:], R[k:, k:])
+        j = k + int(np.argmax(norms))
+        R[:, [k, j]] = R[:, [j, k]]
+        order[k], order[j] = order[j], order[k]
+        x = R[k:, k]
+        alpha = -np.copysign(np.linalg.norm(x), x[0]) if x[0] != 0 else -np.linalg.norm(x)
+        v = x.copy()
+        v[0] -= alpha
+        vv = v @ v
+        if vv > 0:
+            R[k:, k:] -= np.outer(v, (2.0 / vv) * (v @ R[k:, k:]))
+    return order
+
+
+def standard_parameter_names(model) -> list:
+    return [f"{name}_{model.bodies[k].name}" for k in regressor.blocks(model) for name in regressor.PARAMETERS]
+
+
+def base_regressor_layout(model) -> dict:
+    independent, dependent, beta, samples = base_parameters(model)
+    names = standard_parameter_names(model)
+    items = []
+    for r, j in enumerate(independent):
+        combination = {names[j]: 1.0}
+        for d, jd in enumerate(dependent):
+            if beta[r, d] != 0.0:
+                combination[names[jd]] = float(beta[r, d])
+        items.append({"name": names[j], "column": j, "combination": combination})
+    return {"Yb": {"shape": [model.nq, len(independent)], "order": "row-major"},
+            "base_parameters": items,
+            "convention": ("tau = Yb pi_b; pi_b[r] = sum of coefficient * standard parameter over 'combination' (names "
+                           "PARAM_BODY of the regressor's blocks: see layouts.regressor); Yb is the regressor's columns "
+                           "'column'.  Computed at generation from the regressor at the default parameters: a change of "
+                           "the geometry in p may change the combinations"),
+            "samples": samples, "seed": BASE_SEED, "rank_tolerance": BASE_RANK_TOLERANCE,
+            "unidentifiable": [names[j] for j in dependent]}
+
+
+register(Routine("regressor", ("q", "qd", "qdd", "p"), (Output("Y", regressor_shape),),
+                 lambda bound, kin, x: (_flat(regressor.regressor(bound, kin, x["qd"], x["qdd"])),),
+                 "the identification regressor Y(q, qd, qdd), n x 10B row-major: tau = Y pi, pi the 10 standard "
+                 "inertial parameters of each of the B moving bodies (Pinocchio's order and frames): the dynamic "
+                 "wrench (2.10) is linear in pi, carried by the backward sweep (2.41)-(2.42), projected by (2.15)",
+                 layout=regressor_layout, coupled="columns", on_request=True))
+register(Routine("base_regressor", ("q", "qd", "qdd", "p"),
+                 (Output("Yb", lambda model: (model.nq, len(base_parameters(model)[0]))),),
+                 lambda bound, kin, x: (_base_columns(bound, kin, x),),
+                 "the base regressor Yb, n x r row-major: the regressor's r independent columns, tau = Yb pi_b with "
+                 "the base parameters of the manifest (each a combination of standard parameters, found at "
+                 "generation from random samples of Y)", layout=base_regressor_layout, coupled=None, on_request=True))
+
+
+def _base_columns(bound, kin, x):
+    """The independent columns of the regressor."""
+    Y = regressor.regressor(bound, kin, x["qd"], x["qdd"])
+    return [row[j] for row in Y for j in base_parameters(bound.model)[0]]
+
+
 def routines_for(model, roles=None, omitted=()) -> list:
-    """The routines a model has (all of the contract's that apply, or those named), in emission order, less the
+    """The routines emitted for a model, in emission order: those named (``roles``, else the model's own selection
+    ``model.routines``, else every routine of the contract that applies and is not on request), less the
     ``omitted`` ones (:func:`omitted_routines`)."""
+    if roles is None:
+        roles = model.routines
     return [r for role, r in ROUTINES.items()
-            if (roles is None or role in roles) and r.exists_for(model) and role not in omitted]
+            if (role in roles if roles is not None else not r.on_request) and r.exists_for(model)
+            and role not in omitted]
+
+
+def select_routines(model, names):
+    """The model emitting the named routines (``--routines``: names of the contract, ``default`` for the routines
+    emitted when none are named, ``all`` for every routine that applies); an unknown name, or one that does not
+    apply to the model, is an error that lists the choices."""
+    import dataclasses
+
+    from .errors import AggsymError
+
+    chosen = []
+    for name in names:
+        if name == "all":
+            picked = [r.role for r in ROUTINES.values() if r.exists_for(model)]
+        elif name == "default":
+            picked = [r.role for r in ROUTINES.values() if r.exists_for(model) and not r.on_request]
+        elif name not in ROUTINES:
+            shown = name if len(name) <= 80 else name[:80] + "..."
+            raise AggsymError(f"{model.source}: --routines: no routine named {shown!r} (the routines are "
+                              f"{', '.join(ROUTINES)}; or 'default', 'all')")
+        elif not ROUTINES[name].exists_for(model):
+            raise AggsymError(f"{model.source}: --routines: {name!r} does not apply to this model (the ones that do: "
+                              f"{', '.join(r.role for r in ROUTINES.values() if r.exists_for(model))})")
+        else:
+            picked = [name]
+        chosen.extend(role for role in picked if role not in chosen)
+    if not chosen:
+        raise AggsymError(f"{model.source}: --routines: no routine named")
+    return dataclasses.replace(model, routines=tuple(chosen))
 
 
 def massless_coordinates(model, samples: int = 2, tolerance: float = 1e-12) -> tuple:
@@ -629,16 +909,25 @@ def redundant_constraints(model, samples: int = 2, tolerance: float = 1e-9) -> l
 
 
 def omitted_routines(model) -> dict:
-    """{role: reason} of the routines left out because A(q) is singular at the default parameters (a coordinate
-    that moves no mass, e.g. a massless finger joint): forward dynamics, A^-1 and the factors are undefined there;
-    A, b, g, inverse dynamics and the joint wrenches stay defined and are emitted."""
+    """{role: reason} of the routines left out: the regressor where tau = Y pi does not hold
+    (:func:`regressor_problem`), and, when A(q) is singular at the default parameters (a coordinate that moves no
+    mass, e.g. a massless finger joint), forward dynamics, A^-1 and the factors, undefined there (A, b, g, inverse
+    dynamics and the joint wrenches stay defined and are emitted)."""
+    out = {}
+    wanted = {r.role for r in routines_for(model)}
+    problem = regressor_problem(model)
+    if problem:
+        out.update({role: f"tau = Y pi does not hold: {problem}" for role in ("regressor", "base_regressor")
+                    if role in wanted})
+    if not any(ROUTINES[role].regular for role in wanted):
+        return out
     zero, singular = massless_coordinates(model)
     if not singular:
-        return {}
+        return out
     names = ", ".join(f"{model.coordinates[i].name} (joint {model.coordinates[i].joint!r})" for i in zero)
     reason = (f"A(q) is singular at the default parameters: {'coordinate(s) ' + names + ' move(s) no mass' if zero else 'its smallest eigenvalue is zero'}; "
               f"--armature VALUE adds a rotor inertia on every coordinate")
-    return {r.role: reason for r in ROUTINES.values() if r.regular and r.exists_for(model)}
+    return {**out, **{role: reason for role in wanted if ROUTINES[role].regular}}
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -671,6 +960,17 @@ def _coupled_outputs(routine, bound, inputs: dict) -> tuple:
     outs = routine.build(bound, kin, x)
     if how == "force":
         return tuple(coupler.reduce(list(o)) for o in outs)
+    if how == "columns":  # an n_tree x m matrix of generalized forces (the regressor): J^T Y, column by column
+        n, out = coupler.n_tree, []
+        for o in outs:
+            m = len(o) // n
+            cols = [coupler.reduce([o[i * m + j] for i in range(n)]) for j in range(m)]
+            out.append([cols[j][i] for i in range(len(cols[0]) if cols else 0) for j in range(m)])
+        return tuple(out)
+    if how == "rows":  # a Jacobian: each row (over the tree's coordinates) times the coupling's J
+        n = coupler.n_tree
+        return tuple([x for r in range(len(o) // n) for x in coupler.reduce(list(o[r * n:(r + 1) * n]))]
+                     for o in outs)
     if how == "matrix":
         n = coupler.n_tree
         return tuple(_flat(coupler.reduce_matrix([list(o[i * n:(i + 1) * n]) for i in range(n)])) for o in outs)
@@ -702,6 +1002,8 @@ def manifest(model, routines, ops: dict, omitted=None) -> dict:
         "conservative": model.conservative,
         "ops": {r.role: ops[r.role] for r in routines},
         "omitted": dict(omitted or {}),
+        "not_emitted": [r.role for r in ROUTINES.values() if r.exists_for(model) and r not in routines
+                       and r.role not in (omitted or {})],
         "limits": [dict(limits) for limits in model.limits],
         "armature": model.armature,
         "bodies": len(model.bodies),
@@ -713,6 +1015,8 @@ def manifest(model, routines, ops: dict, omitted=None) -> dict:
         out["elastic"] = elastic_entry(model)
     if model.constraints:
         out["constraints"] = constraints_entry(model)
+    if any(r.role.startswith("frame_") for r in routines):
+        out["frames"] = frames_entry(model)
     return out
 
 

@@ -366,7 +366,10 @@ def test_quiet_generate_prints_nothing_and_list_routines_writes_nothing(tmp_path
     assert cli.main(["generate", str(model_path("planar_2link")), "-o", str(other), "--list-routines"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
     manifest = json.loads((out / "planar_2link.json").read_text())
-    assert [line.split()[0] for line in lines] == list(manifest["functions"].values())
+    emitted = [line for line in lines if "(on request:" not in line]
+    assert [line.split()[0] for line in emitted] == list(manifest["functions"].values())
+    assert [line.split()[0] for line in lines if line not in emitted] == \
+        [f"planar_2link_{role}" for role in manifest["not_emitted"]]
     assert all(len(line.split(None, 1)[1]) > 10 for line in lines) and not other.exists()
 
 

@@ -43,12 +43,12 @@ def test_escapers_keep_text_in_its_place(text):
 URDF = """<?xml version="1.0"?>
 <robot name="evil">
   <link name="base"/>
-  <link name="arm">
+  <link name="{joint}">
     <inertial><origin xyz="0.1 0 0"/><mass value="1.0"/>
       <inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial>
   </link>
   <joint name="{joint}" type="revolute">
-    <parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+    <parent link="base"/><child link="{joint}"/><axis xyz="0 0 1"/>
   </joint>
 </robot>
 """
@@ -61,8 +61,9 @@ def xml_attribute(text: str) -> str:
 
 @pytest.mark.parametrize("k", range(len(EVIL) - 1))  # the last one holds characters XML cannot carry
 def test_hostile_joint_names_compile_import_and_typeset_safely(k, tmp_path):
-    """A joint named with C, Python or LaTeX syntax: the header compiles with -Werror (no macro was injected), the
-    NumPy module imports (and runs nothing: no marker file), JOINTS holds the name as given, LaTeX escapes it."""
+    """A joint and its link (a frame of the frame routines) named with C, Python or LaTeX syntax: the header
+    compiles with -Werror (no macro was injected), the NumPy module imports (and runs nothing: no marker file),
+    JOINTS and FRAMES hold the names as given, LaTeX escapes them."""
     marker = "/tmp/aggsym_pwned"
     if os.path.exists(marker):
         os.remove(marker)
@@ -73,6 +74,7 @@ def test_hostile_joint_names_compile_import_and_typeset_safely(k, tmp_path):
     header = (tmp_path / "out" / "evil.h").read_text()
     assert not re.search(r"^\s*#\s*(define double|include <stdio)", header, re.M)
     assert module.JOINTS == (model.coordinates[0].joint,) and not os.path.exists(marker)
+    assert module.FRAMES == (EVIL[k],) == tuple(f["name"] for f in manifest["frames"])
     assert manifest["coordinates"][0]["joint"] == model.coordinates[0].joint
     q = np.array([0.3])
     assert np.allclose(lib.call("inertia", q), module.inertia(q))

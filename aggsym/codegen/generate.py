@@ -217,9 +217,10 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
     tree = Tree(model)
     omitted = omitted_routines(model)
     check_constraints(model)
-    if omitted:
-        warnings.warn(ModelWarning(f"{model.source or model.name}: {next(iter(omitted.values()))}: "
-                                   f"{', '.join(omitted)} left out (see the manifest's 'omitted')"))
+    singular = {role: why for role, why in omitted.items() if ROUTINES[role].regular}
+    if singular:  # (a regressor left out for an elastic model or added masses is only in the manifest)
+        warnings.warn(ModelWarning(f"{model.source or model.name}: {next(iter(singular.values()))}: "
+                                   f"{', '.join(singular)} left out (see the manifest's 'omitted')"))
     prog, outputs = symbolic_routines(model, tree, omitted=omitted)
     stages.done("recursions")
     emitted = [emit_routine(model, prog, ROUTINES[role], outs) for role, outs in outputs.items()]
@@ -238,6 +239,7 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
         "parameters": [(p.name, repr(float(p.value))) for p in model.parameters],
         "macros": header_macros(model, [e.routine for e in emitted]),
         "coordinates": model.coordinates,
+        "frames": model.frames if any(e.routine.role.startswith("frame_") for e in emitted) else (),
         "sincos": any("aggsym_sincos(" in line for r in emitted for line in r.c_body),
         "sign": any("aggsym_sign(" in line for r in emitted for line in r.c_body),
         "time": model.time_dependent,

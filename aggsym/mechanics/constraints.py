@@ -47,7 +47,7 @@ from dataclasses import dataclass
 from ..core.program import is_zero
 from ..model.types import WORLD, code_index
 from .group import Motion, rotation
-from .kinematics import TreeKinematics, world_poses
+from .kinematics import TreeKinematics, point_motion, point_rows, world_poses
 from .linalg import EYE3, add, cross, dot, mm, mtv, mul, mv, scale, sub, transpose
 from .transvective import apply_T_transpose_tree, apply_T_tree, articulated_factors, transvected_forces
 
@@ -162,23 +162,7 @@ class ConstraintKinematics:
 
     def motion_rows(self, c, P, B) -> list:
         """The six rows (o1 o2 o3 theta4 theta5 theta6, n entries each) of the relative motion of constraint c."""
-        tree, kin = self.kin.tree, self.kin
-        n = tree.nq
-        lin, ang = [[0] * n for _ in range(3)], [[0] * n for _ in range(3)]
-        on_k = set(tree.ancestors(c.k))
-        on_m = set(tree.ancestors(c.m)) if c.m >= 0 else set()
-        for s in sorted(on_k ^ on_m):
-            sign = 1 if s in on_k else -1
-            pose = self.poses[s]
-            M = mm(B, pose.c)
-            d = mv(B, sub(P, pose.o))
-            for i, psi in zip(tree.coords[s], kin.psi[s]):
-                w = mv(M, psi[3:])
-                v = add(mv(M, psi[:3]), cross(w, d))
-                for a in range(3):
-                    lin[a][i] = v[a] if sign > 0 else -v[a]
-                    ang[a][i] = w[a] if sign > 0 else -w[a]
-        return lin + ang
+        return point_rows(self.kin, self.poses, c.k, P, B, c.m)
 
     def jacobian(self) -> list:
         """J (D_lambda^T of (4.27)): one row (n entries) per blocked motion, constraints in order."""
@@ -238,11 +222,7 @@ class ConstraintKinematics:
     def _point_motion(self, k, r, V, X):
         """(velocity, classical acceleration at qdd = 0) of the point r of body k, and the body's angular velocity
         and acceleration, all in world axes."""
-        R = self.poses[k].c
-        v, w, a, al = V[k][:3], V[k][3:], X[k][:3], X[k][3:]
-        vb = add(v, cross(w, r))
-        ab = add(add(a, cross(al, r)), cross(w, vb))
-        return mv(R, vb), mv(R, ab), mv(R, w), mv(R, al)
+        return point_motion(self.poses[k].c, V[k], X[k], r)
 
     def residual(self, rest: "ConstraintKinematics") -> list:
         """phi, with ``rest`` the same constraints at q = 0 (the default attachment and orientation)."""

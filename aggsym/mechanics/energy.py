@@ -19,7 +19,7 @@ body), as in Pinocchio.
 from __future__ import annotations
 
 from .bias import gravity_accelerations
-from .kinematics import world_poses
+from .kinematics import moving_bodies, world_poses
 from .linalg import add, dot, mul
 
 
@@ -48,13 +48,12 @@ def potential_energy(bound, kin):
     gam = [g[:3] for g in gravity_accelerations(bound, kin)]  # -g in each body's axes
     minus_g = tuple(-x for x in bound.gravity)
     height = []
-    moves = []
+    moves = moving_bodies(bound)
     acc = 0
     for k, p in enumerate(kin.tree.parent):
         up = minus_g if p < 0 else gam[p]
         h = dot(up, kin.L[k].o)
         height.append(h if p < 0 else height[p] + h)
-        moves.append(bool(kin.tree.coords[k]) or bound.bodies[k].spin is not None or (p >= 0 and moves[p]))
         th = bound.bodies[k].rigid
         if th is not None and moves[k]:
             acc = acc + th.m * height[k] + dot(gam[k], th.h)

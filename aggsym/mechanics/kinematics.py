@@ -24,7 +24,7 @@ from __future__ import annotations
 from ..model.types import code_index
 from .aggregates import Rigid
 from .group import Motion, phi_motion, rotation
-from .linalg import EYE3, ZERO3, add, dot, mm, mtv, scale
+from .linalg import EYE3, ZERO3, add, cross, dot, mm, mtv, mv, scale, sub
 
 ZERO6 = (0, 0, 0, 0, 0, 0)
 
@@ -128,6 +128,7 @@ class TreeKinematics:
         self.psi = []
         self.functional = []  # the functional motion of each pair, T(o) C(c1 c2 c3)
         self.rotations = []  # its elementary rotations in order, (axis, matrix)
+        self.memo = {}  # whole-tree results that several routines of one run share (the regressor)
         for k, body in enumerate(bound.bodies):
             qv = [q[i] for i in self.tree.coords[k]]
             functional, psi, rots = pair_functional(body.codes, qv, bound.backend)
@@ -240,6 +241,53 @@ def world_poses(kin) -> list:
     return poses
 
 
+def moving_bodies(bound) -> list:
+    """Per body: whether it moves (a coordinate or a prescribed spin on its path from the root); the others are
+    welded to the world."""
+    out = []
+    for k, p in enumerate(bound.tree.parent):
+        out.append(bool(bound.tree.coords[k]) or bound.bodies[k].spin is not None or (p >= 0 and out[p]))
+    return out
+
+
+def point_rows(kin, poses, k, P, B=None, m=-1) -> list:
+    """The six rows (n entries each) of the motion of the point P (world) fixed on body k relative to body m (-1:
+    the world): the velocity of P relative to the point of m that coincides with it, then the relative angular
+    velocity, per unit rate of each coordinate, in the axes B (a 3x3 map from world axes; None: world axes).  For
+    coordinate i of body s on k's path and not on m's, with psi = (v, w) its column of M F (1.30) in s's axes
+    (R_s, o_s s's world pose): ``w_i = B R_s w``, ``v_i = B R_s v + w_i x B (P - o_s)``; minus that on m's path
+    and not on k's.  These are the columns of the parastrophic matrix S (1.42) moved to the point: for m = -1
+    and B = None, the frame Jacobian (LOCAL_WORLD_ALIGNED)."""
+    tree = kin.tree
+    n = tree.nq
+    lin, ang = [[0] * n for _ in range(3)], [[0] * n for _ in range(3)]
+    on_k = set(tree.ancestors(k))
+    on_m = set(tree.ancestors(m)) if m >= 0 else set()
+    for s in sorted(on_k ^ on_m):
+        sign = 1 if s in on_k else -1
+        pose = poses[s]
+        M = pose.c if B is None else mm(B, pose.c)
+        d = sub(P, pose.o) if B is None else mv(B, sub(P, pose.o))
+        for i, psi in zip(tree.coords[s], kin.psi[s]):
+            w = mv(M, psi[3:])
+            v = add(mv(M, psi[:3]), cross(w, d))
+            for a in range(3):
+                lin[a][i] = v[a] if sign > 0 else -v[a]
+                ang[a][i] = w[a] if sign > 0 else -w[a]
+    return lin + ang
+
+
+def point_motion(R, V, A, r) -> tuple:
+    """(velocity, classical acceleration) of the point r (body axes) of a body with world rotation R,
+    quasi-velocity V = (v, w) and quasi-acceleration A = (a, alpha), and the body's angular velocity and
+    acceleration, all in world axes: ``R (v + w x r)``, ``R (a + alpha x r + w x (v + w x r))`` (the classical
+    acceleration of the origin is a + w x v)."""
+    v, w, a, al = V[:3], V[3:], A[:3], A[3:]
+    vb = add(v, cross(w, r))
+    ab = add(add(a, cross(al, r)), cross(w, vb))
+    return mv(R, vb), mv(R, ab), mv(R, w), mv(R, al)
+
+
 def world_frame_vectors(kin, vec_world):
     """A free vector given in the world frame, in every body's axes: c_k^T x (used for gravity)."""
     out = []
@@ -250,4 +298,5 @@ def world_frame_vectors(kin, vec_world):
 
 
 __all__ = ["TreeKinematics", "pair_functional", "pair_velocity_product", "pair_velocity_bilinear", "combine",
-           "project", "world_frame_vectors", "world_poses", "generalized", "ZERO6"]
+           "project", "world_frame_vectors", "world_poses", "generalized", "moving_bodies", "point_rows",
+           "point_motion", "ZERO6"]

@@ -315,7 +315,7 @@ def _products(w):
 
 
 def _ident(x):
-    return ("n", x.id) if isinstance(x, Node) else ("o", id(x))
+    return ("n", x.id) if type(x) is Node else ("o", id(x))  # (a dual value: by identity)
 
 
 def lincomb(terms):

@@ -244,6 +244,23 @@ class Constraint:
 
 
 @dataclass(frozen=True)
+class Frame:
+    """A frame fixed on a body, for the frame routines (kinematics for control): its origin ``point`` and its axes:
+    ``axes`` (3x3, columns: the axes of a URDF link frame in the body's axes; None: the body's axes), then the
+    constant elementary rotations ``rotation`` from those (YAML), all constants or expressions in the parameters.  A URDF link is a frame on the body it was merged into; ``source``, ``path``
+    and ``line`` place it in its file, for messages."""
+
+    name: str  # the name it is selected and listed by (a YAML frame's identifier, a body's name, a URDF link's)
+    body: str
+    point: tuple  # 3 expressions, body axes
+    axes: tuple | None = None
+    rotation: tuple = ()  # ((axis 1..3, angle expression), ...) in order of application
+    source: str = ""
+    path: str = ""
+    line: int | None = None
+
+
+@dataclass(frozen=True)
 class Model:
     """A tree of bodies, parents listed before children.
 
@@ -264,6 +281,8 @@ class Model:
     constraints: tuple = ()  # Constraint: bilateral constraints with the medium and closed loops (chapter 4)
     stabilization: tuple = (0, 0)  # (kp, kd) expressions: Baumgarte terms J qdd + gamma = -(kd J qd + kp phi)
     support: str | None = None  # the support body (the support paper): its 6 coordinates are q, the others gamma
+    frames: tuple = ()  # Frame: the frames of the frame routines, in output order (see aggsym.model.frames)
+    routines: tuple | None = None  # the routines to emit (--routines), None: the contract's default set
     regularization: object = 0  # epsilon: constrained forward dynamics solves (J A^-1 J^T + epsilon E) lambda = ...
 
     @property

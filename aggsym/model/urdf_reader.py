@@ -50,7 +50,8 @@ The mapping
   frame.  No parameters: every number is folded.  Visuals, collisions, meshes, transmissions and gazebo tags are
   skipped unread.
 * ``model.meta``: ``mimic`` (above), ``links`` (each URDF link's body, merged links included), ``link_frames``
-  (each link's body and placement there, (body, R, t) with x_body = R x_link + t, for constraints on links),
+  (each link's body and placement there, (body, R, t) with x_body = R x_link + t, for constraints on links and
+  for the frame routines), ``leaf_links`` (the links without a child link: the frames emitted by default),
   ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`.
 
 Physical validity (where the dynamics sees it)
@@ -78,6 +79,7 @@ from __future__ import annotations
 
 import math
 import re
+import dataclasses
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -88,6 +90,7 @@ import sympy as sp
 
 from ..errors import ModelError, ModelWarning
 from .expressions import check_identifier
+from .frames import default_frames
 from .types import _snap as snap
 from .types import (WORLD, Body, Coordinate, Coupling, Inertial, JointDynamics, JointLimits, Model, Pair, Parameter,
                     elementary_rotation)
@@ -767,7 +770,9 @@ class _Reader:
                             "link_frames": {link: (rows[p.body]["name"], tuple(tuple(p.R[i, j] for j in range(3))
                                                                               for i in range(3)), tuple(p.t))
                                             for link, p in place.items()},
+                            "leaf_links": [link for link in place if not children[link]],
                             "floating_base": self.floating_base, "warnings": list(self.warnings)})
+        model = dataclasses.replace(model, frames=default_frames(model))
         if model.nq == 0:
             self.fail(self.root, "the robot has no movable joint (revolute, continuous or prismatic); there are "
                                  "no equations of motion (load with floating_base=True for a free body)")

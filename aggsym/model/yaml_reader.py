@@ -52,12 +52,14 @@ import yaml
 
 from ..errors import ModelError
 from .expressions import ExpressionError, check_identifier, check_supported, evaluate, parse_value
-from .types import (CONSTRAINT_KINDS, COORDINATE_CODES, TIME, WORLD, Body, Constraint, Coordinate, Inertial, Model,
-                    Parameter, Pair)
+from .frames import MAX_FRAMES, default_frames
+from .types import (CONSTRAINT_KINDS, COORDINATE_CODES, TIME, WORLD, Body, Constraint, Coordinate, Frame, Inertial,
+                    Model, Parameter, Pair)
 from .validate import inertia_problem, mass_problem, order_tree, support_problem
 
 TOP_KEYS = {"name", "description", "source", "notes", "gravity", "parameters", "bodies", "contacts", "loops",
-            "constraints", "stabilization", "support", "regularization"}
+            "constraints", "stabilization", "support", "regularization", "frames"}
+FRAME_KEYS = {"name", "body", "point", "rotation", "description", "notes"}
 CONSTRAINT_KEYS = {"name", "body", "point", "medium", "at", "rotation", "motion", "block", "friction", "wheel",
                    "description", "notes"}
 SIDE_FILE_KEYS = {"constraints", "stabilization", "regularization", "description", "notes"}
@@ -278,7 +280,9 @@ class _Reader:
         stabilization = self.stabilization(top.get("stabilization"), constraints)
         model = Model(name=name, bodies=bodies, gravity=gravity, parameters=parameters, source=str(self.file),
                       description=description.strip(), constraints=constraints, stabilization=stabilization,
-                      regularization=self.regularization(top.get("regularization"), constraints))
+                      regularization=self.regularization(top.get("regularization"), constraints),
+                      meta={"declared_frames": self.frames(top.get("frames", []), bodies)})
+        model = dataclasses.replace(model, frames=default_frames(model))
         if "support" in top:
             support = top["support"]
             if not isinstance(support, str):
@@ -288,6 +292,33 @@ class _Reader:
                 self.fail(("support",), problem)
             model = dataclasses.replace(model, support=support)
         return model
+
+    # frames (the frame routines) ----------------------------------------------------------------------
+    def frames(self, value, bodies) -> tuple:
+        """The ``frames:`` list: a name (an identifier, not a body's), the body, a point in its axes (default its
+        origin) and constant axes as elementary rotations from the body's (default the body's)."""
+        path = ("frames",)
+        self.sequence(value, path)
+        if len(value) > MAX_FRAMES:
+            self.fail(path, f"{len(value)} frames, at most {MAX_FRAMES}")
+        bodies_named = {b.name for b in bodies}
+        out, names = [], {}
+        for i, entry in enumerate(value):
+            p = path + (i,)
+            self.mapping(entry, p, FRAME_KEYS, required=("name", "body"))
+            name = self.name(entry["name"], p + ("name",), "frame name")
+            if name in names:
+                self.fail(p + ("name",), f"duplicate frame name {name!r} (also frames[{names[name]}])")
+            if name in bodies_named:
+                self.fail(p + ("name",), f"frame name {name!r} is a body's name (a body is a frame already, at its "
+                                         f"origin)")
+            names[name] = i
+            body, _, _ = self.frame(entry["body"], p + ("body",), {b: (b, None, None) for b in bodies_named}, "body")
+            point = self.vector(entry["point"], p + ("point",)) if "point" in entry else (sp.Integer(0),) * 3
+            rotation = self.rotation(entry.get("rotation", []), p + ("rotation",))
+            out.append(Frame(name=name, body=body, point=point, rotation=rotation, source=str(self.file),
+                             path=_path(p), line=self.doc.line(p)))
+        return tuple(out)
 
     # constraints (chapter 4) --------------------------------------------------------------------------
     def constraints(self, value, frames: dict, time_dependent: bool = False) -> tuple:

@@ -908,3 +908,344 @@ void added_mass_body_in_fluid_transvective_factors(const double *q, const double
     targs[2] = x12*x28 + x13*x29 - x7*x30;
     targs[0] = x10*x42 - x11*x43 - x3*x44;
 }
+
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)
+ * operations: 14 mul, 4 add, 0 div, 3 call */
+void added_mass_body_in_fluid_frame_poses(const double *q, const double *p, double *X)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double q_3 = q[3];
+    const double q_4 = q[4];
+    const double q_5 = q[5];
+    (void)p;
+    X[0] = q_0;
+    X[1] = q_1;
+    X[2] = q_2;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_4, &x3, &x2);
+    X[5] = x3;
+    double x5, x4;
+    aggsym_sincos(q_5, &x5, &x4);
+    const double x6 = x1*x3;
+    X[8] = -x1*x2;
+    const double x7 = x0*x3;
+    X[11] = x0*x2;
+    X[3] = x2*x4;
+    X[4] = -x2*x5;
+    X[6] = x4*x6 + x0*x5;
+    X[7] = x0*x4 - x5*x6;
+    X[9] = x1*x5 - x4*x7;
+    X[10] = x5*x7 + x1*x4;
+}
+
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin
+ * operations: 36 mul, 18 add, 0 div, 3 call */
+void added_mass_body_in_fluid_frame_jacobians(const double *q, const double *p, double *J)
+{
+    const double q_3 = q[3];
+    const double q_4 = q[4];
+    const double q_5 = q[5];
+    (void)p;
+    J[3] = 0;
+    J[4] = 0;
+    J[5] = 0;
+    J[9] = 0;
+    J[10] = 0;
+    J[11] = 0;
+    J[15] = 0;
+    J[16] = 0;
+    J[17] = 0;
+    J[18] = 0;
+    J[19] = 0;
+    J[20] = 0;
+    J[22] = 0;
+    J[24] = 0;
+    J[25] = 0;
+    J[26] = 0;
+    J[30] = 0;
+    J[31] = 0;
+    J[32] = 0;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_4, &x3, &x2);
+    J[23] = x3;
+    double x5, x4;
+    aggsym_sincos(q_5, &x5, &x4);
+    const double x6 = x1*x3;
+    const double x7 = x1*x2;
+    J[29] = -x7;
+    const double x8 = x0*x3;
+    const double x9 = x0*x2;
+    J[35] = x9;
+    const double x10 = x2*x4;
+    const double x11 = x2*x5;
+    const double x12 = x4*x6 + x0*x5;
+    const double x13 = x0*x4 - x5*x6;
+    const double x14 = x1*x5 - x4*x8;
+    const double x15 = x5*x8 + x1*x4;
+    const double x16 = x10*x10 + x11*x11 + x3*x3;
+    J[0] = x16;
+    J[21] = x16;
+    const double x17 = x10*x12 - x11*x13 - x3*x7;
+    J[1] = x17;
+    J[6] = x17;
+    J[27] = x17;
+    const double x18 = x10*x14 - x11*x15 + x3*x9;
+    J[2] = x18;
+    J[12] = x18;
+    J[33] = x18;
+    J[7] = x12*x12 + x13*x13 + x7*x7;
+    const double x19 = x12*x14 + x13*x15 - x7*x9;
+    J[8] = x19;
+    J[13] = x19;
+    J[14] = x14*x14 + x15*x15 + x9*x9;
+    J[28] = x5*x12 + x4*x13;
+    J[34] = x5*x14 + x4*x15;
+}
+
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
+ * operations: 96 mul, 60 add, 0 div, 3 call */
+void added_mass_body_in_fluid_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a)
+{
+    const double q_3 = q[3];
+    const double q_4 = q[4];
+    const double q_5 = q[5];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qd_3 = qd[3];
+    const double qd_4 = qd[4];
+    const double qd_5 = qd[5];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
+    const double qdd_3 = qdd[3];
+    const double qdd_4 = qdd[4];
+    const double qdd_5 = qdd[5];
+    (void)p;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_4, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_5, &x5, &x4);
+    const double x6 = x1*x3;
+    const double x7 = x1*x2;
+    const double x8 = x0*x3;
+    const double x9 = x0*x2;
+    const double x10 = x2*x4;
+    const double x11 = x2*x5;
+    const double x12 = x4*x6 + x0*x5;
+    const double x13 = x0*x4 - x5*x6;
+    const double x14 = x1*x5 - x4*x8;
+    const double x15 = x5*x8 + x1*x4;
+    const double x16 = qd_0*x3;
+    const double x17 = qd_0*x10 + qd_1*x12 + qd_2*x14;
+    const double x18 = qd_1*x13 - qd_0*x11 + qd_2*x15;
+    const double x19 = x16 - qd_1*x7 + qd_2*x9;
+    const double x20 = qd_3*x3;
+    const double x21 = qd_3*x10 + qd_4*x5;
+    const double x22 = qd_4*x4 - qd_3*x11;
+    const double x23 = qd_5 + x20;
+    const double x24 = qd_1*x0 + qd_2*x1;
+    const double x25 = qd_2*x0 - qd_1*x1;
+    const double x26 = qd_3*x25;
+    const double x27 = qd_3*x24;
+    const double x28 = qd_0*x2 - x3*x25;
+    const double x29 = qd_4*x20;
+    const double x30 = x3*x27 - qd_4*(x16 + x2*x25);
+    const double x31 = qd_5*x22 - x4*x29 + qdd_3*x10 + qdd_4*x5;
+    const double x32 = x5*x29 - qd_5*x21 + qdd_4*x4 - qdd_3*x11;
+    const double x33 = qd_4*qd_3*x2 + qdd_5 + qdd_3*x3;
+    const double x34 = x4*x30 + x5*x26 + qd_5*(x4*x24 - x5*x28) + qdd_0*x10 + qdd_1*x12 + qdd_2*x14 + x19*x22 - x18*x23;
+    const double x35 = x4*x26 - x5*x30 - qd_5*(x4*x28 + x5*x24) + qdd_1*x13 - qdd_0*x11 + qdd_2*x15 + x17*x23 - x19*x21;
+    const double x36 = qd_4*x28 - x2*x27 + qdd_0*x3 - qdd_1*x7 + qdd_2*x9 + x18*x21 - x17*x22;
+    a[0] = x10*x34 - x11*x35 + x3*x36;
+    a[1] = x12*x34 + x13*x35 - x7*x36;
+    a[2] = x14*x34 + x15*x35 + x9*x36;
+    a[3] = x10*x31 - x11*x32 + x3*x33;
+    a[4] = x12*x31 + x13*x32 - x7*x33;
+    a[5] = x14*x31 + x15*x32 + x9*x33;
+}
+
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)
+ * operations: 0 mul, 0 add, 0 div, 0 call */
+void added_mass_body_in_fluid_center_of_mass(const double *q, const double *p, double *c)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    (void)p;
+    c[0] = q_0;
+    c[1] = q_1;
+    c[2] = q_2;
+}
+
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
+ * operations: 81 mul, 39 add, 0 div, 3 call */
+void added_mass_body_in_fluid_com_jacobian(const double *q, const double *p, double *Jc)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double q_3 = q[3];
+    const double q_4 = q[4];
+    const double q_5 = q[5];
+    (void)p;
+    Jc[10] = 0;
+    Jc[16] = 0;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_4, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_5, &x5, &x4);
+    const double x6 = x1*x3;
+    const double x7 = x1*x2;
+    const double x8 = x0*x3;
+    const double x9 = x0*x2;
+    const double x10 = x2*x4;
+    const double x11 = x2*x5;
+    const double x12 = x4*x6 + x0*x5;
+    const double x13 = x0*x4 - x5*x6;
+    const double x14 = x1*x5 - x4*x8;
+    const double x15 = x5*x8 + x1*x4;
+    const double x16 = x10*x10 + x11*x11 + x3*x3;
+    Jc[0] = x16;
+    const double x17 = x10*x12 - x11*x13 - x3*x7;
+    Jc[1] = x17;
+    Jc[6] = x17;
+    const double x18 = x10*x14 - x11*x15 + x3*x9;
+    Jc[2] = x18;
+    Jc[12] = x18;
+    Jc[7] = x12*x12 + x13*x13 + x7*x7;
+    const double x19 = x12*x14 + x13*x15 - x7*x9;
+    Jc[8] = x19;
+    Jc[13] = x19;
+    Jc[14] = x14*x14 + x15*x15 + x9*x9;
+    const double x20 = x5*x12 + x4*x13;
+    const double x21 = x5*x14 + x4*x15;
+    const double x22 = 20.94395102393196*q_0;
+    const double x23 = 20.94395102393196*q_1;
+    const double x24 = 20.94395102393196*q_2;
+    Jc[3] = 0.04774648292756859*(20.94395102393196*(q_1*x18 - q_2*x17) + x17*x24 - x18*x23);
+    Jc[9] = 0.04774648292756859*(20.94395102393196*(q_2*x16 - q_0*x18) + x18*x22 - x16*x24);
+    Jc[15] = 0.04774648292756859*(20.94395102393196*(q_0*x17 - q_1*x16) + x16*x23 - x17*x22);
+    Jc[4] = 0.04774648292756859*(20.94395102393196*(q_1*x21 - q_2*x20) + x20*x24 - x21*x23);
+    Jc[5] = 0.04774648292756859*(20.94395102393196*(q_2*x7 + q_1*x9) - x7*x24 - x9*x23);
+    Jc[11] = 0.04774648292756859*(20.94395102393196*(q_2*x3 - q_0*x9) + x9*x22 - x3*x24);
+    Jc[17] = 0.04774648292756859*(x3*x23 + x7*x22 - 20.94395102393196*(q_1*x3 + q_0*x7));
+}
+
+/* the centroidal momentum matrix A_G, 6 x n row-major: h_G = A_G qd, the linear momentum and the angular momentum about the centre of mass, world axes (Pinocchio's computeCentroidalMap)
+ * operations: 177 mul, 109 add, 0 div, 3 call */
+void added_mass_body_in_fluid_centroidal_map(const double *q, const double *p, double *Ag)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double q_3 = q[3];
+    const double q_4 = q[4];
+    const double q_5 = q[5];
+    (void)p;
+    Ag[10] = 0;
+    Ag[16] = 0;
+    Ag[18] = 0;
+    Ag[19] = 0;
+    Ag[20] = 0;
+    Ag[24] = 0;
+    Ag[25] = 0;
+    Ag[26] = 0;
+    Ag[30] = 0;
+    Ag[31] = 0;
+    Ag[32] = 0;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_4, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_5, &x5, &x4);
+    const double x6 = x1*x3;
+    const double x7 = x1*x2;
+    const double x8 = x0*x3;
+    const double x9 = x0*x2;
+    const double x10 = x2*x4;
+    const double x11 = x2*x5;
+    const double x12 = x4*x6 + x0*x5;
+    const double x13 = x0*x4 - x5*x6;
+    const double x14 = x1*x5 - x4*x8;
+    const double x15 = x5*x8 + x1*x4;
+    const double x16 = 0.08377580409572785*x10;
+    const double x17 = x10*x10 + x11*x11 + x3*x3;
+    const double x18 = x10*x12 - x11*x13 - x3*x7;
+    const double x19 = x10*x14 - x11*x15 + x3*x9;
+    const double x20 = x5*x12 + x4*x13;
+    const double x21 = x5*x14 + x4*x15;
+    const double x22 = 20.94395102393196*q_0;
+    const double x23 = 20.94395102393196*q_1;
+    const double x24 = 20.94395102393196*q_2;
+    Ag[0] = 20.94395102393196*x17;
+    const double x25 = 20.94395102393196*x18;
+    Ag[1] = x25;
+    Ag[6] = x25;
+    const double x26 = 20.94395102393196*x19;
+    Ag[2] = x26;
+    Ag[12] = x26;
+    Ag[7] = 20.94395102393196*(x12*x12 + x13*x13 + x7*x7);
+    const double x27 = 20.94395102393196*(x12*x14 + x13*x15 - x7*x9);
+    Ag[8] = x27;
+    Ag[13] = x27;
+    Ag[14] = 20.94395102393196*(x14*x14 + x15*x15 + x9*x9);
+    const double x28 = q_1*x19 - q_2*x18;
+    const double x29 = q_2*x17 - q_0*x19;
+    const double x30 = q_0*x18 - q_1*x17;
+    const double x31 = 20.94395102393196*x28 + x18*x24 - x19*x23;
+    Ag[3] = x31;
+    const double x32 = 20.94395102393196*x29 + x19*x22 - x17*x24;
+    Ag[9] = x32;
+    const double x33 = 20.94395102393196*x30 + x17*x23 - x18*x22;
+    Ag[15] = x33;
+    const double x34 = q_0*x21;
+    const double x35 = q_0*x20;
+    const double x36 = q_1*x21 - q_2*x20;
+    const double x37 = 20.94395102393196*x36 + x20*x24 - x21*x23;
+    Ag[4] = x37;
+    const double x38 = q_2*x7 + q_1*x9;
+    const double x39 = q_1*x3 + q_0*x7;
+    const double x40 = q_2*x3 - q_0*x9;
+    const double x41 = 20.94395102393196*x38 - x7*x24 - x9*x23;
+    Ag[5] = x41;
+    const double x42 = 20.94395102393196*x40 + x9*x22 - x3*x24;
+    Ag[11] = x42;
+    const double x43 = x3*x23 + x7*x22 - 20.94395102393196*x39;
+    Ag[17] = x43;
+    const double x44 = 1.0890854532444618*x11;
+    const double x45 = 1.0890854532444618*x3;
+    const double x46 = 0.08377580409572785*x12;
+    const double x47 = 1.0890854532444618*x13;
+    const double x48 = 1.0890854532444618*x7;
+    const double x49 = q_0*q_0;
+    const double x50 = q_1*q_1;
+    const double x51 = q_2*q_2;
+    const double x52 = x49 + x50 + x51;
+    const double x53 = x10*x16 + x11*x44 + x3*x45 + 20.94395102393196*(x52 - x49);
+    const double x54 = x12*x16 - x13*x44 - x7*x45 - 20.94395102393196*q_0*q_1;
+    const double x55 = x14*x16 - x15*x44 + x9*x45 - 20.94395102393196*q_0*q_2;
+    const double x56 = x12*x46 + x13*x47 + x7*x48 + 20.94395102393196*(x52 - x50);
+    const double x57 = x14*x46 + x15*x47 - x9*x48 - 20.94395102393196*q_1*q_2;
+    const double x58 = x14*0.08377580409572785*x14 + x15*1.0890854532444618*x15 + x9*1.0890854532444618*x9 + 20.94395102393196*(x52 - x51);
+    Ag[21] = x23*x30 - x24*x29 + x17*x53 + x18*x54 + x19*x55 - q_1*x33 + q_2*x32;
+    Ag[27] = x24*x28 - x22*x30 + x17*x54 + x18*x56 + x19*x57 - q_2*x31 + q_0*x33;
+    Ag[33] = x22*x29 - x23*x28 + x17*x55 + x18*x57 + x19*x58 - q_0*x32 + q_1*x31;
+    Ag[22] = x23*x35 + x24*x34 + x20*x54 + x21*x55;
+    Ag[28] = x24*x36 - x22*x35 + x20*x56 + x21*x57 - q_2*x37;
+    Ag[34] = x20*x57 + x21*x58 - x22*x34 - x23*x36 + q_1*x37;
+    Ag[23] = x3*x53 - x7*x54 + x9*x55 - x23*x39 - x24*x40 - q_1*x43 + q_2*x42;
+    Ag[29] = x24*x38 + x22*x39 + x3*x54 - x7*x56 + x9*x57 - q_2*x41 + q_0*x43;
+    Ag[35] = x22*x40 - x23*x38 + x3*x55 - x7*x57 + x9*x58 - q_0*x42 + q_1*x41;
+}

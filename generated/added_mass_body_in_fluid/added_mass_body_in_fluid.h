@@ -12,6 +12,8 @@
  *   q[3]  roll  (rotation, joint free_motion)
  *   q[4]  pitch  (rotation, joint free_motion)
  *   q[5]  yaw  (rotation, joint free_motion)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  spheroid  (on body spheroid)
  */
 #ifndef ADDED_MASS_BODY_IN_FLUID_H
 #define ADDED_MASS_BODY_IN_FLUID_H
@@ -36,6 +38,12 @@ extern "C" {
 #define ADDED_MASS_BODY_IN_FLUID_INERTIA_INVERSE_SIZE 36  /* inertia_inverse: Ainv, 6 x 6 doubles */
 #define ADDED_MASS_BODY_IN_FLUID_TRANSVECTIVE_FACTORS_TARGS_SIZE 15  /* transvective_factors: targs, 15 doubles */
 #define ADDED_MASS_BODY_IN_FLUID_TRANSVECTIVE_FACTORS_DIAG_SIZE 6  /* transvective_factors: diag, 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_FRAME_POSES_SIZE 12  /* frame_poses: X, 1 x 12 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_FRAME_JACOBIANS_SIZE 36  /* frame_jacobians: J, 1 x 6 x 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_FRAME_ACCELERATIONS_SIZE 6  /* frame_accelerations: a, 1 x 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_COM_JACOBIAN_SIZE 18  /* com_jacobian: Jc, 3 x 6 doubles */
+#define ADDED_MASS_BODY_IN_FLUID_CENTROIDAL_MAP_SIZE 36  /* centroidal_map: Ag, 6 x 6 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void added_mass_body_in_fluid_inertia(const double *q, const double *p, double *A);
@@ -63,6 +71,18 @@ void added_mass_body_in_fluid_forward_dynamics(const double *q, const double *qd
 void added_mass_body_in_fluid_inertia_inverse(const double *q, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
 void added_mass_body_in_fluid_transvective_factors(const double *q, const double *p, double *targs, double *diag);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void added_mass_body_in_fluid_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void added_mass_body_in_fluid_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void added_mass_body_in_fluid_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void added_mass_body_in_fluid_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void added_mass_body_in_fluid_com_jacobian(const double *q, const double *p, double *Jc);
+/* the centroidal momentum matrix A_G, 6 x n row-major: h_G = A_G qd, the linear momentum and the angular momentum about the centre of mass, world axes (Pinocchio's computeCentroidalMap) */
+void added_mass_body_in_fluid_centroidal_map(const double *q, const double *p, double *Ag);
 
 #ifdef __cplusplus
 }

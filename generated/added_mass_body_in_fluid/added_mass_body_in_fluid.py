@@ -10,6 +10,7 @@ NAME = 'added_mass_body_in_fluid'
 NQ = 6
 COORDINATES = ('x', 'y', 'z', 'roll', 'pitch', 'yaw', )
 JOINTS = ('free_motion', 'free_motion', 'free_motion', 'free_motion', 'free_motion', 'free_motion', )
+FRAMES = ('spheroid', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ()
 PARAMETERS = np.array([], dtype=float)
 
@@ -918,3 +919,358 @@ def transvective_factors(q, p=None):
     targs[..., 2] = x12*x28 + x13*x29 - x7*x30
     targs[..., 0] = x10*x42 - x11*x43 - x3*x44
     return targs, diag
+
+
+def frame_poses(q, p=None):
+    """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    X = np.empty(batch + (1, 12))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    q_3 = q[..., 3]
+    q_4 = q[..., 4]
+    q_5 = q[..., 5]
+    X[..., 0, 0] = q_0
+    X[..., 0, 1] = q_1
+    X[..., 0, 2] = q_2
+    x0 = np.cos(q_3)
+    x1 = np.sin(q_3)
+    x2 = np.cos(q_4)
+    x3 = np.sin(q_4)
+    X[..., 0, 5] = x3
+    x4 = np.cos(q_5)
+    x5 = np.sin(q_5)
+    x6 = x1*x3
+    X[..., 0, 8] = -x1*x2
+    x7 = x0*x3
+    X[..., 0, 11] = x0*x2
+    X[..., 0, 3] = x2*x4
+    X[..., 0, 4] = -x2*x5
+    X[..., 0, 6] = x4*x6 + x0*x5
+    X[..., 0, 7] = x0*x4 - x5*x6
+    X[..., 0, 9] = x1*x5 - x4*x7
+    X[..., 0, 10] = x5*x7 + x1*x4
+    return X
+
+
+def frame_jacobians(q, p=None):
+    """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    J = np.empty(batch + (1, 6, 6))
+    q_3 = q[..., 3]
+    q_4 = q[..., 4]
+    q_5 = q[..., 5]
+    J[..., 0, 0, 3] = 0
+    J[..., 0, 0, 4] = 0
+    J[..., 0, 0, 5] = 0
+    J[..., 0, 1, 3] = 0
+    J[..., 0, 1, 4] = 0
+    J[..., 0, 1, 5] = 0
+    J[..., 0, 2, 3] = 0
+    J[..., 0, 2, 4] = 0
+    J[..., 0, 2, 5] = 0
+    J[..., 0, 3, 0] = 0
+    J[..., 0, 3, 1] = 0
+    J[..., 0, 3, 2] = 0
+    J[..., 0, 3, 4] = 0
+    J[..., 0, 4, 0] = 0
+    J[..., 0, 4, 1] = 0
+    J[..., 0, 4, 2] = 0
+    J[..., 0, 5, 0] = 0
+    J[..., 0, 5, 1] = 0
+    J[..., 0, 5, 2] = 0
+    x0 = np.cos(q_3)
+    x1 = np.sin(q_3)
+    x2 = np.cos(q_4)
+    x3 = np.sin(q_4)
+    J[..., 0, 3, 5] = x3
+    x4 = np.cos(q_5)
+    x5 = np.sin(q_5)
+    x6 = x1*x3
+    x7 = x1*x2
+    J[..., 0, 4, 5] = -x7
+    x8 = x0*x3
+    x9 = x0*x2
+    J[..., 0, 5, 5] = x9
+    x10 = x2*x4
+    x11 = x2*x5
+    x12 = x4*x6 + x0*x5
+    x13 = x0*x4 - x5*x6
+    x14 = x1*x5 - x4*x8
+    x15 = x5*x8 + x1*x4
+    x16 = x10*x10 + x11*x11 + x3*x3
+    J[..., 0, 0, 0] = x16
+    J[..., 0, 3, 3] = x16
+    x17 = x10*x12 - x11*x13 - x3*x7
+    J[..., 0, 0, 1] = x17
+    J[..., 0, 1, 0] = x17
+    J[..., 0, 4, 3] = x17
+    x18 = x10*x14 - x11*x15 + x3*x9
+    J[..., 0, 0, 2] = x18
+    J[..., 0, 2, 0] = x18
+    J[..., 0, 5, 3] = x18
+    J[..., 0, 1, 1] = x12*x12 + x13*x13 + x7*x7
+    x19 = x12*x14 + x13*x15 - x7*x9
+    J[..., 0, 1, 2] = x19
+    J[..., 0, 2, 1] = x19
+    J[..., 0, 2, 2] = x14*x14 + x15*x15 + x9*x9
+    J[..., 0, 4, 4] = x5*x12 + x4*x13
+    J[..., 0, 5, 4] = x5*x14 + x4*x15
+    return J
+
+
+def frame_accelerations(q, qd, qdd, p=None):
+    """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    qdd = np.asarray(qdd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
+    a = np.empty(batch + (1, 6))
+    q_3 = q[..., 3]
+    q_4 = q[..., 4]
+    q_5 = q[..., 5]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    qd_3 = qd[..., 3]
+    qd_4 = qd[..., 4]
+    qd_5 = qd[..., 5]
+    qdd_0 = qdd[..., 0]
+    qdd_1 = qdd[..., 1]
+    qdd_2 = qdd[..., 2]
+    qdd_3 = qdd[..., 3]
+    qdd_4 = qdd[..., 4]
+    qdd_5 = qdd[..., 5]
+    x0 = np.cos(q_3)
+    x1 = np.sin(q_3)
+    x2 = np.cos(q_4)
+    x3 = np.sin(q_4)
+    x4 = np.cos(q_5)
+    x5 = np.sin(q_5)
+    x6 = x1*x3
+    x7 = x1*x2
+    x8 = x0*x3
+    x9 = x0*x2
+    x10 = x2*x4
+    x11 = x2*x5
+    x12 = x4*x6 + x0*x5
+    x13 = x0*x4 - x5*x6
+    x14 = x1*x5 - x4*x8
+    x15 = x5*x8 + x1*x4
+    x16 = qd_0*x3
+    x17 = qd_0*x10 + qd_1*x12 + qd_2*x14
+    x18 = qd_1*x13 - qd_0*x11 + qd_2*x15
+    x19 = x16 - qd_1*x7 + qd_2*x9
+    x20 = qd_3*x3
+    x21 = qd_3*x10 + qd_4*x5
+    x22 = qd_4*x4 - qd_3*x11
+    x23 = qd_5 + x20
+    x24 = qd_1*x0 + qd_2*x1
+    x25 = qd_2*x0 - qd_1*x1
+    x26 = qd_3*x25
+    x27 = qd_3*x24
+    x28 = qd_0*x2 - x3*x25
+    x29 = qd_4*x20
+    x30 = x3*x27 - qd_4*(x16 + x2*x25)
+    x31 = qd_5*x22 - x4*x29 + qdd_3*x10 + qdd_4*x5
+    x32 = x5*x29 - qd_5*x21 + qdd_4*x4 - qdd_3*x11
+    x33 = qd_4*qd_3*x2 + qdd_5 + qdd_3*x3
+    x34 = x4*x30 + x5*x26 + qd_5*(x4*x24 - x5*x28) + qdd_0*x10 + qdd_1*x12 + qdd_2*x14 + x19*x22 - x18*x23
+    x35 = x4*x26 - x5*x30 - qd_5*(x4*x28 + x5*x24) + qdd_1*x13 - qdd_0*x11 + qdd_2*x15 + x17*x23 - x19*x21
+    x36 = qd_4*x28 - x2*x27 + qdd_0*x3 - qdd_1*x7 + qdd_2*x9 + x18*x21 - x17*x22
+    a[..., 0, 0] = x10*x34 - x11*x35 + x3*x36
+    a[..., 0, 1] = x12*x34 + x13*x35 - x7*x36
+    a[..., 0, 2] = x14*x34 + x15*x35 + x9*x36
+    a[..., 0, 3] = x10*x31 - x11*x32 + x3*x33
+    a[..., 0, 4] = x12*x31 + x13*x32 - x7*x33
+    a[..., 0, 5] = x14*x31 + x15*x32 + x9*x33
+    return a
+
+
+def center_of_mass(q, p=None):
+    """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    c = np.empty(batch + (3,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    c[..., 0] = q_0
+    c[..., 1] = q_1
+    c[..., 2] = q_2
+    return c
+
+
+def com_jacobian(q, p=None):
+    """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    Jc = np.empty(batch + (3, 6))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    q_3 = q[..., 3]
+    q_4 = q[..., 4]
+    q_5 = q[..., 5]
+    Jc[..., 1, 4] = 0
+    Jc[..., 2, 4] = 0
+    x0 = np.cos(q_3)
+    x1 = np.sin(q_3)
+    x2 = np.cos(q_4)
+    x3 = np.sin(q_4)
+    x4 = np.cos(q_5)
+    x5 = np.sin(q_5)
+    x6 = x1*x3
+    x7 = x1*x2
+    x8 = x0*x3
+    x9 = x0*x2
+    x10 = x2*x4
+    x11 = x2*x5
+    x12 = x4*x6 + x0*x5
+    x13 = x0*x4 - x5*x6
+    x14 = x1*x5 - x4*x8
+    x15 = x5*x8 + x1*x4
+    x16 = x10*x10 + x11*x11 + x3*x3
+    Jc[..., 0, 0] = x16
+    x17 = x10*x12 - x11*x13 - x3*x7
+    Jc[..., 0, 1] = x17
+    Jc[..., 1, 0] = x17
+    x18 = x10*x14 - x11*x15 + x3*x9
+    Jc[..., 0, 2] = x18
+    Jc[..., 2, 0] = x18
+    Jc[..., 1, 1] = x12*x12 + x13*x13 + x7*x7
+    x19 = x12*x14 + x13*x15 - x7*x9
+    Jc[..., 1, 2] = x19
+    Jc[..., 2, 1] = x19
+    Jc[..., 2, 2] = x14*x14 + x15*x15 + x9*x9
+    x20 = x5*x12 + x4*x13
+    x21 = x5*x14 + x4*x15
+    x22 = 20.94395102393196*q_0
+    x23 = 20.94395102393196*q_1
+    x24 = 20.94395102393196*q_2
+    Jc[..., 0, 3] = 0.04774648292756859*(20.94395102393196*(q_1*x18 - q_2*x17) + x17*x24 - x18*x23)
+    Jc[..., 1, 3] = 0.04774648292756859*(20.94395102393196*(q_2*x16 - q_0*x18) + x18*x22 - x16*x24)
+    Jc[..., 2, 3] = 0.04774648292756859*(20.94395102393196*(q_0*x17 - q_1*x16) + x16*x23 - x17*x22)
+    Jc[..., 0, 4] = 0.04774648292756859*(20.94395102393196*(q_1*x21 - q_2*x20) + x20*x24 - x21*x23)
+    Jc[..., 0, 5] = 0.04774648292756859*(20.94395102393196*(q_2*x7 + q_1*x9) - x7*x24 - x9*x23)
+    Jc[..., 1, 5] = 0.04774648292756859*(20.94395102393196*(q_2*x3 - q_0*x9) + x9*x22 - x3*x24)
+    Jc[..., 2, 5] = 0.04774648292756859*(x3*x23 + x7*x22 - 20.94395102393196*(q_1*x3 + q_0*x7))
+    return Jc
+
+
+def centroidal_map(q, p=None):
+    """the centroidal momentum matrix A_G, 6 x n row-major: h_G = A_G qd, the linear momentum and the angular momentum about the centre of mass, world axes (Pinocchio's computeCentroidalMap)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    Ag = np.empty(batch + (6, 6))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    q_3 = q[..., 3]
+    q_4 = q[..., 4]
+    q_5 = q[..., 5]
+    Ag[..., 1, 4] = 0
+    Ag[..., 2, 4] = 0
+    Ag[..., 3, 0] = 0
+    Ag[..., 3, 1] = 0
+    Ag[..., 3, 2] = 0
+    Ag[..., 4, 0] = 0
+    Ag[..., 4, 1] = 0
+    Ag[..., 4, 2] = 0
+    Ag[..., 5, 0] = 0
+    Ag[..., 5, 1] = 0
+    Ag[..., 5, 2] = 0
+    x0 = np.cos(q_3)
+    x1 = np.sin(q_3)
+    x2 = np.cos(q_4)
+    x3 = np.sin(q_4)
+    x4 = np.cos(q_5)
+    x5 = np.sin(q_5)
+    x6 = x1*x3
+    x7 = x1*x2
+    x8 = x0*x3
+    x9 = x0*x2
+    x10 = x2*x4
+    x11 = x2*x5
+    x12 = x4*x6 + x0*x5
+    x13 = x0*x4 - x5*x6
+    x14 = x1*x5 - x4*x8
+    x15 = x5*x8 + x1*x4
+    x16 = 0.08377580409572785*x10
+    x17 = x10*x10 + x11*x11 + x3*x3
+    x18 = x10*x12 - x11*x13 - x3*x7
+    x19 = x10*x14 - x11*x15 + x3*x9
+    x20 = x5*x12 + x4*x13
+    x21 = x5*x14 + x4*x15
+    x22 = 20.94395102393196*q_0
+    x23 = 20.94395102393196*q_1
+    x24 = 20.94395102393196*q_2
+    Ag[..., 0, 0] = 20.94395102393196*x17
+    x25 = 20.94395102393196*x18
+    Ag[..., 0, 1] = x25
+    Ag[..., 1, 0] = x25
+    x26 = 20.94395102393196*x19
+    Ag[..., 0, 2] = x26
+    Ag[..., 2, 0] = x26
+    Ag[..., 1, 1] = 20.94395102393196*(x12*x12 + x13*x13 + x7*x7)
+    x27 = 20.94395102393196*(x12*x14 + x13*x15 - x7*x9)
+    Ag[..., 1, 2] = x27
+    Ag[..., 2, 1] = x27
+    Ag[..., 2, 2] = 20.94395102393196*(x14*x14 + x15*x15 + x9*x9)
+    x28 = q_1*x19 - q_2*x18
+    x29 = q_2*x17 - q_0*x19
+    x30 = q_0*x18 - q_1*x17
+    x31 = 20.94395102393196*x28 + x18*x24 - x19*x23
+    Ag[..., 0, 3] = x31
+    x32 = 20.94395102393196*x29 + x19*x22 - x17*x24
+    Ag[..., 1, 3] = x32
+    x33 = 20.94395102393196*x30 + x17*x23 - x18*x22
+    Ag[..., 2, 3] = x33
+    x34 = q_0*x21
+    x35 = q_0*x20
+    x36 = q_1*x21 - q_2*x20
+    x37 = 20.94395102393196*x36 + x20*x24 - x21*x23
+    Ag[..., 0, 4] = x37
+    x38 = q_2*x7 + q_1*x9
+    x39 = q_1*x3 + q_0*x7
+    x40 = q_2*x3 - q_0*x9
+    x41 = 20.94395102393196*x38 - x7*x24 - x9*x23
+    Ag[..., 0, 5] = x41
+    x42 = 20.94395102393196*x40 + x9*x22 - x3*x24
+    Ag[..., 1, 5] = x42
+    x43 = x3*x23 + x7*x22 - 20.94395102393196*x39
+    Ag[..., 2, 5] = x43
+    x44 = 1.0890854532444618*x11
+    x45 = 1.0890854532444618*x3
+    x46 = 0.08377580409572785*x12
+    x47 = 1.0890854532444618*x13
+    x48 = 1.0890854532444618*x7
+    x49 = q_0*q_0
+    x50 = q_1*q_1
+    x51 = q_2*q_2
+    x52 = x49 + x50 + x51
+    x53 = x10*x16 + x11*x44 + x3*x45 + 20.94395102393196*(x52 - x49)
+    x54 = x12*x16 - x13*x44 - x7*x45 - 20.94395102393196*q_0*q_1
+    x55 = x14*x16 - x15*x44 + x9*x45 - 20.94395102393196*q_0*q_2
+    x56 = x12*x46 + x13*x47 + x7*x48 + 20.94395102393196*(x52 - x50)
+    x57 = x14*x46 + x15*x47 - x9*x48 - 20.94395102393196*q_1*q_2
+    x58 = x14*0.08377580409572785*x14 + x15*1.0890854532444618*x15 + x9*1.0890854532444618*x9 + 20.94395102393196*(x52 - x51)
+    Ag[..., 3, 3] = x23*x30 - x24*x29 + x17*x53 + x18*x54 + x19*x55 - q_1*x33 + q_2*x32
+    Ag[..., 4, 3] = x24*x28 - x22*x30 + x17*x54 + x18*x56 + x19*x57 - q_2*x31 + q_0*x33
+    Ag[..., 5, 3] = x22*x29 - x23*x28 + x17*x55 + x18*x57 + x19*x58 - q_0*x32 + q_1*x31
+    Ag[..., 3, 4] = x23*x35 + x24*x34 + x20*x54 + x21*x55
+    Ag[..., 4, 4] = x24*x36 - x22*x35 + x20*x56 + x21*x57 - q_2*x37
+    Ag[..., 5, 4] = x20*x57 + x21*x58 - x22*x34 - x23*x36 + q_1*x37
+    Ag[..., 3, 5] = x3*x53 - x7*x54 + x9*x55 - x23*x39 - x24*x40 - q_1*x43 + q_2*x42
+    Ag[..., 4, 5] = x24*x38 + x22*x39 + x3*x54 - x7*x56 + x9*x57 - q_2*x41 + q_0*x43
+    Ag[..., 5, 5] = x22*x40 - x23*x38 + x3*x55 - x7*x57 + x9*x58 - q_0*x42 + q_1*x41
+    return Ag

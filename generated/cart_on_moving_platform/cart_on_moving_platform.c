@@ -694,3 +694,148 @@ int cart_on_moving_platform_constrained_forward_dynamics(const double *q, const 
     qdd[3] = x5*x15 + x6*(x1*x61 - x2*x62);
     return status[0] != 0.0;
 }
+
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)
+ * operations: 0 mul, 0 add, 0 div, 1 call */
+void cart_on_moving_platform_frame_poses(const double *q, const double *t, const double *p, double *X)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double q_3 = q[3];
+    (void)t;
+    (void)p;
+    X[4] = 0;
+    X[6] = 0;
+    X[7] = 1;
+    X[8] = 0;
+    X[10] = 0;
+    X[0] = q_0;
+    X[1] = q_1;
+    X[2] = q_2;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    X[3] = x0;
+    X[11] = x0;
+    X[5] = x1;
+    X[9] = -x1;
+}
+
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin
+ * operations: 0 mul, 0 add, 0 div, 0 call */
+void cart_on_moving_platform_frame_jacobians(const double *q, const double *t, const double *p, double *J)
+{
+    (void)q;
+    (void)t;
+    (void)p;
+    J[0] = 1;
+    J[1] = 0;
+    J[2] = 0;
+    J[3] = 0;
+    J[4] = 0;
+    J[5] = 1;
+    J[6] = 0;
+    J[7] = 0;
+    J[8] = 0;
+    J[9] = 0;
+    J[10] = 1;
+    J[11] = 0;
+    J[12] = 0;
+    J[13] = 0;
+    J[14] = 0;
+    J[15] = 0;
+    J[16] = 0;
+    J[17] = 0;
+    J[18] = 0;
+    J[19] = 1;
+    J[20] = 0;
+    J[21] = 0;
+    J[22] = 0;
+    J[23] = 0;
+}
+
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
+ * operations: 14 mul, 10 add, 0 div, 1 call */
+void cart_on_moving_platform_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *a)
+{
+    const double q_3 = q[3];
+    const double qd_0 = qd[0];
+    const double qd_2 = qd[2];
+    const double qd_3 = qd[3];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
+    const double qdd_3 = qdd[3];
+    (void)t;
+    (void)p;
+    a[3] = 0;
+    a[5] = 0;
+    a[1] = qdd_1;
+    a[4] = qdd_3;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    const double x2 = qd_3*(qd_0*x1 + qd_2*x0);
+    const double x3 = qd_3*(qd_0*x0 - qd_2*x1);
+    const double x4 = x2 + qdd_0*x0 - qdd_2*x1 - x2;
+    const double x5 = x3 + qdd_0*x1 + qdd_2*x0 - x3;
+    a[0] = x0*x4 + x1*x5;
+    a[2] = x0*x5 - x1*x4;
+}
+
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)
+ * operations: 12 mul, 6 add, 1 div, 1 call */
+void cart_on_moving_platform_center_of_mass(const double *q, const double *t, const double *p, double *c)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double q_3 = q[3];
+    (void)t;
+    static const double p_defaults[7] = {2.0, 0.5, 0.6, 0.05, 0.1, 3.0, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double x0 = p_1*p_2;
+    double x2, x1;
+    aggsym_sincos(q_3, &x2, &x1);
+    const double x3 = 1/(p_0 + p_1);
+    c[0] = x3*(p_0*q_0 + p_1*q_0 - x0*x2);
+    c[1] = x3*(p_0*q_1 + p_1*q_1);
+    c[2] = x3*(p_0*q_2 + p_1*q_2 - x0*x1);
+}
+
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
+ * operations: 8 mul, 5 add, 1 div, 1 call */
+void cart_on_moving_platform_com_jacobian(const double *q, const double *t, const double *p, double *Jc)
+{
+    const double q_0 = q[0];
+    const double q_2 = q[2];
+    const double q_3 = q[3];
+    (void)t;
+    static const double p_defaults[7] = {2.0, 0.5, 0.6, 0.05, 0.1, 3.0, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    Jc[1] = 0;
+    Jc[2] = 0;
+    Jc[4] = 0;
+    Jc[6] = 0;
+    Jc[7] = 0;
+    Jc[8] = 0;
+    Jc[9] = 0;
+    const double x0 = p_1*p_2;
+    double x2, x1;
+    aggsym_sincos(q_3, &x2, &x1);
+    const double x3 = p_0 + p_1;
+    const double x4 = 1/x3;
+    const double x5 = x3*x4;
+    Jc[0] = x5;
+    Jc[5] = x5;
+    Jc[10] = x5;
+    const double x6 = p_1*q_0;
+    const double x7 = p_1*q_2;
+    Jc[3] = x4*(x7 - x0*x1 - x7);
+    Jc[11] = x4*(x6 + x0*x2 - x6);
+}

@@ -11,6 +11,8 @@
  *   q[1]  y  (translation, joint cart)
  *   q[2]  z  (translation, joint cart)
  *   q[3]  swing  (rotation, joint pendulum)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  pendulum  (on body pendulum)
  * Parameters (p order, defaults in CART_ON_MOVING_PLATFORM_P_DEFAULTS):
  *   p[0]  m = 2.0
  *   p[1]  mp = 0.5
@@ -57,6 +59,11 @@ extern "C" {
 #define CART_ON_MOVING_PLATFORM_DELASSUS_SIZE 4  /* delassus: G, 2 x 2 doubles */
 #define CART_ON_MOVING_PLATFORM_CONSTRAINED_FORWARD_DYNAMICS_QDD_SIZE 4  /* constrained_forward_dynamics: qdd, 4 doubles */
 #define CART_ON_MOVING_PLATFORM_CONSTRAINED_FORWARD_DYNAMICS_LAMBDA_SIZE 2  /* constrained_forward_dynamics: lambda, 2 doubles */
+#define CART_ON_MOVING_PLATFORM_FRAME_POSES_SIZE 12  /* frame_poses: X, 1 x 12 doubles */
+#define CART_ON_MOVING_PLATFORM_FRAME_JACOBIANS_SIZE 24  /* frame_jacobians: J, 1 x 6 x 4 doubles */
+#define CART_ON_MOVING_PLATFORM_FRAME_ACCELERATIONS_SIZE 6  /* frame_accelerations: a, 1 x 6 doubles */
+#define CART_ON_MOVING_PLATFORM_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define CART_ON_MOVING_PLATFORM_COM_JACOBIAN_SIZE 12  /* com_jacobian: Jc, 3 x 4 doubles */
 #define CART_ON_MOVING_PLATFORM_P_DEFAULTS { 2.0, 0.5, 0.6, 0.05, 0.1, 3.0, 9.81 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
@@ -97,6 +104,16 @@ void cart_on_moving_platform_slip_velocities(const double *q, const double *qd, 
 void cart_on_moving_platform_delassus(const double *q, const double *t, const double *p, double *G);
 /* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution) */
 int cart_on_moving_platform_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd, double *lambda);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void cart_on_moving_platform_frame_poses(const double *q, const double *t, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void cart_on_moving_platform_frame_jacobians(const double *q, const double *t, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void cart_on_moving_platform_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void cart_on_moving_platform_center_of_mass(const double *q, const double *t, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void cart_on_moving_platform_com_jacobian(const double *q, const double *t, const double *p, double *Jc);
 
 #ifdef __cplusplus
 }

@@ -12,6 +12,7 @@ NAME = 'cart_on_moving_platform'
 NQ = 4
 COORDINATES = ('x', 'y', 'z', 'swing', )
 JOINTS = ('cart', 'cart', 'cart', 'pendulum', )
+FRAMES = ('pendulum', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m', 'mp', 'l', 'heave', 'roll', 'w', 'g', )
 PARAMETERS = np.array([2.0, 0.5, 0.6, 0.05, 0.1, 3.0, 9.81, ], dtype=float)
 
@@ -702,3 +703,157 @@ def constrained_forward_dynamics(q, qd, tau, t, p=None):
         raise np.linalg.LinAlgError('constrained_forward_dynamics: the constraints are singular (J A^-1 J^T has a pivot below 1e-12 of its mean diagonal, or is not finite), or Coulomb friction has no consistent solution, at '
                                     + ("the state" if not batch else "the states " + ", ".join(str(tuple(int(i) for i in b)) for b in bad[:10]) + (" ..." if len(bad) > 10 else "")))
     return qdd, lambda_
+
+
+def frame_poses(q, t, p=None):
+    """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    X = np.empty(batch + (1, 12))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    q_3 = q[..., 3]
+    X[..., 0, 4] = 0
+    X[..., 0, 6] = 0
+    X[..., 0, 7] = 1
+    X[..., 0, 8] = 0
+    X[..., 0, 10] = 0
+    X[..., 0, 0] = q_0
+    X[..., 0, 1] = q_1
+    X[..., 0, 2] = q_2
+    x0 = np.cos(q_3)
+    X[..., 0, 3] = x0
+    X[..., 0, 11] = x0
+    x1 = np.sin(q_3)
+    X[..., 0, 5] = x1
+    X[..., 0, 9] = -x1
+    return X
+
+
+def frame_jacobians(q, t, p=None):
+    """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    J = np.empty(batch + (1, 6, 4))
+    J[..., 0, 0, 0] = 1
+    J[..., 0, 0, 1] = 0
+    J[..., 0, 0, 2] = 0
+    J[..., 0, 0, 3] = 0
+    J[..., 0, 1, 0] = 0
+    J[..., 0, 1, 1] = 1
+    J[..., 0, 1, 2] = 0
+    J[..., 0, 1, 3] = 0
+    J[..., 0, 2, 0] = 0
+    J[..., 0, 2, 1] = 0
+    J[..., 0, 2, 2] = 1
+    J[..., 0, 2, 3] = 0
+    J[..., 0, 3, 0] = 0
+    J[..., 0, 3, 1] = 0
+    J[..., 0, 3, 2] = 0
+    J[..., 0, 3, 3] = 0
+    J[..., 0, 4, 0] = 0
+    J[..., 0, 4, 1] = 0
+    J[..., 0, 4, 2] = 0
+    J[..., 0, 4, 3] = 1
+    J[..., 0, 5, 0] = 0
+    J[..., 0, 5, 1] = 0
+    J[..., 0, 5, 2] = 0
+    J[..., 0, 5, 3] = 0
+    return J
+
+
+def frame_accelerations(q, qd, qdd, t, p=None):
+    """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    qdd = np.asarray(qdd, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], t.shape[:-1], )
+    a = np.empty(batch + (1, 6))
+    q_3 = q[..., 3]
+    qd_0 = qd[..., 0]
+    qd_2 = qd[..., 2]
+    qd_3 = qd[..., 3]
+    qdd_0 = qdd[..., 0]
+    qdd_1 = qdd[..., 1]
+    qdd_2 = qdd[..., 2]
+    qdd_3 = qdd[..., 3]
+    a[..., 0, 3] = 0
+    a[..., 0, 5] = 0
+    a[..., 0, 1] = qdd_1
+    a[..., 0, 4] = qdd_3
+    x0 = np.cos(q_3)
+    x1 = np.sin(q_3)
+    x2 = qd_3*(qd_0*x1 + qd_2*x0)
+    x3 = qd_3*(qd_0*x0 - qd_2*x1)
+    x4 = x2 + qdd_0*x0 - qdd_2*x1 - x2
+    x5 = x3 + qdd_0*x1 + qdd_2*x0 - x3
+    a[..., 0, 0] = x0*x4 + x1*x5
+    a[..., 0, 2] = x0*x5 - x1*x4
+    return a
+
+
+def center_of_mass(q, t, p=None):
+    """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    c = np.empty(batch + (3,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    q_3 = q[..., 3]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    x0 = p_1*p_2
+    x1 = np.cos(q_3)
+    x2 = np.sin(q_3)
+    x3 = 1/(p_0 + p_1)
+    c[..., 0] = x3*(p_0*q_0 + p_1*q_0 - x0*x2)
+    c[..., 1] = x3*(p_0*q_1 + p_1*q_1)
+    c[..., 2] = x3*(p_0*q_2 + p_1*q_2 - x0*x1)
+    return c
+
+
+def com_jacobian(q, t, p=None):
+    """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    Jc = np.empty(batch + (3, 4))
+    q_0 = q[..., 0]
+    q_2 = q[..., 2]
+    q_3 = q[..., 3]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    Jc[..., 0, 1] = 0
+    Jc[..., 0, 2] = 0
+    Jc[..., 1, 0] = 0
+    Jc[..., 1, 2] = 0
+    Jc[..., 1, 3] = 0
+    Jc[..., 2, 0] = 0
+    Jc[..., 2, 1] = 0
+    x0 = p_1*p_2
+    x1 = np.cos(q_3)
+    x2 = np.sin(q_3)
+    x3 = p_0 + p_1
+    x4 = 1/x3
+    x5 = x3*x4
+    Jc[..., 0, 0] = x5
+    Jc[..., 1, 1] = x5
+    Jc[..., 2, 2] = x5
+    x6 = p_1*q_0
+    x7 = p_1*q_2
+    Jc[..., 0, 3] = x4*(x7 - x0*x1 - x7)
+    Jc[..., 2, 3] = x4*(x6 + x0*x2 - x6)
+    return Jc

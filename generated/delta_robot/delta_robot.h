@@ -17,6 +17,10 @@
  *   q[8]  q3  (rotation, joint motor3)
  *   q[9]  a3  (rotation, joint elbow3)
  *   q[10]  b3  (rotation, joint elbow3)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  plate  (on body plate)
+ *   frame 1  forearm2  (on body forearm2)
+ *   frame 2  forearm3  (on body forearm3)
  * Parameters (p order, defaults in DELTA_ROBOT_P_DEFAULTS):
  *   p[0]  R = 0.2
  *   p[1]  r = 0.05
@@ -67,6 +71,11 @@ extern "C" {
 #define DELTA_ROBOT_DELASSUS_SIZE 64  /* delassus: G, 8 x 8 doubles */
 #define DELTA_ROBOT_CONSTRAINED_FORWARD_DYNAMICS_QDD_SIZE 11  /* constrained_forward_dynamics: qdd, 11 doubles */
 #define DELTA_ROBOT_CONSTRAINED_FORWARD_DYNAMICS_LAMBDA_SIZE 8  /* constrained_forward_dynamics: lambda, 8 doubles */
+#define DELTA_ROBOT_FRAME_POSES_SIZE 36  /* frame_poses: X, 3 x 12 doubles */
+#define DELTA_ROBOT_FRAME_JACOBIANS_SIZE 198  /* frame_jacobians: J, 3 x 6 x 11 doubles */
+#define DELTA_ROBOT_FRAME_ACCELERATIONS_SIZE 18  /* frame_accelerations: a, 3 x 6 doubles */
+#define DELTA_ROBOT_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define DELTA_ROBOT_COM_JACOBIAN_SIZE 33  /* com_jacobian: Jc, 3 x 11 doubles */
 #define DELTA_ROBOT_P_DEFAULTS { 0.2, 0.05, 0.3, 0.8, 0.1, 0.5, 0.2, 0.4, 9.81 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
@@ -107,6 +116,16 @@ void delta_robot_slip_velocities(const double *q, const double *qd, const double
 void delta_robot_delassus(const double *q, const double *p, double *G);
 /* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution) */
 int delta_robot_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd, double *lambda);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void delta_robot_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void delta_robot_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void delta_robot_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void delta_robot_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void delta_robot_com_jacobian(const double *q, const double *p, double *Jc);
 
 #ifdef __cplusplus
 }

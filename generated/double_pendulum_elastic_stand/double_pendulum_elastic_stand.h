@@ -11,6 +11,8 @@
  *   q[0]  delta12  (translation, joint stand)
  *   q[1]  delta15  (rotation, joint stand)
  *   q[2]  theta26  (rotation, joint elbow)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  arm2  (on body arm2)
  * Parameters (p order, defaults in DOUBLE_PENDULUM_ELASTIC_STAND_P_DEFAULTS):
  *   p[0]  m2 = 1.0
  *   p[1]  m3 = 0.8
@@ -76,6 +78,11 @@ extern "C" {
 #define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_B_PM_SIZE 2  /* elastic_partition: B_pm, 2 x 1 doubles */
 #define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_B_MM_SIZE 4  /* elastic_partition: B_mm, 2 x 2 doubles */
 #define DOUBLE_PENDULUM_ELASTIC_STAND_ELASTIC_PARTITION_C_MM_SIZE 4  /* elastic_partition: C_mm, 2 x 2 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_FRAME_POSES_SIZE 12  /* frame_poses: X, 1 x 12 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_FRAME_JACOBIANS_SIZE 18  /* frame_jacobians: J, 1 x 6 x 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_FRAME_ACCELERATIONS_SIZE 6  /* frame_accelerations: a, 1 x 6 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define DOUBLE_PENDULUM_ELASTIC_STAND_COM_JACOBIAN_SIZE 9  /* com_jacobian: Jc, 3 x 3 doubles */
 #define DOUBLE_PENDULUM_ELASTIC_STAND_P_DEFAULTS { 1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81, 400.0, 20.0, 150.0 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
@@ -108,6 +115,16 @@ void double_pendulum_elastic_stand_inertia_inverse(const double *q, const double
 void double_pendulum_elastic_stand_transvective_factors(const double *q, const double *p, double *targs, double *diag);
 /* the slow/fast partition of Prop. 2.14: blocks of A(q), B(q, qd) (b = B qd) and C, slow (+) and fast (-, elastic) coordinates, see the manifest's layout */
 void double_pendulum_elastic_stand_elastic_partition(const double *q, const double *qd, const double *p, double *A_pp, double *A_mp, double *A_pm, double *A_mm, double *B_pp, double *B_mp, double *B_pm, double *B_mm, double *C_mm);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void double_pendulum_elastic_stand_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void double_pendulum_elastic_stand_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void double_pendulum_elastic_stand_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void double_pendulum_elastic_stand_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void double_pendulum_elastic_stand_com_jacobian(const double *q, const double *p, double *Jc);
 
 #ifdef __cplusplus
 }

@@ -795,3 +795,164 @@ int double_pendulum_sliding_friction_constrained_forward_dynamics(const double *
     qdd[2] = x23*(x28 - x58*x60) - x24*x6*x64;
     return status[0] != 0.0;
 }
+
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)
+ * operations: 6 mul, 0 add, 0 div, 2 call */
+void double_pendulum_sliding_friction_frame_poses(const double *q, const double *p, double *X)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    static const double p_defaults[15] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.4, 0.7, 0.3, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
+    const double p_4 = p[4];
+    X[8] = 0;
+    X[1] = q_0;
+    double x1, x0;
+    aggsym_sincos(q_1, &x1, &x0);
+    X[11] = x0;
+    X[5] = x1;
+    double x3, x2;
+    aggsym_sincos(q_2, &x3, &x2);
+    X[7] = x2;
+    X[6] = x3;
+    X[3] = x0*x2;
+    X[4] = -x0*x3;
+    X[9] = -x1*x2;
+    X[10] = x1*x3;
+    X[0] = p_4*x0;
+    X[2] = -p_4*x1;
+}
+
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin
+ * operations: 2 mul, 0 add, 0 div, 1 call */
+void double_pendulum_sliding_friction_frame_jacobians(const double *q, const double *p, double *J)
+{
+    const double q_1 = q[1];
+    static const double p_defaults[15] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.4, 0.7, 0.3, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
+    const double p_4 = p[4];
+    J[0] = 0;
+    J[2] = 0;
+    J[3] = 1;
+    J[4] = 0;
+    J[5] = 0;
+    J[6] = 0;
+    J[8] = 0;
+    J[9] = 0;
+    J[10] = 0;
+    J[12] = 0;
+    J[13] = 1;
+    J[14] = 0;
+    J[15] = 0;
+    J[16] = 0;
+    double x1, x0;
+    aggsym_sincos(q_1, &x1, &x0);
+    J[17] = x0;
+    J[11] = x1;
+    J[1] = -p_4*x1;
+    J[7] = -p_4*x0;
+}
+
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
+ * operations: 37 mul, 18 add, 0 div, 2 call */
+void double_pendulum_sliding_friction_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a)
+{
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
+    static const double p_defaults[15] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.4, 0.7, 0.3, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
+    const double p_4 = p[4];
+    double x1, x0;
+    aggsym_sincos(q_1, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_2, &x3, &x2);
+    const double x4 = p_4*qd_1*qd_1;
+    const double x5 = p_4*qdd_1;
+    const double x6 = qd_2*qd_1*x2 + qdd_1*x3;
+    const double x7 = qdd_1*x2 - qd_2*qd_1*x3;
+    const double x8 = x0*x2;
+    const double x9 = x0*x3;
+    const double x10 = x1*x2;
+    const double x11 = x1*x3;
+    const double x12 = qd_2*qd_0*x2;
+    const double x13 = qd_2*qd_0*x3;
+    const double x14 = qdd_0*x3 + x12 - x2*x4 - x12;
+    const double x15 = qdd_0*x2 - x13 + x3*x4 + x13;
+    a[0] = x8*x14 - x9*x15 - x1*x5;
+    a[1] = x3*x14 + x2*x15;
+    a[2] = x11*x15 - x10*x14 - x0*x5;
+    a[3] = x6*x8 - x7*x9 + qdd_2*x1;
+    a[4] = x3*x6 + x2*x7;
+    a[5] = x7*x11 - x6*x10 + qdd_2*x0;
+}
+
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)
+ * operations: 18 mul, 7 add, 1 div, 2 call */
+void double_pendulum_sliding_friction_center_of_mass(const double *q, const double *p, double *c)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    static const double p_defaults[15] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.4, 0.7, 0.3, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double x0 = p_0*p_2;
+    const double x1 = p_1*p_3;
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = 1/(p_0 + p_1);
+    c[0] = (x0*x2 + x1*x2*x4 + p_1*p_4*x2)*x6;
+    c[1] = (p_0*q_0 + x1*x5 + p_1*q_0)*x6;
+    c[2] = -(x0*x3 + x1*x3*x4 + p_1*p_4*x3)*x6;
+}
+
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
+ * operations: 31 mul, 11 add, 1 div, 2 call */
+void double_pendulum_sliding_friction_com_jacobian(const double *q, const double *p, double *Jc)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    static const double p_defaults[15] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.4, 0.7, 0.3, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    Jc[0] = 0;
+    Jc[4] = 0;
+    Jc[6] = 0;
+    const double x0 = p_0*p_2;
+    const double x1 = p_1*p_3;
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = p_0 + p_1;
+    const double x7 = p_4*x2;
+    const double x8 = p_4*x3;
+    const double x9 = x1*x2*x4 + p_1*x7;
+    const double x10 = x1*x5 + p_1*q_0;
+    const double x11 = x1*x3*x4 + p_1*x8;
+    const double x12 = 1/x6;
+    Jc[1] = -(x0*x3 + x11)*x12;
+    Jc[3] = x6*x12;
+    Jc[7] = -(x0*x2 + x9)*x12;
+    Jc[2] = x12*(p_1*q_0*x2 - x2*x10);
+    Jc[5] = x12*(x2*x9 + x3*x11 - p_1*(x2*x7 + x3*x8));
+    Jc[8] = x12*(x3*x10 - p_1*q_0*x3);
+}

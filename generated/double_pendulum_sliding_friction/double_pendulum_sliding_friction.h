@@ -9,6 +9,8 @@
  *   q[0]  o12  (translation, joint hanger)
  *   q[1]  theta15  (rotation, joint hanger)
  *   q[2]  theta26  (rotation, joint elbow)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  arm2  (on body arm2)
  * Parameters (p order, defaults in DOUBLE_PENDULUM_SLIDING_FRICTION_P_DEFAULTS):
  *   p[0]  m2 = 1.0
  *   p[1]  m3 = 0.8
@@ -71,6 +73,11 @@ extern "C" {
 #define DOUBLE_PENDULUM_SLIDING_FRICTION_DELASSUS_SIZE 1  /* delassus: G, 1 x 1 doubles */
 #define DOUBLE_PENDULUM_SLIDING_FRICTION_CONSTRAINED_FORWARD_DYNAMICS_QDD_SIZE 3  /* constrained_forward_dynamics: qdd, 3 doubles */
 #define DOUBLE_PENDULUM_SLIDING_FRICTION_CONSTRAINED_FORWARD_DYNAMICS_LAMBDA_SIZE 1  /* constrained_forward_dynamics: lambda, 1 doubles */
+#define DOUBLE_PENDULUM_SLIDING_FRICTION_FRAME_POSES_SIZE 12  /* frame_poses: X, 1 x 12 doubles */
+#define DOUBLE_PENDULUM_SLIDING_FRICTION_FRAME_JACOBIANS_SIZE 18  /* frame_jacobians: J, 1 x 6 x 3 doubles */
+#define DOUBLE_PENDULUM_SLIDING_FRICTION_FRAME_ACCELERATIONS_SIZE 6  /* frame_accelerations: a, 1 x 6 doubles */
+#define DOUBLE_PENDULUM_SLIDING_FRICTION_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define DOUBLE_PENDULUM_SLIDING_FRICTION_COM_JACOBIAN_SIZE 9  /* com_jacobian: Jc, 3 x 3 doubles */
 #define DOUBLE_PENDULUM_SLIDING_FRICTION_P_DEFAULTS { 1.0, 0.8, 0.25, 0.2, 0.5, 0.4, 0.7, 0.3, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
@@ -111,6 +118,16 @@ void double_pendulum_sliding_friction_slip_velocities(const double *q, const dou
 void double_pendulum_sliding_friction_delassus(const double *q, const double *p, double *G);
 /* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution) */
 int double_pendulum_sliding_friction_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd, double *lambda);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void double_pendulum_sliding_friction_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void double_pendulum_sliding_friction_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void double_pendulum_sliding_friction_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void double_pendulum_sliding_friction_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void double_pendulum_sliding_friction_com_jacobian(const double *q, const double *p, double *Jc);
 
 #ifdef __cplusplus
 }

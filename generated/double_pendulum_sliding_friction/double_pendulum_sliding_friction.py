@@ -10,6 +10,7 @@ NAME = 'double_pendulum_sliding_friction'
 NQ = 3
 COORDINATES = ('o12', 'theta15', 'theta26', )
 JOINTS = ('hanger', 'hanger', 'elbow', )
+FRAMES = ('arm2', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m2', 'm3', 'r21', 'r31', 'p21', 'l2', 'h', 'mu', 'I244', 'I255', 'I266', 'I344', 'I355', 'I366', 'g', )
 PARAMETERS = np.array([1.0, 0.8, 0.25, 0.2, 0.5, 0.4, 0.7, 0.3, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81, ], dtype=float)
 
@@ -799,3 +800,171 @@ def constrained_forward_dynamics(q, qd, tau, p=None):
         raise np.linalg.LinAlgError('constrained_forward_dynamics: the constraints are singular (J A^-1 J^T has a pivot below 1e-12 of its mean diagonal, or is not finite), or Coulomb friction has no consistent solution, at '
                                     + ("the state" if not batch else "the states " + ", ".join(str(tuple(int(i) for i in b)) for b in bad[:10]) + (" ..." if len(bad) > 10 else "")))
     return qdd, lambda_[..., 0][()]
+
+
+def frame_poses(q, p=None):
+    """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    X = np.empty(batch + (1, 12))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    p_4 = p[..., 4]
+    X[..., 0, 8] = 0
+    X[..., 0, 1] = q_0
+    x0 = np.cos(q_1)
+    X[..., 0, 11] = x0
+    x1 = np.sin(q_1)
+    X[..., 0, 5] = x1
+    x2 = np.cos(q_2)
+    X[..., 0, 7] = x2
+    x3 = np.sin(q_2)
+    X[..., 0, 6] = x3
+    X[..., 0, 3] = x0*x2
+    X[..., 0, 4] = -x0*x3
+    X[..., 0, 9] = -x1*x2
+    X[..., 0, 10] = x1*x3
+    X[..., 0, 0] = p_4*x0
+    X[..., 0, 2] = -p_4*x1
+    return X
+
+
+def frame_jacobians(q, p=None):
+    """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    J = np.empty(batch + (1, 6, 3))
+    q_1 = q[..., 1]
+    p_4 = p[..., 4]
+    J[..., 0, 0, 0] = 0
+    J[..., 0, 0, 2] = 0
+    J[..., 0, 1, 0] = 1
+    J[..., 0, 1, 1] = 0
+    J[..., 0, 1, 2] = 0
+    J[..., 0, 2, 0] = 0
+    J[..., 0, 2, 2] = 0
+    J[..., 0, 3, 0] = 0
+    J[..., 0, 3, 1] = 0
+    J[..., 0, 4, 0] = 0
+    J[..., 0, 4, 1] = 1
+    J[..., 0, 4, 2] = 0
+    J[..., 0, 5, 0] = 0
+    J[..., 0, 5, 1] = 0
+    x0 = np.cos(q_1)
+    J[..., 0, 5, 2] = x0
+    x1 = np.sin(q_1)
+    J[..., 0, 3, 2] = x1
+    J[..., 0, 0, 1] = -p_4*x1
+    J[..., 0, 2, 1] = -p_4*x0
+    return J
+
+
+def frame_accelerations(q, qd, qdd, p=None):
+    """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    qdd = np.asarray(qdd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
+    a = np.empty(batch + (1, 6))
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    qdd_0 = qdd[..., 0]
+    qdd_1 = qdd[..., 1]
+    qdd_2 = qdd[..., 2]
+    p_4 = p[..., 4]
+    x0 = np.cos(q_1)
+    x1 = np.sin(q_1)
+    x2 = np.cos(q_2)
+    x3 = np.sin(q_2)
+    x4 = p_4*qd_1*qd_1
+    x5 = p_4*qdd_1
+    x6 = qd_2*qd_1*x2 + qdd_1*x3
+    x7 = qdd_1*x2 - qd_2*qd_1*x3
+    x8 = x0*x2
+    x9 = x0*x3
+    x10 = x1*x2
+    x11 = x1*x3
+    x12 = qd_2*qd_0*x2
+    x13 = qd_2*qd_0*x3
+    x14 = qdd_0*x3 + x12 - x2*x4 - x12
+    x15 = qdd_0*x2 - x13 + x3*x4 + x13
+    a[..., 0, 0] = x8*x14 - x9*x15 - x1*x5
+    a[..., 0, 1] = x3*x14 + x2*x15
+    a[..., 0, 2] = x11*x15 - x10*x14 - x0*x5
+    a[..., 0, 3] = x6*x8 - x7*x9 + qdd_2*x1
+    a[..., 0, 4] = x3*x6 + x2*x7
+    a[..., 0, 5] = x7*x11 - x6*x10 + qdd_2*x0
+    return a
+
+
+def center_of_mass(q, p=None):
+    """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    c = np.empty(batch + (3,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    x0 = p_0*p_2
+    x1 = p_1*p_3
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = np.cos(q_2)
+    x5 = np.sin(q_2)
+    x6 = 1/(p_0 + p_1)
+    c[..., 0] = (x0*x2 + x1*x2*x4 + p_1*p_4*x2)*x6
+    c[..., 1] = (p_0*q_0 + x1*x5 + p_1*q_0)*x6
+    c[..., 2] = -(x0*x3 + x1*x3*x4 + p_1*p_4*x3)*x6
+    return c
+
+
+def com_jacobian(q, p=None):
+    """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    Jc = np.empty(batch + (3, 3))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    Jc[..., 0, 0] = 0
+    Jc[..., 1, 1] = 0
+    Jc[..., 2, 0] = 0
+    x0 = p_0*p_2
+    x1 = p_1*p_3
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = np.cos(q_2)
+    x5 = np.sin(q_2)
+    x6 = p_0 + p_1
+    x7 = p_4*x2
+    x8 = p_4*x3
+    x9 = x1*x2*x4 + p_1*x7
+    x10 = x1*x5 + p_1*q_0
+    x11 = x1*x3*x4 + p_1*x8
+    x12 = 1/x6
+    Jc[..., 0, 1] = -(x0*x3 + x11)*x12
+    Jc[..., 1, 0] = x6*x12
+    Jc[..., 2, 1] = -(x0*x2 + x9)*x12
+    Jc[..., 0, 2] = x12*(p_1*q_0*x2 - x2*x10)
+    Jc[..., 1, 2] = x12*(x2*x9 + x3*x11 - p_1*(x2*x7 + x3*x8))
+    Jc[..., 2, 2] = x12*(x3*x10 - p_1*q_0*x3)
+    return Jc

@@ -9,6 +9,8 @@
  *   q[0]  o12  (translation, joint hanger)
  *   q[1]  theta15  (rotation, joint hanger)
  *   q[2]  theta26  (rotation, joint elbow)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  arm2  (on body arm2)
  * Parameters (p order, defaults in DOUBLE_PENDULUM_VARIANT2_P_DEFAULTS):
  *   p[0]  m2 = 1.0
  *   p[1]  m3 = 0.8
@@ -58,6 +60,11 @@ extern "C" {
 #define DOUBLE_PENDULUM_VARIANT2_INERTIA_INVERSE_SIZE 9  /* inertia_inverse: Ainv, 3 x 3 doubles */
 #define DOUBLE_PENDULUM_VARIANT2_TRANSVECTIVE_FACTORS_TARGS_SIZE 3  /* transvective_factors: targs, 3 doubles */
 #define DOUBLE_PENDULUM_VARIANT2_TRANSVECTIVE_FACTORS_DIAG_SIZE 3  /* transvective_factors: diag, 3 doubles */
+#define DOUBLE_PENDULUM_VARIANT2_FRAME_POSES_SIZE 12  /* frame_poses: X, 1 x 12 doubles */
+#define DOUBLE_PENDULUM_VARIANT2_FRAME_JACOBIANS_SIZE 18  /* frame_jacobians: J, 1 x 6 x 3 doubles */
+#define DOUBLE_PENDULUM_VARIANT2_FRAME_ACCELERATIONS_SIZE 6  /* frame_accelerations: a, 1 x 6 doubles */
+#define DOUBLE_PENDULUM_VARIANT2_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define DOUBLE_PENDULUM_VARIANT2_COM_JACOBIAN_SIZE 9  /* com_jacobian: Jc, 3 x 3 doubles */
 #define DOUBLE_PENDULUM_VARIANT2_P_DEFAULTS { 1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
@@ -86,6 +93,16 @@ void double_pendulum_variant2_forward_dynamics(const double *q, const double *qd
 void double_pendulum_variant2_inertia_inverse(const double *q, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
 void double_pendulum_variant2_transvective_factors(const double *q, const double *p, double *targs, double *diag);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void double_pendulum_variant2_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void double_pendulum_variant2_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void double_pendulum_variant2_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void double_pendulum_variant2_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void double_pendulum_variant2_com_jacobian(const double *q, const double *p, double *Jc);
 
 #ifdef __cplusplus
 }

@@ -12,6 +12,7 @@ NAME = 'flywheel_on_body'
 NQ = 3
 COORDINATES = ('psi1', 'psi2', 'psi3', )
 JOINTS = ('pivot', 'pivot', 'pivot', )
+FRAMES = ('flywheel', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('Omega', 'eps', )
 PARAMETERS = np.array([60.0, 5.0, ], dtype=float)
 
@@ -988,3 +989,310 @@ def transvective_factors(q, t, p=None):
     targs[..., 2] = x10*x30 + x9*x31
     targs[..., 0] = x11*x39 - x12*x40
     return targs, diag
+
+
+def frame_poses(q, t, p=None):
+    """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    X = np.empty(batch + (1, 12))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    t_0 = t[..., 0]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    x0 = p_0*t_0 + t_0*t_0*0.5*p_1
+    x1 = np.cos(x0)
+    x2 = np.sin(x0)
+    x3 = 0.984807753012208*x1
+    x4 = 0.984807753012208*x2
+    x5 = 0.9659258262890682*x2 - 0.04494345552754777*x1
+    x6 = 0.04494345552754777*x2 + 0.9659258262890682*x1
+    x7 = 0.1677312594965206*x1 + 0.2588190451025207*x2
+    x8 = 0.2588190451025207*x1 - 0.1677312594965206*x2
+    x9 = np.cos(q_0)
+    x10 = np.sin(q_0)
+    x11 = np.cos(q_1)
+    x12 = np.sin(q_1)
+    x13 = np.cos(q_2)
+    x14 = np.sin(q_2)
+    x15 = x10*x12
+    x16 = x10*x11
+    x17 = x9*x12
+    x18 = x9*x11
+    x19 = x11*x13
+    x20 = x11*x14
+    x21 = x13*x15 + x9*x14
+    x22 = x9*x13 - x14*x15
+    x23 = x10*x14 - x13*x17
+    x24 = x14*x17 + x10*x13
+    X[..., 0, 3] = x3*x19 - x5*x20 + x7*x12
+    X[..., 0, 4] = x8*x12 - x4*x19 - x6*x20
+    X[..., 0, 5] = 0.2548870022441787*x20 - 0.17364817766693033*x19 + 0.9512512425641976*x12
+    X[..., 0, 6] = x3*x21 + x5*x22 - x7*x16
+    X[..., 0, 7] = x6*x22 - x4*x21 - x8*x16
+    X[..., 0, 8] = -(0.17364817766693033*x21 + 0.2548870022441787*x22 + 0.9512512425641976*x16)
+    X[..., 0, 9] = x3*x23 + x5*x24 + x7*x18
+    X[..., 0, 10] = x6*x24 - x4*x23 + x8*x18
+    X[..., 0, 11] = 0.9512512425641976*x18 - 0.17364817766693033*x23 - 0.2548870022441787*x24
+    X[..., 0, 0] = 0.05*x19 - 0.02*x20 - 0.25*x12
+    X[..., 0, 1] = 0.05*x21 + 0.02*x22 + 0.25*x16
+    X[..., 0, 2] = 0.05*x23 + 0.02*x24 - 0.25*x18
+    return X
+
+
+def frame_jacobians(q, t, p=None):
+    """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    J = np.empty(batch + (1, 6, 3))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    J[..., 0, 3, 1] = 0
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    J[..., 0, 3, 2] = x3
+    x4 = np.cos(q_2)
+    x5 = np.sin(q_2)
+    x6 = x1*x3
+    x7 = x1*x2
+    J[..., 0, 4, 2] = -x7
+    x8 = x0*x3
+    x9 = x0*x2
+    J[..., 0, 5, 2] = x9
+    x10 = x2*x4
+    x11 = x2*x5
+    x12 = x4*x6 + x0*x5
+    x13 = x0*x4 - x5*x6
+    x14 = x1*x5 - x4*x8
+    x15 = x5*x8 + x1*x4
+    x16 = 0.05*x10 - 0.02*x11 - 0.25*x3
+    x17 = 0.05*x12 + 0.02*x13 + 0.25*x7
+    x18 = 0.05*x14 + 0.02*x15 - 0.25*x9
+    x19 = x10*x10 + x11*x11 + x3*x3
+    J[..., 0, 3, 0] = x19
+    x20 = x10*x12 - x11*x13 - x3*x7
+    J[..., 0, 4, 0] = x20
+    x21 = x10*x14 - x11*x15 + x3*x9
+    J[..., 0, 5, 0] = x21
+    J[..., 0, 0, 0] = x18*x20 - x17*x21
+    J[..., 0, 1, 0] = x16*x21 - x18*x19
+    J[..., 0, 2, 0] = x17*x19 - x16*x20
+    x22 = x5*x12 + x4*x13
+    J[..., 0, 4, 1] = x22
+    x23 = x5*x14 + x4*x15
+    J[..., 0, 5, 1] = x23
+    J[..., 0, 0, 1] = x18*x22 - x17*x23
+    J[..., 0, 1, 1] = x16*x23
+    J[..., 0, 2, 1] = -x16*x22
+    J[..., 0, 0, 2] = -(x7*x18 + x9*x17)
+    J[..., 0, 1, 2] = x9*x16 - x3*x18
+    J[..., 0, 2, 2] = x3*x17 + x7*x16
+    return J
+
+
+def frame_accelerations(q, qd, qdd, t, p=None):
+    """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    qdd = np.asarray(qdd, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], t.shape[:-1], )
+    a = np.empty(batch + (1, 6))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    qdd_0 = qdd[..., 0]
+    qdd_1 = qdd[..., 1]
+    qdd_2 = qdd[..., 2]
+    t_0 = t[..., 0]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    x0 = p_0*t_0 + t_0*t_0*0.5*p_1
+    x1 = p_0 + p_1*t_0
+    x2 = np.cos(x0)
+    x3 = np.sin(x0)
+    x4 = 0.984807753012208*x2
+    x5 = 0.984807753012208*x3
+    x6 = 0.9659258262890682*x3 - 0.04494345552754777*x2
+    x7 = 0.04494345552754777*x3 + 0.9659258262890682*x2
+    x8 = 0.1677312594965206*x2 + 0.2588190451025207*x3
+    x9 = 0.2588190451025207*x2 - 0.1677312594965206*x3
+    x10 = np.cos(q_0)
+    x11 = np.sin(q_0)
+    x12 = np.cos(q_1)
+    x13 = np.sin(q_1)
+    x14 = np.cos(q_2)
+    x15 = np.sin(q_2)
+    x16 = x11*x13
+    x17 = x11*x12
+    x18 = x10*x13
+    x19 = x10*x12
+    x20 = x12*x14
+    x21 = x12*x15
+    x22 = x14*x16 + x10*x15
+    x23 = x10*x14 - x15*x16
+    x24 = x11*x15 - x14*x18
+    x25 = x15*x18 + x11*x14
+    x26 = qd_0*x13
+    x27 = qd_0*x20 + qd_1*x15
+    x28 = qd_1*x14 - qd_0*x21
+    x29 = qd_2 + x26
+    x30 = qd_1*x26
+    x31 = x4*x27 + x6*x28 + x8*x29
+    x32 = x7*x28 - x5*x27 + x9*x29
+    x33 = x1 + 0.9512512425641976*x29 - 0.17364817766693033*x27 - 0.2548870022441787*x28
+    x34 = qd_2*x28 - x14*x30 + qdd_0*x20 + qdd_1*x15
+    x35 = x15*x30 - qd_2*x27 + qdd_1*x14 - qdd_0*x21
+    x36 = qd_1*qd_0*x12 + qdd_2 + qdd_0*x13
+    x37 = x1*x32 + x4*x34 + x6*x35 + x8*x36
+    x38 = x7*x35 - x5*x34 + x9*x36 - x1*x31
+    x39 = p_1 + 0.9512512425641976*x36 - 0.17364817766693033*x34 - 0.2548870022441787*x35
+    x40 = 0.25*x28 + 0.02*x29
+    x41 = 0.05*x29 + 0.25*x27
+    x42 = 0.02*x27 - 0.05*x28
+    x43 = x6*x41 - x4*x40 + x8*x42
+    x44 = x5*x40 + x7*x41 + x9*x42
+    x45 = 0.17364817766693033*x40 - 0.2548870022441787*x41 + 0.9512512425641976*x42
+    x46 = x4*x20 - x6*x21 + x8*x13
+    x47 = x9*x13 - x5*x20 - x7*x21
+    x48 = 0.2548870022441787*x21 - 0.17364817766693033*x20 + 0.9512512425641976*x13
+    x49 = x4*x22 + x6*x23 - x8*x17
+    x50 = x7*x23 - x5*x22 - x9*x17
+    x51 = 0.17364817766693033*x22 + 0.2548870022441787*x23 + 0.9512512425641976*x17
+    x52 = x4*x24 + x6*x25 + x8*x19
+    x53 = x7*x25 - x5*x24 + x9*x19
+    x54 = 0.9512512425641976*x19 - 0.17364817766693033*x24 - 0.2548870022441787*x25
+    x55 = 0.25*x35 + 0.02*x36
+    x56 = 0.05*x36 + 0.25*x34
+    x57 = 0.02*x34 - 0.05*x35
+    x58 = x6*x56 - x4*x55 + x8*x57 + x1*x44 + x32*x45 - x33*x44
+    x59 = x5*x55 + x7*x56 + x9*x57 - x1*x43 + x33*x43 - x31*x45
+    x60 = 0.17364817766693033*x55 - 0.2548870022441787*x56 + 0.9512512425641976*x57 + x31*x44 - x32*x43
+    a[..., 0, 0] = x46*x58 + x47*x59 + x48*x60
+    a[..., 0, 1] = x49*x58 + x50*x59 - x51*x60
+    a[..., 0, 2] = x52*x58 + x53*x59 + x54*x60
+    a[..., 0, 3] = x37*x46 + x38*x47 + x39*x48
+    a[..., 0, 4] = x37*x49 + x38*x50 - x39*x51
+    a[..., 0, 5] = x37*x52 + x38*x53 + x39*x54
+    return a
+
+
+def center_of_mass(q, t, p=None):
+    """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    c = np.empty(batch + (3,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    t_0 = t[..., 0]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    x0 = p_0*t_0 + t_0*t_0*0.5*p_1
+    x1 = np.cos(x0)
+    x2 = np.sin(x0)
+    x3 = 0.984807753012208*x1
+    x4 = 0.984807753012208*x2
+    x5 = 0.9659258262890682*x2 - 0.04494345552754777*x1
+    x6 = 0.04494345552754777*x2 + 0.9659258262890682*x1
+    x7 = 0.1677312594965206*x1 + 0.2588190451025207*x2
+    x8 = 0.2588190451025207*x1 - 0.1677312594965206*x2
+    x9 = np.cos(q_0)
+    x10 = np.sin(q_0)
+    x11 = np.cos(q_1)
+    x12 = np.sin(q_1)
+    x13 = np.cos(q_2)
+    x14 = np.sin(q_2)
+    x15 = x10*x12
+    x16 = x10*x11
+    x17 = x9*x12
+    x18 = x9*x11
+    x19 = x11*x13
+    x20 = x11*x14
+    x21 = x13*x15 + x9*x14
+    x22 = x9*x13 - x14*x15
+    x23 = x10*x14 - x13*x17
+    x24 = x14*x17 + x10*x13
+    x25 = 0.05*x19
+    x26 = 0.05*x21
+    x27 = 0.05*x23
+    c[..., 0] = 0.15384615384615385*(x25 - 1.5*x12 + 0.0045000000000000005*(x3*x19 - x5*x20 + x7*x12) - 0.003*(x8*x12 - x4*x19 - x6*x20) + 0.0015*(0.2548870022441787*x20 - 0.17364817766693033*x19 + 0.9512512425641976*x12) + 1.5*(x25 - 0.02*x20 - 0.25*x12))
+    c[..., 1] = 0.15384615384615385*(x26 + 1.5*x16 + 0.0045000000000000005*(x3*x21 + x5*x22 - x7*x16) - 0.003*(x6*x22 - x4*x21 - x8*x16) - 0.0015*(0.17364817766693033*x21 + 0.2548870022441787*x22 + 0.9512512425641976*x16) + 1.5*(x26 + 0.02*x22 + 0.25*x16))
+    c[..., 2] = 0.15384615384615385*(x27 - 1.5*x18 + 0.0045000000000000005*(x3*x23 + x5*x24 + x7*x18) - 0.003*(x6*x24 - x4*x23 + x8*x18) + 0.0015*(0.9512512425641976*x18 - 0.17364817766693033*x23 - 0.2548870022441787*x24) + 1.5*(x27 + 0.02*x24 - 0.25*x18))
+    return c
+
+
+def com_jacobian(q, t, p=None):
+    """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    Jc = np.empty(batch + (3, 3))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    t_0 = t[..., 0]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    x0 = p_0*t_0 + t_0*t_0*0.5*p_1
+    x1 = np.cos(x0)
+    x2 = np.sin(x0)
+    x3 = 0.984807753012208*x1
+    x4 = 0.984807753012208*x2
+    x5 = 0.9659258262890682*x2 - 0.04494345552754777*x1
+    x6 = 0.04494345552754777*x2 + 0.9659258262890682*x1
+    x7 = 0.1677312594965206*x1 + 0.2588190451025207*x2
+    x8 = 0.2588190451025207*x1 - 0.1677312594965206*x2
+    x9 = np.cos(q_0)
+    x10 = np.sin(q_0)
+    x11 = np.cos(q_1)
+    x12 = np.sin(q_1)
+    x13 = np.cos(q_2)
+    x14 = np.sin(q_2)
+    x15 = x10*x12
+    x16 = x10*x11
+    x17 = x9*x12
+    x18 = x9*x11
+    x19 = x11*x13
+    x20 = x11*x14
+    x21 = x13*x15 + x9*x14
+    x22 = x9*x13 - x14*x15
+    x23 = x10*x14 - x13*x17
+    x24 = x14*x17 + x10*x13
+    x25 = 0.05*x19
+    x26 = 0.05*x21
+    x27 = 0.05*x23
+    x28 = x19*x19 + x20*x20 + x12*x12
+    x29 = x19*x21 - x20*x22 - x12*x16
+    x30 = x19*x23 - x20*x24 + x12*x18
+    x31 = x14*x21 + x13*x22
+    x32 = x14*x23 + x13*x24
+    x33 = x25 - 1.5*x12 + 0.0045000000000000005*(x3*x19 - x5*x20 + x7*x12) - 0.003*(x8*x12 - x4*x19 - x6*x20) + 0.0015*(0.2548870022441787*x20 - 0.17364817766693033*x19 + 0.9512512425641976*x12) + 1.5*(x25 - 0.02*x20 - 0.25*x12)
+    x34 = x26 + 1.5*x16 + 0.0045000000000000005*(x3*x21 + x5*x22 - x7*x16) - 0.003*(x6*x22 - x4*x21 - x8*x16) - 0.0015*(0.17364817766693033*x21 + 0.2548870022441787*x22 + 0.9512512425641976*x16) + 1.5*(x26 + 0.02*x22 + 0.25*x16)
+    x35 = x27 - 1.5*x18 + 0.0045000000000000005*(x3*x23 + x5*x24 + x7*x18) - 0.003*(x6*x24 - x4*x23 + x8*x18) + 0.0015*(0.9512512425641976*x18 - 0.17364817766693033*x23 - 0.2548870022441787*x24) + 1.5*(x27 + 0.02*x24 - 0.25*x18)
+    Jc[..., 0, 0] = 0.15384615384615385*(x29*x35 - x30*x34)
+    Jc[..., 1, 0] = 0.15384615384615385*(x30*x33 - x28*x35)
+    Jc[..., 2, 0] = 0.15384615384615385*(x28*x34 - x29*x33)
+    Jc[..., 0, 1] = 0.15384615384615385*(x31*x35 - x32*x34)
+    Jc[..., 1, 1] = 0.15384615384615385*x32*x33
+    Jc[..., 2, 1] = -0.15384615384615385*x31*x33
+    Jc[..., 0, 2] = -0.15384615384615385*(x16*x35 + x18*x34)
+    Jc[..., 1, 2] = 0.15384615384615385*(x18*x33 - x12*x35)
+    Jc[..., 2, 2] = 0.15384615384615385*(x12*x34 + x16*x33)
+    return Jc

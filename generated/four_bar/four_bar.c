@@ -950,3 +950,197 @@ int four_bar_constrained_forward_dynamics(const double *q, const double *qd, con
     qdd[2] = x33*(x49 + x63*x87 - x62*x86) - x96 - x34*(x6*(x94 + p_1*x96) - x7*x93);
     return status[0] != 0.0;
 }
+
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)
+ * operations: 12 mul, 6 add, 0 div, 3 call */
+void four_bar_frame_poses(const double *q, const double *p, double *X)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    static const double p_defaults[4] = {0.1, 0.3, 0.25, 0.3};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    X[2] = 0;
+    X[5] = 0;
+    X[8] = 0;
+    X[9] = 0;
+    X[10] = 0;
+    X[11] = 1;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = x0*x2 - x1*x3;
+    const double x7 = x0*x3 + x1*x2;
+    const double x8 = x4*x6 - x5*x7;
+    X[3] = x8;
+    X[7] = x8;
+    const double x9 = x5*x6 + x4*x7;
+    X[6] = x9;
+    X[4] = -x9;
+    X[0] = p_0*x0 + p_1*x6;
+    X[1] = p_0*x1 + p_1*x7;
+}
+
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin
+ * operations: 8 mul, 6 add, 0 div, 2 call */
+void four_bar_frame_jacobians(const double *q, const double *p, double *J)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    static const double p_defaults[4] = {0.1, 0.3, 0.25, 0.3};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    J[2] = 0;
+    J[5] = 0;
+    J[6] = 0;
+    J[7] = 0;
+    J[8] = 0;
+    J[9] = 0;
+    J[10] = 0;
+    J[11] = 0;
+    J[12] = 0;
+    J[13] = 0;
+    J[14] = 0;
+    J[15] = 1;
+    J[16] = 1;
+    J[17] = 1;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    const double x4 = p_0*x0;
+    const double x5 = p_0*x1;
+    const double x6 = x4 + p_1*(x0*x2 - x1*x3);
+    J[3] = x6;
+    const double x7 = x5 + p_1*(x0*x3 + x1*x2);
+    J[0] = -x7;
+    J[4] = x6 - x4;
+    J[1] = x5 - x7;
+}
+
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
+ * operations: 34 mul, 22 add, 0 div, 3 call */
+void four_bar_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
+    static const double p_defaults[4] = {0.1, 0.3, 0.25, 0.3};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    a[2] = 0;
+    a[3] = 0;
+    a[4] = 0;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = qd_0 + qd_1;
+    const double x7 = qd_2 + x6;
+    const double x8 = p_0*qd_0;
+    const double x9 = x3*x8;
+    const double x10 = x2*x8;
+    const double x11 = x10 + p_1*x6;
+    const double x12 = x4*x9 + x5*x11;
+    const double x13 = x4*x11 - x5*x9;
+    const double x14 = p_0*qdd_0;
+    const double x15 = qdd_0 + qdd_1;
+    a[5] = qdd_2 + x15;
+    const double x16 = x0*x2 - x1*x3;
+    const double x17 = x0*x3 + x1*x2;
+    const double x18 = x4*x16 - x5*x17;
+    const double x19 = x5*x16 + x4*x17;
+    const double x20 = qd_1*x10 + x3*x14;
+    const double x21 = p_1*x15 + x2*x14 - qd_1*x9;
+    const double x22 = qd_2*x13 + x4*x20 + x5*x21 - x7*x13;
+    const double x23 = x7*x12 + x4*x21 - x5*x20 - qd_2*x12;
+    a[0] = x18*x22 - x19*x23;
+    a[1] = x19*x22 + x18*x23;
+}
+
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)
+ * operations: 27 mul, 14 add, 0 div, 3 call */
+void four_bar_center_of_mass(const double *q, const double *p, double *c)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    static const double p_defaults[4] = {0.1, 0.3, 0.25, 0.3};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    c[2] = 0;
+    const double x0 = 0.1*p_0;
+    const double x1 = 0.25*p_1;
+    const double x2 = 0.2*p_2;
+    double x4, x3;
+    aggsym_sincos(q_0, &x4, &x3);
+    double x6, x5;
+    aggsym_sincos(q_1, &x6, &x5);
+    double x8, x7;
+    aggsym_sincos(q_2, &x8, &x7);
+    const double x9 = x3*x5 - x4*x6;
+    const double x10 = x3*x6 + x4*x5;
+    const double x11 = p_0*x3;
+    const double x12 = p_0*x4;
+    c[0] = 0.9090909090909091*(x0*x3 + x1*x9 + 0.5*x11 + x2*(x7*x9 - x8*x10) + 0.4*(x11 + p_1*x9));
+    c[1] = 0.9090909090909091*(x0*x4 + x1*x10 + 0.5*x12 + x2*(x8*x9 + x7*x10) + 0.4*(x12 + p_1*x10));
+}
+
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
+ * operations: 33 mul, 18 add, 0 div, 3 call */
+void four_bar_com_jacobian(const double *q, const double *p, double *Jc)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    static const double p_defaults[4] = {0.1, 0.3, 0.25, 0.3};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    Jc[6] = 0;
+    Jc[7] = 0;
+    Jc[8] = 0;
+    const double x0 = 0.1*p_0;
+    const double x1 = 0.25*p_1;
+    const double x2 = 0.2*p_2;
+    double x4, x3;
+    aggsym_sincos(q_0, &x4, &x3);
+    double x6, x5;
+    aggsym_sincos(q_1, &x6, &x5);
+    double x8, x7;
+    aggsym_sincos(q_2, &x8, &x7);
+    const double x9 = x3*x5 - x4*x6;
+    const double x10 = x3*x6 + x4*x5;
+    const double x11 = p_0*x3;
+    const double x12 = p_0*x4;
+    const double x13 = 0.4*(x11 + p_1*x9);
+    const double x14 = 0.4*(x12 + p_1*x10);
+    const double x15 = x2*(x7*x9 - x8*x10) + x13;
+    const double x16 = x2*(x8*x9 + x7*x10) + x14;
+    const double x17 = x1*x9 + 0.5*x11 + x15;
+    const double x18 = x1*x10 + 0.5*x12 + x16;
+    Jc[3] = 0.9090909090909091*(x0*x3 + x17);
+    Jc[0] = -0.9090909090909091*(x0*x4 + x18);
+    Jc[1] = 0.9090909090909091*(0.9*x12 - x18);
+    Jc[4] = 0.9090909090909091*(x17 - 0.9*x11);
+    Jc[2] = 0.9090909090909091*(x14 - x16);
+    Jc[5] = 0.9090909090909091*(x15 - x13);
+}

@@ -10,6 +10,7 @@ NAME = 'four_bar'
 NQ = 3
 COORDINATES = ('q1', 'q2', 'q3', )
 JOINTS = ('crank', 'coupler', 'rocker', )
+FRAMES = ('rocker', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('a', 'b', 'c', 'd', )
 PARAMETERS = np.array([0.1, 0.3, 0.25, 0.3, ], dtype=float)
 
@@ -957,3 +958,204 @@ def constrained_forward_dynamics(q, qd, tau, p=None):
         raise np.linalg.LinAlgError('constrained_forward_dynamics: the constraints are singular (J A^-1 J^T has a pivot below 1e-12 of its mean diagonal, or is not finite), or Coulomb friction has no consistent solution, at '
                                     + ("the state" if not batch else "the states " + ", ".join(str(tuple(int(i) for i in b)) for b in bad[:10]) + (" ..." if len(bad) > 10 else "")))
     return qdd, lambda_
+
+
+def frame_poses(q, p=None):
+    """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    X = np.empty(batch + (1, 12))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    X[..., 0, 2] = 0
+    X[..., 0, 5] = 0
+    X[..., 0, 8] = 0
+    X[..., 0, 9] = 0
+    X[..., 0, 10] = 0
+    X[..., 0, 11] = 1
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = np.cos(q_2)
+    x5 = np.sin(q_2)
+    x6 = x0*x2 - x1*x3
+    x7 = x0*x3 + x1*x2
+    x8 = x4*x6 - x5*x7
+    X[..., 0, 3] = x8
+    X[..., 0, 7] = x8
+    x9 = x5*x6 + x4*x7
+    X[..., 0, 6] = x9
+    X[..., 0, 4] = -x9
+    X[..., 0, 0] = p_0*x0 + p_1*x6
+    X[..., 0, 1] = p_0*x1 + p_1*x7
+    return X
+
+
+def frame_jacobians(q, p=None):
+    """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    J = np.empty(batch + (1, 6, 3))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    J[..., 0, 0, 2] = 0
+    J[..., 0, 1, 2] = 0
+    J[..., 0, 2, 0] = 0
+    J[..., 0, 2, 1] = 0
+    J[..., 0, 2, 2] = 0
+    J[..., 0, 3, 0] = 0
+    J[..., 0, 3, 1] = 0
+    J[..., 0, 3, 2] = 0
+    J[..., 0, 4, 0] = 0
+    J[..., 0, 4, 1] = 0
+    J[..., 0, 4, 2] = 0
+    J[..., 0, 5, 0] = 1
+    J[..., 0, 5, 1] = 1
+    J[..., 0, 5, 2] = 1
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = p_0*x0
+    x5 = p_0*x1
+    x6 = x4 + p_1*(x0*x2 - x1*x3)
+    J[..., 0, 1, 0] = x6
+    x7 = x5 + p_1*(x0*x3 + x1*x2)
+    J[..., 0, 0, 0] = -x7
+    J[..., 0, 1, 1] = x6 - x4
+    J[..., 0, 0, 1] = x5 - x7
+    return J
+
+
+def frame_accelerations(q, qd, qdd, p=None):
+    """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    qdd = np.asarray(qdd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
+    a = np.empty(batch + (1, 6))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    qdd_0 = qdd[..., 0]
+    qdd_1 = qdd[..., 1]
+    qdd_2 = qdd[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    a[..., 0, 2] = 0
+    a[..., 0, 3] = 0
+    a[..., 0, 4] = 0
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = np.cos(q_2)
+    x5 = np.sin(q_2)
+    x6 = qd_0 + qd_1
+    x7 = qd_2 + x6
+    x8 = p_0*qd_0
+    x9 = x3*x8
+    x10 = x2*x8
+    x11 = x10 + p_1*x6
+    x12 = x4*x9 + x5*x11
+    x13 = x4*x11 - x5*x9
+    x14 = p_0*qdd_0
+    x15 = qdd_0 + qdd_1
+    a[..., 0, 5] = qdd_2 + x15
+    x16 = x0*x2 - x1*x3
+    x17 = x0*x3 + x1*x2
+    x18 = x4*x16 - x5*x17
+    x19 = x5*x16 + x4*x17
+    x20 = qd_1*x10 + x3*x14
+    x21 = p_1*x15 + x2*x14 - qd_1*x9
+    x22 = qd_2*x13 + x4*x20 + x5*x21 - x7*x13
+    x23 = x7*x12 + x4*x21 - x5*x20 - qd_2*x12
+    a[..., 0, 0] = x18*x22 - x19*x23
+    a[..., 0, 1] = x19*x22 + x18*x23
+    return a
+
+
+def center_of_mass(q, p=None):
+    """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    c = np.empty(batch + (3,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    c[..., 2] = 0
+    x0 = 0.1*p_0
+    x1 = 0.25*p_1
+    x2 = 0.2*p_2
+    x3 = np.cos(q_0)
+    x4 = np.sin(q_0)
+    x5 = np.cos(q_1)
+    x6 = np.sin(q_1)
+    x7 = np.cos(q_2)
+    x8 = np.sin(q_2)
+    x9 = x3*x5 - x4*x6
+    x10 = x3*x6 + x4*x5
+    x11 = p_0*x3
+    x12 = p_0*x4
+    c[..., 0] = 0.9090909090909091*(x0*x3 + x1*x9 + 0.5*x11 + x2*(x7*x9 - x8*x10) + 0.4*(x11 + p_1*x9))
+    c[..., 1] = 0.9090909090909091*(x0*x4 + x1*x10 + 0.5*x12 + x2*(x8*x9 + x7*x10) + 0.4*(x12 + p_1*x10))
+    return c
+
+
+def com_jacobian(q, p=None):
+    """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    Jc = np.empty(batch + (3, 3))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    Jc[..., 2, 0] = 0
+    Jc[..., 2, 1] = 0
+    Jc[..., 2, 2] = 0
+    x0 = 0.1*p_0
+    x1 = 0.25*p_1
+    x2 = 0.2*p_2
+    x3 = np.cos(q_0)
+    x4 = np.sin(q_0)
+    x5 = np.cos(q_1)
+    x6 = np.sin(q_1)
+    x7 = np.cos(q_2)
+    x8 = np.sin(q_2)
+    x9 = x3*x5 - x4*x6
+    x10 = x3*x6 + x4*x5
+    x11 = p_0*x3
+    x12 = p_0*x4
+    x13 = 0.4*(x11 + p_1*x9)
+    x14 = 0.4*(x12 + p_1*x10)
+    x15 = x2*(x7*x9 - x8*x10) + x13
+    x16 = x2*(x8*x9 + x7*x10) + x14
+    x17 = x1*x9 + 0.5*x11 + x15
+    x18 = x1*x10 + 0.5*x12 + x16
+    Jc[..., 1, 0] = 0.9090909090909091*(x0*x3 + x17)
+    Jc[..., 0, 0] = -0.9090909090909091*(x0*x4 + x18)
+    Jc[..., 0, 1] = 0.9090909090909091*(0.9*x12 - x18)
+    Jc[..., 1, 1] = 0.9090909090909091*(x17 - 0.9*x11)
+    Jc[..., 0, 2] = 0.9090909090909091*(x14 - x16)
+    Jc[..., 1, 2] = 0.9090909090909091*(x15 - x13)
+    return Jc

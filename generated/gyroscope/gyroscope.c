@@ -452,3 +452,160 @@ void gyroscope_transvective_factors(const double *q, const double *p, double *ta
     targs[1] = x0;
     diag[0] = 0.0066048 - 0.0011048*x0*x0;
 }
+
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)
+ * operations: 34 mul, 16 add, 0 div, 3 call */
+void gyroscope_frame_poses(const double *q, const double *p, double *X)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    (void)p;
+    X[0] = 0;
+    X[1] = 0;
+    X[2] = 0;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    const double x2 = 0.3420201433256687*x1 - 0.5389855446957562*x0;
+    const double x3 = 0.5389855446957562*x1 + 0.3420201433256687*x0;
+    const double x4 = 0.8191520442889918*x0;
+    const double x5 = 0.8191520442889918*x1;
+    const double x6 = 0.19617469496901108*x0 + 0.9396926207859084*x1;
+    const double x7 = 0.9396926207859084*x0 - 0.19617469496901108*x1;
+    double x9, x8;
+    aggsym_sincos(q_1, &x9, &x8);
+    double x11, x10;
+    aggsym_sincos(q_2, &x11, &x10);
+    const double x12 = 0.7697511313200572*x8 - x3*x9;
+    X[5] = 0.7697511313200572*x9 + x3*x8;
+    const double x13 = 0.573576436351046*x8 + x5*x9;
+    X[8] = 0.573576436351046*x9 - x5*x8;
+    const double x14 = 0.2801664995932355*x8 + x7*x9;
+    X[11] = x7*x8 - 0.2801664995932355*x9;
+    X[3] = x10*x12 + x2*x11;
+    X[4] = x2*x10 - x11*x12;
+    X[6] = x10*x13 + x4*x11;
+    X[7] = x4*x10 - x11*x13;
+    X[9] = x6*x11 - x10*x14;
+    X[10] = x11*x14 + x6*x10;
+}
+
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin
+ * operations: 16 mul, 7 add, 0 div, 2 call */
+void gyroscope_frame_jacobians(const double *q, const double *p, double *J)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    (void)p;
+    J[0] = 0;
+    J[1] = 0;
+    J[2] = 0;
+    J[3] = 0;
+    J[4] = 0;
+    J[5] = 0;
+    J[6] = 0;
+    J[7] = 0;
+    J[8] = 0;
+    J[9] = 0.7697511313200572;
+    J[12] = 0.573576436351046;
+    J[15] = -0.2801664995932355;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    J[10] = 0.3420201433256687*x1 - 0.5389855446957562*x0;
+    J[13] = 0.8191520442889918*x0;
+    J[16] = 0.19617469496901108*x0 + 0.9396926207859084*x1;
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    J[11] = 0.7697511313200572*x3 + (0.5389855446957562*x1 + 0.3420201433256687*x0)*x2;
+    J[14] = 0.573576436351046*x3 - 0.8191520442889918*x1*x2;
+    J[17] = (0.9396926207859084*x0 - 0.19617469496901108*x1)*x2 - 0.2801664995932355*x3;
+}
+
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
+ * operations: 59 mul, 31 add, 0 div, 3 call */
+void gyroscope_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
+    (void)p;
+    a[0] = 0;
+    a[1] = 0;
+    a[2] = 0;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    const double x2 = 0.3420201433256687*x1 - 0.5389855446957562*x0;
+    const double x3 = 0.5389855446957562*x1 + 0.3420201433256687*x0;
+    const double x4 = 0.8191520442889918*x0;
+    const double x5 = 0.8191520442889918*x1;
+    const double x6 = 0.19617469496901108*x0 + 0.9396926207859084*x1;
+    const double x7 = 0.9396926207859084*x0 - 0.19617469496901108*x1;
+    double x9, x8;
+    aggsym_sincos(q_1, &x9, &x8);
+    double x11, x10;
+    aggsym_sincos(q_2, &x11, &x10);
+    const double x12 = qd_0*x8;
+    const double x13 = qdd_0*x8 - qd_1*qd_0*x9;
+    const double x14 = qd_2*(qd_1*x10 - x11*x12) + x10*x13 + qdd_1*x11;
+    const double x15 = qdd_1*x10 - x11*x13 - qd_2*(x10*x12 + qd_1*x11);
+    const double x16 = qdd_2 + qd_1*x12 + qdd_0*x9;
+    const double x17 = 0.7697511313200572*x8 - x3*x9;
+    const double x18 = 0.573576436351046*x8 + x5*x9;
+    const double x19 = 0.2801664995932355*x8 + x7*x9;
+    a[3] = x14*(x10*x17 + x2*x11) + x15*(x2*x10 - x11*x17) + x16*(0.7697511313200572*x9 + x3*x8);
+    a[4] = x14*(x10*x18 + x4*x11) + x15*(x4*x10 - x11*x18) + x16*(0.573576436351046*x9 - x5*x8);
+    a[5] = x14*(x6*x11 - x10*x19) + x15*(x11*x19 + x6*x10) + x16*(x7*x8 - 0.2801664995932355*x9);
+}
+
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)
+ * operations: 14 mul, 5 add, 0 div, 2 call */
+void gyroscope_center_of_mass(const double *q, const double *p, double *c)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    (void)p;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    c[0] = 0.0010909090909090907*(0.7697511313200572*x3 + (0.5389855446957562*x1 + 0.3420201433256687*x0)*x2);
+    c[1] = 0.0010909090909090907*(0.573576436351046*x3 - 0.8191520442889918*x1*x2);
+    c[2] = 0.0010909090909090907*((0.9396926207859084*x0 - 0.19617469496901108*x1)*x2 - 0.2801664995932355*x3);
+}
+
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
+ * operations: 37 mul, 13 add, 0 div, 2 call */
+void gyroscope_com_jacobian(const double *q, const double *p, double *Jc)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    (void)p;
+    Jc[2] = 0;
+    Jc[5] = 0;
+    Jc[8] = 0;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    const double x2 = 0.3420201433256687*x1 - 0.5389855446957562*x0;
+    const double x3 = 0.8191520442889918*x0;
+    const double x4 = 0.19617469496901108*x0 + 0.9396926207859084*x1;
+    double x6, x5;
+    aggsym_sincos(q_1, &x6, &x5);
+    const double x7 = 0.7697511313200572*x6 + (0.5389855446957562*x1 + 0.3420201433256687*x0)*x5;
+    const double x8 = 0.573576436351046*x6 - 0.8191520442889918*x1*x5;
+    const double x9 = (0.9396926207859084*x0 - 0.19617469496901108*x1)*x5 - 0.2801664995932355*x6;
+    const double x10 = 0.0024*x7;
+    const double x11 = 0.0024*x8;
+    const double x12 = 0.0024*x9;
+    Jc[0] = 0.45454545454545453*(0.0013765834472425104*x9 + 0.0006723995990237651*x8);
+    Jc[3] = -0.45454545454545453*(0.0006723995990237651*x7 + 0.0018474027151681371*x9);
+    Jc[6] = 0.45454545454545453*(0.0018474027151681371*x8 - 0.0013765834472425104*x7);
+    Jc[1] = 0.45454545454545453*(x3*x12 - x4*x11);
+    Jc[4] = 0.45454545454545453*(x4*x10 - x2*x12);
+    Jc[7] = 0.45454545454545453*(x2*x11 - x3*x10);
+}

@@ -10,6 +10,7 @@ NAME = 'gyroscope'
 NQ = 3
 COORDINATES = ('theta14', 'theta25', 'theta36', )
 JOINTS = ('outer_axis', 'inner_axis', 'spin_axis', )
+FRAMES = ('rotor', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ()
 PARAMETERS = np.array([], dtype=float)
 
@@ -461,3 +462,172 @@ def transvective_factors(q, p=None):
     targs[..., 1] = x0
     diag[..., 0] = 0.0066048 - 0.0011048*x0*x0
     return targs, diag
+
+
+def frame_poses(q, p=None):
+    """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    X = np.empty(batch + (1, 12))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    X[..., 0, 0] = 0
+    X[..., 0, 1] = 0
+    X[..., 0, 2] = 0
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = 0.3420201433256687*x1 - 0.5389855446957562*x0
+    x3 = 0.5389855446957562*x1 + 0.3420201433256687*x0
+    x4 = 0.8191520442889918*x0
+    x5 = 0.8191520442889918*x1
+    x6 = 0.19617469496901108*x0 + 0.9396926207859084*x1
+    x7 = 0.9396926207859084*x0 - 0.19617469496901108*x1
+    x8 = np.cos(q_1)
+    x9 = np.sin(q_1)
+    x10 = np.cos(q_2)
+    x11 = np.sin(q_2)
+    x12 = 0.7697511313200572*x8 - x3*x9
+    X[..., 0, 5] = 0.7697511313200572*x9 + x3*x8
+    x13 = 0.573576436351046*x8 + x5*x9
+    X[..., 0, 8] = 0.573576436351046*x9 - x5*x8
+    x14 = 0.2801664995932355*x8 + x7*x9
+    X[..., 0, 11] = x7*x8 - 0.2801664995932355*x9
+    X[..., 0, 3] = x10*x12 + x2*x11
+    X[..., 0, 4] = x2*x10 - x11*x12
+    X[..., 0, 6] = x10*x13 + x4*x11
+    X[..., 0, 7] = x4*x10 - x11*x13
+    X[..., 0, 9] = x6*x11 - x10*x14
+    X[..., 0, 10] = x11*x14 + x6*x10
+    return X
+
+
+def frame_jacobians(q, p=None):
+    """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    J = np.empty(batch + (1, 6, 3))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    J[..., 0, 0, 0] = 0
+    J[..., 0, 0, 1] = 0
+    J[..., 0, 0, 2] = 0
+    J[..., 0, 1, 0] = 0
+    J[..., 0, 1, 1] = 0
+    J[..., 0, 1, 2] = 0
+    J[..., 0, 2, 0] = 0
+    J[..., 0, 2, 1] = 0
+    J[..., 0, 2, 2] = 0
+    J[..., 0, 3, 0] = 0.7697511313200572
+    J[..., 0, 4, 0] = 0.573576436351046
+    J[..., 0, 5, 0] = -0.2801664995932355
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    J[..., 0, 3, 1] = 0.3420201433256687*x1 - 0.5389855446957562*x0
+    J[..., 0, 4, 1] = 0.8191520442889918*x0
+    J[..., 0, 5, 1] = 0.19617469496901108*x0 + 0.9396926207859084*x1
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    J[..., 0, 3, 2] = 0.7697511313200572*x3 + (0.5389855446957562*x1 + 0.3420201433256687*x0)*x2
+    J[..., 0, 4, 2] = 0.573576436351046*x3 - 0.8191520442889918*x1*x2
+    J[..., 0, 5, 2] = (0.9396926207859084*x0 - 0.19617469496901108*x1)*x2 - 0.2801664995932355*x3
+    return J
+
+
+def frame_accelerations(q, qd, qdd, p=None):
+    """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    qdd = np.asarray(qdd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
+    a = np.empty(batch + (1, 6))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    qdd_0 = qdd[..., 0]
+    qdd_1 = qdd[..., 1]
+    qdd_2 = qdd[..., 2]
+    a[..., 0, 0] = 0
+    a[..., 0, 1] = 0
+    a[..., 0, 2] = 0
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = 0.3420201433256687*x1 - 0.5389855446957562*x0
+    x3 = 0.5389855446957562*x1 + 0.3420201433256687*x0
+    x4 = 0.8191520442889918*x0
+    x5 = 0.8191520442889918*x1
+    x6 = 0.19617469496901108*x0 + 0.9396926207859084*x1
+    x7 = 0.9396926207859084*x0 - 0.19617469496901108*x1
+    x8 = np.cos(q_1)
+    x9 = np.sin(q_1)
+    x10 = np.cos(q_2)
+    x11 = np.sin(q_2)
+    x12 = qd_0*x8
+    x13 = qdd_0*x8 - qd_1*qd_0*x9
+    x14 = qd_2*(qd_1*x10 - x11*x12) + x10*x13 + qdd_1*x11
+    x15 = qdd_1*x10 - x11*x13 - qd_2*(x10*x12 + qd_1*x11)
+    x16 = qdd_2 + qd_1*x12 + qdd_0*x9
+    x17 = 0.7697511313200572*x8 - x3*x9
+    x18 = 0.573576436351046*x8 + x5*x9
+    x19 = 0.2801664995932355*x8 + x7*x9
+    a[..., 0, 3] = x14*(x10*x17 + x2*x11) + x15*(x2*x10 - x11*x17) + x16*(0.7697511313200572*x9 + x3*x8)
+    a[..., 0, 4] = x14*(x10*x18 + x4*x11) + x15*(x4*x10 - x11*x18) + x16*(0.573576436351046*x9 - x5*x8)
+    a[..., 0, 5] = x14*(x6*x11 - x10*x19) + x15*(x11*x19 + x6*x10) + x16*(x7*x8 - 0.2801664995932355*x9)
+    return a
+
+
+def center_of_mass(q, p=None):
+    """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    c = np.empty(batch + (3,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    c[..., 0] = 0.0010909090909090907*(0.7697511313200572*x3 + (0.5389855446957562*x1 + 0.3420201433256687*x0)*x2)
+    c[..., 1] = 0.0010909090909090907*(0.573576436351046*x3 - 0.8191520442889918*x1*x2)
+    c[..., 2] = 0.0010909090909090907*((0.9396926207859084*x0 - 0.19617469496901108*x1)*x2 - 0.2801664995932355*x3)
+    return c
+
+
+def com_jacobian(q, p=None):
+    """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    Jc = np.empty(batch + (3, 3))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    Jc[..., 0, 2] = 0
+    Jc[..., 1, 2] = 0
+    Jc[..., 2, 2] = 0
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = 0.3420201433256687*x1 - 0.5389855446957562*x0
+    x3 = 0.8191520442889918*x0
+    x4 = 0.19617469496901108*x0 + 0.9396926207859084*x1
+    x5 = np.cos(q_1)
+    x6 = np.sin(q_1)
+    x7 = 0.7697511313200572*x6 + (0.5389855446957562*x1 + 0.3420201433256687*x0)*x5
+    x8 = 0.573576436351046*x6 - 0.8191520442889918*x1*x5
+    x9 = (0.9396926207859084*x0 - 0.19617469496901108*x1)*x5 - 0.2801664995932355*x6
+    x10 = 0.0024*x7
+    x11 = 0.0024*x8
+    x12 = 0.0024*x9
+    Jc[..., 0, 0] = 0.45454545454545453*(0.0013765834472425104*x9 + 0.0006723995990237651*x8)
+    Jc[..., 1, 0] = -0.45454545454545453*(0.0006723995990237651*x7 + 0.0018474027151681371*x9)
+    Jc[..., 2, 0] = 0.45454545454545453*(0.0018474027151681371*x8 - 0.0013765834472425104*x7)
+    Jc[..., 0, 1] = 0.45454545454545453*(x3*x12 - x4*x11)
+    Jc[..., 1, 1] = 0.45454545454545453*(x4*x10 - x2*x12)
+    Jc[..., 2, 1] = 0.45454545454545453*(x2*x11 - x3*x10)
+    return Jc

@@ -9,6 +9,8 @@
  * Coordinates (q order):
  *   q[0]  theta14  (rotation, joint outer_axis)
  *   q[1]  theta25  (rotation, joint inner_axis)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  rotor  (on body rotor)
  * Parameters (p order, defaults in GYROSCOPE_SPINNING_ROTOR_P_DEFAULTS):
  *   p[0]  Omega = 300.0
  */
@@ -35,6 +37,11 @@ extern "C" {
 #define GYROSCOPE_SPINNING_ROTOR_INERTIA_INVERSE_SIZE 4  /* inertia_inverse: Ainv, 2 x 2 doubles */
 #define GYROSCOPE_SPINNING_ROTOR_TRANSVECTIVE_FACTORS_TARGS_SIZE 1  /* transvective_factors: targs, 1 doubles */
 #define GYROSCOPE_SPINNING_ROTOR_TRANSVECTIVE_FACTORS_DIAG_SIZE 2  /* transvective_factors: diag, 2 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_FRAME_POSES_SIZE 12  /* frame_poses: X, 1 x 12 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_FRAME_JACOBIANS_SIZE 12  /* frame_jacobians: J, 1 x 6 x 2 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_FRAME_ACCELERATIONS_SIZE 6  /* frame_accelerations: a, 1 x 6 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define GYROSCOPE_SPINNING_ROTOR_COM_JACOBIAN_SIZE 6  /* com_jacobian: Jc, 3 x 2 doubles */
 #define GYROSCOPE_SPINNING_ROTOR_P_DEFAULTS { 300.0 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
@@ -61,6 +68,16 @@ void gyroscope_spinning_rotor_forward_dynamics(const double *q, const double *qd
 void gyroscope_spinning_rotor_inertia_inverse(const double *q, const double *t, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
 void gyroscope_spinning_rotor_transvective_factors(const double *q, const double *t, const double *p, double *targs, double *diag);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void gyroscope_spinning_rotor_frame_poses(const double *q, const double *t, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void gyroscope_spinning_rotor_frame_jacobians(const double *q, const double *t, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void gyroscope_spinning_rotor_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void gyroscope_spinning_rotor_center_of_mass(const double *q, const double *t, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void gyroscope_spinning_rotor_com_jacobian(const double *q, const double *t, const double *p, double *Jc);
 
 #ifdef __cplusplus
 }

@@ -12,6 +12,7 @@ NAME = 'gyroscope_spinning_rotor'
 NQ = 2
 COORDINATES = ('theta14', 'theta25', )
 JOINTS = ('outer_axis', 'inner_axis', )
+FRAMES = ('rotor', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('Omega', )
 PARAMETERS = np.array([300.0, ], dtype=float)
 
@@ -431,3 +432,167 @@ def transvective_factors(q, t, p=None):
     diag[..., 1] = 0.002 + x4
     diag[..., 0] = 0.004 + x5 + x3*x3*(0.0035 - x5)
     return targs[..., 0][()], diag
+
+
+def frame_poses(q, t, p=None):
+    """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    X = np.empty(batch + (1, 12))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    t_0 = t[..., 0]
+    p_0 = p[..., 0]
+    X[..., 0, 0] = 0
+    X[..., 0, 1] = 0
+    X[..., 0, 2] = 0
+    x0 = p_0*t_0
+    x1 = np.cos(x0)
+    x2 = np.sin(x0)
+    x3 = np.cos(q_0)
+    x4 = np.sin(q_0)
+    x5 = 0.3420201433256687*x4 - 0.5389855446957562*x3
+    x6 = 0.5389855446957562*x4 + 0.3420201433256687*x3
+    x7 = 0.8191520442889918*x3
+    x8 = 0.8191520442889918*x4
+    x9 = 0.19617469496901108*x3 + 0.9396926207859084*x4
+    x10 = 0.9396926207859084*x3 - 0.19617469496901108*x4
+    x11 = np.cos(q_1)
+    x12 = np.sin(q_1)
+    x13 = 0.7697511313200572*x11 - x6*x12
+    X[..., 0, 5] = 0.7697511313200572*x12 + x6*x11
+    x14 = 0.573576436351046*x11 + x8*x12
+    X[..., 0, 8] = 0.573576436351046*x12 - x8*x11
+    x15 = 0.2801664995932355*x11 + x10*x12
+    X[..., 0, 11] = x10*x11 - 0.2801664995932355*x12
+    X[..., 0, 3] = x1*x13 + x2*x5
+    X[..., 0, 4] = x1*x5 - x2*x13
+    X[..., 0, 6] = x1*x14 + x2*x7
+    X[..., 0, 7] = x1*x7 - x2*x14
+    X[..., 0, 9] = x2*x9 - x1*x15
+    X[..., 0, 10] = x2*x15 + x1*x9
+    return X
+
+
+def frame_jacobians(q, t, p=None):
+    """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    J = np.empty(batch + (1, 6, 2))
+    q_0 = q[..., 0]
+    J[..., 0, 0, 0] = 0
+    J[..., 0, 0, 1] = 0
+    J[..., 0, 1, 0] = 0
+    J[..., 0, 1, 1] = 0
+    J[..., 0, 2, 0] = 0
+    J[..., 0, 2, 1] = 0
+    J[..., 0, 3, 0] = 0.7697511313200572
+    J[..., 0, 4, 0] = 0.573576436351046
+    J[..., 0, 5, 0] = -0.2801664995932355
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    J[..., 0, 3, 1] = 0.3420201433256687*x1 - 0.5389855446957562*x0
+    J[..., 0, 4, 1] = 0.8191520442889918*x0
+    J[..., 0, 5, 1] = 0.19617469496901108*x0 + 0.9396926207859084*x1
+    return J
+
+
+def frame_accelerations(q, qd, qdd, t, p=None):
+    """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    qdd = np.asarray(qdd, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], t.shape[:-1], )
+    a = np.empty(batch + (1, 6))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qdd_0 = qdd[..., 0]
+    qdd_1 = qdd[..., 1]
+    t_0 = t[..., 0]
+    p_0 = p[..., 0]
+    a[..., 0, 0] = 0
+    a[..., 0, 1] = 0
+    a[..., 0, 2] = 0
+    x0 = p_0*t_0
+    x1 = np.cos(x0)
+    x2 = np.sin(x0)
+    x3 = np.cos(q_0)
+    x4 = np.sin(q_0)
+    x5 = 0.3420201433256687*x4 - 0.5389855446957562*x3
+    x6 = 0.5389855446957562*x4 + 0.3420201433256687*x3
+    x7 = 0.8191520442889918*x3
+    x8 = 0.8191520442889918*x4
+    x9 = 0.19617469496901108*x3 + 0.9396926207859084*x4
+    x10 = 0.9396926207859084*x3 - 0.19617469496901108*x4
+    x11 = np.cos(q_1)
+    x12 = np.sin(q_1)
+    x13 = qd_0*x11
+    x14 = qdd_0*x11 - qd_1*qd_0*x12
+    x15 = qd_1*x13 + qdd_0*x12
+    x16 = p_0*(x1*qd_1 - x2*x13) + x1*x14 + x2*qdd_1
+    x17 = x1*qdd_1 - x2*x14 - p_0*(x1*x13 + x2*qd_1)
+    x18 = 0.7697511313200572*x11 - x6*x12
+    x19 = 0.573576436351046*x11 + x8*x12
+    x20 = 0.2801664995932355*x11 + x10*x12
+    a[..., 0, 3] = x16*(x1*x18 + x2*x5) + x17*(x1*x5 - x2*x18) + x15*(0.7697511313200572*x12 + x6*x11)
+    a[..., 0, 4] = x16*(x1*x19 + x2*x7) + x17*(x1*x7 - x2*x19) + x15*(0.573576436351046*x12 - x8*x11)
+    a[..., 0, 5] = x16*(x2*x9 - x1*x20) + x17*(x2*x20 + x1*x9) + x15*(x10*x11 - 0.2801664995932355*x12)
+    return a
+
+
+def center_of_mass(q, t, p=None):
+    """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    c = np.empty(batch + (3,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    c[..., 0] = 0.0010909090909090907*(0.7697511313200572*x3 + (0.5389855446957562*x1 + 0.3420201433256687*x0)*x2)
+    c[..., 1] = 0.0010909090909090907*(0.573576436351046*x3 - 0.8191520442889918*x1*x2)
+    c[..., 2] = 0.0010909090909090907*((0.9396926207859084*x0 - 0.19617469496901108*x1)*x2 - 0.2801664995932355*x3)
+    return c
+
+
+def com_jacobian(q, t, p=None):
+    """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
+    q = np.asarray(q, dtype=float)
+    t = np.asarray(t, dtype=float)[..., None]
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
+    Jc = np.empty(batch + (3, 2))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = 0.3420201433256687*x1 - 0.5389855446957562*x0
+    x3 = 0.8191520442889918*x0
+    x4 = 0.19617469496901108*x0 + 0.9396926207859084*x1
+    x5 = np.cos(q_1)
+    x6 = np.sin(q_1)
+    x7 = 0.7697511313200572*x6 + (0.5389855446957562*x1 + 0.3420201433256687*x0)*x5
+    x8 = 0.573576436351046*x6 - 0.8191520442889918*x1*x5
+    x9 = (0.9396926207859084*x0 - 0.19617469496901108*x1)*x5 - 0.2801664995932355*x6
+    x10 = 0.0024*x7
+    x11 = 0.0024*x8
+    x12 = 0.0024*x9
+    Jc[..., 0, 0] = 0.45454545454545453*(0.0013765834472425104*x9 + 0.0006723995990237651*x8)
+    Jc[..., 1, 0] = -0.45454545454545453*(0.0006723995990237651*x7 + 0.0018474027151681371*x9)
+    Jc[..., 2, 0] = 0.45454545454545453*(0.0018474027151681371*x8 - 0.0013765834472425104*x7)
+    Jc[..., 0, 1] = 0.45454545454545453*(x3*x12 - x4*x11)
+    Jc[..., 1, 1] = 0.45454545454545453*(x4*x10 - x2*x12)
+    Jc[..., 2, 1] = 0.45454545454545453*(x2*x11 - x3*x10)
+    return Jc

@@ -12,6 +12,9 @@
  *   q[3]  theta44  (rotation, joint joint4)
  *   q[4]  theta55  (rotation, joint joint5)
  *   q[5]  theta66  (rotation, joint joint6)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  link6  (on body link6)
+ *   frame 1  tool  (on body link6)
  */
 #ifndef MANIPULATOR6_H
 #define MANIPULATOR6_H
@@ -36,6 +39,11 @@ extern "C" {
 #define MANIPULATOR6_INERTIA_INVERSE_SIZE 36  /* inertia_inverse: Ainv, 6 x 6 doubles */
 #define MANIPULATOR6_TRANSVECTIVE_FACTORS_TARGS_SIZE 15  /* transvective_factors: targs, 15 doubles */
 #define MANIPULATOR6_TRANSVECTIVE_FACTORS_DIAG_SIZE 6  /* transvective_factors: diag, 6 doubles */
+#define MANIPULATOR6_FRAME_POSES_SIZE 24  /* frame_poses: X, 2 x 12 doubles */
+#define MANIPULATOR6_FRAME_JACOBIANS_SIZE 72  /* frame_jacobians: J, 2 x 6 x 6 doubles */
+#define MANIPULATOR6_FRAME_ACCELERATIONS_SIZE 12  /* frame_accelerations: a, 2 x 6 doubles */
+#define MANIPULATOR6_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define MANIPULATOR6_COM_JACOBIAN_SIZE 18  /* com_jacobian: Jc, 3 x 6 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void manipulator6_inertia(const double *q, const double *p, double *A);
@@ -63,6 +71,16 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
 void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
 void manipulator6_transvective_factors(const double *q, const double *p, double *targs, double *diag);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void manipulator6_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void manipulator6_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void manipulator6_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void manipulator6_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void manipulator6_com_jacobian(const double *q, const double *p, double *Jc);
 
 #ifdef __cplusplus
 }

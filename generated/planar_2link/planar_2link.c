@@ -414,3 +414,145 @@ void planar_2link_transvective_factors(const double *q, const double *p, double 
     diag[0] = p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x5 + x3*x3*(p_1 - x5));
     targs[0] = 1 + p_2*x2*x4;
 }
+
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)
+ * operations: 6 mul, 2 add, 0 div, 2 call */
+void planar_2link_frame_poses(const double *q, const double *p, double *X)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
+    const double p_2 = p[2];
+    X[2] = 0;
+    X[5] = 0;
+    X[8] = 0;
+    X[9] = 0;
+    X[10] = 0;
+    X[11] = 1;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    const double x4 = x0*x2 - x1*x3;
+    X[3] = x4;
+    X[7] = x4;
+    const double x5 = x0*x3 + x1*x2;
+    X[6] = x5;
+    X[4] = -x5;
+    X[0] = p_2*x0;
+    X[1] = p_2*x1;
+}
+
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin
+ * operations: 2 mul, 0 add, 0 div, 1 call */
+void planar_2link_frame_jacobians(const double *q, const double *p, double *J)
+{
+    const double q_0 = q[0];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
+    const double p_2 = p[2];
+    J[1] = 0;
+    J[3] = 0;
+    J[4] = 0;
+    J[5] = 0;
+    J[6] = 0;
+    J[7] = 0;
+    J[8] = 0;
+    J[9] = 0;
+    J[10] = 1;
+    J[11] = 1;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    J[2] = p_2*x0;
+    J[0] = -p_2*x1;
+}
+
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
+ * operations: 18 mul, 10 add, 0 div, 2 call */
+void planar_2link_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
+    const double p_2 = p[2];
+    a[2] = 0;
+    a[3] = 0;
+    a[4] = 0;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    const double x4 = qd_0 + qd_1;
+    const double x5 = p_2*qd_0;
+    const double x6 = x3*x5;
+    const double x7 = x2*x5;
+    const double x8 = p_2*qdd_0;
+    a[5] = qdd_0 + qdd_1;
+    const double x9 = x0*x2 - x1*x3;
+    const double x10 = x0*x3 + x1*x2;
+    const double x11 = x3*x8 + qd_1*x7 - x4*x7;
+    const double x12 = x2*x8 - qd_1*x6 + x4*x6;
+    a[0] = x9*x11 - x10*x12;
+    a[1] = x10*x11 + x9*x12;
+}
+
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)
+ * operations: 18 mul, 7 add, 1 div, 2 call */
+void planar_2link_center_of_mass(const double *q, const double *p, double *c)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    c[2] = 0;
+    const double x0 = p_0*0.5*p_2;
+    const double x1 = p_1*0.5*p_3;
+    double x3, x2;
+    aggsym_sincos(q_0, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_1, &x5, &x4);
+    const double x6 = 1/(p_0 + p_1);
+    c[0] = (x0*x2 + x1*(x2*x4 - x3*x5) + p_1*p_2*x2)*x6;
+    c[1] = (x0*x3 + x1*(x2*x5 + x3*x4) + p_1*p_2*x3)*x6;
+}
+
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
+ * operations: 20 mul, 9 add, 1 div, 2 call */
+void planar_2link_com_jacobian(const double *q, const double *p, double *Jc)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    static const double p_defaults[5] = {1.0, 0.7, 0.6, 0.4, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    Jc[4] = 0;
+    Jc[5] = 0;
+    const double x0 = p_0*0.5*p_2;
+    const double x1 = p_1*0.5*p_3;
+    double x3, x2;
+    aggsym_sincos(q_0, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_1, &x5, &x4);
+    const double x6 = p_1*p_2*x2;
+    const double x7 = p_1*p_2*x3;
+    const double x8 = x1*(x2*x4 - x3*x5) + x6;
+    const double x9 = x1*(x2*x5 + x3*x4) + x7;
+    const double x10 = 1/(p_0 + p_1);
+    Jc[2] = (x0*x2 + x8)*x10;
+    Jc[0] = -(x0*x3 + x9)*x10;
+    Jc[1] = x10*(x7 - x9);
+    Jc[3] = x10*(x8 - x6);
+}

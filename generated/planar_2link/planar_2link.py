@@ -10,6 +10,7 @@ NAME = 'planar_2link'
 NQ = 2
 COORDINATES = ('theta1', 'theta2', )
 JOINTS = ('joint1', 'joint2', )
+FRAMES = ('link2', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m1', 'm2', 'l1', 'l2', 'g', )
 PARAMETERS = np.array([1.0, 0.7, 0.6, 0.4, 9.81, ], dtype=float)
 
@@ -412,3 +413,152 @@ def transvective_factors(q, p=None):
     diag[..., 0] = p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x5 + x3*x3*(p_1 - x5))
     targs[..., 0] = 1 + p_2*x2*x4
     return targs[..., 0][()], diag
+
+
+def frame_poses(q, p=None):
+    """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    X = np.empty(batch + (1, 12))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    p_2 = p[..., 2]
+    X[..., 0, 2] = 0
+    X[..., 0, 5] = 0
+    X[..., 0, 8] = 0
+    X[..., 0, 9] = 0
+    X[..., 0, 10] = 0
+    X[..., 0, 11] = 1
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = x0*x2 - x1*x3
+    X[..., 0, 3] = x4
+    X[..., 0, 7] = x4
+    x5 = x0*x3 + x1*x2
+    X[..., 0, 6] = x5
+    X[..., 0, 4] = -x5
+    X[..., 0, 0] = p_2*x0
+    X[..., 0, 1] = p_2*x1
+    return X
+
+
+def frame_jacobians(q, p=None):
+    """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    J = np.empty(batch + (1, 6, 2))
+    q_0 = q[..., 0]
+    p_2 = p[..., 2]
+    J[..., 0, 0, 1] = 0
+    J[..., 0, 1, 1] = 0
+    J[..., 0, 2, 0] = 0
+    J[..., 0, 2, 1] = 0
+    J[..., 0, 3, 0] = 0
+    J[..., 0, 3, 1] = 0
+    J[..., 0, 4, 0] = 0
+    J[..., 0, 4, 1] = 0
+    J[..., 0, 5, 0] = 1
+    J[..., 0, 5, 1] = 1
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    J[..., 0, 1, 0] = p_2*x0
+    J[..., 0, 0, 0] = -p_2*x1
+    return J
+
+
+def frame_accelerations(q, qd, qdd, p=None):
+    """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    qdd = np.asarray(qdd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
+    a = np.empty(batch + (1, 6))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qdd_0 = qdd[..., 0]
+    qdd_1 = qdd[..., 1]
+    p_2 = p[..., 2]
+    a[..., 0, 2] = 0
+    a[..., 0, 3] = 0
+    a[..., 0, 4] = 0
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = qd_0 + qd_1
+    x5 = p_2*qd_0
+    x6 = x3*x5
+    x7 = x2*x5
+    x8 = p_2*qdd_0
+    a[..., 0, 5] = qdd_0 + qdd_1
+    x9 = x0*x2 - x1*x3
+    x10 = x0*x3 + x1*x2
+    x11 = x3*x8 + qd_1*x7 - x4*x7
+    x12 = x2*x8 - qd_1*x6 + x4*x6
+    a[..., 0, 0] = x9*x11 - x10*x12
+    a[..., 0, 1] = x10*x11 + x9*x12
+    return a
+
+
+def center_of_mass(q, p=None):
+    """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    c = np.empty(batch + (3,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    c[..., 2] = 0
+    x0 = p_0*0.5*p_2
+    x1 = p_1*0.5*p_3
+    x2 = np.cos(q_0)
+    x3 = np.sin(q_0)
+    x4 = np.cos(q_1)
+    x5 = np.sin(q_1)
+    x6 = 1/(p_0 + p_1)
+    c[..., 0] = (x0*x2 + x1*(x2*x4 - x3*x5) + p_1*p_2*x2)*x6
+    c[..., 1] = (x0*x3 + x1*(x2*x5 + x3*x4) + p_1*p_2*x3)*x6
+    return c
+
+
+def com_jacobian(q, p=None):
+    """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    Jc = np.empty(batch + (3, 2))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    Jc[..., 2, 0] = 0
+    Jc[..., 2, 1] = 0
+    x0 = p_0*0.5*p_2
+    x1 = p_1*0.5*p_3
+    x2 = np.cos(q_0)
+    x3 = np.sin(q_0)
+    x4 = np.cos(q_1)
+    x5 = np.sin(q_1)
+    x6 = p_1*p_2*x2
+    x7 = p_1*p_2*x3
+    x8 = x1*(x2*x4 - x3*x5) + x6
+    x9 = x1*(x2*x5 + x3*x4) + x7
+    x10 = 1/(p_0 + p_1)
+    Jc[..., 1, 0] = (x0*x2 + x8)*x10
+    Jc[..., 0, 0] = -(x0*x3 + x9)*x10
+    Jc[..., 0, 1] = x10*(x7 - x9)
+    Jc[..., 1, 1] = x10*(x8 - x6)
+    return Jc

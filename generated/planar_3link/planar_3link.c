@@ -687,3 +687,206 @@ void planar_3link_transvective_factors(const double *q, const double *p, double 
     targs[1] = x22 + p_3*(x2*x21 - x3*x5*x6);
     targs[0] = 1 + p_3*(x3*x17 + x2*x18);
 }
+
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)
+ * operations: 12 mul, 6 add, 0 div, 3 call */
+void planar_3link_frame_poses(const double *q, const double *p, double *X)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    X[2] = 0;
+    X[5] = 0;
+    X[8] = 0;
+    X[9] = 0;
+    X[10] = 0;
+    X[11] = 1;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = x0*x2 - x1*x3;
+    const double x7 = x0*x3 + x1*x2;
+    const double x8 = x4*x6 - x5*x7;
+    X[3] = x8;
+    X[7] = x8;
+    const double x9 = x5*x6 + x4*x7;
+    X[6] = x9;
+    X[4] = -x9;
+    X[0] = p_3*x0 + p_4*x6;
+    X[1] = p_3*x1 + p_4*x7;
+}
+
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin
+ * operations: 8 mul, 6 add, 0 div, 2 call */
+void planar_3link_frame_jacobians(const double *q, const double *p, double *J)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    J[2] = 0;
+    J[5] = 0;
+    J[6] = 0;
+    J[7] = 0;
+    J[8] = 0;
+    J[9] = 0;
+    J[10] = 0;
+    J[11] = 0;
+    J[12] = 0;
+    J[13] = 0;
+    J[14] = 0;
+    J[15] = 1;
+    J[16] = 1;
+    J[17] = 1;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    const double x4 = p_3*x0;
+    const double x5 = p_3*x1;
+    const double x6 = x4 + p_4*(x0*x2 - x1*x3);
+    J[3] = x6;
+    const double x7 = x5 + p_4*(x0*x3 + x1*x2);
+    J[0] = -x7;
+    J[4] = x6 - x4;
+    J[1] = x5 - x7;
+}
+
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
+ * operations: 34 mul, 22 add, 0 div, 3 call */
+void planar_3link_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    a[2] = 0;
+    a[3] = 0;
+    a[4] = 0;
+    double x1, x0;
+    aggsym_sincos(q_0, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_1, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = qd_0 + qd_1;
+    const double x7 = qd_2 + x6;
+    const double x8 = p_3*qd_0;
+    const double x9 = x3*x8;
+    const double x10 = x2*x8;
+    const double x11 = x10 + p_4*x6;
+    const double x12 = x4*x9 + x5*x11;
+    const double x13 = x4*x11 - x5*x9;
+    const double x14 = p_3*qdd_0;
+    const double x15 = qdd_0 + qdd_1;
+    a[5] = qdd_2 + x15;
+    const double x16 = x0*x2 - x1*x3;
+    const double x17 = x0*x3 + x1*x2;
+    const double x18 = x4*x16 - x5*x17;
+    const double x19 = x5*x16 + x4*x17;
+    const double x20 = x3*x14 + qd_1*x10;
+    const double x21 = p_4*x15 + x2*x14 - qd_1*x9;
+    const double x22 = x4*x20 + x5*x21 + qd_2*x13 - x7*x13;
+    const double x23 = x4*x21 - x5*x20 - qd_2*x12 + x7*x12;
+    a[0] = x18*x22 - x19*x23;
+    a[1] = x19*x22 + x18*x23;
+}
+
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)
+ * operations: 30 mul, 16 add, 1 div, 3 call */
+void planar_3link_center_of_mass(const double *q, const double *p, double *c)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_5 = p[5];
+    c[2] = 0;
+    const double x0 = p_0*0.5*p_3;
+    const double x1 = p_1*0.5*p_4;
+    const double x2 = p_2*0.5*p_5;
+    double x4, x3;
+    aggsym_sincos(q_0, &x4, &x3);
+    double x6, x5;
+    aggsym_sincos(q_1, &x6, &x5);
+    double x8, x7;
+    aggsym_sincos(q_2, &x8, &x7);
+    const double x9 = x3*x5 - x4*x6;
+    const double x10 = x3*x6 + x4*x5;
+    const double x11 = p_3*x3;
+    const double x12 = p_3*x4;
+    const double x13 = 1/(p_0 + p_1 + p_2);
+    c[0] = (x0*x3 + x1*x9 + p_1*x11 + x2*(x7*x9 - x8*x10) + p_2*(x11 + p_4*x9))*x13;
+    c[1] = (x0*x4 + x1*x10 + p_1*x12 + x2*(x8*x9 + x7*x10) + p_2*(x12 + p_4*x10))*x13;
+}
+
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
+ * operations: 36 mul, 20 add, 1 div, 3 call */
+void planar_3link_com_jacobian(const double *q, const double *p, double *Jc)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    static const double p_defaults[7] = {1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double p_2 = p[2];
+    const double p_3 = p[3];
+    const double p_4 = p[4];
+    const double p_5 = p[5];
+    Jc[6] = 0;
+    Jc[7] = 0;
+    Jc[8] = 0;
+    const double x0 = p_0*0.5*p_3;
+    const double x1 = p_1*0.5*p_4;
+    const double x2 = p_2*0.5*p_5;
+    double x4, x3;
+    aggsym_sincos(q_0, &x4, &x3);
+    double x6, x5;
+    aggsym_sincos(q_1, &x6, &x5);
+    double x8, x7;
+    aggsym_sincos(q_2, &x8, &x7);
+    const double x9 = p_1 + p_2;
+    const double x10 = x3*x5 - x4*x6;
+    const double x11 = x3*x6 + x4*x5;
+    const double x12 = p_3*x3;
+    const double x13 = p_3*x4;
+    const double x14 = p_2*(x12 + p_4*x10);
+    const double x15 = p_2*(x13 + p_4*x11);
+    const double x16 = x2*(x7*x10 - x8*x11) + x14;
+    const double x17 = x2*(x8*x10 + x7*x11) + x15;
+    const double x18 = x1*x10 + p_1*x12 + x16;
+    const double x19 = x1*x11 + p_1*x13 + x17;
+    const double x20 = 1/(p_0 + x9);
+    Jc[3] = (x0*x3 + x18)*x20;
+    Jc[0] = -(x0*x4 + x19)*x20;
+    Jc[1] = x20*(x9*x13 - x19);
+    Jc[4] = x20*(x18 - x9*x12);
+    Jc[2] = x20*(x15 - x17);
+    Jc[5] = x20*(x16 - x14);
+}

@@ -9,6 +9,8 @@
  *   q[0]  theta1  (rotation, joint joint1)
  *   q[1]  theta2  (rotation, joint joint2)
  *   q[2]  theta3  (rotation, joint joint3)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  link3  (on body link3)
  * Parameters (p order, defaults in PLANAR_3LINK_P_DEFAULTS):
  *   p[0]  m1 = 1.0
  *   p[1]  m2 = 0.7
@@ -48,6 +50,11 @@ extern "C" {
 #define PLANAR_3LINK_INERTIA_INVERSE_SIZE 9  /* inertia_inverse: Ainv, 3 x 3 doubles */
 #define PLANAR_3LINK_TRANSVECTIVE_FACTORS_TARGS_SIZE 3  /* transvective_factors: targs, 3 doubles */
 #define PLANAR_3LINK_TRANSVECTIVE_FACTORS_DIAG_SIZE 3  /* transvective_factors: diag, 3 doubles */
+#define PLANAR_3LINK_FRAME_POSES_SIZE 12  /* frame_poses: X, 1 x 12 doubles */
+#define PLANAR_3LINK_FRAME_JACOBIANS_SIZE 18  /* frame_jacobians: J, 1 x 6 x 3 doubles */
+#define PLANAR_3LINK_FRAME_ACCELERATIONS_SIZE 6  /* frame_accelerations: a, 1 x 6 doubles */
+#define PLANAR_3LINK_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define PLANAR_3LINK_COM_JACOBIAN_SIZE 9  /* com_jacobian: Jc, 3 x 3 doubles */
 #define PLANAR_3LINK_P_DEFAULTS { 1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
@@ -76,6 +83,16 @@ void planar_3link_forward_dynamics(const double *q, const double *qd, const doub
 void planar_3link_inertia_inverse(const double *q, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
 void planar_3link_transvective_factors(const double *q, const double *p, double *targs, double *diag);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void planar_3link_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void planar_3link_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void planar_3link_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void planar_3link_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void planar_3link_com_jacobian(const double *q, const double *p, double *Jc);
 
 #ifdef __cplusplus
 }

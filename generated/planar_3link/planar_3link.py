@@ -10,6 +10,7 @@ NAME = 'planar_3link'
 NQ = 3
 COORDINATES = ('theta1', 'theta2', 'theta3', )
 JOINTS = ('joint1', 'joint2', 'joint3', )
+FRAMES = ('link3', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m1', 'm2', 'm3', 'l1', 'l2', 'l3', 'g', )
 PARAMETERS = np.array([1.0, 0.7, 0.4, 0.6, 0.4, 0.3, 9.81, ], dtype=float)
 
@@ -686,3 +687,213 @@ def transvective_factors(q, p=None):
     targs[..., 1] = x22 + p_3*(x2*x21 - x3*x5*x6)
     targs[..., 0] = 1 + p_3*(x3*x17 + x2*x18)
     return targs, diag
+
+
+def frame_poses(q, p=None):
+    """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    X = np.empty(batch + (1, 12))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    X[..., 0, 2] = 0
+    X[..., 0, 5] = 0
+    X[..., 0, 8] = 0
+    X[..., 0, 9] = 0
+    X[..., 0, 10] = 0
+    X[..., 0, 11] = 1
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = np.cos(q_2)
+    x5 = np.sin(q_2)
+    x6 = x0*x2 - x1*x3
+    x7 = x0*x3 + x1*x2
+    x8 = x4*x6 - x5*x7
+    X[..., 0, 3] = x8
+    X[..., 0, 7] = x8
+    x9 = x5*x6 + x4*x7
+    X[..., 0, 6] = x9
+    X[..., 0, 4] = -x9
+    X[..., 0, 0] = p_3*x0 + p_4*x6
+    X[..., 0, 1] = p_3*x1 + p_4*x7
+    return X
+
+
+def frame_jacobians(q, p=None):
+    """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    J = np.empty(batch + (1, 6, 3))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    J[..., 0, 0, 2] = 0
+    J[..., 0, 1, 2] = 0
+    J[..., 0, 2, 0] = 0
+    J[..., 0, 2, 1] = 0
+    J[..., 0, 2, 2] = 0
+    J[..., 0, 3, 0] = 0
+    J[..., 0, 3, 1] = 0
+    J[..., 0, 3, 2] = 0
+    J[..., 0, 4, 0] = 0
+    J[..., 0, 4, 1] = 0
+    J[..., 0, 4, 2] = 0
+    J[..., 0, 5, 0] = 1
+    J[..., 0, 5, 1] = 1
+    J[..., 0, 5, 2] = 1
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = p_3*x0
+    x5 = p_3*x1
+    x6 = x4 + p_4*(x0*x2 - x1*x3)
+    J[..., 0, 1, 0] = x6
+    x7 = x5 + p_4*(x0*x3 + x1*x2)
+    J[..., 0, 0, 0] = -x7
+    J[..., 0, 1, 1] = x6 - x4
+    J[..., 0, 0, 1] = x5 - x7
+    return J
+
+
+def frame_accelerations(q, qd, qdd, p=None):
+    """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    qdd = np.asarray(qdd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
+    a = np.empty(batch + (1, 6))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    qdd_0 = qdd[..., 0]
+    qdd_1 = qdd[..., 1]
+    qdd_2 = qdd[..., 2]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    a[..., 0, 2] = 0
+    a[..., 0, 3] = 0
+    a[..., 0, 4] = 0
+    x0 = np.cos(q_0)
+    x1 = np.sin(q_0)
+    x2 = np.cos(q_1)
+    x3 = np.sin(q_1)
+    x4 = np.cos(q_2)
+    x5 = np.sin(q_2)
+    x6 = qd_0 + qd_1
+    x7 = qd_2 + x6
+    x8 = p_3*qd_0
+    x9 = x3*x8
+    x10 = x2*x8
+    x11 = x10 + p_4*x6
+    x12 = x4*x9 + x5*x11
+    x13 = x4*x11 - x5*x9
+    x14 = p_3*qdd_0
+    x15 = qdd_0 + qdd_1
+    a[..., 0, 5] = qdd_2 + x15
+    x16 = x0*x2 - x1*x3
+    x17 = x0*x3 + x1*x2
+    x18 = x4*x16 - x5*x17
+    x19 = x5*x16 + x4*x17
+    x20 = x3*x14 + qd_1*x10
+    x21 = p_4*x15 + x2*x14 - qd_1*x9
+    x22 = x4*x20 + x5*x21 + qd_2*x13 - x7*x13
+    x23 = x4*x21 - x5*x20 - qd_2*x12 + x7*x12
+    a[..., 0, 0] = x18*x22 - x19*x23
+    a[..., 0, 1] = x19*x22 + x18*x23
+    return a
+
+
+def center_of_mass(q, p=None):
+    """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    c = np.empty(batch + (3,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    p_5 = p[..., 5]
+    c[..., 2] = 0
+    x0 = p_0*0.5*p_3
+    x1 = p_1*0.5*p_4
+    x2 = p_2*0.5*p_5
+    x3 = np.cos(q_0)
+    x4 = np.sin(q_0)
+    x5 = np.cos(q_1)
+    x6 = np.sin(q_1)
+    x7 = np.cos(q_2)
+    x8 = np.sin(q_2)
+    x9 = x3*x5 - x4*x6
+    x10 = x3*x6 + x4*x5
+    x11 = p_3*x3
+    x12 = p_3*x4
+    x13 = 1/(p_0 + p_1 + p_2)
+    c[..., 0] = (x0*x3 + x1*x9 + p_1*x11 + x2*(x7*x9 - x8*x10) + p_2*(x11 + p_4*x9))*x13
+    c[..., 1] = (x0*x4 + x1*x10 + p_1*x12 + x2*(x8*x9 + x7*x10) + p_2*(x12 + p_4*x10))*x13
+    return c
+
+
+def com_jacobian(q, p=None):
+    """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    Jc = np.empty(batch + (3, 3))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    p_2 = p[..., 2]
+    p_3 = p[..., 3]
+    p_4 = p[..., 4]
+    p_5 = p[..., 5]
+    Jc[..., 2, 0] = 0
+    Jc[..., 2, 1] = 0
+    Jc[..., 2, 2] = 0
+    x0 = p_0*0.5*p_3
+    x1 = p_1*0.5*p_4
+    x2 = p_2*0.5*p_5
+    x3 = np.cos(q_0)
+    x4 = np.sin(q_0)
+    x5 = np.cos(q_1)
+    x6 = np.sin(q_1)
+    x7 = np.cos(q_2)
+    x8 = np.sin(q_2)
+    x9 = p_1 + p_2
+    x10 = x3*x5 - x4*x6
+    x11 = x3*x6 + x4*x5
+    x12 = p_3*x3
+    x13 = p_3*x4
+    x14 = p_2*(x12 + p_4*x10)
+    x15 = p_2*(x13 + p_4*x11)
+    x16 = x2*(x7*x10 - x8*x11) + x14
+    x17 = x2*(x8*x10 + x7*x11) + x15
+    x18 = x1*x10 + p_1*x12 + x16
+    x19 = x1*x11 + p_1*x13 + x17
+    x20 = 1/(p_0 + x9)
+    Jc[..., 1, 0] = (x0*x3 + x18)*x20
+    Jc[..., 0, 0] = -(x0*x4 + x19)*x20
+    Jc[..., 0, 1] = x20*(x9*x13 - x19)
+    Jc[..., 1, 1] = x20*(x18 - x9*x12)
+    Jc[..., 0, 2] = x20*(x15 - x17)
+    Jc[..., 1, 2] = x20*(x16 - x14)
+    return Jc

@@ -1117,3 +1117,215 @@ int rolling_disc_constrained_forward_dynamics(const double *q, const double *qd,
     qdd[5] = x42*(x50 - x74*x121 + x75*x120 - x76*x119) - x7*x126;
     return status[0] != 0.0;
 }
+
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)
+ * operations: 14 mul, 5 add, 0 div, 3 call */
+void rolling_disc_frame_poses(const double *q, const double *p, double *X)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double q_3 = q[3];
+    const double q_4 = q[4];
+    const double q_5 = q[5];
+    static const double p_defaults[3] = {0.5, 0.1, 9.81};
+    if (!p) p = p_defaults;
+    const double p_1 = p[1];
+    X[0] = q_0;
+    X[1] = q_1;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    X[2] = p_1 + q_2;
+    double x3, x2;
+    aggsym_sincos(q_4, &x3, &x2);
+    X[10] = x3;
+    double x5, x4;
+    aggsym_sincos(q_5, &x5, &x4);
+    X[4] = -x1*x2;
+    const double x6 = x1*x3;
+    X[3] = x0*x4 - x5*x6;
+    X[5] = x0*x5 + x4*x6;
+    X[7] = x0*x2;
+    const double x7 = x0*x3;
+    X[6] = x1*x4 + x5*x7;
+    X[8] = x1*x5 - x4*x7;
+    X[9] = -x2*x5;
+    X[11] = x2*x4;
+}
+
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin
+ * operations: 4 mul, 1 add, 0 div, 2 call */
+void rolling_disc_frame_jacobians(const double *q, const double *p, double *J)
+{
+    const double q_3 = q[3];
+    const double q_4 = q[4];
+    (void)p;
+    J[1] = 0;
+    J[2] = 0;
+    J[3] = 0;
+    J[4] = 0;
+    J[5] = 0;
+    J[6] = 0;
+    J[8] = 0;
+    J[9] = 0;
+    J[10] = 0;
+    J[11] = 0;
+    J[12] = 0;
+    J[13] = 0;
+    J[14] = 1;
+    J[15] = 0;
+    J[16] = 0;
+    J[17] = 0;
+    J[18] = 0;
+    J[19] = 0;
+    J[20] = 0;
+    J[21] = 0;
+    J[24] = 0;
+    J[25] = 0;
+    J[26] = 0;
+    J[27] = 0;
+    J[30] = 0;
+    J[31] = 0;
+    J[32] = 0;
+    J[33] = 1;
+    J[34] = 0;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    J[22] = x0;
+    J[28] = x1;
+    double x3, x2;
+    aggsym_sincos(q_4, &x3, &x2);
+    J[35] = x3;
+    J[23] = -x1*x2;
+    J[29] = x0*x2;
+    const double x4 = x0*x0 + x1*x1;
+    J[0] = x4;
+    J[7] = x4;
+}
+
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
+ * operations: 84 mul, 50 add, 0 div, 3 call */
+void rolling_disc_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a)
+{
+    const double q_3 = q[3];
+    const double q_4 = q[4];
+    const double q_5 = q[5];
+    const double qd_0 = qd[0];
+    const double qd_1 = qd[1];
+    const double qd_2 = qd[2];
+    const double qd_3 = qd[3];
+    const double qd_4 = qd[4];
+    const double qd_5 = qd[5];
+    const double qdd_0 = qdd[0];
+    const double qdd_1 = qdd[1];
+    const double qdd_2 = qdd[2];
+    const double qdd_3 = qdd[3];
+    const double qdd_4 = qdd[4];
+    const double qdd_5 = qdd[5];
+    (void)p;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    double x3, x2;
+    aggsym_sincos(q_4, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_5, &x5, &x4);
+    const double x6 = qd_0*x0 + qd_1*x1;
+    const double x7 = qd_1*x0 - qd_0*x1;
+    const double x8 = qd_3*x3;
+    const double x9 = qd_3*x2;
+    const double x10 = qd_4*x4 - x5*x9;
+    const double x11 = qd_4*x5 + x4*x9;
+    const double x12 = qd_5 + x8;
+    const double x13 = x2*x7 + qd_2*x3;
+    const double x14 = qd_2*x2 - x3*x7;
+    const double x15 = x4*x6 - x5*x14;
+    const double x16 = x5*x6 + x4*x14;
+    const double x17 = x1*x2;
+    const double x18 = x1*x3;
+    const double x19 = x0*x4 - x5*x18;
+    const double x20 = x0*x5 + x4*x18;
+    const double x21 = x0*x2;
+    const double x22 = x0*x3;
+    const double x23 = x1*x4 + x5*x22;
+    const double x24 = x1*x5 - x4*x22;
+    const double x25 = x2*x5;
+    const double x26 = x2*x4;
+    const double x27 = qdd_3*x2 - qd_4*x8;
+    const double x28 = qdd_4*x4 - x5*x27 - qd_5*x11;
+    const double x29 = qd_5*x10 + qdd_4*x5 + x4*x27;
+    const double x30 = qdd_5 + qd_4*x9 + qdd_3*x3;
+    const double x31 = qd_3*x7 + qdd_0*x0 + qdd_1*x1;
+    const double x32 = qdd_1*x0 - qdd_0*x1 - qd_3*x6;
+    const double x33 = qdd_2*x2 - x3*x32 - qd_4*x13;
+    const double x34 = x12*x16 - x11*x13 + x4*x31 - x5*x33 - qd_5*x16;
+    const double x35 = x11*x15 - x10*x16 + qd_4*x14 + x2*x32 + qdd_2*x3;
+    const double x36 = x10*x13 - x12*x15 + qd_5*x15 + x5*x31 + x4*x33;
+    a[0] = x19*x34 - x17*x35 + x20*x36;
+    a[1] = x23*x34 + x21*x35 + x24*x36;
+    a[2] = x3*x35 - x25*x34 + x26*x36;
+    a[3] = x19*x28 - x17*x30 + x20*x29;
+    a[4] = x23*x28 + x21*x30 + x24*x29;
+    a[5] = x3*x30 - x25*x28 + x26*x29;
+}
+
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)
+ * operations: 6 mul, 1 add, 1 div, 0 call */
+void rolling_disc_center_of_mass(const double *q, const double *p, double *c)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    static const double p_defaults[3] = {0.5, 0.1, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    const double x0 = 1/p_0;
+    c[0] = x0*p_0*q_0;
+    c[1] = x0*p_0*q_1;
+    c[2] = x0*p_0*(p_1 + q_2);
+}
+
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
+ * operations: 34 mul, 14 add, 1 div, 2 call */
+void rolling_disc_com_jacobian(const double *q, const double *p, double *Jc)
+{
+    const double q_0 = q[0];
+    const double q_1 = q[1];
+    const double q_2 = q[2];
+    const double q_3 = q[3];
+    const double q_4 = q[4];
+    static const double p_defaults[3] = {0.5, 0.1, 9.81};
+    if (!p) p = p_defaults;
+    const double p_0 = p[0];
+    const double p_1 = p[1];
+    Jc[1] = 0;
+    Jc[2] = 0;
+    Jc[3] = 0;
+    Jc[4] = 0;
+    Jc[6] = 0;
+    Jc[8] = 0;
+    Jc[9] = 0;
+    Jc[10] = 0;
+    Jc[12] = 0;
+    Jc[13] = 0;
+    Jc[15] = 0;
+    double x1, x0;
+    aggsym_sincos(q_3, &x1, &x0);
+    const double x2 = p_1 + q_2;
+    double x4, x3;
+    aggsym_sincos(q_4, &x4, &x3);
+    const double x5 = x1*x3;
+    const double x6 = x0*x3;
+    const double x7 = 1/p_0;
+    Jc[14] = p_0*x7;
+    const double x8 = p_0*q_0;
+    const double x9 = p_0*q_1;
+    const double x10 = p_0*x2;
+    const double x11 = x7*p_0*(x0*x0 + x1*x1);
+    Jc[0] = x11;
+    Jc[7] = x11;
+    Jc[16] = x7*(p_0*(q_0*x1 - q_1*x0) + x0*x9 - x1*x8);
+    Jc[5] = x7*(p_0*(q_1*x4 - x2*x6) + x6*x10 - x4*x9);
+    Jc[11] = x7*(x4*x8 + x5*x10 - p_0*(q_0*x4 + x2*x5));
+    Jc[17] = x7*(p_0*(q_1*x5 + q_0*x6) - x5*x9 - x6*x8);
+}

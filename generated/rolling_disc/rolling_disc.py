@@ -10,6 +10,7 @@ NAME = 'rolling_disc'
 NQ = 6
 COORDINATES = ('x', 'y', 'z', 'yaw', 'lean', 'spin', )
 JOINTS = ('carriage', 'carriage', 'carriage', 'carriage', 'fork', 'disc', )
+FRAMES = ('disc', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m', 'r', 'g', )
 PARAMETERS = np.array([0.5, 0.1, 9.81, ], dtype=float)
 
@@ -1118,3 +1119,224 @@ def constrained_forward_dynamics(q, qd, tau, p=None):
         raise np.linalg.LinAlgError('constrained_forward_dynamics: the constraints are singular (J A^-1 J^T has a pivot below 1e-12 of its mean diagonal, or is not finite), or Coulomb friction has no consistent solution, at '
                                     + ("the state" if not batch else "the states " + ", ".join(str(tuple(int(i) for i in b)) for b in bad[:10]) + (" ..." if len(bad) > 10 else "")))
     return qdd, lambda_
+
+
+def frame_poses(q, p=None):
+    """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    X = np.empty(batch + (1, 12))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    q_3 = q[..., 3]
+    q_4 = q[..., 4]
+    q_5 = q[..., 5]
+    p_1 = p[..., 1]
+    X[..., 0, 0] = q_0
+    X[..., 0, 1] = q_1
+    x0 = np.cos(q_3)
+    x1 = np.sin(q_3)
+    X[..., 0, 2] = p_1 + q_2
+    x2 = np.cos(q_4)
+    x3 = np.sin(q_4)
+    X[..., 0, 10] = x3
+    x4 = np.cos(q_5)
+    x5 = np.sin(q_5)
+    X[..., 0, 4] = -x1*x2
+    x6 = x1*x3
+    X[..., 0, 3] = x0*x4 - x5*x6
+    X[..., 0, 5] = x0*x5 + x4*x6
+    X[..., 0, 7] = x0*x2
+    x7 = x0*x3
+    X[..., 0, 6] = x1*x4 + x5*x7
+    X[..., 0, 8] = x1*x5 - x4*x7
+    X[..., 0, 9] = -x2*x5
+    X[..., 0, 11] = x2*x4
+    return X
+
+
+def frame_jacobians(q, p=None):
+    """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    J = np.empty(batch + (1, 6, 6))
+    q_3 = q[..., 3]
+    q_4 = q[..., 4]
+    J[..., 0, 0, 1] = 0
+    J[..., 0, 0, 2] = 0
+    J[..., 0, 0, 3] = 0
+    J[..., 0, 0, 4] = 0
+    J[..., 0, 0, 5] = 0
+    J[..., 0, 1, 0] = 0
+    J[..., 0, 1, 2] = 0
+    J[..., 0, 1, 3] = 0
+    J[..., 0, 1, 4] = 0
+    J[..., 0, 1, 5] = 0
+    J[..., 0, 2, 0] = 0
+    J[..., 0, 2, 1] = 0
+    J[..., 0, 2, 2] = 1
+    J[..., 0, 2, 3] = 0
+    J[..., 0, 2, 4] = 0
+    J[..., 0, 2, 5] = 0
+    J[..., 0, 3, 0] = 0
+    J[..., 0, 3, 1] = 0
+    J[..., 0, 3, 2] = 0
+    J[..., 0, 3, 3] = 0
+    J[..., 0, 4, 0] = 0
+    J[..., 0, 4, 1] = 0
+    J[..., 0, 4, 2] = 0
+    J[..., 0, 4, 3] = 0
+    J[..., 0, 5, 0] = 0
+    J[..., 0, 5, 1] = 0
+    J[..., 0, 5, 2] = 0
+    J[..., 0, 5, 3] = 1
+    J[..., 0, 5, 4] = 0
+    x0 = np.cos(q_3)
+    J[..., 0, 3, 4] = x0
+    x1 = np.sin(q_3)
+    J[..., 0, 4, 4] = x1
+    x2 = np.cos(q_4)
+    x3 = np.sin(q_4)
+    J[..., 0, 5, 5] = x3
+    J[..., 0, 3, 5] = -x1*x2
+    J[..., 0, 4, 5] = x0*x2
+    x4 = x0*x0 + x1*x1
+    J[..., 0, 0, 0] = x4
+    J[..., 0, 1, 1] = x4
+    return J
+
+
+def frame_accelerations(q, qd, qdd, p=None):
+    """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    qdd = np.asarray(qdd, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
+    a = np.empty(batch + (1, 6))
+    q_3 = q[..., 3]
+    q_4 = q[..., 4]
+    q_5 = q[..., 5]
+    qd_0 = qd[..., 0]
+    qd_1 = qd[..., 1]
+    qd_2 = qd[..., 2]
+    qd_3 = qd[..., 3]
+    qd_4 = qd[..., 4]
+    qd_5 = qd[..., 5]
+    qdd_0 = qdd[..., 0]
+    qdd_1 = qdd[..., 1]
+    qdd_2 = qdd[..., 2]
+    qdd_3 = qdd[..., 3]
+    qdd_4 = qdd[..., 4]
+    qdd_5 = qdd[..., 5]
+    x0 = np.cos(q_3)
+    x1 = np.sin(q_3)
+    x2 = np.cos(q_4)
+    x3 = np.sin(q_4)
+    x4 = np.cos(q_5)
+    x5 = np.sin(q_5)
+    x6 = qd_0*x0 + qd_1*x1
+    x7 = qd_1*x0 - qd_0*x1
+    x8 = qd_3*x3
+    x9 = qd_3*x2
+    x10 = qd_4*x4 - x5*x9
+    x11 = qd_4*x5 + x4*x9
+    x12 = qd_5 + x8
+    x13 = x2*x7 + qd_2*x3
+    x14 = qd_2*x2 - x3*x7
+    x15 = x4*x6 - x5*x14
+    x16 = x5*x6 + x4*x14
+    x17 = x1*x2
+    x18 = x1*x3
+    x19 = x0*x4 - x5*x18
+    x20 = x0*x5 + x4*x18
+    x21 = x0*x2
+    x22 = x0*x3
+    x23 = x1*x4 + x5*x22
+    x24 = x1*x5 - x4*x22
+    x25 = x2*x5
+    x26 = x2*x4
+    x27 = qdd_3*x2 - qd_4*x8
+    x28 = qdd_4*x4 - x5*x27 - qd_5*x11
+    x29 = qd_5*x10 + qdd_4*x5 + x4*x27
+    x30 = qdd_5 + qd_4*x9 + qdd_3*x3
+    x31 = qd_3*x7 + qdd_0*x0 + qdd_1*x1
+    x32 = qdd_1*x0 - qdd_0*x1 - qd_3*x6
+    x33 = qdd_2*x2 - x3*x32 - qd_4*x13
+    x34 = x12*x16 - x11*x13 + x4*x31 - x5*x33 - qd_5*x16
+    x35 = x11*x15 - x10*x16 + qd_4*x14 + x2*x32 + qdd_2*x3
+    x36 = x10*x13 - x12*x15 + qd_5*x15 + x5*x31 + x4*x33
+    a[..., 0, 0] = x19*x34 - x17*x35 + x20*x36
+    a[..., 0, 1] = x23*x34 + x21*x35 + x24*x36
+    a[..., 0, 2] = x3*x35 - x25*x34 + x26*x36
+    a[..., 0, 3] = x19*x28 - x17*x30 + x20*x29
+    a[..., 0, 4] = x23*x28 + x21*x30 + x24*x29
+    a[..., 0, 5] = x3*x30 - x25*x28 + x26*x29
+    return a
+
+
+def center_of_mass(q, p=None):
+    """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    c = np.empty(batch + (3,))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    x0 = 1/p_0
+    c[..., 0] = x0*p_0*q_0
+    c[..., 1] = x0*p_0*q_1
+    c[..., 2] = x0*p_0*(p_1 + q_2)
+    return c
+
+
+def com_jacobian(q, p=None):
+    """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
+    q = np.asarray(q, dtype=float)
+    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    batch = np.broadcast_shapes(q.shape[:-1], )
+    Jc = np.empty(batch + (3, 6))
+    q_0 = q[..., 0]
+    q_1 = q[..., 1]
+    q_2 = q[..., 2]
+    q_3 = q[..., 3]
+    q_4 = q[..., 4]
+    p_0 = p[..., 0]
+    p_1 = p[..., 1]
+    Jc[..., 0, 1] = 0
+    Jc[..., 0, 2] = 0
+    Jc[..., 0, 3] = 0
+    Jc[..., 0, 4] = 0
+    Jc[..., 1, 0] = 0
+    Jc[..., 1, 2] = 0
+    Jc[..., 1, 3] = 0
+    Jc[..., 1, 4] = 0
+    Jc[..., 2, 0] = 0
+    Jc[..., 2, 1] = 0
+    Jc[..., 2, 3] = 0
+    x0 = np.cos(q_3)
+    x1 = np.sin(q_3)
+    x2 = p_1 + q_2
+    x3 = np.cos(q_4)
+    x4 = np.sin(q_4)
+    x5 = x1*x3
+    x6 = x0*x3
+    x7 = 1/p_0
+    Jc[..., 2, 2] = p_0*x7
+    x8 = p_0*q_0
+    x9 = p_0*q_1
+    x10 = p_0*x2
+    x11 = x7*p_0*(x0*x0 + x1*x1)
+    Jc[..., 0, 0] = x11
+    Jc[..., 1, 1] = x11
+    Jc[..., 2, 4] = x7*(p_0*(q_0*x1 - q_1*x0) + x0*x9 - x1*x8)
+    Jc[..., 0, 5] = x7*(p_0*(q_1*x4 - x2*x6) + x6*x10 - x4*x9)
+    Jc[..., 1, 5] = x7*(x4*x8 + x5*x10 - p_0*(q_0*x4 + x2*x5))
+    Jc[..., 2, 5] = x7*(p_0*(q_1*x5 + q_0*x6) - x5*x9 - x6*x8)
+    return Jc

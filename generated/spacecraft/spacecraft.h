@@ -18,6 +18,9 @@
  *   q[9]  theta22  (rotation, joint shoulder_roll)
  *   q[10]  theta23  (rotation, joint shoulder_pitch)
  *   q[11]  theta24  (rotation, joint elbow_yaw)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  antenna  (on body antenna)
+ *   frame 1  link24  (on body link24)
  */
 #ifndef SPACECRAFT_H
 #define SPACECRAFT_H
@@ -51,6 +54,12 @@ extern "C" {
 #define SPACECRAFT_SUPPORT_DIRECT_SIZE 6  /* support_direct: qdd, 6 doubles */
 #define SPACECRAFT_SUPPORT_INVERSE_GAMMADD_SIZE 6  /* support_inverse: gammadd, 6 doubles */
 #define SPACECRAFT_SUPPORT_INVERSE_RESIDUAL_SIZE 6  /* support_inverse: residual, 6 doubles */
+#define SPACECRAFT_FRAME_POSES_SIZE 24  /* frame_poses: X, 2 x 12 doubles */
+#define SPACECRAFT_FRAME_JACOBIANS_SIZE 144  /* frame_jacobians: J, 2 x 6 x 12 doubles */
+#define SPACECRAFT_FRAME_ACCELERATIONS_SIZE 12  /* frame_accelerations: a, 2 x 6 doubles */
+#define SPACECRAFT_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define SPACECRAFT_COM_JACOBIAN_SIZE 36  /* com_jacobian: Jc, 3 x 12 doubles */
+#define SPACECRAFT_CENTROIDAL_MAP_SIZE 72  /* centroidal_map: Ag, 6 x 12 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void spacecraft_inertia(const double *q, const double *p, double *A);
@@ -84,6 +93,18 @@ void spacecraft_support_coefficients(const double *q, const double *qd, const do
 int spacecraft_support_direct(const double *q, const double *qd, const double *gamma, const double *gammad, const double *gammadd, const double *T, const double *p, double *qdd);
 /* the inverse problem (3.4) 2: the mechanism's gammadd that gives the support a wanted qdd: exact (minimum norm when k > 6) when rank I = 6, least squares with the 6-residual when k < 6 */
 int spacecraft_support_inverse(const double *q, const double *qd, const double *qdd, const double *gamma, const double *gammad, const double *T, const double *p, double *gammadd, double *residual);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void spacecraft_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void spacecraft_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void spacecraft_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void spacecraft_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void spacecraft_com_jacobian(const double *q, const double *p, double *Jc);
+/* the centroidal momentum matrix A_G, 6 x n row-major: h_G = A_G qd, the linear momentum and the angular momentum about the centre of mass, world axes (Pinocchio's computeCentroidalMap) */
+void spacecraft_centroidal_map(const double *q, const double *p, double *Ag);
 
 #ifdef __cplusplus
 }

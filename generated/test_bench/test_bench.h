@@ -54,6 +54,13 @@
  *   q[45]  q6_11  (rotation, joint j6_11)
  *   q[46]  q6_12  (rotation, joint j6_12)
  *   q[47]  q6_13  (translation, joint j6_13)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  s1_13  (on body s1_13)
+ *   frame 1  s2_13  (on body s2_13)
+ *   frame 2  s3_13  (on body s3_13)
+ *   frame 3  s4_13  (on body s4_13)
+ *   frame 4  s5_13  (on body s5_13)
+ *   frame 5  s6_13  (on body s6_13)
  */
 #ifndef TEST_BENCH_H
 #define TEST_BENCH_H
@@ -78,6 +85,11 @@ extern "C" {
 #define TEST_BENCH_INERTIA_INVERSE_SIZE 2304  /* inertia_inverse: Ainv, 48 x 48 doubles */
 #define TEST_BENCH_TRANSVECTIVE_FACTORS_TARGS_SIZE 393  /* transvective_factors: targs, 393 doubles */
 #define TEST_BENCH_TRANSVECTIVE_FACTORS_DIAG_SIZE 48  /* transvective_factors: diag, 48 doubles */
+#define TEST_BENCH_FRAME_POSES_SIZE 72  /* frame_poses: X, 6 x 12 doubles */
+#define TEST_BENCH_FRAME_JACOBIANS_SIZE 1728  /* frame_jacobians: J, 6 x 6 x 48 doubles */
+#define TEST_BENCH_FRAME_ACCELERATIONS_SIZE 36  /* frame_accelerations: a, 6 x 6 doubles */
+#define TEST_BENCH_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define TEST_BENCH_COM_JACOBIAN_SIZE 144  /* com_jacobian: Jc, 3 x 48 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void test_bench_inertia(const double *q, const double *p, double *A);
@@ -105,6 +117,16 @@ void test_bench_forward_dynamics(const double *q, const double *qd, const double
 void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
 void test_bench_transvective_factors(const double *q, const double *p, double *targs, double *diag);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void test_bench_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void test_bench_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void test_bench_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void test_bench_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void test_bench_com_jacobian(const double *q, const double *p, double *Jc);
 
 #ifdef __cplusplus
 }

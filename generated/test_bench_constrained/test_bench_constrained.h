@@ -54,6 +54,13 @@
  *   q[45]  q6_11  (rotation, joint j6_11)
  *   q[46]  q6_12  (rotation, joint j6_12)
  *   q[47]  q6_13  (translation, joint j6_13)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  s1_13  (on body s1_13)
+ *   frame 1  s2_13  (on body s2_13)
+ *   frame 2  s3_13  (on body s3_13)
+ *   frame 3  s4_13  (on body s4_13)
+ *   frame 4  s5_13  (on body s5_13)
+ *   frame 5  s6_13  (on body s6_13)
  * Parameters (p order, defaults in TEST_BENCH_CONSTRAINED_P_DEFAULTS):
  *   p[0]  psi4 = 0.3
  */
@@ -88,6 +95,11 @@ extern "C" {
 #define TEST_BENCH_CONSTRAINED_DELASSUS_SIZE 1764  /* delassus: G, 42 x 42 doubles */
 #define TEST_BENCH_CONSTRAINED_CONSTRAINED_FORWARD_DYNAMICS_QDD_SIZE 48  /* constrained_forward_dynamics: qdd, 48 doubles */
 #define TEST_BENCH_CONSTRAINED_CONSTRAINED_FORWARD_DYNAMICS_LAMBDA_SIZE 42  /* constrained_forward_dynamics: lambda, 42 doubles */
+#define TEST_BENCH_CONSTRAINED_FRAME_POSES_SIZE 72  /* frame_poses: X, 6 x 12 doubles */
+#define TEST_BENCH_CONSTRAINED_FRAME_JACOBIANS_SIZE 1728  /* frame_jacobians: J, 6 x 6 x 48 doubles */
+#define TEST_BENCH_CONSTRAINED_FRAME_ACCELERATIONS_SIZE 36  /* frame_accelerations: a, 6 x 6 doubles */
+#define TEST_BENCH_CONSTRAINED_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define TEST_BENCH_CONSTRAINED_COM_JACOBIAN_SIZE 144  /* com_jacobian: Jc, 3 x 48 doubles */
 #define TEST_BENCH_CONSTRAINED_P_DEFAULTS { 0.3 }
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
@@ -128,6 +140,16 @@ void test_bench_constrained_slip_velocities(const double *q, const double *qd, c
 void test_bench_constrained_delassus(const double *q, const double *p, double *G);
 /* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution) */
 int test_bench_constrained_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd, double *lambda);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void test_bench_constrained_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void test_bench_constrained_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void test_bench_constrained_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void test_bench_constrained_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void test_bench_constrained_com_jacobian(const double *q, const double *p, double *Jc);
 
 #ifdef __cplusplus
 }

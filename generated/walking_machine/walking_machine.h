@@ -30,6 +30,13 @@
  *   q[21]  theta624  (rotation, joint hip_roll6)
  *   q[22]  theta635  (rotation, joint hip_pitch6)
  *   q[23]  theta645  (rotation, joint knee6)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  shank1  (on body shank1)
+ *   frame 1  shank2  (on body shank2)
+ *   frame 2  shank3  (on body shank3)
+ *   frame 3  shank4  (on body shank4)
+ *   frame 4  shank5  (on body shank5)
+ *   frame 5  shank6  (on body shank6)
  */
 #ifndef WALKING_MACHINE_H
 #define WALKING_MACHINE_H
@@ -54,6 +61,12 @@ extern "C" {
 #define WALKING_MACHINE_INERTIA_INVERSE_SIZE 576  /* inertia_inverse: Ainv, 24 x 24 doubles */
 #define WALKING_MACHINE_TRANSVECTIVE_FACTORS_TARGS_SIZE 141  /* transvective_factors: targs, 141 doubles */
 #define WALKING_MACHINE_TRANSVECTIVE_FACTORS_DIAG_SIZE 24  /* transvective_factors: diag, 24 doubles */
+#define WALKING_MACHINE_FRAME_POSES_SIZE 72  /* frame_poses: X, 6 x 12 doubles */
+#define WALKING_MACHINE_FRAME_JACOBIANS_SIZE 864  /* frame_jacobians: J, 6 x 6 x 24 doubles */
+#define WALKING_MACHINE_FRAME_ACCELERATIONS_SIZE 36  /* frame_accelerations: a, 6 x 6 doubles */
+#define WALKING_MACHINE_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define WALKING_MACHINE_COM_JACOBIAN_SIZE 72  /* com_jacobian: Jc, 3 x 24 doubles */
+#define WALKING_MACHINE_CENTROIDAL_MAP_SIZE 144  /* centroidal_map: Ag, 6 x 24 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void walking_machine_inertia(const double *q, const double *p, double *A);
@@ -81,6 +94,18 @@ void walking_machine_forward_dynamics(const double *q, const double *qd, const d
 void walking_machine_inertia_inverse(const double *q, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
 void walking_machine_transvective_factors(const double *q, const double *p, double *targs, double *diag);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void walking_machine_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void walking_machine_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void walking_machine_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void walking_machine_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void walking_machine_com_jacobian(const double *q, const double *p, double *Jc);
+/* the centroidal momentum matrix A_G, 6 x n row-major: h_G = A_G qd, the linear momentum and the angular momentum about the centre of mass, world axes (Pinocchio's computeCentroidalMap) */
+void walking_machine_centroidal_map(const double *q, const double *p, double *Ag);
 
 #ifdef __cplusplus
 }

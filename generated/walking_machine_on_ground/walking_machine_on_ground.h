@@ -30,6 +30,13 @@
  *   q[21]  theta624  (rotation, joint hip_roll6)
  *   q[22]  theta635  (rotation, joint hip_pitch6)
  *   q[23]  theta645  (rotation, joint knee6)
+ * Frames (the order of the frame routines' blocks; origin and axes in the body: NAME.json "frames"):
+ *   frame 0  shank1  (on body shank1)
+ *   frame 1  shank2  (on body shank2)
+ *   frame 2  shank3  (on body shank3)
+ *   frame 3  shank4  (on body shank4)
+ *   frame 4  shank5  (on body shank5)
+ *   frame 5  shank6  (on body shank6)
  */
 #ifndef WALKING_MACHINE_ON_GROUND_H
 #define WALKING_MACHINE_ON_GROUND_H
@@ -60,6 +67,12 @@ extern "C" {
 #define WALKING_MACHINE_ON_GROUND_DELASSUS_SIZE 324  /* delassus: G, 18 x 18 doubles */
 #define WALKING_MACHINE_ON_GROUND_CONSTRAINED_FORWARD_DYNAMICS_QDD_SIZE 24  /* constrained_forward_dynamics: qdd, 24 doubles */
 #define WALKING_MACHINE_ON_GROUND_CONSTRAINED_FORWARD_DYNAMICS_LAMBDA_SIZE 18  /* constrained_forward_dynamics: lambda, 18 doubles */
+#define WALKING_MACHINE_ON_GROUND_FRAME_POSES_SIZE 72  /* frame_poses: X, 6 x 12 doubles */
+#define WALKING_MACHINE_ON_GROUND_FRAME_JACOBIANS_SIZE 864  /* frame_jacobians: J, 6 x 6 x 24 doubles */
+#define WALKING_MACHINE_ON_GROUND_FRAME_ACCELERATIONS_SIZE 36  /* frame_accelerations: a, 6 x 6 doubles */
+#define WALKING_MACHINE_ON_GROUND_CENTER_OF_MASS_SIZE 3  /* center_of_mass: c, 3 doubles */
+#define WALKING_MACHINE_ON_GROUND_COM_JACOBIAN_SIZE 72  /* com_jacobian: Jc, 3 x 24 doubles */
+#define WALKING_MACHINE_ON_GROUND_CENTROIDAL_MAP_SIZE 144  /* centroidal_map: Ag, 6 x 24 doubles */
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34) */
 void walking_machine_on_ground_inertia(const double *q, const double *p, double *A);
@@ -97,6 +110,18 @@ void walking_machine_on_ground_constraint_bias(const double *q, const double *qd
 void walking_machine_on_ground_delassus(const double *q, const double *p, double *G);
 /* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution) */
 int walking_machine_on_ground_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd, double *lambda);
+/* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
+void walking_machine_on_ground_frame_poses(const double *q, const double *p, double *X);
+/* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */
+void walking_machine_on_ground_frame_jacobians(const double *q, const double *p, double *J);
+/* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd */
+void walking_machine_on_ground_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *p, double *a);
+/* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3) */
+void walking_machine_on_ground_center_of_mass(const double *q, const double *p, double *c);
+/* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment) */
+void walking_machine_on_ground_com_jacobian(const double *q, const double *p, double *Jc);
+/* the centroidal momentum matrix A_G, 6 x n row-major: h_G = A_G qd, the linear momentum and the angular momentum about the centre of mass, world axes (Pinocchio's computeCentroidalMap) */
+void walking_machine_on_ground_centroidal_map(const double *q, const double *p, double *Ag);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,56 @@
+"""Analytical derivatives of inverse and forward dynamics, by forward-mode differentiation of the recursions.
+
+The sweeps (2.39)-(2.46) run on dual numbers (:mod:`aggsym.core.dual`) seeded with unit tangents on q (directions
+0..n-1) and qd (directions n..2n-1): every intermediate of the straight-line program of tau = u* gets its
+derivatives beside it, so that ``dtau/dq`` and ``dtau/dqd`` reuse the kinematics and the wrenches of the sweeps
+(the elastic force C (q - q0) of (2.27) is differentiated the same way); ``dtau/dqdd`` is A(q).
+
+Forward dynamics: q'' solves A(q) q'' + d(q, qd) = tau, so along any input x (q or qd) at fixed tau
+``A dq''/dx + dtau_ID/dx (q, qd, q'') = 0``, i.e. ``dq''/dx = -A^-1 dtau_ID/dx`` evaluated at the forward
+dynamics' own q'' (and dq''/dtau = A^-1).  A^-1 is applied column by column with the transvective factors,
+``A^-1 v = T^T diag(1/(beta,beta)) T v`` (3.19)-(3.20) in O(n) per column (:func:`~.transvective.cauchy_solve_tree`):
+no dense inverse.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+from ..core.dual import Dual, DualBackend, tangent
+from .elastic import elastic_forces
+from .kinematics import TreeKinematics
+from .sweeps import inverse_dynamics
+from .transvective import articulated_factors, cauchy_solve_tree, forward_dynamics
+
+
+def _dual_inverse_dynamics(bound, kin, qd, qdd) -> tuple:
+    """tau (duals) at (kin.q, qd, qdd) with tangents along q (0..n-1) and qd (n..2n-1)."""
+    n = kin.tree.nq
+    dual = dataclasses.replace(bound, backend=DualBackend(bound.backend))
+    q = [Dual(x, {i: 1}) for i, x in enumerate(kin.q)]
+    rates = [Dual(x, {n + i: 1}) for i, x in enumerate(qd)]
+    dkin = TreeKinematics(dual, q)
+    tau = inverse_dynamics(dual, dkin, rates, qdd)
+    return [a + b for a, b in zip(tau, elastic_forces(dual, q))]
+
+
+def inverse_dynamics_derivatives(bound, kin, qd, qdd) -> tuple:
+    """(dtau/dq, dtau/dqd) as n x n rows (entry (i, j): d tau_i / d q_j)."""
+    n = kin.tree.nq
+    tau = _dual_inverse_dynamics(bound, kin, qd, qdd)
+    return ([[tangent(t, j) for j in range(n)] for t in tau], [[tangent(t, n + j) for j in range(n)] for t in tau])
+
+
+def forward_dynamics_derivatives(bound, kin, qd, tau) -> tuple:
+    """(dqdd/dq, dqdd/dqd) as n x n rows, at q'' = forward dynamics (tau already less the elastic force)."""
+    n = kin.tree.nq
+    qdd = forward_dynamics(bound, kin, tau, qd)
+    dq, dqd = inverse_dynamics_derivatives(bound, kin, qd, qdd)
+    fac = articulated_factors(bound, kin, arguments=False)
+    out = []
+    for rows in (dq, dqd):
+        cols = [cauchy_solve_tree(kin, fac, [-rows[i][j] for i in range(n)]) for j in range(n)]
+        out.append([[cols[j][i] for j in range(n)] for i in range(n)])
+    return tuple(out)
+
+
+__all__ = ["inverse_dynamics_derivatives", "forward_dynamics_derivatives"]
