@@ -26,6 +26,7 @@ code generator can emit.
 from __future__ import annotations
 
 import keyword
+import functools
 import math
 import re
 from fractions import Fraction
@@ -74,6 +75,13 @@ def check_identifier(name) -> str | None:
     return None
 
 
+@functools.lru_cache(maxsize=4096)
+def _float_expr(value: float) -> sp.Expr:
+    """A finite float as a SymPy number (an Integer where it is one); cached: a model repeats its numbers (SymPy
+    numbers are immutable), and a file of distinct numbers only misses the bounded cache."""
+    return sp.Integer(int(value)) if value.is_integer() and abs(value) < 1e15 else sp.Float(value)
+
+
 def parse_value(value, symbols: dict) -> sp.Expr:
     """A YAML number or expression string as a SymPy expression over the given symbols (name -> Symbol).
 
@@ -88,7 +96,7 @@ def parse_value(value, symbols: dict) -> sp.Expr:
     if isinstance(value, float):
         if not math.isfinite(value):
             raise ExpressionError(f"{value!r} is not a finite number")
-        return sp.Integer(int(value)) if value.is_integer() and abs(value) < 1e15 else sp.Float(value)
+        return _float_expr(value)
     if not isinstance(value, str):
         raise ExpressionError(f"expected a number or an expression, got {type(value).__name__} {_short(repr(value))}")
     if len(value) > MAX_LENGTH:

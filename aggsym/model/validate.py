@@ -9,6 +9,8 @@ tensor itself.
 """
 from __future__ import annotations
 
+import functools
+
 import math
 
 import numpy as np
@@ -30,9 +32,14 @@ def inertia_problem(inertia, triangle: bool = True, tol: float = TOL) -> str | N
 
     It must be symmetric, positive semi-definite, and (unless ``triangle`` is False) its principal moments
     must satisfy the triangle inequality (each at most the sum of the other two).  ``tol`` is relative to the
-    largest entry (at least 1).
+    largest entry (at least 1).  (Cached on the numbers: models repeat their links.)
     """
-    J = np.asarray(inertia, dtype=float)
+    return _inertia_problem(tuple(float(x) for row in inertia for x in row), triangle, tol)
+
+
+@functools.lru_cache(maxsize=4096)
+def _inertia_problem(entries: tuple, triangle: bool, tol: float) -> str | None:
+    J = np.array(entries, dtype=float).reshape(3, 3)
     if not np.all(np.isfinite(J)):
         return "inertia has non-finite entries"
     scale = max(1.0, float(np.max(np.abs(J))))

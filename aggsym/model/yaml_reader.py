@@ -100,7 +100,25 @@ MAX_DEPTH = 64  # nesting of mappings and sequences
 MAX_BODIES = 10_000  # bodies (rotors included) of a model, as for a URDF's links
 MAX_PARAMETERS = 10_000
 # libyaml's composer (C, ten times faster; it refuses nesting beyond 1000 levels itself) where PyYAML has it
-_COMPOSER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+_BASE_COMPOSER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+# The first characters with which a plain scalar can be anything but text under the safe loader's implicit
+# resolvers (YAML 1.1: bool yes/no/on/off/true/false, int, float, .inf/.nan, null ~, merge <<, value =, timestamp)
+_NOT_TEXT_START = frozenset("yYnNtTfFoO-+.0123456789<~=")
+_STR = "tag:yaml.org,2002:str"
+
+
+class _Composer(_BASE_COMPOSER):
+    """The safe composer with a shortcut in tag resolution: a plain scalar that starts with a character no implicit
+    resolver of the safe loader matches is text, without trying the resolvers' patterns one by one (the names and
+    keys of a model: most of its scalars)."""
+
+    def resolve(self, kind, value, implicit):
+        if kind is yaml.ScalarNode and implicit[0] and value and value[0] not in _NOT_TEXT_START:
+            return _STR
+        return super().resolve(kind, value, implicit)
+
+
+_COMPOSER = _Composer
 _PLAIN_TAGS = {f"tag:yaml.org,2002:{t}" for t in ("str", "int", "float", "bool", "null", "map", "seq")}
 
 
@@ -156,10 +174,17 @@ class _Doc:
             finally:
                 self._open.discard(id(node))
         try:
-            return self._constructor.construct_object(node, deep=True)
+            return self._scalar(node)
         except yaml.YAMLError as exc:
             raise ModelError(self.file, _path(path), f"not valid YAML: {getattr(exc, 'problem', None) or exc}",
                              line) from None
+
+    def _scalar(self, node):
+        """A scalar by its tag's constructor directly (what construct_object does for a scalar, without its
+        bookkeeping: a model has tens of thousands of scalars)."""
+        if isinstance(node, yaml.ScalarNode) and node.tag in self._constructor.yaml_constructors:
+            return self._constructor.yaml_constructors[node.tag](self._constructor, node)
+        return self._constructor.construct_object(node, deep=True)
 
     def _collection(self, node, path):
         if isinstance(node, yaml.MappingNode):
