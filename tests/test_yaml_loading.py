@@ -2,6 +2,7 @@
 are exit 2 naming the file and the place, fast, with nothing written and nothing run."""
 import os
 import time
+from pathlib import Path
 
 import pytest
 
@@ -65,3 +66,30 @@ def test_anchors_and_aliases_that_are_fine_still_load(tmp_path):
                     "  - name: b\n    parent: a\n    pair: {translation: [0.2, 0, 0], functional: {theta6: q2}}\n"
                     "    mass: 1.0\n    com: *c\n    inertia: *i\n")
     assert aggsym.load(path).nq == 2
+
+
+RESOLVER_CASES = ("yes Yes YES no No NO true True TRUE false False FALSE on On ON off Off OFF null Null NULL y n Y N ~ "
+                  "yes1 nope tRUE oN 1 1.5 .inf .nan 0x1F 0o17 0b101 1_000 190:20:30 2001-12-14 "
+                  "2001-12-14t21:59:43.10-05:00 << = -1 +1 .5 +.inf abc theta4 _x 1e3 -2e3 6.8523015e+5 0. "
+                  "1_000.5 190:20:30.15 -.Inf .NaN").split()
+
+
+def test_the_shortcut_resolver_gives_the_safe_loaders_tags_and_values():
+    """The composer's shortcut (text known by its first character or word) and the float shortcut change nothing:
+    every edge case of YAML 1.1's implicit resolvers gets SafeLoader's tag and value."""
+    import math
+
+    import yaml
+
+    from aggsym.model.yaml_reader import _PLAIN_TAGS, _Composer, _Doc
+
+    for word in RESOLVER_CASES:
+        ours = yaml.compose(f"a: {word}", Loader=_Composer).value[0][1].tag
+        theirs = yaml.compose(f"a: {word}", Loader=yaml.SafeLoader).value[0][1].tag
+        assert ours == theirs, word
+    plain = [w for w in RESOLVER_CASES if yaml.compose(f"a: {w}", Loader=yaml.SafeLoader).value[0][1].tag
+             in _PLAIN_TAGS]  # (a timestamp, a merge key or '=' are refused by the model reader)
+    text = "a: [" + ", ".join(plain) + "]"
+    ours, theirs = _Doc(Path("x.yaml"), text).root["a"], yaml.safe_load(text)["a"]
+    for x, y in zip(ours, theirs):
+        assert type(x) is type(y) and (x == y or (isinstance(x, float) and math.isnan(x) and math.isnan(y))), (x, y)

@@ -101,10 +101,12 @@ MAX_BODIES = 10_000  # bodies (rotors included) of a model, as for a URDF's link
 MAX_PARAMETERS = 10_000
 # libyaml's composer (C, ten times faster; it refuses nesting beyond 1000 levels itself) where PyYAML has it
 _BASE_COMPOSER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-# The first characters with which a plain scalar can be anything but text under the safe loader's implicit
-# resolvers (YAML 1.1: bool yes/no/on/off/true/false, int, float, .inf/.nan, null ~, merge <<, value =, timestamp)
-_NOT_TEXT_START = frozenset("yYnNtTfFoO-+.0123456789<~=")
+# What a plain scalar must start with, or be, to be anything but text under the safe loader's implicit resolvers
+# (YAML 1.1: int, float, .inf/.nan, timestamp, null ~, merge <<, value =; the words of bool and null)
+_NOT_TEXT_START = frozenset("-+.0123456789<~=")
+_WORDS = frozenset("yes Yes YES no No NO true True TRUE false False FALSE on On ON off Off OFF null Null NULL".split())
 _STR = "tag:yaml.org,2002:str"
+_FLOAT = "tag:yaml.org,2002:float"
 
 
 class _Composer(_BASE_COMPOSER):
@@ -113,7 +115,8 @@ class _Composer(_BASE_COMPOSER):
     keys of a model: most of its scalars)."""
 
     def resolve(self, kind, value, implicit):
-        if kind is yaml.ScalarNode and implicit[0] and value and value[0] not in _NOT_TEXT_START:
+        if kind is yaml.ScalarNode and implicit[0] and value and value[0] not in _NOT_TEXT_START \
+                and value not in _WORDS:
             return _STR
         return super().resolve(kind, value, implicit)
 
@@ -182,8 +185,16 @@ class _Doc:
     def _scalar(self, node):
         """A scalar by its tag's constructor directly (what construct_object does for a scalar, without its
         bookkeeping: a model has tens of thousands of scalars)."""
-        if isinstance(node, yaml.ScalarNode) and node.tag in self._constructor.yaml_constructors:
-            return self._constructor.yaml_constructors[node.tag](self._constructor, node)
+        tag = node.tag
+        if tag == _STR:
+            return node.value
+        if tag == _FLOAT and ":" not in node.value and node.value[:1] != ".":
+            try:  # the resolver matched YAML's float pattern: digits, a point, an exponent, underscores
+                return float(node.value)
+            except ValueError:
+                pass
+        if isinstance(node, yaml.ScalarNode) and tag in self._constructor.yaml_constructors:
+            return self._constructor.yaml_constructors[tag](self._constructor, node)
         return self._constructor.construct_object(node, deep=True)
 
     def _collection(self, node, path):
@@ -194,7 +205,7 @@ class _Doc:
                         key_node.tag == "tag:yaml.org,2002:map":
                     raise ModelError(self.file, _path(path), "a key must be a name",
                                      key_node.start_mark.line + 1)
-                key = self._constructor.construct_object(key_node, deep=True)
+                key = self._scalar(key_node)
                 if not isinstance(key, (str, int)):
                     raise ModelError(self.file, _path(path), f"a key must be a name, got {key!r}",
                                      key_node.start_mark.line + 1)
