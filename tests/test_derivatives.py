@@ -17,9 +17,10 @@ from aggsym.contract import select_routines
 from aggsym.errors import ModelWarning
 from aggsym.twin import NumericTwin
 from conftest import model_path
-from helpers import generated_code, pinocchio_model, pinocchio_q, pinocchio_tree, relative_error, robot_path
+from helpers import (
+    coupled_gripper, generated_code, pinocchio_model, pinocchio_q, pinocchio_tree, reduction, relative_error, robot_path,
+)
 from random_trees import random_urdf
-from test_mimic import GRIPPER, reduction
 
 TOLERANCE = 1e-9
 ROLES = ["inverse_dynamics_derivatives", "forward_dynamics_derivatives"]
@@ -110,10 +111,7 @@ def test_derivatives_are_the_rates_of_the_dynamics(source, tmp_path, rng):
     with a coordinate, a prescribed spin, a free root) and on a gripper whose mimic joints are coupled (no Pinocchio
     reference for those)."""
     if source == "mimic":
-        path = tmp_path / "gripper.urdf"
-        path.write_text(GRIPPER)
-        model = aggsym.load(path, mimic="couple")
-        assert model.couplings
+        model, _ = coupled_gripper(tmp_path)
     else:
         model = aggsym.load(model_path(source))
     twin = NumericTwin(model)
@@ -131,9 +129,7 @@ def test_derivatives_are_the_rates_of_the_dynamics(source, tmp_path, rng):
 
 def test_coupled_derivatives_equal_pinocchio(tmp_path, rng):
     """Mimic joints coupled: d tau_q / d q = K^T (d tau / d q_tree) K against Pinocchio's full model."""
-    path = tmp_path / "gripper.urdf"
-    path.write_text(GRIPPER)
-    model = aggsym.load(path, mimic="couple")
+    model, path = coupled_gripper(tmp_path)
     pm = pin.buildModelFromUrdf(str(path))
     K, o = reduction(model)
     twin = NumericTwin(model)

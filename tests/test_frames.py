@@ -21,9 +21,10 @@ from aggsym.errors import AggsymError, ModelWarning
 from aggsym.model.frames import catalog, select_frames
 from aggsym.twin import NumericTwin
 from conftest import model_path
-from helpers import generated_code, pinocchio_model, pinocchio_q, pinocchio_tree, relative_error, robot_path
+from helpers import (
+    coupled_gripper, generated_code, pinocchio_model, pinocchio_q, pinocchio_tree, reduction, relative_error, robot_path,
+)
 from random_trees import random_urdf
-from test_mimic import GRIPPER, reduction
 
 TOLERANCE = 1e-9
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -185,10 +186,7 @@ def test_jacobians_and_accelerations_are_the_rates_of_the_poses(source, tmp_path
     """J = d(pose)/dq and a = d/dt (J qd) by central differences: a check that needs no Pinocchio, on a robot with
     mimic joints coupled (Pinocchio does not model them) and on YAML trees."""
     if source == "mimic":
-        path = tmp_path / "gripper.urdf"
-        path.write_text(GRIPPER)
-        model = aggsym.load(path, mimic="couple")
-        assert model.couplings
+        model, _ = coupled_gripper(tmp_path)
     else:
         model = aggsym.load(model_path(source))
     twin = NumericTwin(model)
@@ -209,9 +207,7 @@ def test_frames_with_coupled_mimic_joints_equal_pinocchio(tmp_path, rng):
     """A gripper whose second finger and fingertip mimic other joints, coupled (q holds only the masters): poses,
     accelerations and the centre of mass at the tree's q_tree = K q + o, Jacobians K-reduced, against Pinocchio's
     full model of the same file."""
-    path = tmp_path / "gripper.urdf"
-    path.write_text(GRIPPER)
-    model = aggsym.load(path, mimic="couple")
+    model, path = coupled_gripper(tmp_path)
     model = select_frames(model, ["tip", "right", "palm"])
     pm = pin.buildModelFromUrdf(str(path))
     K, o = reduction(model)

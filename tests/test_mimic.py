@@ -14,37 +14,10 @@ from aggsym import cli
 from aggsym.codegen.compile import CLibrary, compile_shared, import_module
 from aggsym.codegen.generate import generate, write
 from aggsym.errors import ModelError
-from helpers import inertia_rate, pinocchio_q, relative_error
+from helpers import GRIPPER, inertia_rate, pinocchio_q, reduction, relative_error
 from random_trees import random_urdf
 
 TOLERANCE = 1e-9
-
-GRIPPER = """<robot name="gripper">
-  <link name="base"/>
-  <link name="arm"><inertial><origin xyz="0.2 0 0.01" rpy="0.1 0 0"/><mass value="2"/>
-    <inertia ixx="0.01" iyy="0.05" izz="0.05" ixy="0.001" ixz="0" iyz="0"/></inertial></link>
-  <link name="palm"><inertial><origin xyz="0.05 0 0"/><mass value="0.6"/>
-    <inertia ixx="0.002" iyy="0.003" izz="0.003" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="left"><inertial><origin xyz="0.02 0.01 0"/><mass value="0.1"/>
-    <inertia ixx="0.0001" iyy="0.0002" izz="0.0002" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="right"><inertial><origin xyz="0.02 -0.01 0"/><mass value="0.1"/>
-    <inertia ixx="0.0001" iyy="0.0002" izz="0.0002" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="tip"><inertial><origin xyz="0.01 0 0"/><mass value="0.05"/>
-    <inertia ixx="0.00001" iyy="0.00002" izz="0.00002" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="shoulder" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
-    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-  <joint name="wrist" type="revolute"><parent link="arm"/><child link="palm"/><origin xyz="0.4 0 0" rpy="0 0.3 0"/>
-    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-  <joint name="finger_left" type="prismatic"><parent link="palm"/><child link="left"/><origin xyz="0.1 0.02 0"/>
-    <axis xyz="0 1 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/></joint>
-  <joint name="finger_right" type="prismatic"><parent link="palm"/><child link="right"/><origin xyz="0.1 -0.02 0"/>
-    <axis xyz="0 -1 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/>
-    <mimic joint="finger_left" multiplier="1" offset="0"/></joint>
-  <joint name="tip_joint" type="revolute"><parent link="left"/><child link="tip"/><origin xyz="0.03 0 0"/>
-    <axis xyz="0.6 0 0.8"/><limit lower="-1" upper="1" effort="1" velocity="1"/>
-    <mimic joint="wrist" multiplier="-0.7" offset="0.2"/></joint>
-</robot>
-"""
 
 
 def with_mimics(seed: int) -> str:
@@ -61,20 +34,6 @@ def with_mimics(seed: int) -> str:
         ET.SubElement(joints[follower], "mimic", joint=master, multiplier=f"{rng.uniform(-2, 2):.6f}",
                       offset=f"{rng.uniform(-1, 1):.6f}")
     return ET.tostring(root, encoding="unicode")
-
-
-def reduction(model):
-    """J and o of q_tree = J q + o for a coupled model (tree order = Pinocchio's order of the full model)."""
-    index = {c.name: i for i, c in enumerate(model.pair_coordinates)}
-    free = [index[c.name] for c in model.coordinates]
-    J = np.zeros((len(index), len(free)))
-    o = np.zeros(len(index))
-    for j, t in enumerate(free):
-        J[t, j] = 1
-    for c in model.couplings:
-        J[index[c.coordinate], free.index(index[c.master])] = c.multiplier
-        o[index[c.coordinate]] = c.offset
-    return J, o
 
 
 def references(model, path, q, qd, qdd):

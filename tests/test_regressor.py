@@ -17,9 +17,8 @@ from aggsym.contract import ROUTINES, base_regressor_layout, omitted_routines, r
 from aggsym.errors import ModelWarning
 from aggsym.twin import NumericTwin
 from conftest import MODELS
-from helpers import generated_code, pinocchio_model, pinocchio_q, relative_error, robot_path
+from helpers import coupled_gripper, generated_code, pinocchio_model, pinocchio_q, reduction, relative_error, robot_path
 from random_trees import random_urdf
-from test_mimic import GRIPPER, reduction
 
 TOLERANCE = 1e-9
 
@@ -110,9 +109,7 @@ def test_regressor_of_random_trees_equals_pinocchio(seed, tmp_path):
 
 def test_regressor_with_coupled_mimic_joints(tmp_path, rng):
     """q holds the masters only: Y_q = K^T Y_tree (tau_q = K^T tau_tree), against Pinocchio's full model."""
-    path = tmp_path / "gripper.urdf"
-    path.write_text(GRIPPER)
-    model = aggsym.load(path, mimic="couple")
+    model, path = coupled_gripper(tmp_path)
     pm = pin.buildModelFromUrdf(str(path))
     K, o = reduction(model)
     twin = NumericTwin(model)

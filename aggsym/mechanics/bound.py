@@ -18,9 +18,9 @@ from ..core.program import fold
 from ..model.tree import Tree
 from ..model.types import TIME, Model, code_index
 from .aggregates import General, Rigid
-from .group import Motion
+from .group import Motion, rotation
 from .kinematics import combine, pair_functional, pair_velocity_product
-from .linalg import add
+from .linalg import EYE3, add, mm
 
 
 @dataclass
@@ -144,3 +144,13 @@ def _prescribed(pair, L0, s, backend):
     Ud = add(combine(psi, accel), pair_velocity_product(codes, rate, rots))
     return L0.compose(motion), (U, Ud)
 
+
+def constant_axes(bound, axes, steps):
+    """Constant axes as backend scalars: ``axes`` (3x3 expressions, columns the axes; None: the identity) turned by
+    the elementary rotations ``steps`` ((axis, angle expression), ..., Prop. 1.17) in order; None when both are
+    absent (a frame's or a constraint's reference axes)."""
+    R = None if axes is None else tuple(tuple(bound.scalar(x) for x in row) for row in axes)
+    for axis, angle in steps:
+        a = bound.scalar(angle)
+        R = mm(EYE3 if R is None else R, rotation(axis, bound.backend.cos(a), bound.backend.sin(a)))
+    return R

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 
 from ..core.program import is_zero
 from ..model.types import WORLD, code_index
+from .bound import constant_axes
 from .group import Motion, rotation
 from .kinematics import TreeKinematics, point_motion, point_rows, world_poses
 from .linalg import EYE3, add, cross, dot, mm, mtv, mul, mv, scale, sub, transpose
@@ -76,13 +77,10 @@ class BoundConstraint:
 
 def bind_constraints(bound) -> list:
     index = {name: k for k, name in enumerate(bound.tree.names)}
-    backend = bound.backend
     out = []
     for c in bound.model.constraints:
-        R = EYE3 if c.medium_axes is None else tuple(tuple(bound.scalar(x) for x in row) for row in c.medium_axes)
-        for axis, angle in c.rotation:
-            a = bound.scalar(angle)
-            R = mm(R, rotation(axis, backend.cos(a), backend.sin(a)))
+        R = constant_axes(bound, c.medium_axes, c.rotation)
+        R = EYE3 if R is None else R
         out.append(BoundConstraint(
             k=index[c.body], m=-1 if c.medium == WORLD else index[c.medium],
             r=tuple(bound.scalar(x) for x in c.point),

@@ -27,9 +27,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .group import rotation
+from .bound import constant_axes
 from .kinematics import ZERO6, moving_bodies, point_motion, point_rows, world_poses
-from .linalg import EYE3, add, cross, dot, mm, mmt, mul, mv, scale, sub
+from .linalg import add, cross, dot, mm, mmt, mul, mv, scale, sub
 
 
 @dataclass
@@ -41,15 +41,8 @@ class BoundFrame:
 
 def bind_frames(bound) -> list:
     index = {name: k for k, name in enumerate(bound.tree.names)}
-    backend = bound.backend
-    out = []
-    for f in bound.model.frames:
-        R = None if f.axes is None else tuple(tuple(bound.scalar(x) for x in row) for row in f.axes)
-        for axis, angle in f.rotation:
-            a = bound.scalar(angle)
-            R = mm(EYE3 if R is None else R, rotation(axis, backend.cos(a), backend.sin(a)))
-        out.append(BoundFrame(index[f.body], tuple(bound.scalar(x) for x in f.point), R))
-    return out
+    return [BoundFrame(index[f.body], tuple(bound.scalar(x) for x in f.point), constant_axes(bound, f.axes, f.rotation))
+            for f in bound.model.frames]
 
 
 def frame_poses(bound, kin) -> list:
