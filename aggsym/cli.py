@@ -54,6 +54,11 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--support", action="store_true",
                        help="URDF only, with --floating-base: the free root is the support of the support equation "
                             "(3.1); its 6 coordinates are q, the joints gamma (support_* routines)")
+        p.add_argument("--inertial-parameters", metavar="all|LINK,...",
+                       help="URDF only: the named links' inertial data (or every link's: all) become entries of p, "
+                            "ten per link (m, m c, inertia about the link origin in link axes; defaults from the file)")
+        p.add_argument("--payload", metavar="LINK",
+                       help="URDF only: a payload fixed to LINK, its ten inertial parameters in p (zero by default)")
         p.add_argument("--frames", metavar="A,B,...",
                        help="the frames of the frame routines, in this order: URDF link names, or a YAML model's "
                             "bodies and 'frames:' (default: the links or bodies without a child, then 'frames:')")
@@ -108,6 +113,11 @@ def _load(args):
         if problem:
             raise AggsymError(f"{path}: --support: {problem}")
         model = dataclasses.replace(model, support=root)
+    if args.inertial_parameters is not None or args.payload is not None:
+        from .model.inertials import with_inertial_parameters
+
+        links = [x.strip() for x in (args.inertial_parameters or "").split(",") if x.strip()]
+        model = with_inertial_parameters(model, links, args.payload)
     if args.frames is not None:
         from .model.frames import select_frames
 

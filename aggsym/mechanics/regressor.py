@@ -100,15 +100,14 @@ def standard_parameters(model) -> list:
         if body.inertial is None:
             out.extend([sp.Integer(0)] * 10)
             continue
-        m = body.inertial.mass
-        c = sp.Matrix(body.inertial.com)
-        J = sp.Matrix(body.inertial.inertia) + m * (c.dot(c) * sp.eye(3) - c * c.T)
+        m, h, J = body.inertial.mises()
+        h, J = sp.Matrix(h), sp.Matrix(J)
         if body.link_rotation is not None:
             R = sp.Matrix(body.link_rotation)
-            c, J = R.T * c, R.T * J * R
+            h, J = R.T * h, R.T * J * R
         out.append(m)
-        out.extend(m * c[i] for i in range(3))
-        out.extend(J[i, j] for i, j in _INERTIA_ENTRIES)
+        out.extend(sp.expand(h[i]) for i in range(3))
+        out.extend(sp.expand(J[i, j]) for i, j in _INERTIA_ENTRIES)
     return out
 
 

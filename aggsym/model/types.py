@@ -160,9 +160,13 @@ class Inertial:
     mass: sp.Expr
     com: tuple
     inertia: tuple  # 3x3 symmetric, about the centre of mass
+    origin: tuple | None = None  # (m, h, theta_O) given at the origin instead (runtime inertial parameters: no
+    # division by a mass that p may set to zero); com and inertia then hold their values at the defaults
 
     def mises(self):
         """(m, h, theta_O): the Mises matrix (2.3) at the body origin, h = m r_c, theta_O = theta_c + m(r.r E - r r^T)."""
+        if self.origin is not None:
+            return self.origin
         m = self.mass
         r = sp.Matrix(self.com)
         theta = sp.Matrix(self.inertia) + m * (r.dot(r) * sp.eye(3) - r * r.T)

@@ -52,6 +52,8 @@ The mapping
 * ``model.meta``: ``mimic`` (above), ``links`` (each URDF link's body, merged links included), ``link_frames``
   (each link's body and placement there, (body, R, t) with x_body = R x_link + t, for constraints on links and
   for the frame routines), ``leaf_links`` (the links without a child link: the frames emitted by default),
+  ``link_parts`` (each link's own mass, centre of mass and inertia about it, in its body's axes, for
+  :mod:`aggsym.model.inertials`),
   ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`.
 
 Physical validity (where the dynamics sees it)
@@ -701,6 +703,7 @@ class _Reader:
         pair_names = set(joints)
         rows = []  # per body: dict with name, parent, pair, link, rotation, parts (inertial contributions)
         place: dict[str, _Place] = {}
+        link_parts: dict[str, tuple] = {}  # each link's own (mass, com, inertia about it) in its body's axes
 
         def add_inertial(link, where: _Place):
             data = links[link]
@@ -713,6 +716,7 @@ class _Reader:
             if data.rotation or where.rotation:
                 J = _product(_product(R, J), R.T)
             rows[where.body]["parts"].append((_exact(data.mass), com, J.applyfunc(snap)))
+            link_parts[link] = rows[where.body]["parts"][-1]
 
         root_pair_name = _identifier(ROOT_PAIR, pair_names, "joint")
         if self.floating_base:
@@ -771,6 +775,7 @@ class _Reader:
                                                                               for i in range(3)), tuple(p.t))
                                             for link, p in place.items()},
                             "leaf_links": [link for link in place if not children[link]],
+                            "link_parts": link_parts,
                             "floating_base": self.floating_base, "warnings": list(self.warnings)})
         model = dataclasses.replace(model, frames=default_frames(model))
         if model.nq == 0:

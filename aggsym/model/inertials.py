@@ -1,0 +1,144 @@
+"""Runtime inertial parameters of a URDF robot: a link's inertial data, or a payload's, as entries of p.
+
+``aggsym generate robot.urdf --inertial-parameters all|LINK,LINK,...`` makes the named links' inertial data runtime
+parameters, and ``--payload LINK`` adds a payload fixed to LINK (massless by default), so that a controller can
+change a tool or a load without generating again.  Each gets ten parameters in the regressor's form
+(:mod:`aggsym.mechanics.regressor`): ``m``, the first moment ``mcx mcy mcz`` (m times the centre of mass) and the
+inertia ``Ixx Ixy Iyy Ixz Iyz Izz`` about the link frame's origin, in link axes, named ``<param>_<link>`` (the link
+made an identifier) and ``payload_<param>``; the links' defaults are their URDF values, the payload's zero.  They
+are appended to p in the order named, the payload last.
+
+The body a link was merged into keeps its other links as numbers: its Mises matrix (2.3) at the body origin is the
+merged one less the link's own part plus the parametrized part, moved from the link frame (R, t: x_body = R x_link
++ t) by ``h = R h_L + m t``, ``Theta_O = R I_L R^T + m(|t|^2 E - t t^T) + 2 (t . R h_L) E - t (R h_L)^T - (R h_L) t^T``
+(polynomial in the parameters: a mass set to zero at run time divides nothing).
+"""
+from __future__ import annotations
+
+import dataclasses
+import re
+
+import sympy as sp
+
+from ..errors import AggsymError
+from .types import Inertial, Model, Parameter
+
+NAMES = ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
+_ENTRIES = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))
+
+
+def _identifier(name: str) -> str:
+    s = re.sub(r"[^A-Za-z0-9_]", "_", name)
+    return s if s and s[0].isalpha() else f"link_{s}"
+
+
+def _origin_form(mass, com, J) -> tuple:
+    """(m, h, Theta_O) of a part given by its mass, centre of mass and inertia about it (body axes)."""
+    c = sp.Matrix(com)
+    theta = sp.Matrix(J) + mass * (c.dot(c) * sp.eye(3) - c * c.T)
+    return mass, sp.Matrix(mass * c), theta
+
+
+def _moved(m, h_link, I_link, R, t) -> tuple:
+    """A part given about the link frame's origin in link axes, about the body origin in body axes."""
+    h = R * h_link
+    theta = R * I_link * R.T + m * (t.dot(t) * sp.eye(3) - t * t.T) + 2 * t.dot(h) * sp.eye(3) - t * h.T - h * t.T
+    return m, h + m * t, theta
+
+
+def _values(model: Model, link: str) -> list:
+    """The link's own ten parameters at their URDF values (about its frame's origin, link axes)."""
+    part = model.meta["link_parts"].get(link)
+    if part is None:
+        return [0.0] * 10
+    _, R, t = model.meta["link_frames"][link]
+    R, t = sp.Matrix(R), sp.Matrix(t)
+    m, h, theta = _origin_form(*part)  # about the body origin, body axes
+    # back to the link frame: the inverse of _moved
+    h_link = R.T * (h - m * t)
+    hb = R * h_link
+    I_body_at_link = theta - (m * (t.dot(t) * sp.eye(3) - t * t.T) + 2 * t.dot(hb) * sp.eye(3) - t * hb.T - hb * t.T)
+    I_link = R.T * I_body_at_link * R
+    return [float(m)] + [float(h_link[i]) for i in range(3)] + [float(I_link[i, j]) for i, j in _ENTRIES]
+
+
+def with_inertial_parameters(model: Model, links=(), payload: str | None = None) -> Model:
+    """The model with the named links' inertial data (``links``: names, or ``["all"]`` for every link with an
+    ``<inertial>``) and a payload on ``payload`` as runtime parameters (see the module's text)."""
+    frames = model.meta.get("link_frames")
+    if frames is None:
+        raise AggsymError(f"{model.source}: --inertial-parameters and --payload apply to URDF robots (a YAML model "
+                          f"writes its masses and inertias as expressions in its parameters)")
+    links = list(links)
+    if links == ["all"]:
+        links = [link for link in frames if link in model.meta["link_parts"]]
+    for name in links + ([payload] if payload is not None else []):
+        if name not in frames:
+            shown = name if len(name) <= 80 else name[:80] + "..."
+            some = ", ".join(repr(n) for n in list(frames)[:8]) + (", ..." if len(frames) > 8 else "")
+            raise AggsymError(f"{model.source}: no link named {shown!r} (the robot's links: {some})")
+    if len(set(links)) != len(links):
+        raise AggsymError(f"{model.source}: --inertial-parameters names a link twice")
+    taken = {p.name for p in model.parameters}
+    parameters = list(model.parameters)
+    index = {b.name: k for k, b in enumerate(model.bodies)}
+    forms = {}  # body index -> its Mises matrix at the origin, being rewritten
+
+    def form(k):
+        if k not in forms:
+            inertial = model.bodies[k].inertial
+            if inertial is None:
+                forms[k] = (sp.Integer(0), sp.zeros(3, 1), sp.zeros(3, 3))
+            else:
+                m, h, theta = inertial.mises()
+                forms[k] = (m, sp.Matrix(h), sp.Matrix(theta))
+        return forms[k]
+
+    def add(k, part, sign=1):
+        m, h, theta = form(k)
+        forms[k] = (m + sign * part[0], h + sign * part[1], theta + sign * part[2])
+
+    def symbols(prefix_of, defaults):
+        out = []
+        for name, value in zip(NAMES, defaults):
+            pname = prefix_of(name)
+            if pname in taken:
+                raise AggsymError(f"{model.source}: the parameter name {pname!r} is taken twice")
+            taken.add(pname)
+            parameters.append(Parameter(pname, float(value)))
+            out.append(parameters[-1].symbol)
+        return out
+
+    def parametrized(link, syms):
+        body, R, t = frames[link]
+        m, h = syms[0], sp.Matrix(syms[1:4])
+        I = sp.zeros(3, 3)
+        for (i, j), x in zip(_ENTRIES, syms[4:]):
+            I[i, j] = I[j, i] = x
+        return index[body], _moved(m, h, I, sp.Matrix(R), sp.Matrix(t))
+
+    for link in links:
+        k, part = parametrized(link, symbols(lambda n, link=link: f"{n}_{_identifier(link)}", _values(model, link)))
+        own = model.meta["link_parts"].get(link)
+        if own is not None:
+            add(k, _origin_form(*own), -1)
+        add(k, part)
+    if payload is not None:
+        k, part = parametrized(payload, symbols(lambda n: f"payload_{n}", [0.0] * 10))
+        add(k, part)
+    defaults = {p.symbol: p.value for p in parameters}
+    bodies = list(model.bodies)
+    for k, (m, h, theta) in forms.items():
+        m = sp.expand(m)
+        h = tuple(sp.expand(x) for x in h)
+        theta = tuple(tuple(sp.expand(theta[i, j]) for j in range(3)) for i in range(3))
+        m0 = float(m.subs(defaults))
+        c0 = tuple(float(x.subs(defaults)) / m0 if m0 else 0.0 for x in h)
+        J0 = tuple(tuple(float(theta[i][j].subs(defaults)) - m0 * ((sum(x * x for x in c0) if i == j else 0)
+                                                                     - c0[i] * c0[j]) for j in range(3))
+                   for i in range(3))
+        bodies[k] = dataclasses.replace(bodies[k], inertial=Inertial(sp.Float(m0), c0, J0, origin=(m, h, theta)))
+    return dataclasses.replace(model, bodies=tuple(bodies), parameters=tuple(parameters))
+
+
+__all__ = ["with_inertial_parameters", "NAMES"]
