@@ -67,8 +67,8 @@ class Routine:
     applies: Callable | None = None  # model -> bool; None means every model has this routine
     regular: bool = False  # defined only where A(q) is regular (left out, with the reason, where it is not)
     # with coupled coordinates: "force" (outputs reduce by J^T), "matrix" (J^T X J), "rows" (each row of an
-    # m x n Jacobian times J), "columns" (J^T Y for an n x m matrix Y), "tree" (the tree's own outputs), "forward" / "inverse" (q'' and A^-1 under the
-    # coupling), None (not emitted)
+    # m x n Jacobian times J), "columns" (J^T Y for an n x m matrix Y), "tree" (the tree's own outputs),
+    # "forward" / "inverse" (q'' and A^-1 under the coupling), None (not emitted)
     coupled: str | None = "force"
     input_lengths: Callable | None = None  # model -> {input: length} where it is not q's (the support routines)
     on_request: bool = False  # emitted only when named (--routines): large outputs that few users need
@@ -608,9 +608,17 @@ def _has_frames(model) -> bool:
     return bool(model.frames)
 
 
+def _has_moving_mass(model) -> bool:
+    """The centre of mass needs a moving mass: False when every body that moves is massless (the mass routines are
+    then not emitted; a mass that p sets to zero at run time gives NaN)."""
+    total = sum((model.bodies[k].inertial.mises()[0] for k in regressor.blocks(model)
+                 if model.bodies[k].inertial is not None), 0)
+    return not (total == 0)
+
+
 def _has_free_root(model) -> bool:
-    """A floating base: the root body's pair has all six coordinates."""
-    return len(model.bodies[0].pair.coordinates) == 6
+    """A floating base (the root body's pair has all six coordinates) with a moving mass."""
+    return len(model.bodies[0].pair.coordinates) == 6 and _has_moving_mass(model)
 
 
 COM_CONVENTION = ("the bodies that move (a body welded to the world is left out, as Pinocchio's centerOfMass "
@@ -646,14 +654,16 @@ register(Routine("center_of_mass", ("q", "p"), (Output("c", lambda model: (3,)),
                  lambda bound, kin, x: (frames.center_of_mass(bound, kin),),
                  "the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first "
                  "moment of Theta_lk (2.3)",
-                 layout=lambda model: {"rows": ["x", "y", "z"], "convention": COM_CONVENTION}, coupled="tree"))
+                 layout=lambda model: {"rows": ["x", "y", "z"], "convention": COM_CONVENTION}, coupled="tree",
+                 applies=_has_moving_mass))
 register(Routine("com_jacobian", ("q", "p"), (Output("Jc", lambda model: (3, model.nq)),),
                  lambda bound, kin, x: (_flat(frames.com_jacobian(bound, kin)),),
                  "the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the "
                  "subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the "
                  "subtrees' mass and first moment)",
                  layout=lambda model: {"rows": ["x", "y", "z"], "columns": [c.name for c in model.coordinates],
-                                       "order": "row-major", "convention": COM_CONVENTION}, coupled="rows"))
+                                       "order": "row-major", "convention": COM_CONVENTION}, coupled="rows",
+                 applies=_has_moving_mass))
 register(Routine("centroidal_map", ("q", "p"), (Output("Ag", lambda model: (6, model.nq)),),
                  lambda bound, kin, x: (_flat(frames.centroidal_map(bound, kin)),),
                  "the centroidal momentum matrix A_G, 6 x n row-major: h_G = A_G qd, the linear momentum and the "
@@ -733,7 +743,10 @@ def base_parameters(model) -> tuple:
     rank = int((sv > tol).sum())
     independent = sorted(pivoted_columns(Y)[:rank])
     dependent = [j for j in range(P) if j not in set(independent)]
-    beta = np.linalg.lstsq(Y[:, independent], Y[:, dependent], rcond=None)[0] if dependent else np.zeros((rank, 0))
+    if rank and dependent:
+        beta = np.linalg.lstsq(Y[:, independent], Y[:, dependent], rcond=None)[0]
+    else:  # nothing to express, or nothing identifiable (a tree whose moving bodies do no work)
+        beta = np.zeros((rank, len(dependent)))
     scale = max(float(np.abs(beta).max()), 1.0) if beta.size else 1.0
     beta[np.abs(beta) < 1e-10 * scale] = 0.0
     beta = np.vectorize(lambda v: float(f"{v:.12g}"))(beta) if beta.size else beta  # least squares' last digits

@@ -307,3 +307,20 @@ def test_readme_controller_example_compiles_runs_and_tracks(tmp_path):
     data = pm.createData()
     pin.framesForwardKinematics(pm, data, pinocchio_q(pm, q))
     assert np.abs(tool - data.oMf[pm.getFrameId("tool0", pin.FrameType.BODY)].translation).max() < 1e-8
+
+
+def test_a_robot_whose_moving_links_are_massless_generates_without_the_mass_routines(tmp_path):
+    """Every body that moves is massless: the centre of mass and its Jacobian are left out (they would divide by
+    zero) and generation ends in exit 0, not an internal error; the frames are emitted."""
+    path = tmp_path / "massless.urdf"
+    path.write_text('<robot name="massless"><link name="base"><inertial><mass value="1"/>'
+                    '<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link><link name="arm"/>'
+                    '<joint name="j" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>'
+                    '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>')
+    run = subprocess.run([sys.executable, "-m", "aggsym", "generate", str(path), "-o", str(tmp_path / "out"), "-q",
+                          "--routines", "default,regressor,base_regressor"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    manifest = json.loads((tmp_path / "out" / "massless.json").read_text())
+    assert "frame_poses" in manifest["functions"] and "center_of_mass" not in manifest["functions"]
+    base = manifest["layouts"]["base_regressor"]["base_parameters"]  # the regressor is kinematic: the arm's Izz
+    assert [b["name"] for b in base] == ["Izz_arm"]  # can be identified, even though the file gives it 0
