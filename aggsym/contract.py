@@ -611,8 +611,8 @@ def _has_frames(model) -> bool:
 def _has_moving_mass(model) -> bool:
     """The centre of mass needs a moving mass: False when every body that moves is massless (the mass routines are
     then not emitted; a mass that p sets to zero at run time gives NaN)."""
-    total = sum((model.bodies[k].inertial.mises()[0] for k in regressor.blocks(model)
-                 if model.bodies[k].inertial is not None), 0)
+    inertials = [model.bodies[k].inertial for k in regressor.blocks(model) if model.bodies[k].inertial is not None]
+    total = sum((i.mass if i.origin is None else i.origin[0] for i in inertials), 0)
     return not (total == 0)
 
 
