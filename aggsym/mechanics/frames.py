@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 from .bound import constant_axes
 from .kinematics import ZERO6, moving_bodies, point_motion, point_rows, world_poses
-from .linalg import add, cross, dot, mm, mmt, mul, mv, scale, sub
+from .linalg import add, cross, mm, mul, mv, scale, sub
 
 
 @dataclass
@@ -81,67 +81,44 @@ def frame_accelerations(bound, kin, qd, qdd) -> list:
 
 
 class MassDistribution:
-    """The moving bodies' mass, first moment and rotational inertia, world axes about the world origin, per body
-    and summed over subtrees (see the module's text)."""
+    """The moving bodies' Mises matrices (2.3) moved to the world frame by their poses (2.7), L Theta L^T
+    (:meth:`~aggsym.mechanics.aggregates.Rigid.moved`: mass, first moment C and inertia I about the world origin,
+    world axes), and their sums over subtrees (see the module's text); None where a subtree has no mass."""
 
-    def __init__(self, bound, kin, inertia: bool = False):
+    def __init__(self, bound, kin):
         tree = kin.tree
         self.poses = world_poses(kin)
         moves = moving_bodies(bound)
-        self.mass, self.first, self.inertia = [], [], []
-        for k, body in enumerate(bound.bodies):
-            th = body.rigid if moves[k] else None
-            if th is None:
-                self.mass.append(0)
-                self.first.append((0, 0, 0))
-                self.inertia.append(None)
-                continue
-            R, o = self.poses[k].c, self.poses[k].o
-            h = mv(R, th.h)
-            self.mass.append(th.m)
-            self.first.append(add(scale(th.m, o), h))
-            if inertia:  # R Theta R^T about o, moved to the world origin: + m(|o|^2 E - o o^T) + 2(o.h)E - o h^T - h o^T
-                J = mmt(mm(R, th.theta), R)
-                oh = dot(o, h)
-                oo = dot(o, o)
-                J = tuple(tuple(J[i][j] + mul(th.m, (oo if i == j else 0) - mul(o[i], o[j])) + (2 * oh if i == j else 0)
-                                - mul(o[i], h[j]) - mul(h[i], o[j]) for j in range(3)) for i in range(3))
-                self.inertia.append(J)
-            else:
-                self.inertia.append(None)
-        # subtree sums, leaves first
-        self.M, self.C, self.I = list(self.mass), list(self.first), list(self.inertia)
-        for k in range(len(tree) - 1, -1, -1):
+        self.sub = [b.rigid.moved(self.poses[k]) if moves[k] and b.rigid is not None else None
+                    for k, b in enumerate(bound.bodies)]
+        for k in range(len(tree) - 1, -1, -1):  # leaves first
             p = tree.parent[k]
-            if p >= 0:
-                self.M[p] = self.M[p] + self.M[k]
-                self.C[p] = add(self.C[p], self.C[k])
-                if self.I[k] is not None:
-                    self.I[p] = self.I[k] if self.I[p] is None else tuple(
-                        add(a, b) for a, b in zip(self.I[p], self.I[k]))
-        roots = [k for k, p in enumerate(tree.parent) if p < 0]
-        self.total = sum((self.M[k] for k in roots[1:]), self.M[roots[0]])
-        first = self.C[roots[0]]
-        for k in roots[1:]:
-            first = add(first, self.C[k])
-        self.total_first = first
+            if p >= 0 and self.sub[k] is not None:
+                self.sub[p] = self.sub[k] + self.sub[p]
+        total = None
+        for k, p in enumerate(tree.parent):
+            if p < 0 and self.sub[k] is not None:
+                total = self.sub[k] + total
+        self.total = total
 
     def centre(self) -> tuple:
-        return scale(1 / self.total, self.total_first)
+        return scale(1 / self.total.m, self.total.h)
 
     def columns(self, kin):
-        """Per coordinate i: (its body s, the world column (v_i, w_i), the velocity u of the point at the world
-        origin)."""
+        """Per coordinate i whose subtree has mass: (i, the subtree's Rigid, the world column's angular part w_i,
+        the velocity u of the point at the world origin)."""
         for s in range(len(kin.tree)):
+            if self.sub[s] is None:
+                continue
             R, o = self.poses[s].c, self.poses[s].o
             for i, psi in zip(kin.tree.coords[s], kin.psi[s]):
                 w = mv(R, psi[3:])
-                v = mv(R, psi[:3])
-                yield i, s, w, sub(v, cross(w, o))
+                yield i, self.sub[s], w, sub(mv(R, psi[:3]), cross(w, o))
 
-    def linear_momentum(self, s, w, u) -> tuple:
-        """p_i = M_s u + w x C_s: the subtree's linear momentum for the unit rate."""
-        return add(scale(self.M[s], u), cross(w, self.C[s]))
+
+def linear_momentum(X, w, u) -> tuple:
+    """p_i = M_s u + w x C_s: the subtree's linear momentum for the unit rate."""
+    return add(scale(X.m, u), cross(w, X.h))
 
 
 def center_of_mass(bound, kin) -> list:
@@ -152,26 +129,22 @@ def center_of_mass(bound, kin) -> list:
 def com_jacobian(bound, kin) -> list:
     """dG/dq: 3 x n rows, column i = p_i / M."""
     mass = MassDistribution(bound, kin)
-    n = kin.tree.nq
-    rows = [[0] * n for _ in range(3)]
-    inv = 1 / mass.total
-    for i, s, w, u in mass.columns(kin):
-        p = mass.linear_momentum(s, w, u)
-        for a in range(3):
-            rows[a][i] = mul(inv, p[a])
+    rows = [[0] * kin.tree.nq for _ in range(3)]
+    inv = 1 / mass.total.m
+    for i, X, w, u in mass.columns(kin):
+        for a, x in enumerate(linear_momentum(X, w, u)):
+            rows[a][i] = mul(inv, x)
     return rows
 
 
 def centroidal_map(bound, kin) -> list:
     """A_G: 6 x n rows, h_G = A_G qd (linear momentum, angular momentum about G, world axes)."""
-    mass = MassDistribution(bound, kin, inertia=True)
+    mass = MassDistribution(bound, kin)
     G = mass.centre()
-    n = kin.tree.nq
-    rows = [[0] * n for _ in range(6)]
-    for i, s, w, u in mass.columns(kin):
-        p = mass.linear_momentum(s, w, u)
-        L = add(cross(mass.C[s], u), mv(mass.I[s], w)) if mass.I[s] is not None else cross(mass.C[s], u)
-        L = sub(L, cross(G, p))
+    rows = [[0] * kin.tree.nq for _ in range(6)]
+    for i, X, w, u in mass.columns(kin):
+        p = linear_momentum(X, w, u)
+        L = sub(add(cross(X.h, u), mv(X.theta, w)), cross(G, p))  # L_O - G x p
         for a in range(3):
             rows[a][i] = p[a]
             rows[3 + a][i] = L[a]
