@@ -158,9 +158,7 @@ def cmd_generate(args) -> int:
     t0 = time.perf_counter()
     model = _load(args)
     if args.list_routines:
-        from .contract import c_symbol, omitted_routines, routines_for
-
-        from .contract import ROUTINES
+        from .contract import ROUTINES, c_symbol, omitted_routines, routines_for
 
         omitted = omitted_routines(model)
         routines = routines_for(model, omitted=omitted)

@@ -106,9 +106,6 @@ class Dual(Node):
     def __repr__(self):
         return f"Dual({self.v!r}, {self.d!r})"
 
-    def tangent(self, k):
-        return self.d.get(k, 0)
-
 
 def tangent(x, k):
     """The derivative of ``x`` along direction k (0 for a plain value)."""

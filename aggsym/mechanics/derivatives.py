@@ -43,9 +43,9 @@ def inverse_dynamics_derivatives(bound, kin, qd, qdd) -> tuple:
 def forward_dynamics_derivatives(bound, kin, qd, tau) -> tuple:
     """(dqdd/dq, dqdd/dqd) as n x n rows, at q'' = forward dynamics (tau already less the elastic force)."""
     n = kin.tree.nq
-    qdd = forward_dynamics(bound, kin, tau, qd)
-    dq, dqd = inverse_dynamics_derivatives(bound, kin, qd, qdd)
     fac = articulated_factors(bound, kin, arguments=False)
+    qdd = forward_dynamics(bound, kin, tau, qd, fac)
+    dq, dqd = inverse_dynamics_derivatives(bound, kin, qd, qdd)
     out = []
     for rows in (dq, dqd):
         cols = [cauchy_solve_tree(kin, fac, [-rows[i][j] for i in range(n)]) for j in range(n)]

@@ -242,12 +242,8 @@ def world_poses(kin) -> list:
 
 
 def moving_bodies(bound) -> list:
-    """Per body: whether it moves (a coordinate or a prescribed spin on its path from the root); the others are
-    welded to the world."""
-    out = []
-    for k, p in enumerate(bound.tree.parent):
-        out.append(bool(bound.tree.coords[k]) or bound.bodies[k].spin is not None or (p >= 0 and out[p]))
-    return out
+    """Per body: whether it moves (:attr:`aggsym.model.tree.Tree.moving`); the others are welded to the world."""
+    return bound.tree.moving
 
 
 def point_rows(kin, poses, k, P, B=None, m=-1) -> list:

@@ -11,13 +11,15 @@ Pinocchio's order): a 6 x 10 matrix Phi(w, alpha, a) with f = Phi pi.  The gener
 projected by the parastrophic matrix, tau = S Z (2.15), (2.30): the block of Y for body k and coordinate i is
 s_{i,k}^T Phi_k, s_{i,k} the row of S (1.42)-(1.43) at body k (the motion of k per unit rate of i, in k's
 axes), zero where k is not moved by i (one motion transform per pair (i, k) and ten sparse dot products, where
-carrying the ten columns up the tree as wrenches would take ten transforms).  A URDF body's parameters are in its link frame (Pinocchio's joint frame): Phi is built from the motion in
-link axes and its columns turned to the body's (x_body = R x_link).  One block per moving body (a body welded to the
+carrying the ten columns up the tree as wrenches would take ten transforms).  A URDF body's parameters are in its
+link frame (Pinocchio's joint frame): Phi is built from the motion in link axes and its columns turned to the
+body's (x_body = R x_link).  One block per moving body (a body welded to the
 world has none), bodies in tree order (the order of the coordinates); links welded by fixed joints are in their
 body, as Pinocchio merges them.
 """
 from __future__ import annotations
 
+from ..model.tree import Tree
 from .kinematics import moving_bodies
 from .linalg import add, cross, dot, mtv, mv, neg
 from .sweeps import link_rotation, origin_sweep
@@ -28,14 +30,7 @@ _INERTIA_ENTRIES = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))  # Ixx, Ixy,
 
 def blocks(model) -> list:
     """The bodies with a block of the regressor, in order (indices into model.bodies): those that move."""
-    parent = {b.name: i for i, b in enumerate(model.bodies)}
-    out, moves = [], []
-    for k, b in enumerate(model.bodies):
-        up = parent.get(b.parent)
-        moves.append(bool(b.pair.coordinates) or bool(b.pair.prescribed) or (up is not None and moves[up]))
-        if moves[k]:
-            out.append(k)
-    return out
+    return [k for k, moves in enumerate(Tree(model).moving) if moves]
 
 
 def _unit(j):

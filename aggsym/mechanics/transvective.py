@@ -443,11 +443,11 @@ def transvected_forces(bound, kin, fac: Factors, tau, qd) -> list:
     return inverse_dynamics(bound, kin, qd, [0] * kin.tree.nq, transvect=transvect)
 
 
-def forward_dynamics(bound, kin, tau, qd):
+def forward_dynamics(bound, kin, tau, qd, fac=None):
     """q'' = T^T diag(1/(beta,beta)) T (tau - b - g) (3.20) in O(n): T F by :func:`transvected_forces` on the
     sweeps (b + g = d(q, q') (2.52)), then T^T by :func:`apply_T_transpose_tree`; the arguments <t,k> are never
-    formed."""
-    fac = articulated_factors(bound, kin, arguments=False)
+    formed (``fac``: the factors, when the caller has them)."""
+    fac = articulated_factors(bound, kin, arguments=False) if fac is None else fac
     y = transvected_forces(bound, kin, fac, tau, qd)
     return apply_T_transpose_tree(kin, fac, [mul(r, v) for r, v in zip(fac.recip, y)])
 

@@ -57,6 +57,15 @@ class Tree:
         return [sorted(s) for s in sub]
 
     @cached_property
+    def moving(self) -> list[bool]:
+        """Per body: whether it moves (a coordinate or a prescribed spin on its path from the root); the others are
+        welded to the world."""
+        out: list[bool] = []
+        for k, (p, b) in enumerate(zip(self.parent, self.model.bodies)):
+            out.append(bool(self.coords[k]) or bool(b.pair.prescribed) or (p >= 0 and out[p]))
+        return out
+
+    @cached_property
     def depth(self) -> list[int]:
         """Number of bodies on the path from the root to k, k included."""
         d = []
