@@ -41,8 +41,11 @@ def _parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_text, description=help_text, epilog=EXAMPLES[name],
                            formatter_class=argparse.RawDescriptionHelpFormatter)
         p.add_argument("model", metavar="MODEL", help="a .yaml model or a .urdf robot")
-        p.add_argument("--floating-base", action="store_true",
-                       help="URDF only: give the root a free 6-coordinate pair (o1 o2 o3 theta4 theta5 theta6)")
+        p.add_argument("--floating-base", nargs="?", const="euler", choices=["euler", "quaternion"], default=None,
+                       help="URDF only: a free root. euler (the default when no kind is given): the 6-coordinate "
+                            "pair o1 o2 o3 theta4 theta5 theta6; quaternion: Pinocchio's free-flyer, q = (x, y, z, "
+                            "qx, qy, qz, qw, joints) (nq = n + 7), velocities (v, w of the base in its own axes, "
+                            "joint rates) (nv = n + 6)"),
         p.add_argument("--mimic", choices=["independent", "couple"], default="independent",
                        help="URDF only: <mimic> joints keep their own coordinate (default) or follow their master")
         p.add_argument("--armature", metavar="VALUE", type=_armature, default=0.0,
@@ -92,7 +95,7 @@ def _load(args):
     from .model import load
 
     path = Path(args.model)
-    options = {"floating_base": True} if args.floating_base else {}
+    options = {"floating_base": args.floating_base} if args.floating_base else {}
     if args.mimic != "independent":
         options["mimic"] = args.mimic
     if (options or args.constraints or args.support) and path.suffix.lower() != ".urdf":
@@ -100,6 +103,12 @@ def _load(args):
                           f"(a YAML model lists its constraints and support itself)")
     if args.support and not args.floating_base:
         raise AggsymError(f"{path}: --support needs --floating-base (the support is the free root)")
+    if args.support and args.floating_base == "quaternion":
+        raise AggsymError(f"{path}: --support takes the Euler base (--floating-base euler): the support equation "
+                          f"(3.1) is written in the support's six coordinates, which a quaternion base does not have")
+    if args.mimic == "couple" and args.floating_base == "quaternion":
+        raise AggsymError(f"{path}: --mimic couple with --floating-base quaternion is not supported; use "
+                          f"--floating-base euler, or independent mimic joints")
     model = load(path, **options)
     if args.constraints:
         from .model.yaml_reader import load_constraints
@@ -223,7 +232,7 @@ def cmd_ops(args) -> int:
 
     model = _load(args)
     gen = generate(model, latex=False)
-    print(ops_table(model.name, model.nq, {r.routine.role: r.ops for r in gen.routines}))
+    print(ops_table(model.name, model.nv, {r.routine.role: r.ops for r in gen.routines}))
     return 0
 
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from . import __version__
-from .mechanics import constraints, derivatives, elastic, frames, regressor, support, sweeps, transvective
+from .mechanics import constraints, derivatives, elastic, frames, manifold, regressor, support, sweeps, transvective
 from .mechanics.bias import coriolis_matrix, gravity_vector
 from .mechanics.coupling import Coupler
 from .mechanics.energy import kinetic_energy, momentum, potential_energy
@@ -36,8 +36,9 @@ from .mechanics.inertia import inertia_matrix
 from .mechanics.kinematics import TreeKinematics
 from .model.tree import Tree
 
-INPUT_KINDS = ("q", "qd", "qdd", "tau", "gamma", "gammad", "gammadd", "T", "t")  # t: the time of models with
-# prescribed motions; gamma, gammad, gammadd (the mechanism's coordinates) and T (a wrench) of the support routines
+INPUT_KINDS = ("q", "qd", "qdd", "tau", "gamma", "gammad", "gammadd", "T", "t", "v", "dt")  # t: the time of models
+# with prescribed motions; gamma, gammad, gammadd (the mechanism's coordinates) and T (a wrench) of the support
+# routines; v (a velocity, nv) and dt (a time step) of integrate
 
 
 @dataclass(frozen=True)
@@ -116,7 +117,9 @@ def input_length(model, name: str, routine: Routine | None = None) -> int:
         return routine.input_lengths(model)[name]
     if name in ("gamma", "gammad", "gammadd"):
         return model.mechanism_coordinates
-    return len(model.parameters) if name == "p" else 1 if name == "t" else 6 if name == "T" else model.nq
+    if name == "q":
+        return model.nq
+    return len(model.parameters) if name == "p" else 1 if name in ("t", "dt") else 6 if name == "T" else model.nv
 
 
 def c_symbol(model, routine: Routine) -> str:
@@ -149,7 +152,10 @@ def parameter_macro(model, parameter) -> str:
 
 def header_macros(model, routines) -> list:
     """(macro, value, comment) of the header: NQ, NP, one index per parameter, one size per output array."""
-    out = [(f"{model.name}_NQ".upper(), model.nq, "coordinates: the length of q, qd, qdd, tau"),
+    out = [(f"{model.name}_NQ".upper(), model.nq, "the length of q" if model.nq != model.nv else
+            "coordinates: the length of q, qd, qdd, tau"),
+           (f"{model.name}_NV".upper(), model.nv, "velocities: the length of qd, qdd, tau" +
+            (" (q has NQ entries: a free-flyer's quaternion)" if model.nq != model.nv else " (= NQ)")),
            (f"{model.name}_NP".upper(), len(model.parameters), "parameters: the length of p")]
     for i, p in enumerate(model.parameters):
         out.append((parameter_macro(model, p), i, "index in p"))
@@ -169,11 +175,18 @@ def header_macros(model, routines) -> list:
 
 
 def nq_vector(model):
-    return (model.nq,)
+    """n: a vector of generalized forces or accelerations (Pinocchio's nv; = the length of q but with a
+    free-flyer)."""
+    return (model.nv,)
 
 
 def nq_square(model):
-    return (model.nq, model.nq)
+    return (model.nv, model.nv)
+
+
+def positions_vector(model):
+    """The length of q."""
+    return (model.nq,)
 
 
 def scalar(model):
@@ -294,7 +307,7 @@ def _minus(a, b):
 
 
 def _zeros(kin):
-    return [0] * kin.tree.nq
+    return [0] * kin.tree.nv
 
 
 def _gravity(bound, kin, x):
@@ -400,7 +413,7 @@ def constraint_rows_vector(model):
 
 
 def constraint_jacobian_shape(model):
-    return (model.constraint_rows, model.nq)
+    return (model.constraint_rows, model.nv)
 
 
 def constraint_square(model):
@@ -563,6 +576,20 @@ register(Routine("support_inverse", ("q", "qd", "qdd", "gamma", "gammad", "T", "
                  layout=support_layout, applies=_has_support, coupled=None, input_lengths=support_lengths))
 
 
+def _has_quaternion(model) -> bool:
+    """A free-flyer root (--floating-base quaternion): q has nq = nv + 1 entries."""
+    return any(b.pair.quaternion for b in model.bodies)
+
+
+register(Routine("integrate", ("q", "v", "dt"), (Output("q_next", positions_vector),),
+                 lambda bound, kin, x: (manifold.integrate(bound, x["q"], x["v"], x["dt"][0]),),
+                 "q (+) v dt, Pinocchio's integrate: the joints q + v dt, the free-flyer root M exp((v, w) dt) in "
+                 "SE(3) (its quaternion normalized)",
+                 layout=lambda model: {"q_next": "the same layout as q (the manifest's 'coordinates'); v has the "
+                                                 "layout of the 'velocities'; dt is one number"},
+                 applies=_has_quaternion, coupled=None))
+
+
 def _inverse_dynamics_derivatives(bound, kin, x):
     dq, dqd = derivatives.inverse_dynamics_derivatives(bound, kin, x["qd"], x["qdd"])
     return _flat(dq), _flat(dqd)
@@ -632,7 +659,7 @@ register(Routine("frame_poses", ("q", "p"), (Output("X", lambda model: (frame_co
                                      "origin in world axes, then R row-major: x_world = R x_frame + origin"),
                  applies=_has_frames, coupled="tree"))
 register(Routine("frame_jacobians", ("q", "p"),
-                 (Output("J", lambda model: (frame_count(model), 6, model.nq)),),
+                 (Output("J", lambda model: (frame_count(model), 6, model.nv)),),
                  lambda bound, kin, x: (_flat(frames.frame_jacobians(bound, kin)),),
                  "per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each "
                  "coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the "
@@ -656,7 +683,7 @@ register(Routine("center_of_mass", ("q", "p"), (Output("c", lambda model: (3,)),
                  "moment of Theta_lk (2.3)",
                  layout=lambda model: {"rows": ["x", "y", "z"], "convention": COM_CONVENTION}, coupled="tree",
                  applies=_has_moving_mass))
-register(Routine("com_jacobian", ("q", "p"), (Output("Jc", lambda model: (3, model.nq)),),
+register(Routine("com_jacobian", ("q", "p"), (Output("Jc", lambda model: (3, model.nv)),),
                  lambda bound, kin, x: (_flat(frames.com_jacobian(bound, kin)),),
                  "the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the "
                  "subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the "
@@ -664,7 +691,7 @@ register(Routine("com_jacobian", ("q", "p"), (Output("Jc", lambda model: (3, mod
                  layout=lambda model: {"rows": ["x", "y", "z"], "columns": [c.name for c in model.coordinates],
                                        "order": "row-major", "convention": COM_CONVENTION}, coupled="rows",
                  applies=_has_moving_mass))
-register(Routine("centroidal_map", ("q", "p"), (Output("Ag", lambda model: (6, model.nq)),),
+register(Routine("centroidal_map", ("q", "p"), (Output("Ag", lambda model: (6, model.nv)),),
                  lambda bound, kin, x: (_flat(frames.centroidal_map(bound, kin)),),
                  "the centroidal momentum matrix A_G, 6 x n row-major: h_G = A_G qd, the linear momentum and the "
                  "angular momentum about the centre of mass, world axes (Pinocchio's computeCentroidalMap)",
@@ -675,7 +702,7 @@ register(Routine("centroidal_map", ("q", "p"), (Output("Ag", lambda model: (6, m
 
 
 def regressor_shape(model):
-    return (model.nq, 10 * len(regressor.blocks(model)))
+    return (model.nv, 10 * len(regressor.blocks(model)))
 
 
 def regressor_layout(model) -> dict:
@@ -733,7 +760,7 @@ def base_parameters(model) -> tuple:
     samples = max(8, -(-4 * P // max(n, 1)))
     rng = np.random.default_rng(BASE_SEED)
     bound = bind(model, Numeric())
-    x = {"q": list(rng.uniform(-np.pi, np.pi, (n, samples))), "qd": list(rng.normal(size=(n, samples))),
+    x = {"q": list(sample_configurations(model, rng, samples)), "qd": list(rng.normal(size=(n, samples))),
          "qdd": list(rng.normal(size=(n, samples)))}
     flat = run(ROUTINES["regressor"], bound, x)[0]
     Y = np.stack([np.broadcast_to(np.asarray(v, dtype=float), (samples,)) for v in flat]).reshape(n, P, samples)
@@ -790,7 +817,7 @@ def base_regressor_layout(model) -> dict:
             if beta[r, d] != 0.0:
                 combination[names[jd]] = float(beta[r, d])
         items.append({"name": names[j], "column": j, "combination": combination})
-    return {"Yb": {"shape": [model.nq, len(independent)], "order": "row-major"},
+    return {"Yb": {"shape": [model.nv, len(independent)], "order": "row-major"},
             "base_parameters": items,
             "convention": ("tau = Yb pi_b; pi_b[r] = sum of coefficient * standard parameter over 'combination' (names "
                            "PARAM_BODY of the regressor's blocks: see layouts.regressor); Yb is the regressor's columns "
@@ -807,7 +834,7 @@ register(Routine("regressor", ("q", "qd", "qdd", "p"), (Output("Y", regressor_sh
                  "wrench (2.10) is linear in pi, carried by the backward sweep (2.41)-(2.42), projected by (2.15)",
                  layout=regressor_layout, coupled="columns", on_request=True))
 register(Routine("base_regressor", ("q", "qd", "qdd", "p"),
-                 (Output("Yb", lambda model: (model.nq, len(base_parameters(model)[0]))),),
+                 (Output("Yb", lambda model: (model.nv, len(base_parameters(model)[0]))),),
                  lambda bound, kin, x: (_base_columns(bound, kin, x),),
                  "the base regressor Yb, n x r row-major: the regressor's r independent columns, tau = Yb pi_b with "
                  "the base parameters of the manifest (each a combination of standard parameters, found at "
@@ -860,6 +887,21 @@ def select_routines(model, names):
     return dataclasses.replace(model, routines=tuple(chosen))
 
 
+def sample_configurations(model, rng, size=None):
+    """Random configurations q (shape (nq,), or (nq, size)): each coordinate uniform in [-pi, pi]; a free-flyer's
+    position uniform in [-pi, pi]^3 and its quaternion a random unit quaternion (the samples of the checks, the
+    base parameters and the redundancy tests)."""
+    import numpy as np
+
+    shape = (model.nq,) if size is None else (model.nq, size)
+    q = rng.uniform(-np.pi, np.pi, shape)
+    for idx, b in zip(Tree(model).positions, model.bodies):
+        if b.pair.quaternion:
+            quat = rng.normal(size=(4,) + shape[1:])
+            q[idx[3]:idx[3] + 4] = quat / np.linalg.norm(quat, axis=0)
+    return q
+
+
 def massless_coordinates(model, samples: int = 2, tolerance: float = 1e-12) -> tuple:
     """(coordinate indices with A_ii = 0, whether A(q) is singular), at the default parameters and a few fixed
     random configurations: A_ii = psi_i^T A+ psi_i is the kinetic energy of a unit rate of coordinate i alone,
@@ -869,16 +911,17 @@ def massless_coordinates(model, samples: int = 2, tolerance: float = 1e-12) -> t
     from .core.backend import Numeric
     from .mechanics.bound import bind
 
-    if model.nq == 0:
+    n = model.nv
+    if n == 0:
         return (), False
     bound = bind(model, Numeric())
     rng = np.random.default_rng(0)
-    zero, singular = set(range(model.nq)), False
+    zero, singular = set(range(n)), False
     for _ in range(samples):
-        q = [float(x) for x in rng.uniform(-np.pi, np.pi, model.nq)]
-        A = np.array(run(ROUTINES["inertia"], bound, {"q": q})[0], dtype=float).reshape(model.nq, model.nq)
+        q = [float(x) for x in sample_configurations(model, rng)]
+        A = np.array(run(ROUTINES["inertia"], bound, {"q": q})[0], dtype=float).reshape(n, n)
         scale = max(float(np.abs(A).max()), 1e-300)
-        zero &= {i for i in range(model.nq) if abs(A[i, i]) <= tolerance * scale}
+        zero &= {i for i in range(n) if abs(A[i, i]) <= tolerance * scale}
         singular = singular or float(np.linalg.eigvalsh(A)[0]) <= tolerance * scale
     return tuple(sorted(zero)), singular
 
@@ -899,9 +942,9 @@ def redundant_constraints(model, samples: int = 2, tolerance: float = 1e-9) -> l
     bound = bind(model, Numeric())
     rng = np.random.default_rng(0)
     dependent = set()
-    for q in [np.zeros(model.nq)] + [rng.uniform(-np.pi, np.pi, model.nq) for _ in range(samples)]:
+    for q in [bound.tree.neutral] + [sample_configurations(model, rng) for _ in range(samples)]:
         J = np.array(run(ROUTINES["constraint_jacobian"], bound, {"q": [float(x) for x in q]})[0], dtype=float)
-        J = J.reshape(model.constraint_rows, model.nq)
+        J = J.reshape(model.constraint_rows, model.nv)
         scale = max(float(np.abs(J).max()), 1e-300)
         dependent, kept = set(), []
         for r in range(J.shape[0]):
@@ -1000,7 +1043,9 @@ def manifest(model, routines, ops: dict, omitted=None) -> dict:
     out = {
         "name": model.name,
         "nq": model.nq,
-        "coordinates": [{"name": c.name, "joint": c.joint, "kind": c.kind} for c in model.coordinates],
+        "nv": model.nv,
+        "coordinates": [{"name": name, "joint": joint, "kind": kind} for name, joint, kind in model.positions],
+        "velocities": [{"name": c.name, "joint": c.joint, "kind": c.kind} for c in model.coordinates],
         "parameters": [{"name": p.name, "value": p.value} for p in model.parameters],
         "functions": {r.role: c_symbol(model, r) for r in routines},
         "descriptions": {r.role: r.doc for r in routines},

@@ -27,8 +27,9 @@ from .model.types import TIME
 
 
 def coordinate_symbols(model):
-    """(q, qd, qdd) as lists of real SymPy symbols named after the coordinates: x, x_d, x_dd."""
-    q = [sp.Symbol(c.name, real=True) for c in model.coordinates]
+    """(q, qd, qdd) as lists of real SymPy symbols named after the coordinates: x, x_d, x_dd (q: the entries of q,
+    a free-flyer's seven positions included, :attr:`aggsym.model.types.Model.positions`)."""
+    q = [sp.Symbol(name, real=True) for name, _, _ in model.positions]
     qd = [sp.Symbol(c.name + "_d", real=True) for c in model.coordinates]
     qdd = [sp.Symbol(c.name + "_dd", real=True) for c in model.coordinates]
     return q, qd, qdd
@@ -53,13 +54,14 @@ class Equations:
         prog = self._backend.program
         self._bound = bind(model, self._backend, tree=self.tree)
         self._q = prog.vector("q", model.nq)
-        self._qd = prog.vector("qd", model.nq)
-        self._qdd = prog.vector("qdd", model.nq)
+        self._qd = prog.vector("qd", model.nv)
+        self._qdd = prog.vector("qdd", model.nv)
         self._kin = TreeKinematics(self._bound, self._q)
         self._symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
         self._symbols[("t", 0)] = TIME  # the time of prescribed motions (rotors)
         for i in range(model.nq):
             self._symbols[("q", i)] = q[i]
+        for i in range(model.nv):
             self._symbols[("qd", i)] = qd[i]
             self._symbols[("qdd", i)] = qdd[i]
 
@@ -98,28 +100,28 @@ class Equations:
     @cached_property
     def A(self) -> sp.Matrix:
         A = inertia_matrix(self._bound, self._kin)
-        return self._matrix([x for row in A for x in row], self.model.nq, self.model.nq)
+        return self._matrix([x for row in A for x in row], self.model.nv, self.model.nv)
 
     @cached_property
     def b(self) -> sp.Matrix:
-        return self._matrix(bias_vector(self._bound, self._kin, self._qd), self.model.nq, 1)
+        return self._matrix(bias_vector(self._bound, self._kin, self._qd), self.model.nv, 1)
 
     @cached_property
     def g(self) -> sp.Matrix:
-        return self._matrix(gravity_vector(self._bound, self._kin), self.model.nq, 1)
+        return self._matrix(gravity_vector(self._bound, self._kin), self.model.nv, 1)
 
     @cached_property
     def u_star(self) -> sp.Matrix:
         """The preplanned control u* = tau for the motion (q, q', q'') by the forward and backward sweeps
         (2.39)-(2.42), without assembling A, b, g; with the elastic forces C (q - q0) of (2.27) where there are
         springs."""
-        return self._matrix(inverse_dynamics(self._bound, self._kin, self._qd, self._qdd), self.model.nq, 1) + self.c
+        return self._matrix(inverse_dynamics(self._bound, self._kin, self._qd, self._qdd), self.model.nv, 1) + self.c
 
     @cached_property
     def c(self) -> sp.Matrix:
         """C (q - q0), the elastic generalized force of (2.27) (zero without elastic pairs)."""
         c = to_sympy(self._backend.program, elastic_forces(self._bound, self._q), self._symbols)
-        return sp.Matrix(self.model.nq, 1, [sp.expand(x) for x in c])
+        return sp.Matrix(self.model.nv, 1, [sp.expand(x) for x in c])
 
     def transvective_factors(self, simplify: bool = False):
         """The Cauchy form (3.20) as SymPy objects: ``(T_factors, diag)``.
@@ -134,7 +136,7 @@ class Equations:
         if simplify:
             args = [sp.simplify(a) for a in args]
             diag = [sp.simplify(d) for d in diag]
-        n = self.model.nq
+        n = self.model.nv
         factors = []
         for (t, k), a in zip(fac.pairs, args):
             if a == 0:

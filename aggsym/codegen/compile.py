@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..contract import ROUTINES, input_length, signature
+from ..contract import ROUTINES, input_length, sample_configurations, signature
 from ..errors import AggsymError
 from ..twin import NumericTwin
 
@@ -113,7 +113,9 @@ def random_inputs(model, role, rng):
         if name == "p":
             continue
         size = input_length(model, name, routine)
-        if name in ("q", "gamma"):
+        if name == "q" and size == model.nq:
+            args.append(sample_configurations(model, rng))
+        elif name in ("q", "gamma"):
             args.append(rng.uniform(-np.pi, np.pi, size))
         elif name == "t":
             args.append(float(rng.uniform(0, 10)))

@@ -17,6 +17,7 @@ import time
 import warnings
 from dataclasses import dataclass, field
 from importlib.resources import files
+from types import SimpleNamespace
 from pathlib import Path
 
 import jinja2
@@ -238,7 +239,9 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
         "version": __version__,
         "parameters": [(p.name, repr(float(p.value))) for p in model.parameters],
         "macros": header_macros(model, [e.routine for e in emitted]),
-        "coordinates": model.coordinates,
+        "coordinates": [SimpleNamespace(name=n, joint=j, kind=k) for n, j, k in model.positions],
+        "velocities": model.coordinates if model.nq != model.nv else None,
+        "nv": model.nv,
         "frames": model.frames if any(e.routine.role.startswith("frame_") for e in emitted) else (),
         "sincos": any("aggsym_sincos(" in line for r in emitted for line in r.c_body),
         "sign": any("aggsym_sign(" in line for r in emitted for line in r.c_body),

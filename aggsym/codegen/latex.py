@@ -30,12 +30,15 @@ def _dotted(name_latex: str, accent: str) -> str:
 
 def symbol_names(model) -> dict:
     """LaTeX for the coordinate symbols and their derivatives: theta36 -> \\theta_{36}, \\dot{\\theta}_{36}."""
-    q, qd, qdd = coordinate_symbols(model)
+    _, qd, qdd = coordinate_symbols(model)
+    free = {c.name for b in model.bodies if b.pair.quaternion for c in b.pair.coordinates}
     names = {}
-    for s, d, dd in zip(q, qd, qdd):
-        base = sp.latex(s)
-        names[d] = _dotted(base, "dot")
-        names[dd] = _dotted(base, "ddot")
+    for c, d, dd in zip(model.coordinates, qd, qdd):
+        base = sp.latex(sp.Symbol(c.name, real=True))
+        if c.name in free:  # a free-flyer's velocity is no coordinate's rate: v, its rate v-dot
+            names[d], names[dd] = base, _dotted(base, "dot")
+        else:
+            names[d], names[dd] = _dotted(base, "dot"), _dotted(base, "ddot")
     return names
 
 
@@ -83,7 +86,7 @@ def closed_form(model):
     """Closed forms: the nonzero entries of A (upper triangle), b and g, and the scalar equations (2.26)."""
     eq = Equations(model, simplify=True)
     names = symbol_names(model)
-    n = model.nq
+    n = model.nv
     sections = []
     rows = [broken(f"A_{{{i + 1}{j + 1}}}", _terms(eq.A[i, j], names))
             for i in range(n) for j in range(i, n) if eq.A[i, j] != 0]
@@ -121,7 +124,7 @@ def cauchy_form(model):
     (beta,beta)_k, and q'' = T^T diag(1/(beta,beta)) T F with T the product of the transvections (3.9)."""
     eq = Equations(model)
     names = symbol_names(model)
-    n = model.nq
+    n = model.nv
     factors, diag = eq.transvective_factors(simplify=False)
 
     def readable(x):
@@ -225,7 +228,7 @@ def intermediate_form(model, prog, outputs, roles=("inertia", "bias", "gravity")
             named = getattr(x, "id", None) in sym
             value = printer._print(conv(x, top=not named))
             if role == "inertia":
-                i, j = divmod(k, model.nq)
+                i, j = divmod(k, model.nv)
                 if j < i:
                     continue
                 target = f"{label}_{{{i + 1},{j + 1}}}"
@@ -256,7 +259,7 @@ def constraint_section(model, prog, outputs, small: bool):
         symbols[("t", 0)] = TIME
         J = to_sympy(prog, outputs["constraint_jacobian"][0], symbols)
         gamma = to_sympy(prog, outputs["constraint_bias"][0], symbols)
-        n = model.nq
+        n = model.nv
         for r in range(model.constraint_rows):
             for j in range(n):
                 x = sp.trigsimp(J[r * n + j])
@@ -273,7 +276,7 @@ def constraint_section(model, prog, outputs, small: bool):
 def latex_document(model, env, prog, outputs) -> str:
     """The standalone LaTeX document (rendered through templates/model.tex.j2)."""
     flat = [x for role in ("inertia", "bias", "gravity") if role in outputs for o in outputs[role] for x in o]
-    small = (not model.couplings and model.nq <= CLOSED_FORM_MAX_NQ
+    small = (not model.couplings and model.nv <= CLOSED_FORM_MAX_NQ
              and len(prog.reachable(flat)) <= CLOSED_FORM_MAX_NODES
              and expanded_terms(prog, flat) <= CLOSED_FORM_MAX_TERMS)
     names = symbol_names(model)
@@ -281,7 +284,7 @@ def latex_document(model, env, prog, outputs) -> str:
     ctx = {
         "name": model.name,
         "description": model.description or "",
-        "coordinates": [(sp.latex(s), c.joint, c.kind) for s, c in zip(q, model.coordinates)],
+        "coordinates": [(sp.latex(s), joint, kind) for s, (_, joint, kind) in zip(q, model.positions)],
         "parameters": [(sp.latex(p.symbol), repr(p.value)) for p in model.parameters],
         "gravity": ", ".join(sp.latex(g) for g in model.gravity),
         "closed": closed_form(model) if small else None,

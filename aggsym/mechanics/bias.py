@@ -66,7 +66,7 @@ def coriolis_matrix(bound, kin, qd, skew=False):
 
     O(n) per column; n x n rows.  For models without prescribed motions: a prescribed spin's terms in b are not
     of the form B q' (the partition and coriolis routines are not emitted for them)."""
-    n = kin.tree.nq
+    n = kin.tree.nv
     B = [[0] * n for _ in range(n)]
     for j, Z in enumerate(coriolis_wrenches(bound, kin, qd, skew)):
         col = generalized(kin, Z)
@@ -79,7 +79,7 @@ def coriolis_wrenches(bound, kin, qd, skew=False):
     """Per column j of :func:`coriolis_matrix`, the wrenches Z = L Y accumulated towards the root (before the
     projection F^T M^T): Z[0] is the column's wrench at the root, in the root's axes."""
     tree = kin.tree
-    n = tree.nq
+    n = tree.nv
     V = kin.velocities(qd)
     S = kin.parastrophic()
     for j in range(n):

@@ -269,8 +269,8 @@ class Disc:
 
 
 def rest_kinematics(bound) -> ConstraintKinematics:
-    """The constraints at q = 0 and t = 0 (constants, or expressions in the parameters)."""
-    kin0 = TreeKinematics(bound, [0] * bound.tree.nq)
+    """The constraints at q = 0 (a free-flyer's unit quaternion: the identity) and t = 0 (constants, or expressions in the parameters)."""
+    kin0 = TreeKinematics(bound, bound.tree.neutral)
     return ConstraintKinematics(bound, kin0, rest=True)
 
 

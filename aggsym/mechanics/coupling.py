@@ -26,7 +26,7 @@ class Coupler:
 
     def __init__(self, model, tree):
         index = {c.name: i for i, c in enumerate(model.pair_coordinates)}
-        self.n_tree = tree.nq
+        self.n_tree = tree.nv
         self.free = [index[c.name] for c in model.coordinates]  # q's coordinates in the tree
         position = {t: i for i, t in enumerate(self.free)}
         self.coupled = [(index[c.coordinate], position[index[c.master]], index[c.master], c.multiplier, c.offset)

@@ -10,12 +10,16 @@ Forward dynamics: q'' solves A(q) q'' + d(q, qd) = tau, so along any input x (q 
 dynamics' own q'' (and dq''/dtau = A^-1).  A^-1 is applied column by column with the transvective factors,
 ``A^-1 v = T^T diag(1/(beta,beta)) T v`` (3.19)-(3.20) in O(n) per column (:func:`~.transvective.cauchy_solve_tree`):
 no dense inverse.
+
+With a free-flyer root the directions along q are Pinocchio's tangent space (nv of them, not nq): the root moves
+as ``q (+) d = (M exp(d))``, d = (dv, dw) in the body's axes, whose first-order change of the seven positions is
+``dx = R dv`` and ``dquat = quat * (dw/2, 0)`` (quaternion product; ``d R = R hat(dw)``): those are the seeds.
 """
 from __future__ import annotations
 
 import dataclasses
 
-from ..core.dual import Dual, DualBackend, tangent
+from ..core.dual import Dual, DualBackend, lift, tangent
 from .elastic import elastic_forces
 from .kinematics import TreeKinematics
 from .sweeps import inverse_dynamics
@@ -24,25 +28,48 @@ from .transvective import articulated_factors, cauchy_solve_tree, forward_dynami
 
 def _dual_inverse_dynamics(bound, kin, qd, qdd) -> tuple:
     """tau (duals) at (kin.q, qd, qdd) with tangents along q (0..n-1) and qd (n..2n-1)."""
-    n = kin.tree.nq
+    n = kin.tree.nv
     dual = dataclasses.replace(bound, backend=DualBackend(bound.backend))
-    q = [Dual(x, {i: 1}) for i, x in enumerate(kin.q)]
+    q = tangent_seeds(kin)
     rates = [Dual(x, {n + i: 1}) for i, x in enumerate(qd)]
     dkin = TreeKinematics(dual, q)
     tau = inverse_dynamics(dual, dkin, rates, qdd)
     return [a + b for a, b in zip(tau, elastic_forces(dual, q))]
 
 
+def tangent_seeds(kin) -> list:
+    """q as duals with unit tangents along the velocity directions 0..nv-1 (a free-flyer's seven positions along
+    its six directions, see the module's text)."""
+    q = list(kin.q)
+    for k, (idx, coords) in enumerate(zip(kin.tree.positions, kin.tree.coords)):
+        if not kin.free[k]:
+            for p, i in zip(idx, coords):
+                q[p] = Dual(kin.q[p], {i: 1})
+            continue
+        R = kin.functional[k].c
+        x, y, z, w = (kin.q[p] for p in idx[3:])
+        half = (x / 2, y / 2, z / 2, w / 2)
+        for a in range(3):  # the origin: R dv
+            q[idx[a]] = lift(kin.q[idx[a]], {coords[j]: R[a][j] for j in range(3)})
+        # quat * (e_j/2, 0) = (w e_j + v x e_j, -v_j) / 2 for v = (x, y, z)
+        cross = ((0, half[2], -half[1]), (-half[2], 0, half[0]), (half[1], -half[0], 0))  # v x e_j / 2, by j
+        for a in range(3):
+            q[idx[3 + a]] = lift(kin.q[idx[3 + a]],
+                                 {coords[3 + j]: (half[3] if a == j else 0) + cross[j][a] for j in range(3)})
+        q[idx[6]] = lift(kin.q[idx[6]], {coords[3 + j]: -half[j] for j in range(3)})
+    return q
+
+
 def inverse_dynamics_derivatives(bound, kin, qd, qdd) -> tuple:
     """(dtau/dq, dtau/dqd) as n x n rows (entry (i, j): d tau_i / d q_j)."""
-    n = kin.tree.nq
+    n = kin.tree.nv
     tau = _dual_inverse_dynamics(bound, kin, qd, qdd)
     return ([[tangent(t, j) for j in range(n)] for t in tau], [[tangent(t, n + j) for j in range(n)] for t in tau])
 
 
 def forward_dynamics_derivatives(bound, kin, qd, tau) -> tuple:
     """(dqdd/dq, dqdd/dqd) as n x n rows, at q'' = forward dynamics (tau already less the elastic force)."""
-    n = kin.tree.nq
+    n = kin.tree.nv
     fac = articulated_factors(bound, kin, arguments=False)
     qdd = forward_dynamics(bound, kin, tau, qd, fac)
     dq, dqd = inverse_dynamics_derivatives(bound, kin, qd, qdd)

@@ -38,7 +38,7 @@ def is_elastic(model) -> bool:
 def stiffness_matrix(bound) -> list:
     """C as n x n rows of backend scalars: block diagonal over the elastic pairs (2.27)."""
     tree = bound.tree
-    n = tree.nq
+    n = tree.nv
     C = [[0] * n for _ in range(n)]
     for k, body in enumerate(bound.bodies):
         if body.stiffness is None:
@@ -52,12 +52,12 @@ def stiffness_matrix(bound) -> list:
 
 def deformations(bound, q) -> list:
     """q - q0 on the elastic pairs' coordinates, 0 elsewhere."""
-    out = [0] * bound.tree.nq
+    out = [0] * bound.tree.nv
     for k, body in enumerate(bound.bodies):
         if body.stiffness is None:
             continue
-        for i, r in zip(bound.tree.coords[k], body.rest):
-            out[i] = q[i] - r
+        for i, j, r in zip(bound.tree.coords[k], bound.tree.positions[k], body.rest):
+            out[i] = q[j] - r
     return out
 
 
@@ -65,7 +65,7 @@ def elastic_forces(bound, q) -> list:
     """C (q - q0), the generalized elastic force on the left side of (2.27): n scalars (0 off elastic pairs)."""
     tree = bound.tree
     d = deformations(bound, q)
-    out = [0] * tree.nq
+    out = [0] * tree.nv
     for k, body in enumerate(bound.bodies):
         if body.stiffness is None:
             continue
@@ -92,7 +92,7 @@ def elastic_energy(bound, q):
 def fast_slow(model) -> tuple:
     """(slow, fast): coordinate indices of the non-elastic and the elastic motions, each in q order (Prop. 2.14)."""
     fast = list(model.elastic_coordinates)
-    slow = [i for i in range(model.nq) if i not in set(fast)]
+    slow = [i for i in range(model.nv) if i not in set(fast)]
     return slow, fast
 
 

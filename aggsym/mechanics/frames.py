@@ -129,7 +129,7 @@ def center_of_mass(bound, kin) -> list:
 def com_jacobian(bound, kin) -> list:
     """dG/dq: 3 x n rows, column i = p_i / M."""
     mass = MassDistribution(bound, kin)
-    rows = [[0] * kin.tree.nq for _ in range(3)]
+    rows = [[0] * kin.tree.nv for _ in range(3)]
     inv = 1 / mass.total.m
     for i, X, w, u in mass.columns(kin):
         for a, x in enumerate(linear_momentum(X, w, u)):
@@ -141,7 +141,7 @@ def centroidal_map(bound, kin) -> list:
     """A_G: 6 x n rows, h_G = A_G qd (linear momentum, angular momentum about G, world axes)."""
     mass = MassDistribution(bound, kin)
     G = mass.centre()
-    rows = [[0] * kin.tree.nq for _ in range(6)]
+    rows = [[0] * kin.tree.nv for _ in range(6)]
     for i, X, w, u in mass.columns(kin):
         p = linear_momentum(X, w, u)
         L = sub(add(cross(X.h, u), mv(X.theta, w)), cross(G, p))  # L_O - G x p

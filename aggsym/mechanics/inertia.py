@@ -26,7 +26,7 @@ def composite_inertias(bound, kin):
 def inertia_matrix(bound, kin, plus=None):
     """A(q) by (2.33)-(2.34), as an n x n list of rows (O(n d) blocks, d the tree depth)."""
     tree = kin.tree
-    n = tree.nq
+    n = tree.nv
     A = [[0] * n for _ in range(n)]
     plus = composite_inertias(bound, kin) if plus is None else plus
     for k in range(len(tree)):

@@ -13,6 +13,11 @@ For the tree (1.34)-(1.43): ``V_lk = L^T V_parent + M F q'`` (2.39), the rows of
 ``s^{st}_{lk} = s^{st}_{parent} L^{parent}_{lk}`` (1.43), and the column ``X = S'^T q'`` by (2.37):
 ``X_lk = L^T X_parent + L'^T V_parent + (M F)' q'`` where ``L'^T V_parent = Phi-action(L^T V_parent, V_pair)``.
 
+A free-flyer pair (Pinocchio's JointModelFreeFlyer, :attr:`aggsym.model.types.Pair.positions`) is placed by seven
+entries of q, the origin (x, y, z) in the parent's axes and a unit quaternion (qx, qy, qz, qw), ``L = T(x) C(R(quat))``;
+its six coordinates are the body's quasi-velocity (v, w) itself (Def. 1.9), so ``M F`` is the unit matrix and
+``(M F)' q' = 0``: the recursions take the velocity as it is.
+
 A pair with a prescribed motion (a rotor's spin (2.13)) has no coordinate; its relative quasi-velocity U = f theta'
 and quasi-acceleration U' = f theta'' are known at the bound time (``BoundBody.spin``) and enter wherever the
 pair's own M F q' and (M F)' q' + M F q'' do: V, X (so X is the quasi-acceleration at q'' = 0) and V'.
@@ -63,6 +68,24 @@ def pair_functional(codes, qv, backend):
     return Motion(c, tuple(o)), psi, rots
 
 
+def quaternion_rotation(x, y, z, w):
+    """The rotation of the unit quaternion (x, y, z, w) = (sin(a/2) e, cos(a/2)): the axes of the turned frame in the
+    fixed one, ``E + 2 w hat(v) + 2 hat(v)^2`` with v = (x, y, z) (the form Pinocchio and Eigen use; it assumes
+    a unit quaternion)."""
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
+    return ((1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)),
+            (2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)),
+            (2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)))
+
+
+def free_flyer(qv):
+    """The functional motion of a free-flyer pair from its seven positions, and its unit M F columns."""
+    motion = Motion(quaternion_rotation(*qv[3:7]), tuple(qv[:3]))
+    psi = [tuple(1 if j == i else 0 for j in range(6)) for i in range(6)]
+    return motion, psi, []
+
+
 def pair_velocity_product(codes, qdv, rots):
     """(M F)' q' of (2.19): the pair's relative quasi-acceleration at zero q'' (:func:`pair_velocity_bilinear`
     with w = u); zero for a single coordinate."""
@@ -110,7 +133,7 @@ def project(psi, F):
 
 def generalized(kin, Z):
     """F^T M^T Z: the projection of every body's wrench on its pair's axes, in coordinate order (2.15), (2.46)."""
-    out = [0] * kin.tree.nq
+    out = [0] * kin.tree.nv
     for k in range(len(kin.tree)):
         for i, x in zip(kin.tree.coords[k], project(kin.psi[k], Z[k])):
             out[i] = x
@@ -129,9 +152,13 @@ class TreeKinematics:
         self.functional = []  # the functional motion of each pair, T(o) C(c1 c2 c3)
         self.rotations = []  # its elementary rotations in order, (axis, matrix)
         self.memo = {}  # whole-tree results that several routines of one run share (the regressor)
+        self.free = [b.pair.quaternion for b in bound.model.bodies]  # free-flyer pairs: constant M F
         for k, body in enumerate(bound.bodies):
-            qv = [q[i] for i in self.tree.coords[k]]
-            functional, psi, rots = pair_functional(body.codes, qv, bound.backend)
+            qv = [q[i] for i in self.tree.positions[k]]
+            if self.free[k]:
+                functional, psi, rots = free_flyer(qv)
+            else:
+                functional, psi, rots = pair_functional(body.codes, qv, bound.backend)
             self.L.append(body.L0.compose(functional))
             self.psi.append(psi)
             self.functional.append(functional)
@@ -144,7 +171,7 @@ class TreeKinematics:
         moves by L at once (its parallel-axis form costs about the same for any o), a general block by the
         functional translation first (along one axis its translated form skips most products).  The one congruence through a pair: composite
         bodies (2.32) and the articulated blocks of (3.7) both move by it."""
-        if not self.rotations[k] and isinstance(X, Rigid):
+        if not self.rotations[k] and (isinstance(X, Rigid) or self.free[k]):
             return X.moved(self.L[k])
         for axis, rot in reversed(self.rotations[k]):
             i = axis % 3  # the plane's first axis: rot[i][i] = cos, rot[(i + 1) % 3][i] = sin
@@ -166,12 +193,16 @@ class TreeKinematics:
     def relative_acceleration(self, k, qd):
         """(M F)' q' of pair k (2.19), plus the prescribed U' of a rotor's pair: its relative quasi-acceleration
         at zero q'' (child frame)."""
+        if self.free[k]:
+            return ZERO6
         out = pair_velocity_product(self.bound.bodies[k].codes, self.pair_rates(k, qd), self.rotations[k])
         spin = self.bound.bodies[k].spin
         return out if spin is None else add(out, spin[1])
 
     def relative_acceleration_bilinear(self, k, u, w):
         """(M F)'(u) w of pair k, u and w rate vectors of all coordinates (see :func:`pair_velocity_bilinear`)."""
+        if self.free[k]:
+            return ZERO6
         return pair_velocity_bilinear(self.bound.bodies[k].codes, self.pair_rates(k, u), self.pair_rates(k, w),
                                       self.rotations[k])
 
@@ -255,7 +286,7 @@ def point_rows(kin, poses, k, P, B=None, m=-1) -> list:
     and not on k's.  These are the columns of the parastrophic matrix S (1.42) moved to the point: for m = -1
     and B = None, the frame Jacobian (LOCAL_WORLD_ALIGNED)."""
     tree = kin.tree
-    n = tree.nq
+    n = tree.nv
     lin, ang = [[0] * n for _ in range(3)], [[0] * n for _ in range(3)]
     on_k = set(tree.ancestors(k))
     on_m = set(tree.ancestors(m)) if m >= 0 else set()
@@ -294,5 +325,5 @@ def world_frame_vectors(kin, vec_world):
 
 
 __all__ = ["TreeKinematics", "pair_functional", "pair_velocity_product", "pair_velocity_bilinear", "combine",
-           "project", "world_frame_vectors", "world_poses", "generalized", "moving_bodies", "point_rows",
+           "project", "world_frame_vectors", "quaternion_rotation", "free_flyer", "world_poses", "generalized", "moving_bodies", "point_rows",
            "point_motion", "ZERO6"]

@@ -67,7 +67,7 @@ def regressor(bound, kin, qd, qdd) -> list:
 def _regressor(bound, kin, qd, qdd) -> list:
     tree = kin.tree
     ks = [k for k, moves in enumerate(moving_bodies(bound)) if moves]
-    rows = [[0] * (10 * len(ks)) for _ in range(tree.nq)]
+    rows = [[0] * (10 * len(ks)) for _ in range(tree.nv)]
     origins = origin_sweep(bound, kin, qd, qdd, neg(bound.gravity))
     S = kin.parastrophic()
     for b, k in enumerate(ks):

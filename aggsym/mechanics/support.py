@@ -53,7 +53,7 @@ def _columns(bound, kin) -> list:
     tree = kin.tree
     plus = composite_inertias(bound, kin)
     cols = []
-    for j in range(tree.nq):
+    for j in range(tree.nv):
         k = tree.body_of[j]
         psi = kin.psi[k][tree.coords[k].index(j)]
         beta = ZERO6 if plus[k] is None else plus[k].apply(psi)

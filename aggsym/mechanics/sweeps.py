@@ -103,6 +103,8 @@ def origin_sweep(bound, kin, qd, qdd, base=ZERO3):
         if p < 0:
             a = L.unrotate_free(base)
             w, wd = rel[3:], turn
+            if kin.free[k]:  # a free-flyer's v is the origin's velocity in the turning body axes: its classical
+                a = add(a, cross(w, rel[:3]))  # acceleration is v' + w x v
         else:
             par = out[p]
             wp = L.unrotate_free(par.w)
@@ -244,7 +246,7 @@ def generalized_forces_lumped(bound, kin, origins, rest, transvect=None):
     mass = [b.mises.m if isinstance(b.mises, Rigid) else 0 for b in bound.bodies]
     first = [b.mises.h if isinstance(b.mises, Rigid) else ZERO3 for b in bound.bodies]
     E = list(rest)
-    tau = [0] * tree.nq
+    tau = [0] * tree.nv
     for k in range(len(tree) - 1, -1, -1):
         p = tree.parent[k]
         L = kin.L[k]
@@ -295,7 +297,7 @@ def inverse_dynamics(bound, kin, qd, qdd, H=None, gravity=True, transvect=None):
 
 def d_vector(bound, kin, qd, H=None, gravity=True):
     """d(q, q') = F^T M^T Z_o by the sweeps with q'' = 0 (2.44)-(2.46); with gravity only, d = b + g (2.52)."""
-    return inverse_dynamics(bound, kin, qd, [0] * kin.tree.nq, H, gravity)
+    return inverse_dynamics(bound, kin, qd, [0] * kin.tree.nv, H, gravity)
 
 
 # scalar helpers -------------------------------------------------------------------------------------------

@@ -82,7 +82,7 @@ __all__ = [
 
 def coordinate_parents(tree) -> list[int]:
     """For each coordinate, the coordinate just above it on its root path (-1 for none), see the module doc."""
-    parent = [-1] * tree.nq
+    parent = [-1] * tree.nv
     last = [-1] * len(tree)  # the last coordinate on the path from the root to body k, k included
     for k, p in enumerate(tree.parent):
         prev = -1 if p < 0 else last[p]
@@ -208,7 +208,7 @@ def articulated_factors(bound, kin, arguments: bool = True) -> Factors:
     With ``arguments=False`` the arguments <t,k> (3.8) are not formed (``args`` is empty): the O(n) evaluation
     of (3.19), (3.20) (:func:`apply_T_tree`, :func:`apply_T_transpose_tree`) needs only the columns betabar."""
     tree = kin.tree
-    n = tree.nq
+    n = tree.nv
     diag, recip, beta, betabar = [0] * n, [0] * n, [None] * n, [None] * n
     args: dict = {}
     acc = [b.mises for b in bound.bodies]  # A_kk, then + sum over children L (A^Delta - beta beta^T/(.,.)) L^T
@@ -240,7 +240,7 @@ def corrected_factors(bound, kin) -> Factors:
     ``L(k,p) = L^k_p betabar^p`` are carried up from p's pair one motion at a time, L(k,p) = L^k_k+1 L(k+1,p).
     """
     tree = kin.tree
-    n = tree.nq
+    n = tree.nv
     plus = composite_inertias(bound, kin)
     body_of = tree.body_of
     below = [[] for _ in range(n)]
@@ -440,7 +440,7 @@ def transvected_forces(bound, kin, fac: Factors, tau, qd) -> list:
         rows, W = transvect_pair(kin, fac, k, F)
         return [rows[t] for t in kin.tree.coords[k]], W
 
-    return inverse_dynamics(bound, kin, qd, [0] * kin.tree.nq, transvect=transvect)
+    return inverse_dynamics(bound, kin, qd, [0] * kin.tree.nv, transvect=transvect)
 
 
 def forward_dynamics(bound, kin, tau, qd, fac=None):
@@ -459,7 +459,7 @@ def inertia_inverse(bound, kin):
     in O(n) each (:func:`cauchy_solve_tree`) cost more on every model (six-link arm 478 against 312, panda 1968
     against 1370, talos 10598 against 6144, test bench 25588 against 20785), and so do the columns of T carried
     up the tree as 6-vectors (:func:`apply_T_tree` on unit vectors) except on the deepest tree (test bench 20050)."""
-    return inverse_from_factors(articulated_factors(bound, kin), kin.tree.nq)
+    return inverse_from_factors(articulated_factors(bound, kin), kin.tree.nv)
 
 
 def factor_outputs(bound, kin):

@@ -2,7 +2,8 @@
 
 Bodies are numbered 0..N-1 in the model's order (parents first); ``parent[k] == -1`` means the inertial frame
 E_10.  Coordinates are numbered in the same order, pair by pair, each pair's in the order of its mobility axes
-f_1..f_6 (1.40).
+f_1..f_6 (1.40).  ``nv`` counts them (the length of qd, qdd, tau on the tree); the entries of q are the same
+except for a free-flyer pair, which has seven positions for its six coordinates (``positions``, ``nq``).
 """
 from __future__ import annotations
 
@@ -27,12 +28,17 @@ class Tree:
             if p >= 0:
                 self.children[p].append(k)
         self.coords = []  # per body: list of coordinate indices of its pair
-        i = 0
+        self.positions = []  # per body: the indices of its pair's entries of q
+        i = j = 0
         for b in model.bodies:
             n = len(b.pair.coordinates)
+            m = len(b.pair.positions) if b.pair.quaternion else n
             self.coords.append(list(range(i, i + n)))
+            self.positions.append(list(range(j, j + m)))
             i += n
-        self.nq = i
+            j += m
+        self.nv = i
+        self.nq = j
         self.body_of = [k for k, cs in enumerate(self.coords) for _ in cs]  # coordinate -> body
 
     def __len__(self) -> int:
@@ -45,6 +51,15 @@ class Tree:
             chain.append(k)
             k = self.parent[k]
         return chain[::-1]
+
+    @cached_property
+    def neutral(self) -> list:
+        """q = 0, with a free-flyer's quaternion the identity (qw = 1): the configuration of zero coordinates."""
+        q = [0] * self.nq
+        for b, idx in zip(self.model.bodies, self.positions):
+            if b.pair.quaternion:
+                q[idx[6]] = 1
+        return q
 
     @cached_property
     def subtrees(self) -> list[list[int]]:

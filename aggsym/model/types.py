@@ -125,6 +125,9 @@ class Coordinate:
         return "translation" if self.axis < 3 else "rotation"
 
 
+QUATERNION_KINDS = ("translation",) * 3 + ("quaternion",) * 4  # the kinds of a free-flyer pair's seven positions
+
+
 @dataclass(frozen=True)
 class Pair:
     """The kinematic pair (parent, body): constructive then functional configuration (1.24)-(1.27)."""
@@ -136,6 +139,15 @@ class Pair:
     stiffness: tuple | None = None  # k x k expressions over the pair's coordinates (Hooke, (1.32), (2.27))
     rest: tuple | None = None  # k expressions: the coordinates at which the elastic force vanishes (default 0)
     prescribed: tuple = ()  # ((code, expression in TIME), ...): known rotations of a pair without coordinates
+    positions: tuple = ()  # a free-flyer pair (Pinocchio's JointModelFreeFlyer): the names of its seven entries of q,
+    # x y z (the origin in the parent's axes) then the unit quaternion qx qy qz qw of its rotation; its six
+    # coordinates o1..theta6 are then the body's own quasi-velocity (v, w) in body axes (Def. 1.9), not rates of
+    # q.  Empty for every other pair: its entries of q are its coordinates.
+
+    @property
+    def quaternion(self) -> bool:
+        """True for a free-flyer pair (see ``positions``)."""
+        return bool(self.positions)
 
     @property
     def codes(self) -> tuple:
@@ -297,7 +309,7 @@ class Model:
     @property
     def mechanism_coordinates(self) -> int:
         """k: the coordinates gamma of the mechanism carried by the support (nq - 6), 0 without a support."""
-        return self.nq - 6 if self.support else 0
+        return self.nv - 6 if self.support else 0
 
     @property
     def slip_rows(self) -> int:
@@ -320,8 +332,27 @@ class Model:
         return tuple(c for c in self.pair_coordinates if c.name not in coupled)
 
     @property
-    def nq(self) -> int:
+    def nv(self) -> int:
+        """The number of coordinates: the length of qd, qdd and tau (Pinocchio's nv)."""
         return len(self.coordinates)
+
+    @property
+    def nq(self) -> int:
+        """The length of q: nv, plus one for a free-flyer root (seven positions for its six velocities)."""
+        return self.nv + sum(1 for b in self.bodies if b.pair.quaternion)
+
+    @property
+    def positions(self) -> tuple:
+        """The entries of q as (name, joint, kind): a free-flyer pair's seven positions, every other coordinate
+        itself (in tree order)."""
+        coupled = {c.coordinate for c in self.couplings}
+        out = []
+        for b in self.bodies:
+            if b.pair.quaternion:
+                out.extend((n, b.pair.name, k) for n, k in zip(b.pair.positions, QUATERNION_KINDS))
+            else:
+                out.extend((c.name, c.joint, c.kind) for c in b.pair.coordinates if c.name not in coupled)
+        return tuple(out)
 
     @property
     def joint_dynamics(self) -> tuple:

@@ -27,9 +27,11 @@ The mapping
   ``<inertial>`` is massless.  A mass of 0 keeps its rotational inertia (Pinocchio does the same); a link with
   mass 0 and zero inertia is massless.
 * The root link (the one link that is no joint's child) is attached to the world by a pair without
-  coordinates (fixed base), or with ``floating_base=True`` by the free pair o1, o2, o3, theta4, theta5, theta6
-  (coordinates ``base_x, base_y, base_z, base_rx, base_ry, base_rz``; Pinocchio's composite
-  PX, PY, PZ, RX, RY, RZ).
+  coordinates (fixed base), or with ``floating_base=True`` (or ``"euler"``) by the free pair o1, o2, o3, theta4,
+  theta5, theta6 (coordinates ``base_x, base_y, base_z, base_rx, base_ry, base_rz``; Pinocchio's composite
+  PX, PY, PZ, RX, RY, RZ), or with ``floating_base="quaternion"`` by Pinocchio's free-flyer: q starts with
+  ``base_x, base_y, base_z, base_qx, base_qy, base_qz, base_qw`` (origin, unit quaternion) and the velocities with
+  ``base_vx, base_vy, base_vz, base_wx, base_wy, base_wz`` (the root's own (v, w), body axes).
 * Bodies and coordinates are ordered as Pinocchio orders its joints for the same file: depth first from the
   root, the joints leaving a link in the byte order of their names (urdfdom keeps them in a ``std::map``),
   fixed joints walked through in place.  So q maps one-to-one onto Pinocchio's fixed-base model.
@@ -108,6 +110,10 @@ UNSUPPORTED = {
 }
 FLOATING = (("base_x", "o1"), ("base_y", "o2"), ("base_z", "o3"), ("base_rx", "theta4"), ("base_ry", "theta5"),
             ("base_rz", "theta6"))
+FREE_FLYER = (("base_vx", "o1"), ("base_vy", "o2"), ("base_vz", "o3"), ("base_wx", "theta4"), ("base_wy", "theta5"),
+              ("base_wz", "theta6"))  # velocities of the quaternion base
+FREE_FLYER_POSITIONS = ("base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
+FLOATING_BASES = (False, True, "euler", "quaternion")
 MIMIC_OPTIONS = ("independent", "couple")
 ROOT_PAIR = "root_joint"
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
@@ -719,13 +725,18 @@ class _Reader:
             link_parts[link] = rows[where.body]["parts"][-1]
 
         root_pair_name = _identifier(ROOT_PAIR, pair_names, "joint")
-        if self.floating_base:
+        positions = ()
+        if self.floating_base == "quaternion":
+            coords = tuple(Coordinate(coordinate_names.own(n), code, root_pair_name) for n, code in FREE_FLYER)
+            positions = tuple(coordinate_names.own(n) for n in FREE_FLYER_POSITIONS)
+        elif self.floating_base:
             coords = tuple(Coordinate(coordinate_names.own(n), code, root_pair_name) for n, code in FLOATING)
         else:
             coords = ()
         zero = (sp.Integer(0),) * 3
         rows.append({"name": bodies_names.claim(root, link_el[root]), "parent": WORLD, "link": root,
-                     "pair": Pair(root_pair_name, zero, (), coords), "link_rotation": None, "parts": []})
+                     "pair": Pair(root_pair_name, zero, (), coords, positions=positions), "link_rotation": None,
+                     "parts": []})
         place[root] = _Place(0, [], sp.eye(3), sp.zeros(3, 1))
         add_inertial(root, place[root])
         stack = list(reversed(children[root]))  # depth first, siblings in order (Pinocchio's order)
@@ -890,13 +901,18 @@ def friction_parameters(coordinates) -> tuple:
     return tuple(out)
 
 
-def load_urdf(path, floating_base: bool = False, mimic: str = "independent") -> Model:
+def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent") -> Model:
     """Read and validate a URDF file; raises :class:`ModelError` naming the element and line of a problem."""
     path = Path(path)
     if mimic not in MIMIC_OPTIONS:
         raise ValueError(f"mimic must be one of {', '.join(MIMIC_OPTIONS)}, got {mimic!r}")
-    if not isinstance(floating_base, bool):
-        raise TypeError(f"floating_base must be True or False, got {floating_base!r}")
+    if not any(floating_base is v or (isinstance(v, str) and floating_base == v) for v in FLOATING_BASES):
+        raise TypeError(f"floating_base must be False, True (= 'euler') or 'quaternion', got {floating_base!r}")
+    if floating_base == "euler":
+        floating_base = True
+    if floating_base == "quaternion" and mimic == "couple":
+        raise ValueError("mimic='couple' with a quaternion floating base is not supported: use the Euler base "
+                         "(floating_base=True) or independent mimic joints")
     try:
         with open(path, "rb") as f:
             data = f.read(MAX_BYTES + 1)

@@ -260,9 +260,12 @@ def support_problem(model, name: str) -> str | None:
     if tuple(body.pair.codes) != SUPPORT_CODES:
         return (f"the support's pair must be free: the six coordinates o1 o2 o3 theta4 theta5 theta6, and "
                 f"{name!r} has {', '.join(body.pair.codes) or 'none'}")
+    if body.pair.quaternion:
+        return ("the support's pair must be the Euler free pair (--floating-base euler): the support equation (3.1) "
+                "is written in its six coordinates, which a quaternion free-flyer does not have")
     if body.pair.stiffness is not None:
         return "the support's pair cannot be elastic"
-    if model.nq <= 6:
+    if model.nv <= 6:
         return "the support carries no mechanism (no coordinate besides its six)"
     if model.time_dependent:
         return "a support with prescribed motions (rotors with a prescribed spin) is not supported yet"

@@ -23,6 +23,7 @@ extern "C" {
 #endif
 
 #define ADDED_MASS_BODY_IN_FLUID_NQ 6  /* coordinates: the length of q, qd, qdd, tau */
+#define ADDED_MASS_BODY_IN_FLUID_NV 6  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define ADDED_MASS_BODY_IN_FLUID_NP 0  /* parameters: the length of p */
 #define ADDED_MASS_BODY_IN_FLUID_INERTIA_SIZE 36  /* inertia: A, 6 x 6 doubles */
 #define ADDED_MASS_BODY_IN_FLUID_BIAS_SIZE 6  /* bias: b, 6 doubles */

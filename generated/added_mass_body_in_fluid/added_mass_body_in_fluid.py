@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'added_mass_body_in_fluid'
 NQ = 6
-COORDINATES = ('x', 'y', 'z', 'roll', 'pitch', 'yaw', )
+NV = 6
+COORDINATES = ('x', 'y', 'z', 'roll', 'pitch', 'yaw', )  # the entries of q
 JOINTS = ('free_motion', 'free_motion', 'free_motion', 'free_motion', 'free_motion', 'free_motion', )
 FRAMES = ('spheroid', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ()

@@ -30,6 +30,7 @@ extern "C" {
 #endif
 
 #define CART_ON_MOVING_PLATFORM_NQ 4  /* coordinates: the length of q, qd, qdd, tau */
+#define CART_ON_MOVING_PLATFORM_NV 4  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define CART_ON_MOVING_PLATFORM_NP 7  /* parameters: the length of p */
 #define CART_ON_MOVING_PLATFORM_P_m 0  /* index in p */
 #define CART_ON_MOVING_PLATFORM_P_mp 1  /* index in p */

@@ -10,7 +10,8 @@ import numpy as np
 
 NAME = 'cart_on_moving_platform'
 NQ = 4
-COORDINATES = ('x', 'y', 'z', 'swing', )
+NV = 4
+COORDINATES = ('x', 'y', 'z', 'swing', )  # the entries of q
 JOINTS = ('cart', 'cart', 'cart', 'pendulum', )
 FRAMES = ('pendulum', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m', 'mp', 'l', 'heave', 'roll', 'w', 'g', )

@@ -40,6 +40,7 @@ extern "C" {
 #endif
 
 #define DELTA_ROBOT_NQ 11  /* coordinates: the length of q, qd, qdd, tau */
+#define DELTA_ROBOT_NV 11  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define DELTA_ROBOT_NP 9  /* parameters: the length of p */
 #define DELTA_ROBOT_P_R 0  /* index in p */
 #define DELTA_ROBOT_P_r 1  /* index in p */

@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'delta_robot'
 NQ = 11
-COORDINATES = ('q1', 'a1', 'b1', 'c1', 'd1', 'q2', 'a2', 'b2', 'q3', 'a3', 'b3', )
+NV = 11
+COORDINATES = ('q1', 'a1', 'b1', 'c1', 'd1', 'q2', 'a2', 'b2', 'q3', 'a3', 'b3', )  # the entries of q
 JOINTS = ('motor1', 'elbow1', 'elbow1', 'wrist1_n', 'wrist1_t', 'motor2', 'elbow2', 'elbow2', 'motor3', 'elbow3', 'elbow3', )
 FRAMES = ('plate', 'forearm2', 'forearm3', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('R', 'r', 'la', 'lf', 'w', 'ma', 'mf', 'mp', 'g', )

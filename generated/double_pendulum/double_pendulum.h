@@ -33,6 +33,7 @@ extern "C" {
 #endif
 
 #define DOUBLE_PENDULUM_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define DOUBLE_PENDULUM_NV 3  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define DOUBLE_PENDULUM_NP 12  /* parameters: the length of p */
 #define DOUBLE_PENDULUM_P_m2 0  /* index in p */
 #define DOUBLE_PENDULUM_P_m3 1  /* index in p */

@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'double_pendulum'
 NQ = 3
-COORDINATES = ('o12', 'theta25', 'theta36', )
+NV = 3
+COORDINATES = ('o12', 'theta25', 'theta36', )  # the entries of q
 JOINTS = ('slide', 'shoulder', 'elbow', )
 FRAMES = ('arm3', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m2', 'm3', 'r21', 'r31', 'p31', 'I244', 'I255', 'I266', 'I344', 'I355', 'I366', 'g', )

@@ -9,7 +9,8 @@ import numpy as np
 
 NAME = 'double_pendulum_elastic_stand'
 NQ = 3
-COORDINATES = ('delta12', 'delta15', 'theta26', )
+NV = 3
+COORDINATES = ('delta12', 'delta15', 'theta26', )  # the entries of q
 JOINTS = ('stand', 'stand', 'elbow', )
 FRAMES = ('arm2', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m2', 'm3', 'r21', 'r31', 'p21', 'I244', 'I255', 'I266', 'I344', 'I355', 'I366', 'g', 'k22', 'k25', 'k55', )

@@ -36,6 +36,7 @@ extern "C" {
 #endif
 
 #define DOUBLE_PENDULUM_SLIDING_FRICTION_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define DOUBLE_PENDULUM_SLIDING_FRICTION_NV 3  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define DOUBLE_PENDULUM_SLIDING_FRICTION_NP 15  /* parameters: the length of p */
 #define DOUBLE_PENDULUM_SLIDING_FRICTION_P_m2 0  /* index in p */
 #define DOUBLE_PENDULUM_SLIDING_FRICTION_P_m3 1  /* index in p */

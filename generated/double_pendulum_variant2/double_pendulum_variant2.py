@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'double_pendulum_variant2'
 NQ = 3
-COORDINATES = ('o12', 'theta15', 'theta26', )
+NV = 3
+COORDINATES = ('o12', 'theta15', 'theta26', )  # the entries of q
 JOINTS = ('hanger', 'hanger', 'elbow', )
 FRAMES = ('arm2', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m2', 'm3', 'r21', 'r31', 'p21', 'I244', 'I255', 'I266', 'I344', 'I355', 'I366', 'g', )

@@ -24,6 +24,7 @@ extern "C" {
 #endif
 
 #define FLYWHEEL_ON_BODY_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define FLYWHEEL_ON_BODY_NV 3  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define FLYWHEEL_ON_BODY_NP 2  /* parameters: the length of p */
 #define FLYWHEEL_ON_BODY_P_Omega 0  /* index in p */
 #define FLYWHEEL_ON_BODY_P_eps 1  /* index in p */

@@ -10,7 +10,8 @@ import numpy as np
 
 NAME = 'flywheel_on_body'
 NQ = 3
-COORDINATES = ('psi1', 'psi2', 'psi3', )
+NV = 3
+COORDINATES = ('psi1', 'psi2', 'psi3', )  # the entries of q
 JOINTS = ('pivot', 'pivot', 'pivot', )
 FRAMES = ('flywheel', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('Omega', 'eps', )

@@ -25,6 +25,7 @@ extern "C" {
 #endif
 
 #define FOUR_BAR_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define FOUR_BAR_NV 3  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define FOUR_BAR_NP 4  /* parameters: the length of p */
 #define FOUR_BAR_P_a 0  /* index in p */
 #define FOUR_BAR_P_b 1  /* index in p */

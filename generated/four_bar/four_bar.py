@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'four_bar'
 NQ = 3
-COORDINATES = ('q1', 'q2', 'q3', )
+NV = 3
+COORDINATES = ('q1', 'q2', 'q3', )  # the entries of q
 JOINTS = ('crank', 'coupler', 'rocker', )
 FRAMES = ('rocker', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('a', 'b', 'c', 'd', )

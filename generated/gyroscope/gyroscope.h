@@ -20,6 +20,7 @@ extern "C" {
 #endif
 
 #define GYROSCOPE_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define GYROSCOPE_NV 3  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define GYROSCOPE_NP 0  /* parameters: the length of p */
 #define GYROSCOPE_INERTIA_SIZE 9  /* inertia: A, 3 x 3 doubles */
 #define GYROSCOPE_BIAS_SIZE 3  /* bias: b, 3 doubles */

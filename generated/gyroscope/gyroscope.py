@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'gyroscope'
 NQ = 3
-COORDINATES = ('theta14', 'theta25', 'theta36', )
+NV = 3
+COORDINATES = ('theta14', 'theta25', 'theta36', )  # the entries of q
 JOINTS = ('outer_axis', 'inner_axis', 'spin_axis', )
 FRAMES = ('rotor', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ()

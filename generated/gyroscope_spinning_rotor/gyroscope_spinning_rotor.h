@@ -22,6 +22,7 @@ extern "C" {
 #endif
 
 #define GYROSCOPE_SPINNING_ROTOR_NQ 2  /* coordinates: the length of q, qd, qdd, tau */
+#define GYROSCOPE_SPINNING_ROTOR_NV 2  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define GYROSCOPE_SPINNING_ROTOR_NP 1  /* parameters: the length of p */
 #define GYROSCOPE_SPINNING_ROTOR_P_Omega 0  /* index in p */
 #define GYROSCOPE_SPINNING_ROTOR_INERTIA_SIZE 4  /* inertia: A, 2 x 2 doubles */

@@ -10,7 +10,8 @@ import numpy as np
 
 NAME = 'gyroscope_spinning_rotor'
 NQ = 2
-COORDINATES = ('theta14', 'theta25', )
+NV = 2
+COORDINATES = ('theta14', 'theta25', )  # the entries of q
 JOINTS = ('outer_axis', 'inner_axis', )
 FRAMES = ('rotor', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('Omega', )

@@ -24,6 +24,7 @@ extern "C" {
 #endif
 
 #define MANIPULATOR6_NQ 6  /* coordinates: the length of q, qd, qdd, tau */
+#define MANIPULATOR6_NV 6  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define MANIPULATOR6_NP 0  /* parameters: the length of p */
 #define MANIPULATOR6_INERTIA_SIZE 36  /* inertia: A, 6 x 6 doubles */
 #define MANIPULATOR6_BIAS_SIZE 6  /* bias: b, 6 doubles */

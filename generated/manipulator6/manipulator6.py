@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'manipulator6'
 NQ = 6
-COORDINATES = ('theta14', 'theta25', 'theta35', 'theta44', 'theta55', 'theta66', )
+NV = 6
+COORDINATES = ('theta14', 'theta25', 'theta35', 'theta44', 'theta55', 'theta66', )  # the entries of q
 JOINTS = ('joint1', 'joint2', 'joint3', 'joint4', 'joint5', 'joint6', )
 FRAMES = ('link6', 'tool', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ()

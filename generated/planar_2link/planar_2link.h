@@ -25,6 +25,7 @@ extern "C" {
 #endif
 
 #define PLANAR_2LINK_NQ 2  /* coordinates: the length of q, qd, qdd, tau */
+#define PLANAR_2LINK_NV 2  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define PLANAR_2LINK_NP 5  /* parameters: the length of p */
 #define PLANAR_2LINK_P_m1 0  /* index in p */
 #define PLANAR_2LINK_P_m2 1  /* index in p */

@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'planar_2link'
 NQ = 2
-COORDINATES = ('theta1', 'theta2', )
+NV = 2
+COORDINATES = ('theta1', 'theta2', )  # the entries of q
 JOINTS = ('joint1', 'joint2', )
 FRAMES = ('link2', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m1', 'm2', 'l1', 'l2', 'g', )

@@ -28,6 +28,7 @@ extern "C" {
 #endif
 
 #define PLANAR_3LINK_NQ 3  /* coordinates: the length of q, qd, qdd, tau */
+#define PLANAR_3LINK_NV 3  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define PLANAR_3LINK_NP 7  /* parameters: the length of p */
 #define PLANAR_3LINK_P_m1 0  /* index in p */
 #define PLANAR_3LINK_P_m2 1  /* index in p */

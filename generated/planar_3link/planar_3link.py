@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'planar_3link'
 NQ = 3
-COORDINATES = ('theta1', 'theta2', 'theta3', )
+NV = 3
+COORDINATES = ('theta1', 'theta2', 'theta3', )  # the entries of q
 JOINTS = ('joint1', 'joint2', 'joint3', )
 FRAMES = ('link3', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m1', 'm2', 'm3', 'l1', 'l2', 'l3', 'g', )

@@ -27,6 +27,7 @@ extern "C" {
 #endif
 
 #define ROLLING_DISC_NQ 6  /* coordinates: the length of q, qd, qdd, tau */
+#define ROLLING_DISC_NV 6  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define ROLLING_DISC_NP 3  /* parameters: the length of p */
 #define ROLLING_DISC_P_m 0  /* index in p */
 #define ROLLING_DISC_P_r 1  /* index in p */

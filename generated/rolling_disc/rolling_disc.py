@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'rolling_disc'
 NQ = 6
-COORDINATES = ('x', 'y', 'z', 'yaw', 'lean', 'spin', )
+NV = 6
+COORDINATES = ('x', 'y', 'z', 'yaw', 'lean', 'spin', )  # the entries of q
 JOINTS = ('carriage', 'carriage', 'carriage', 'carriage', 'fork', 'disc', )
 FRAMES = ('disc', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ('m', 'r', 'g', )

@@ -30,6 +30,7 @@ extern "C" {
 #endif
 
 #define SPACECRAFT_NQ 12  /* coordinates: the length of q, qd, qdd, tau */
+#define SPACECRAFT_NV 12  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define SPACECRAFT_NP 0  /* parameters: the length of p */
 #define SPACECRAFT_INERTIA_SIZE 144  /* inertia: A, 12 x 12 doubles */
 #define SPACECRAFT_BIAS_SIZE 12  /* bias: b, 12 doubles */

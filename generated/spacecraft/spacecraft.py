@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'spacecraft'
 NQ = 12
-COORDINATES = ('x11', 'y11', 'z11', 'a11', 'b11', 'c11', 'a12', 'b12', 'c12', 'theta22', 'theta23', 'theta24', )
+NV = 12
+COORDINATES = ('x11', 'y11', 'z11', 'a11', 'b11', 'c11', 'a12', 'b12', 'c12', 'theta22', 'theta23', 'theta24', )  # the entries of q
 JOINTS = ('free_flight', 'free_flight', 'free_flight', 'free_flight', 'free_flight', 'free_flight', 'ball_joint', 'ball_joint', 'ball_joint', 'shoulder_roll', 'shoulder_pitch', 'elbow_yaw', )
 FRAMES = ('antenna', 'link24', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ()

@@ -70,6 +70,7 @@ extern "C" {
 #endif
 
 #define TEST_BENCH_NQ 48  /* coordinates: the length of q, qd, qdd, tau */
+#define TEST_BENCH_NV 48  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define TEST_BENCH_NP 0  /* parameters: the length of p */
 #define TEST_BENCH_INERTIA_SIZE 2304  /* inertia: A, 48 x 48 doubles */
 #define TEST_BENCH_BIAS_SIZE 48  /* bias: b, 48 doubles */

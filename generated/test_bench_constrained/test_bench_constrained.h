@@ -72,6 +72,7 @@ extern "C" {
 #endif
 
 #define TEST_BENCH_CONSTRAINED_NQ 48  /* coordinates: the length of q, qd, qdd, tau */
+#define TEST_BENCH_CONSTRAINED_NV 48  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define TEST_BENCH_CONSTRAINED_NP 1  /* parameters: the length of p */
 #define TEST_BENCH_CONSTRAINED_P_psi4 0  /* index in p */
 #define TEST_BENCH_CONSTRAINED_INERTIA_SIZE 2304  /* inertia: A, 48 x 48 doubles */

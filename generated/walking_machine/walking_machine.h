@@ -46,6 +46,7 @@ extern "C" {
 #endif
 
 #define WALKING_MACHINE_NQ 24  /* coordinates: the length of q, qd, qdd, tau */
+#define WALKING_MACHINE_NV 24  /* velocities: the length of qd, qdd, tau (= NQ) */
 #define WALKING_MACHINE_NP 0  /* parameters: the length of p */
 #define WALKING_MACHINE_INERTIA_SIZE 576  /* inertia: A, 24 x 24 doubles */
 #define WALKING_MACHINE_BIAS_SIZE 24  /* bias: b, 24 doubles */

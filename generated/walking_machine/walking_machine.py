@@ -8,7 +8,8 @@ import numpy as np
 
 NAME = 'walking_machine'
 NQ = 24
-COORDINATES = ('x11', 'y11', 'z11', 'a11', 'b11', 'c11', 'theta124', 'theta135', 'theta145', 'theta224', 'theta235', 'theta245', 'theta324', 'theta335', 'theta345', 'theta424', 'theta435', 'theta445', 'theta524', 'theta535', 'theta545', 'theta624', 'theta635', 'theta645', )
+NV = 24
+COORDINATES = ('x11', 'y11', 'z11', 'a11', 'b11', 'c11', 'theta124', 'theta135', 'theta145', 'theta224', 'theta235', 'theta245', 'theta324', 'theta335', 'theta345', 'theta424', 'theta435', 'theta445', 'theta524', 'theta535', 'theta545', 'theta624', 'theta635', 'theta645', )  # the entries of q
 JOINTS = ('trunk_free', 'trunk_free', 'trunk_free', 'trunk_free', 'trunk_free', 'trunk_free', 'hip_roll1', 'hip_pitch1', 'knee1', 'hip_roll2', 'hip_pitch2', 'knee2', 'hip_roll3', 'hip_pitch3', 'knee3', 'hip_roll4', 'hip_pitch4', 'knee4', 'hip_roll5', 'hip_pitch5', 'knee5', 'hip_roll6', 'hip_pitch6', 'knee6', )
 FRAMES = ('shank1', 'shank2', 'shank3', 'shank4', 'shank5', 'shank6', )  # the order of the frame routines' blocks
 PARAMETER_NAMES = ()
