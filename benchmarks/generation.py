@@ -17,10 +17,13 @@ STAGE = re.compile(r"^aggsym: [^:]+: (recursions|printing|templates|latex): ([0-
 TOTAL = re.compile(r"^aggsym: [^:]+: wrote \d+ files to .* in ([0-9.]+) s$")
 
 
-def generate_measured(label: str, model_path, outdir, timeout: float | None = None) -> dict:
-    """One full ``aggsym generate`` in a fresh process; returns its measurements and the manifest."""
+def generate_measured(label: str, model_path, outdir, timeout: float | None = None,
+                      routines: str | None = None) -> dict:
+    """One full ``aggsym generate`` in a fresh process; returns its measurements and the manifest.  ``routines``:
+    the value of ``--routines`` (default: none given, the default set)."""
     outdir = Path(outdir)
-    run = run_measured([python(), "-m", "aggsym", "generate", str(model_path), "-o", str(outdir)],
+    extra = ["--routines", routines] if routines else []
+    run = run_measured([python(), "-m", "aggsym", "generate", str(model_path), "-o", str(outdir), *extra],
                        timeout=timeout, env=child_env())
     stages, internal = {}, None
     for line in run.stderr.splitlines():
@@ -30,7 +33,7 @@ def generate_measured(label: str, model_path, outdir, timeout: float | None = No
         m = TOTAL.match(line)
         if m:
             internal = float(m.group(1))
-    result = {"label": label, "model": str(model_path), "outdir": str(outdir), "ok": run.ok,
+    result = {"label": label, "model": str(model_path), "outdir": str(outdir), "routines": routines, "ok": run.ok,
               "timed_out": run.timed_out, "returncode": run.returncode, "wall_seconds": run.wall_seconds,
               "cpu_seconds": run.cpu_seconds, "maxrss_kib": run.maxrss_kib, "stages": stages,
               "internal_seconds": internal}

@@ -18,7 +18,8 @@ Settings (environment variables; defaults in brackets):
 
 Sections: 1. generation time and peak memory of every models/*.yaml, the four example-robot-data robots and
 the chains, with KanesMethod on the chains (generation.json, kane.json); 2. operation counts from the
-manifests (opcounts.json); 3. runtime of the generated C against Pinocchio C++ (runtime.json; with solo12
+manifests (opcounts.json); 3. runtime of the generated C against Pinocchio C++ (runtime.json; the four robots generated again, untimed, with
+the routines on request: derivatives, regressor; with solo12
 standing on its four feet, constrained forward dynamics against constraintDynamics, :mod:`benchmarks.constrained`);
 4. reading and ordering a 2000-body YAML and URDF chain (inputs.json, :mod:`benchmarks.inputs`).
 """
@@ -159,22 +160,22 @@ def section_kane(cfg) -> dict:
     return {"timeout": timeout, "runs": runs, "timed_out_at": timed_out_at}
 
 
-def section_runtime(cfg, generation) -> dict:
+def section_runtime(cfg) -> dict:
     from . import constrained
     from .generation import generate_measured
-    from .runtime import build_harness, run_harness
+    from .runtime import ROUTINES, build_harness, run_harness
 
-    runs = {r["label"]: r for r in generation.get("runs", [])}
-    missing = [name for name in ROBOT_FILES if not runs.get(name, {}).get("ok")]
-    if missing:
-        return {"error": f"no generated code for {', '.join(missing)}"}
+    # The robots' code for this section: its own folders, with the routines on request (section 1 times the
+    # default set alone, in build/gen); this generation is not timed.
     paths = robot_paths()
-    for name in ROBOT_FILES:  # section 1 read back from an earlier run whose build folder is gone
-        if not (Path(runs[name]["outdir"]) / f"{runs[name]['name']}.c").exists():
-            log(f"generating {name} again into {runs[name]['outdir']} (not timed) ...")
-            again = generate_measured(name, paths[name], runs[name]["outdir"], timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"])
-            if not again["ok"]:
-                return {"error": f"generating {name} again failed:\n{again.get('stderr', '')}"}
+    runs = {}
+    for name in ROBOT_FILES:
+        outdir = BUILD / "runtime" / "gen" / name
+        log(f"generating {name} into {outdir.relative_to(ROOT)} with --routines {ROUTINES} (not timed) ...")
+        runs[name] = generate_measured(name, paths[name], outdir, timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"],
+                                       routines=ROUTINES)
+        if not runs[name]["ok"]:
+            return {"error": f"generating {name} with --routines {ROUTINES} failed:\n{runs[name].get('stderr', '')}"}
     generated = {runs[name]["name"]: Path(runs[name]["outdir"]) for name in ROBOT_FILES}
     # solo12 on its four feet: generated and checked against the pin bindings; a failure here leaves the rest
     try:
@@ -205,6 +206,10 @@ def section_runtime(cfg, generation) -> dict:
     for robot in data["robots"]:
         robot["model_name"] = robot["name"]
         robot["name"] = labels.get(robot["name"], robot["name"])
+        # the operation counts of the timed routines, from the manifest of the code timed here
+        ops = runs[robot["name"]]["ops"] if robot["name"] in runs else {}
+        robot["ops"] = {p["role"]: ops[p["role"]] for p in robot["pairs"] if p["role"] in ops}
+    data["routines"] = ROUTINES
     bad = [(r["name"], p["role"], p["relative_error"]) for r in data["robots"] for p in r["pairs"]
            if not p["relative_error"] <= 1e-9]
     tolerance = constrained.TOLERANCE  # qdd of the constrained model, in C (harness) and NumPy (pin bindings)
@@ -235,7 +240,7 @@ def main() -> int:
     _save("opcounts", opcounts)
     if "runtime" in sections:
         try:
-            runtime = section_runtime(cfg, generation)
+            runtime = section_runtime(cfg)
         except Exception as exc:  # reported, not fatal: the other sections still make a report
             runtime = {"error": f"{exc.__class__.__name__}: {exc}"}
             log(f"runtime section failed: {runtime['error']}")

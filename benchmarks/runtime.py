@@ -34,7 +34,18 @@ PAIRS = [
     ("inverse_dynamics", "rnea", "inverse dynamics / rnea"),
     ("forward_dynamics", "aba", "forward dynamics / aba"),
     ("inertia_inverse", "computeMinverse", "A^-1 / computeMinverse"),
+    # beyond the five, timed where the generated model has them: the derivatives and the regressor are emitted on
+    # request (aggsym generate --routines default,...), frame_jacobians is in the default set
+    ("inverse_dynamics_derivatives", "computeRNEADerivatives", "dtau/dq, dtau/dqd / computeRNEADerivatives"),
+    ("forward_dynamics_derivatives", "computeABADerivatives", "dqdd/dq, dqdd/dqd / computeABADerivatives"),
+    ("frame_jacobians", "computeJointJacobians + getFrameJacobian", "frame Jacobians / getFrameJacobian"),
+    ("regressor", "computeJointTorqueRegressor", "regressor Y / computeJointTorqueRegressor"),
 ]
+DEFAULT_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics", "inertia_inverse")
+EXTRA_ROLES = ("inverse_dynamics_derivatives", "forward_dynamics_derivatives", "frame_jacobians", "regressor")
+# what the runtime section asks ``aggsym generate`` for (section 1 times the default set alone, which has
+# frame_jacobians but not the derivatives nor the regressor)
+ROUTINES = ",".join(("default",) + EXTRA_ROLES)
 
 
 def cmeel_prefix() -> Path:
@@ -150,6 +161,26 @@ def _model_arrays(m: dict) -> tuple:
     return lines + [f"static const double {name}_p[] = {{{values}}};"], f"{name}_p"
 
 
+def _model_record(m: dict) -> list:
+    """C lines of one fixed-base model: its arrays, timers and bench_model record (the routines beyond the five
+    that its manifest lists get their timers; the others NULL)."""
+    name = m["name"]
+    arrays, p = _model_arrays(m)
+    has = [role for role in EXTRA_ROLES if role in m["functions"]]
+    lines = arrays + [f"BENCH_MODEL_TIMERS({name})"] + [f"BENCH_{role.upper()}({name})" for role in has]
+    frames = m.get("layouts", {}).get("frame_jacobians", {}).get("frames", []) if "frame_jacobians" in has else []
+    if frames:
+        lines.append(f"static const char *const {name}_frames[] = {{{', '.join(c_string(f) for f in frames)}}};")
+    cols = m["layouts"]["regressor"]["Y"]["shape"][1] if "regressor" in has else 0
+    fields = [c_string(name), str(m["nq"]), str(len(m["parameters"])), p, f"{name}_joints"]
+    fields += [f"{name}_{role}" for role in DEFAULT_ROLES] + [f"{name}_t_{role}" for role in DEFAULT_ROLES]
+    fields += [str(len(frames)), f"{name}_frames" if frames else "NULL", str(cols)]
+    fields += [f"{name}_{role}" if role in has else "NULL" for role in EXTRA_ROLES]
+    fields += [f"{name}_t_{role}" if role in has else "NULL" for role in EXTRA_ROLES]
+    lines.append(f"static const bench_model {name}_bench = {{{', '.join(fields)}}};")
+    return lines
+
+
 def bench_models_source(manifests: list, constrained: list = ()) -> str:
     """bench_models.c: the batch timers and records of the generated models (harness/bench.h); ``constrained``:
     the manifests of models timed for their constrained forward dynamics alone."""
@@ -163,10 +194,7 @@ def bench_models_source(manifests: list, constrained: list = ()) -> str:
               "    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);",
               "    return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;", "}", ""]
     for m in manifests:
-        name = m["name"]
-        arrays, p = _model_arrays(m)
-        lines += arrays
-        lines.append(f"BENCH_MODEL({name}, {m['nq']}, {len(m['parameters'])}, {p}, {name}_joints)")
+        lines += _model_record(m)
     for m in constrained:
         name = m["name"]
         arrays, p = _model_arrays(m)

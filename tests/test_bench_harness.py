@@ -20,6 +20,7 @@ from benchmarks.measure import run_measured  # noqa: E402
 import aggsym  # noqa: E402
 from aggsym.codegen.compile import check_generated  # noqa: E402
 from aggsym.codegen.generate import generate, write  # noqa: E402
+from aggsym.contract import select_routines  # noqa: E402
 
 
 def test_chain_models_are_valid_and_prefixes_of_each_other(tmp_path):
@@ -48,15 +49,26 @@ def test_chain_generated_c_matches_the_numeric_twin(tmp_path):
 
 
 def test_timing_harness_runs_on_a_tiny_model(tmp_path):
-    model = chain.chain_model(3, tmp_path)
+    """chain3 generated as the runtime section does (the routines on request too: every pair of runtime.PAIRS is
+    timed), chain2 with the default routines alone (the five pairs and the frame Jacobians; the derivatives' and
+    the regressor's entries are NULL)."""
+    model = select_routines(chain.chain_model(3, tmp_path), runtime.ROUTINES.split(","))
     write(generate(model, latex=False), tmp_path / "chain3")
-    exe = runtime.build_generated_only(tmp_path / "build", {"chain3": tmp_path / "chain3"}, log=lambda m: None)
+    write(generate(chain.chain_model(2, tmp_path), latex=False), tmp_path / "chain2")
+    manifest = json.loads((tmp_path / "chain3" / "chain3.json").read_text())
+    assert set(runtime.EXTRA_ROLES) <= set(manifest["functions"])
+    source = runtime.bench_models_source([manifest])
+    assert "BENCH_REGRESSOR(chain3)" in source and "chain3_frames[]" in source
+    exe = runtime.build_generated_only(tmp_path / "build", {"chain3": tmp_path / "chain3",
+                                                            "chain2": tmp_path / "chain2"}, log=lambda m: None)
     data = runtime.run_generated_only(exe, tmp_path / "out.json", seconds=0.01, states=20)
-    (robot,) = data["robots"]
-    assert robot["name"] == "chain3" and robot["nq"] == 3
-    assert [p["role"] for p in robot["pairs"]] == [role for role, _, _ in runtime.PAIRS]
-    for p in robot["pairs"]:
-        assert math.isfinite(p["generated_ns"]) and p["generated_ns"] > 0 and p["batches"] >= 15
+    robots = {r["name"]: r for r in data["robots"]}
+    assert robots["chain3"]["nq"] == 3 and robots["chain2"]["nq"] == 2
+    assert [p["role"] for p in robots["chain3"]["pairs"]] == [role for role, _, _ in runtime.PAIRS]
+    assert [p["role"] for p in robots["chain2"]["pairs"]] == [*runtime.DEFAULT_ROLES, "frame_jacobians"]
+    for robot in robots.values():
+        for p in robot["pairs"]:
+            assert math.isfinite(p["generated_ns"]) and p["generated_ns"] > 0 and p["batches"] >= 15
 
 
 MEASURE_FROM_A_SMALL_PARENT = """

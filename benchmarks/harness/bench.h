@@ -22,6 +22,8 @@ typedef struct {
 typedef void (*bench_fn_q)(const double *q, const double *p, double *out);
 typedef void (*bench_fn_qv)(const double *q, const double *qd, const double *p, double *out);
 typedef void (*bench_fn_qvx)(const double *q, const double *qd, const double *x, const double *p, double *out);
+typedef void (*bench_fn_qvx2)(const double *q, const double *qd, const double *x, const double *p, double *out1,
+                              double *out2);
 /* One batch: `calls` calls on the states first, first+1, ... (cycling through the `count` states); returns the
    batch's mean wall-clock ns per call (CLOCK_MONOTONIC) and stores its mean thread-CPU ns per call
    (CLOCK_THREAD_CPUTIME_ID, which leaves out time the thread was preempted) in *cpu_ns. */
@@ -43,6 +45,19 @@ typedef struct {
     bench_timer t_inverse_dynamics;
     bench_timer t_forward_dynamics;
     bench_timer t_inertia_inverse;
+    /* The routines beyond the five (NULL when the model was generated without them).  A timer of a routine with two
+       n*n outputs writes them to out and out + n*n. */
+    int nframes;                /* frames of frame_jacobians (0 without it) */
+    const char *const *frames;  /* their names (URDF links), in the routine's order */
+    int regressor_cols;         /* columns of the regressor, 10 per moving body (0 without it) */
+    bench_fn_qvx2 inverse_dynamics_derivatives; /* (q, qd, qdd) -> dtau_dq, dtau_dqd, n*n each */
+    bench_fn_qvx2 forward_dynamics_derivatives; /* (q, qd, tau) -> dqdd_dq, dqdd_dqd, n*n each */
+    bench_fn_q frame_jacobians;  /* per frame a 6 x n block (v, w of its origin, world axes), row-major */
+    bench_fn_qvx regressor;      /* (q, qd, qdd) -> Y, n x regressor_cols row-major */
+    bench_timer t_inverse_dynamics_derivatives;
+    bench_timer t_forward_dynamics_derivatives;
+    bench_timer t_frame_jacobians;
+    bench_timer t_regressor;
 } bench_model;
 
 /* A model with constraints (generated with --constraints): its constrained forward dynamics alone. */
@@ -93,19 +108,22 @@ double bench_cpu_now_ns(void);  /* CLOCK_THREAD_CPUTIME_ID */
 #define BENCH_TIMER_Q(T, F) BENCH_TIMER(T, F(s->q + at, s->p, out))
 #define BENCH_TIMER_QV(T, F) BENCH_TIMER(T, F(s->q + at, s->qd + at, s->p, out))
 #define BENCH_TIMER_QVX(T, F, X) BENCH_TIMER(T, F(s->q + at, s->qd + at, s->X + at, s->p, out))
-/* Everything one model contributes: five timers and its bench_model record. */
-#define BENCH_MODEL(NAME, NQ, NP, P, JOINTS)                                                    \
+#define BENCH_TIMER_QVX2(T, F, X) BENCH_TIMER(T, F(s->q + at, s->qd + at, s->X + at, s->p, out, out + n * n))
+/* The five timers every model has (its bench_model record is written by benchmarks/runtime.py, with the
+   other routines it was generated with). */
+#define BENCH_MODEL_TIMERS(NAME)                                                                \
     BENCH_TIMER_Q(NAME##_t_inertia, NAME##_inertia)                                             \
     BENCH_TIMER_QV(NAME##_t_nonlinear_effects, NAME##_nonlinear_effects)                        \
     BENCH_TIMER_QVX(NAME##_t_inverse_dynamics, NAME##_inverse_dynamics, qdd)                    \
     BENCH_TIMER_QVX(NAME##_t_forward_dynamics, NAME##_forward_dynamics, tau)                    \
-    BENCH_TIMER_Q(NAME##_t_inertia_inverse, NAME##_inertia_inverse)                             \
-    static const bench_model NAME##_bench = {                                                   \
-        #NAME, NQ, NP, P, JOINTS,                                                               \
-        NAME##_inertia, NAME##_nonlinear_effects, NAME##_inverse_dynamics,                      \
-        NAME##_forward_dynamics, NAME##_inertia_inverse,                                        \
-        NAME##_t_inertia, NAME##_t_nonlinear_effects, NAME##_t_inverse_dynamics,                \
-        NAME##_t_forward_dynamics, NAME##_t_inertia_inverse};
+    BENCH_TIMER_Q(NAME##_t_inertia_inverse, NAME##_inertia_inverse)
+/* The timers of the routines beyond the five, one macro each. */
+#define BENCH_INVERSE_DYNAMICS_DERIVATIVES(NAME)                                                \
+    BENCH_TIMER_QVX2(NAME##_t_inverse_dynamics_derivatives, NAME##_inverse_dynamics_derivatives, qdd)
+#define BENCH_FORWARD_DYNAMICS_DERIVATIVES(NAME)                                                \
+    BENCH_TIMER_QVX2(NAME##_t_forward_dynamics_derivatives, NAME##_forward_dynamics_derivatives, tau)
+#define BENCH_FRAME_JACOBIANS(NAME) BENCH_TIMER_Q(NAME##_t_frame_jacobians, NAME##_frame_jacobians)
+#define BENCH_REGRESSOR(NAME) BENCH_TIMER_QVX(NAME##_t_regressor, NAME##_regressor, qdd)
 /* A constrained model: its timer (qdd into out, lambda after it) and its bench_constrained_model record. */
 #define BENCH_CONSTRAINED_MODEL(NAME, NQ, NC, NP, P, JOINTS)                                    \
     BENCH_TIMER(NAME##_t_constrained_forward_dynamics,                                          \

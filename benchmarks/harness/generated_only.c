@@ -1,6 +1,6 @@
 /* The generated side of the runtime harness alone (no Pinocchio): times the five routines of every linked
-   model the way pinocchio_bench.cpp does (batches over precomputed random states, median of per-batch means)
-   and writes JSON.  Used by tests/test_bench_harness.py, which cannot wait for the C++ build.
+   model, and the others of runtime.PAIRS it was generated with, the way pinocchio_bench.cpp does (batches over
+   precomputed random states, median of per-batch means) and writes JSON.  Used by tests/test_bench_harness.py, which cannot wait for the C++ build.
 
      generated_only SECONDS STATES CALLS OUT.json */
 #include <math.h>
@@ -35,9 +35,10 @@ static double median(double *v, int n) {
 
 int main(int argc, char **argv) {
     static const char *const roles[] = {"inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics",
-                                        "inertia_inverse"};
+                                        "inertia_inverse", "inverse_dynamics_derivatives",
+                                        "forward_dynamics_derivatives", "frame_jacobians", "regressor"};
     double seconds;
-    int nstates, calls, m, k, b, i;
+    int nstates, calls, m, k, b, i, written;
     FILE *out;
     if (argc != 5) {
         fprintf(stderr, "usage: %s SECONDS STATES CALLS OUT.json\n", argv[0]);
@@ -53,15 +54,24 @@ int main(int argc, char **argv) {
         const bench_model *bm = bench_models[m];
         const int n = bm->nq;
         const size_t size = (size_t)nstates * (size_t)n;
+        /* the largest output: two n*n matrices, the frames' 6 x n blocks, or the regressor */
+        size_t out_size = 2 * (size_t)n * (size_t)n;
         double *q = malloc(size * sizeof *q), *qd = malloc(size * sizeof *q), *qdd = malloc(size * sizeof *q);
-        double *tau = malloc(size * sizeof *q), *buf = malloc((size_t)n * (size_t)n * sizeof *q);
-        bench_timer timers[5];
+        double *tau = malloc(size * sizeof *q), *buf;
+        bench_timer timers[9];
         bench_states s;
         timers[0] = bm->t_inertia;
         timers[1] = bm->t_nonlinear_effects;
         timers[2] = bm->t_inverse_dynamics;
         timers[3] = bm->t_forward_dynamics;
         timers[4] = bm->t_inertia_inverse;
+        timers[5] = bm->t_inverse_dynamics_derivatives;
+        timers[6] = bm->t_forward_dynamics_derivatives;
+        timers[7] = bm->t_frame_jacobians;
+        timers[8] = bm->t_regressor;
+        if ((size_t)bm->nframes * 6 * (size_t)n > out_size) out_size = (size_t)bm->nframes * 6 * (size_t)n;
+        if ((size_t)bm->regressor_cols * (size_t)n > out_size) out_size = (size_t)bm->regressor_cols * (size_t)n;
+        buf = malloc(out_size * sizeof *buf);
         for (i = 0; i < (int)size; ++i) {
             q[i] = -3.141592653589793 + 6.283185307179586 * uniform01();
             qd[i] = normal01();
@@ -76,10 +86,11 @@ int main(int argc, char **argv) {
         s.tau = tau;
         s.p = bm->p;
         fprintf(out, "%s{\"name\": \"%s\", \"nq\": %d, \"pairs\": [", m ? ", " : "", bm->name, n);
-        for (k = 0; k < 5; ++k) {
+        for (k = 0, written = 0; k < 9; ++k) {
             double cpu, t = 0.0;
             int batches, first;
             double *g, *c;
+            if (!timers[k]) continue; /* a routine the model was generated without */
             for (first = 0; first < nstates; first += calls) t += timers[k](&s, first, calls, buf, &cpu) * calls;
             batches = (int)ceil(seconds * 1e9 / (t > 1.0 ? t : 1.0) * nstates / calls);
             batches = batches < 51 ? 51 : (batches > 400001 ? 400001 : batches);
@@ -88,7 +99,7 @@ int main(int argc, char **argv) {
             for (b = 0; b < batches; ++b)
                 g[b] = timers[k](&s, (int)(((long long)b * calls) % nstates), calls, buf, &c[b]);
             fprintf(out, "%s{\"role\": \"%s\", \"batches\": %d, \"generated_ns\": %.3f, \"generated_cpu_ns\": %.3f}",
-                    k ? ", " : "", roles[k], batches, median(g, batches), median(c, batches));
+                    written++ ? ", " : "", roles[k], batches, median(g, batches), median(c, batches));
             free(g);
             free(c);
         }

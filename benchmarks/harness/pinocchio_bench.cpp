@@ -9,7 +9,12 @@
 // pair is timed in interleaved batches (one batch = CALLS calls on consecutive states, cycling through the
 // STATES; a generated batch, then a Pinocchio batch on the same states, repeated for about SECONDS), and the
 // median of the per-batch means is reported in ns per call, wall clock and thread CPU time.  crba and aba are
-// timed in both of Pinocchio's conventions (LOCAL, its default, and WORLD) and the faster one is reported.  Batches are short
+// timed in both of Pinocchio's conventions (LOCAL, its default, and WORLD) and the faster one is reported.
+// Beyond the five, where the generated model has them: inverse_dynamics_derivatives against
+// computeRNEADerivatives (dtau_dq, dtau_dv), forward_dynamics_derivatives against computeABADerivatives (ddq_dq,
+// ddq_dv), frame_jacobians against one computeJointJacobians (+ updateFramePlacements, timed with and without)
+// and getFrameJacobian(LOCAL_WORLD_ALIGNED) for each of the generated code's frames (URDF links, Pinocchio's
+// BODY frames), regressor against computeJointTorqueRegressor (the full matrices compared).  Batches are short
 // (tens of microseconds) so that most hold no preemption on a shared machine and the median ignores those that
 // do.
 //
@@ -21,11 +26,14 @@
 // (lambda in world axes, as aggsym's) and LOCAL; the faster is reported.  The states' qd are projected onto the
 // null space of the contacts' Jacobian: Pinocchio's drift is J' qd only where the contact points are at rest.
 #define PINOCCHIO_DISABLE_UNSUPPORTED_WARNINGS  // constraintDynamics is marked "the API will change"
+#include <pinocchio/algorithm/aba-derivatives.hpp>
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/constrained-dynamics.hpp>
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/frames.hpp>
 #include <pinocchio/algorithm/jacobian.hpp>
+#include <pinocchio/algorithm/regressor.hpp>
+#include <pinocchio/algorithm/rnea-derivatives.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody.hpp>
 #include <pinocchio/parsers/urdf.hpp>
@@ -46,12 +54,32 @@
 namespace {
 
 const int CHECK_STATES = 5;
-const char *const PAIRS[] = {"inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics",
-                             "inertia_inverse"};
-const char *const PINOCCHIO[] = {"crba", "nonLinearEffects", "rnea", "aba", "computeMinverse"};
-const int NPAIRS = 5;
-// crba and aba take a convention (default LOCAL); both are timed and the faster one is Pinocchio's time.
-const char *const VARIANT[][2] = {{"LOCAL", "WORLD"}, {"", ""}, {"", ""}, {"LOCAL", "WORLD"}, {"", ""}};
+// the five pairs, then those beyond them (the derivatives and the regressor are emitted on request, the frame
+// Jacobians by default; each is timed where the generated model has it)
+const char *const PAIRS[] = {"inertia",
+                             "nonlinear_effects",
+                             "inverse_dynamics",
+                             "forward_dynamics",
+                             "inertia_inverse",
+                             "inverse_dynamics_derivatives",
+                             "forward_dynamics_derivatives",
+                             "frame_jacobians",
+                             "regressor"};
+const char *const PINOCCHIO[] = {"crba",
+                                 "nonLinearEffects",
+                                 "rnea",
+                                 "aba",
+                                 "computeMinverse",
+                                 "computeRNEADerivatives",
+                                 "computeABADerivatives",
+                                 "computeJointJacobians + getFrameJacobian",
+                                 "computeJointTorqueRegressor"};
+const int NPAIRS = 9;
+// crba and aba take a convention (default LOCAL); both are timed and the faster one is Pinocchio's time.  The
+// frame Jacobians are timed with and without updateFramePlacements (getFrameJacobian does not read oMf).
+const char *const VARIANT[][2] = {{"LOCAL", "WORLD"}, {"", ""}, {"", ""}, {"LOCAL", "WORLD"}, {"", ""},
+                                  {"", ""},           {"", ""}, {"with updateFramePlacements", "without"},
+                                  {"", ""}};
 // constraintDynamics: the contacts' reference frame (LOCAL_WORLD_ALIGNED is aggsym's lambda); the faster counts.
 const pinocchio::ReferenceFrame CONTACT_FRAME[] = {pinocchio::LOCAL_WORLD_ALIGNED, pinocchio::LOCAL};
 const char *const CONTACT_FRAME_NAME[] = {"LOCAL_WORLD_ALIGNED", "LOCAL"};
@@ -95,6 +123,15 @@ std::vector<double> symmetric_from_upper(const M &m) {
   std::vector<double> out((size_t)n * n);
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) out[(size_t)i * n + j] = i <= j ? m(i, j) : m(j, i);
+  return out;
+}
+
+// Row-major copy of a full matrix (Eigen's are column-major).
+template <typename M>
+std::vector<double> row_major(const M &m) {
+  std::vector<double> out((size_t)m.rows() * m.cols());
+  for (int i = 0; i < (int)m.rows(); ++i)
+    for (int j = 0; j < (int)m.cols(); ++j) out[(size_t)i * m.cols() + j] = m(i, j);
   return out;
 }
 
@@ -233,7 +270,8 @@ void time_pair(FILE *out, bool first_pair, const std::string &robot, const char 
                robot.c_str(), role, mg, label.c_str(), mp, mg / mp, mgc / mpc, err, batches, calls);
 }
 
-// The five pairs of one fixed-base robot; returns nonzero on an error (after a message).
+// The pairs of one fixed-base robot (the five, then those beyond them the generated model has); returns nonzero
+// on an error (after a message).
 int bench_robot(FILE *out, const std::string &name, const std::string &path, unsigned seed, double seconds,
                 int nstates, int calls) {
   const bench_model *bm = nullptr;
@@ -255,10 +293,31 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
   if (!same_joints(model, bm->joints, name, continuous)) return 1;
   States s = random_states(model, continuous, nstates, seed);
   bench_states cs = {s.count, n, s.q.data(), s.qd.data(), s.qdd.data(), s.tau.data(), bm->p};
-  std::vector<double> buf((size_t)n * n);
+  // the frames of frame_jacobians: Pinocchio's frames of those URDF links (BODY frames)
+  std::vector<pinocchio::FrameIndex> frame_ids;
+  for (int f = 0; f < bm->nframes; ++f) {
+    if (!model.existFrame(bm->frames[f], pinocchio::BODY)) {
+      std::fprintf(stderr, "%s: Pinocchio's model has no link frame %s\n", name.c_str(), bm->frames[f]);
+      return 1;
+    }
+    frame_ids.push_back(model.getFrameId(bm->frames[f], pinocchio::BODY));
+  }
+  const int nframes = (int)frame_ids.size();
+  const int regressor_cols = 10 * ((int)model.njoints - 1);
+  if (bm->regressor && bm->regressor_cols != regressor_cols) {
+    std::fprintf(stderr, "%s: the generated regressor has %d columns, Pinocchio's %d\n", name.c_str(),
+                 bm->regressor_cols, regressor_cols);
+    return 1;
+  }
+  // Pinocchio's Jacobian of each frame, zeroed once: getFrameJacobian writes the columns of the frame's support
+  // (the same ones on every call) and leaves the others as they are.
+  std::vector<pinocchio::Data::Matrix6x> frame_J(nframes, pinocchio::Data::Matrix6x::Zero(6, n));
+  std::vector<double> buf(std::max({(size_t)2 * n * n, (size_t)6 * nframes * n, (size_t)n * regressor_cols}));
+  const size_t nn = (size_t)n * n;
 
   // Agreement on the first states.
-  double err[NPAIRS] = {0, 0, 0, 0, 0};
+  double err[NPAIRS] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  std::vector<double> frames_pin((size_t)6 * nframes * n);
   for (int k = 0; k < std::min(CHECK_STATES, nstates); ++k) {
     const double *q = &s.q[(size_t)k * n], *qd = &s.qd[(size_t)k * n];
     const double *qdd = &s.qdd[(size_t)k * n], *tau = &s.tau[(size_t)k * n];
@@ -281,6 +340,38 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
     bm->inertia_inverse(q, bm->p, buf.data());
     pinocchio::computeMinverse(model, data, s.Q[k]);
     err[4] = std::max(err[4], relative_error(buf.data(), symmetric_from_upper(data.Minv).data(), n * n));
+    // the derivatives: Pinocchio fills the full n x n matrices (row-major copies here); each matrix compared on
+    // its own scale
+    if (bm->inverse_dynamics_derivatives) {
+      bm->inverse_dynamics_derivatives(q, qd, qdd, bm->p, buf.data(), buf.data() + nn);
+      pinocchio::computeRNEADerivatives(model, data, s.Q[k], s.V[k], s.Vd[k]);
+      err[5] = std::max({err[5], relative_error(buf.data(), row_major(data.dtau_dq).data(), n * n),
+                         relative_error(buf.data() + nn, row_major(data.dtau_dv).data(), n * n)});
+    }
+    if (bm->forward_dynamics_derivatives) {
+      bm->forward_dynamics_derivatives(q, qd, tau, bm->p, buf.data(), buf.data() + nn);
+      pinocchio::computeABADerivatives(model, data, s.Q[k], s.V[k], s.T[k]);
+      err[6] = std::max({err[6], relative_error(buf.data(), row_major(data.ddq_dq).data(), n * n),
+                         relative_error(buf.data() + nn, row_major(data.ddq_dv).data(), n * n)});
+    }
+    if (bm->frame_jacobians && nframes) {
+      bm->frame_jacobians(q, bm->p, buf.data());
+      pinocchio::computeJointJacobians(model, data, s.Q[k]);
+      pinocchio::updateFramePlacements(model, data);
+      for (int f = 0; f < nframes; ++f) {
+        pinocchio::Data::Matrix6x J = pinocchio::Data::Matrix6x::Zero(6, n);
+        pinocchio::getFrameJacobian(model, data, frame_ids[f], pinocchio::LOCAL_WORLD_ALIGNED, J);
+        const std::vector<double> Jr = row_major(J);
+        std::copy(Jr.begin(), Jr.end(), frames_pin.begin() + (size_t)6 * f * n);
+      }
+      err[7] = std::max(err[7], relative_error(buf.data(), frames_pin.data(), 6 * nframes * n));
+    }
+    if (bm->regressor) {
+      bm->regressor(q, qd, qdd, bm->p, buf.data());
+      pinocchio::computeJointTorqueRegressor(model, data, s.Q[k], s.V[k], s.Vd[k]);
+      err[8] = std::max(err[8], relative_error(buf.data(), row_major(data.jointTorqueRegressor).data(),
+                                               n * regressor_cols));
+    }
   }
 
   auto timer = [&](auto &&call) -> Timer {
@@ -296,6 +387,20 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
     return [&, c](int i) {
       pinocchio::aba(model, data, s.Q[i], s.V[i], s.T[i], c);
       return data.ddq[0];
+    };
+  };
+  // every emitted frame's Jacobian from one computeJointJacobians, with updateFramePlacements (oMf of every
+  // frame, as the usual call sequence has it) or without (getFrameJacobian reads oMi and the frame's placement)
+  auto frames_call = [&](bool update_frames) {
+    return [&, update_frames](int i) {
+      pinocchio::computeJointJacobians(model, data, s.Q[i]);
+      if (update_frames) pinocchio::updateFramePlacements(model, data);
+      double acc = 0.0;
+      for (int f = 0; f < nframes; ++f) {
+        pinocchio::getFrameJacobian(model, data, frame_ids[f], pinocchio::LOCAL_WORLD_ALIGNED, frame_J[f]);
+        acc += frame_J[f](0, n - 1);
+      }
+      return acc;
     };
   };
   std::vector<std::pair<std::string, Timer>> pin_timer[NPAIRS] = {
@@ -315,15 +420,44 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
           pinocchio::computeMinverse(model, data, s.Q[i]);
           return data.Minv(0, 0);
         })}},
+      {{"", timer([&](int i) {
+          pinocchio::computeRNEADerivatives(model, data, s.Q[i], s.V[i], s.Vd[i]);
+          return data.dtau_dq(0, 0) + data.dtau_dv(0, 0);
+        })}},
+      {{"", timer([&](int i) {
+          pinocchio::computeABADerivatives(model, data, s.Q[i], s.V[i], s.T[i]);
+          return data.ddq_dq(0, 0) + data.ddq_dv(0, 0);
+        })}},
+      {{VARIANT[7][0], timer(frames_call(true))}, {VARIANT[7][1], timer(frames_call(false))}},
+      {{"", timer([&](int i) {
+          pinocchio::computeJointTorqueRegressor(model, data, s.Q[i], s.V[i], s.Vd[i]);
+          return data.jointTorqueRegressor(0, 0);
+        })}},
   };
-  bench_timer ours_timer[NPAIRS] = {bm->t_inertia, bm->t_nonlinear_effects, bm->t_inverse_dynamics,
-                                    bm->t_forward_dynamics, bm->t_inertia_inverse};
+  bench_timer ours_timer[NPAIRS] = {bm->t_inertia,
+                                    bm->t_nonlinear_effects,
+                                    bm->t_inverse_dynamics,
+                                    bm->t_forward_dynamics,
+                                    bm->t_inertia_inverse,
+                                    bm->t_inverse_dynamics_derivatives,
+                                    bm->t_forward_dynamics_derivatives,
+                                    nframes ? bm->t_frame_jacobians : nullptr,
+                                    bm->t_regressor};
 
-  std::fprintf(out, "{\"name\": \"%s\", \"urdf\": \"%s\", \"nq\": %d, \"pinocchio_nq\": %d, \"pairs\": [",
-               json_escape(name).c_str(), json_escape(path).c_str(), n, (int)model.nq);
+  std::string frames_json;
+  for (int f = 0; f < nframes; ++f)
+    frames_json += (f ? ", \"" : "\"") + json_escape(bm->frames[f]) + "\"";
+  std::fprintf(out,
+               "{\"name\": \"%s\", \"urdf\": \"%s\", \"nq\": %d, \"pinocchio_nq\": %d, \"frames\": [%s], "
+               "\"regressor_cols\": %d, \"pairs\": [",
+               json_escape(name).c_str(), json_escape(path).c_str(), n, (int)model.nq, frames_json.c_str(),
+               bm->regressor ? regressor_cols : 0);
+  bool first = true;
   for (int k = 0; k < NPAIRS; ++k) {
-    time_pair(out, k == 0, name, PAIRS[k], PINOCCHIO[k], pin_timer[k], ours_timer[k], cs, buf.data(), seconds,
-              calls, err[k]);
+    if (!ours_timer[k]) continue;  // a routine the model was generated without
+    time_pair(out, first, name, PAIRS[k], PINOCCHIO[k], pin_timer[k], ours_timer[k], cs, buf.data(), seconds, calls,
+              err[k]);
+    first = false;
   }
   std::fprintf(out, "]}");
   return 0;
