@@ -10,10 +10,15 @@ import math
 from pathlib import Path
 
 ROBOTS = ("ur5", "panda", "hyq", "talos")
-RUNTIME_TARGET_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics")
+RUNTIME_TARGET_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics",
+                        "inverse_dynamics_derivatives", "forward_dynamics_derivatives", "frame_jacobians", "regressor")
 RUNTIME_LABELS = {"inertia": "A(q) ↔ crba", "nonlinear_effects": "b+g ↔ nonLinearEffects",
                   "inverse_dynamics": "inverse dynamics ↔ rnea", "forward_dynamics": "forward dynamics ↔ aba",
-                  "inertia_inverse": "A⁻¹ ↔ computeMinverse"}
+                  "inertia_inverse": "A⁻¹ ↔ computeMinverse",
+                  "inverse_dynamics_derivatives": "∂τ/∂q, ∂τ/∂q̇ ↔ computeRNEADerivatives",
+                  "forward_dynamics_derivatives": "∂q̈/∂q, ∂q̈/∂q̇ ↔ computeABADerivatives",
+                  "frame_jacobians": "frame Jacobians ↔ computeJointJacobians + getFrameJacobian",
+                  "regressor": "regressor Y ↔ computeJointTorqueRegressor"}
 # Pinocchio 4.1 figures quoted in DESIGN.md ("Performance"), ns per call: crba / nonLinearEffects / aba
 DESIGN_PINOCCHIO_NS = {"ur5": {"inertia": 300, "nonlinear_effects": 660, "forward_dynamics": 1360},
                        "panda": {"inertia": 480, "nonlinear_effects": 970, "forward_dynamics": 2050},
@@ -62,6 +67,15 @@ def text_table(header, rows) -> str:
 
 def _gen_runs(results) -> dict:
     return {r["label"]: r for r in results.get("generation", {}).get("runs", [])}
+
+
+def _runtime_ops(results, robot) -> dict:
+    """The operation counts of the routines timed for ``robot`` (the manifest of the code the runtime section
+    built; older runs have none)."""
+    for r in results.get("runtime", {}).get("robots", []):
+        if r["name"] == robot:
+            return r.get("ops") or {}
+    return {}
 
 
 def _runtime_pairs(results) -> dict:
@@ -167,8 +181,7 @@ def diagnose(results) -> list:
             p = pairs.get((robot, role))
             if p is None or p["ratio"] <= RUNTIME_RATIO_TARGET:
                 continue
-            g = runs.get(robot, {})
-            o = g.get("ops", {}).get(role)
+            o = _runtime_ops(results, robot).get(role) or runs.get(robot, {}).get("ops", {}).get(role)
             ops = f"; the routine's C has {o['mul']} mul + {o['add']} add + {o['div']} div, {o['call']} calls" \
                 if o else ""
             notes.append(f"runtime {robot} {role}: {p['generated_ns']:.0f} ns against {p['pinocchio']} "
@@ -254,22 +267,25 @@ def plot_runtime(results, path: Path) -> bool:
     robots = results.get("runtime", {}).get("robots", [])
     if not robots:
         return False
-    roles = [p["role"] for p in robots[0]["pairs"]]
-    fig, ax = plt.subplots(figsize=(10, 4.2))
-    width = 0.8 / len(roles)
+    roles = []
+    for r in robots:
+        roles += [p["role"] for p in r["pairs"] if p["role"] not in roles]
+    fig, ax = plt.subplots(figsize=(max(10, 1.6 * len(roles) + 2), 4.8))
+    width = 0.85 / len(roles)
     for k, role in enumerate(roles):
         xs = [i + (k - (len(roles) - 1) / 2) * width for i in range(len(robots))]
-        ys = [next(p["ratio"] for p in r["pairs"] if p["role"] == role) for r in robots]
+        ys = [next((p["ratio"] for p in r["pairs"] if p["role"] == role), math.nan) for r in robots]
         ax.bar(xs, ys, width, label=RUNTIME_LABELS.get(role, role))
         for x, y in zip(xs, ys):
-            ax.text(x, y, f"{y:.2f}", ha="center", va="bottom", fontsize=7)
+            if not math.isnan(y):
+                ax.text(x, y, f"{y:.2f}", ha="center", va="bottom", fontsize=6)
     ax.axhline(1.0, color="k", lw=0.8)
     ax.axhline(RUNTIME_RATIO_TARGET, color="C3", ls="--", lw=1, label=f"target {RUNTIME_RATIO_TARGET:g}")
     ax.set_xticks(range(len(robots)))
     ax.set_xticklabels([f"{r['name']} (n = {r['nq']})" for r in robots])
     ax.set_ylabel("time generated / time Pinocchio")
     ax.set_title("Runtime ratio, ns per call (median of batch means); below 1 the generated C is faster")
-    ax.legend(fontsize=8, ncol=2)
+    ax.legend(fontsize=7, ncol=3)
     ax.grid(True, axis="y", alpha=0.3)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -501,7 +517,24 @@ def _runtime(results) -> str:
               "`forward_dynamics` ↔ `aba`, `inertia_inverse` ↔ `computeMinverse` (upper triangle only as well).  "
               "Pinocchio's `crba` and `aba` are timed in both of its conventions (`Convention::LOCAL`, the default, "
               "and `Convention::WORLD`, each checked against the generated code) and the faster is Pinocchio's time "
-              "(named in the table).", ""]
+              "(named in the table).", "",
+              "Beyond the five: the runtime section generates the four robots again (untimed, into "
+              "`benchmarks/build/runtime/gen/`) with `aggsym generate ROBOT.urdf --routines "
+              f"{rt.get('routines', 'default,…')}` (section 1 times the default set alone).  "
+              "`inverse_dynamics_derivatives` (∂τ/∂q, ∂τ/∂q̇) ↔ `computeRNEADerivatives(model, data, q, v, a)` "
+              "(`dtau_dq`, `dtau_dv`: Pinocchio fills both full n×n matrices), `forward_dynamics_derivatives` "
+              "(∂q̈/∂q, ∂q̈/∂q̇) ↔ `computeABADerivatives(model, data, q, v, tau)` (`ddq_dq`, `ddq_dv`); each of the "
+              "two matrices is compared on its own scale and the larger error shown.  `frame_jacobians` (a 6×n "
+              "block per frame: velocity of the frame origin, then angular velocity, world axes) ↔ one "
+              "`computeJointJacobians` then `getFrameJacobian(model, data, frame, LOCAL_WORLD_ALIGNED, J)` for each "
+              "frame the generated code emits (the manifest's frames: by default the links without a child; "
+              "Pinocchio's BODY frames of those links, each J zeroed once, since getFrameJacobian writes only the "
+              "columns of the frame's support), timed with and without `updateFramePlacements` (getFrameJacobian "
+              "reads `oMi` and the frame's placement, not `oMf`), the faster shown; one call of the generated routine "
+              "against the whole sequence.  `regressor` (Y, n × 10 per moving body) ↔ "
+              "`computeJointTorqueRegressor(model, data, q, v, a)` (`jointTorqueRegressor`): the layouts agree "
+              "(one block per Pinocchio joint, in joint order, (m, m c, I) about the joint frame in Pinocchio's "
+              "order, welded links merged), so the full matrices are compared.", ""]
     for robot in rt["robots"]:
         rows = []
         for p in robot["pairs"]:
@@ -514,6 +547,9 @@ def _runtime(results) -> str:
                   table(("pair", "Pinocchio function", "generated ns", "Pinocchio ns", "ratio", "CPU-time ratio",
                          "rel. error", "batches"),
                         rows), ""]
+        if robot.get("frames"):
+            lines += [f"Frames of the frame Jacobians ({len(robot['frames'])}): "
+                      + ", ".join(f"`{f}`" for f in robot["frames"]) + ".", ""]
     lines += _constrained(rt)
     comp = rt.get("compile_seconds", {})
     if comp:

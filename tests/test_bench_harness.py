@@ -178,6 +178,8 @@ def test_report_writer_produces_the_sections_and_the_targets(tmp_path):
     assert rows["full generation talos ≤ 60 s, peak memory ≤ 2 GiB"] is False  # 3 GiB
     assert [ok for what, ok in rows.items() if "forward dynamics" in what] == [False]
     assert [ok for what, ok in rows.items() if "A(q) ↔ crba" in what] == [True]
+    for role in runtime.EXTRA_ROLES:  # the pairs beyond the five have their rows, with the same 0.5 target
+        assert [ok for what, ok in rows.items() if report.RUNTIME_LABELS[role] in what] == [True], role
     assert any(what.startswith("op count inertia at n = 6") and ok for what, ok in rows.items())
     summary = report.summary_text(results)
     assert "NO" in summary and "yes" in summary
