@@ -103,8 +103,10 @@ def origin_sweep(bound, kin, qd, qdd, base=ZERO3):
         if p < 0:
             a = L.unrotate_free(base)
             w, wd = rel[3:], turn
-            if kin.free[k]:  # a free-flyer's v is the origin's velocity in the turning body axes: its classical
-                a = add(a, cross(w, rel[:3]))  # acceleration is v' + w x v
+            if kin.free[k]:
+                # a free-flyer's v is its origin's velocity in its own turning axes: the classical acceleration of
+                # the origin is v' + w x v (v' = own[:3], added below)
+                a = add(a, cross(w, rel[:3]))
         else:
             par = out[p]
             wp = L.unrotate_free(par.w)

@@ -30,9 +30,11 @@ class Tree:
         self.coords = []  # per body: list of coordinate indices of its pair
         self.positions = []  # per body: the indices of its pair's entries of q
         i = j = 0
-        for b in model.bodies:
+        for k, b in enumerate(model.bodies):
             n = len(b.pair.coordinates)
             m = len(b.pair.positions) if b.pair.quaternion else n
+            if b.pair.quaternion and self.parent[k] >= 0:
+                raise ValueError(f"body {self.names[k]!r}: a free-flyer pair joins a root of the tree to the world")
             self.coords.append(list(range(i, i + n)))
             self.positions.append(list(range(j, j + m)))
             i += n
