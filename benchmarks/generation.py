@@ -18,11 +18,12 @@ TOTAL = re.compile(r"^aggsym: [^:]+: wrote \d+ files to .* in ([0-9.]+) s$")
 
 
 def generate_measured(label: str, model_path, outdir, timeout: float | None = None,
-                      routines: str | None = None) -> dict:
+                      routines: str | None = None, options=()) -> dict:
     """One full ``aggsym generate`` in a fresh process; returns its measurements and the manifest.  ``routines``:
-    the value of ``--routines`` (default: none given, the default set)."""
+    the value of ``--routines`` (default: none given, the default set); ``options``: further arguments (e.g.
+    ``--floating-base quaternion --name ur5_ff``)."""
     outdir = Path(outdir)
-    extra = ["--routines", routines] if routines else []
+    extra = (["--routines", routines] if routines else []) + list(options)
     run = run_measured([python(), "-m", "aggsym", "generate", str(model_path), "-o", str(outdir), *extra],
                        timeout=timeout, env=child_env())
     stages, internal = {}, None

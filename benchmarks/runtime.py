@@ -153,7 +153,7 @@ def c_string(s: str) -> str:
 def _model_arrays(m: dict) -> tuple:
     """(C lines of the joint names and default parameters of a manifest's model, the parameters' expression)."""
     name = m["name"]
-    joints = ", ".join(c_string(c["joint"]) for c in m["coordinates"])
+    joints = ", ".join(c_string(c["joint"]) for c in m.get("velocities", m["coordinates"]))
     lines = [f"static const char *const {name}_joints[] = {{{joints}}};"]
     if not m["parameters"]:
         return lines, "NULL"
@@ -172,7 +172,9 @@ def _model_record(m: dict) -> list:
     if frames:
         lines.append(f"static const char *const {name}_frames[] = {{{', '.join(c_string(f) for f in frames)}}};")
     cols = m["layouts"]["regressor"]["Y"]["shape"][1] if "regressor" in has else 0
-    fields = [c_string(name), str(m["nq"]), str(len(m["parameters"])), p, f"{name}_joints"]
+    free_flyer = any(c["kind"] == "quaternion" for c in m["coordinates"])
+    fields = [c_string(name), str(m["nq"]), str(m.get("nv", m["nq"])), str(int(free_flyer)), str(len(m["parameters"])),
+              p, f"{name}_joints"]
     fields += [f"{name}_{role}" for role in DEFAULT_ROLES] + [f"{name}_t_{role}" for role in DEFAULT_ROLES]
     fields += [str(len(frames)), f"{name}_frames" if frames else "NULL", str(cols)]
     fields += [f"{name}_{role}" if role in has else "NULL" for role in EXTRA_ROLES]

@@ -55,15 +55,26 @@ def test_timing_harness_runs_on_a_tiny_model(tmp_path):
     model = select_routines(chain.chain_model(3, tmp_path), runtime.ROUTINES.split(","))
     write(generate(model, latex=False), tmp_path / "chain3")
     write(generate(chain.chain_model(2, tmp_path), latex=False), tmp_path / "chain2")
+    free = tmp_path / "free.urdf"  # one revolute joint on Pinocchio's free-flyer: q has 8 entries, qd 7
+    free.write_text('<robot name="free"><link name="a"><inertial><mass value="2"/><inertia ixx="1" iyy="2" izz="3" '
+                    'ixy="0" ixz="0" iyz="0"/></inertial></link><link name="b"><inertial><mass value="1"/>'
+                    '<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+                    '<joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>'
+                    '<origin xyz="0.1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>')
+    write(generate(aggsym.load(free, floating_base="quaternion"), latex=False), tmp_path / "free")
     manifest = json.loads((tmp_path / "chain3" / "chain3.json").read_text())
     assert set(runtime.EXTRA_ROLES) <= set(manifest["functions"])
     source = runtime.bench_models_source([manifest])
     assert "BENCH_REGRESSOR(chain3)" in source and "chain3_frames[]" in source
+    free_manifest = json.loads((tmp_path / "free" / "free.json").read_text())
+    assert '"free", 8, 7, 1,' in runtime.bench_models_source([free_manifest])  # nq, nv, free_flyer
     exe = runtime.build_generated_only(tmp_path / "build", {"chain3": tmp_path / "chain3",
-                                                            "chain2": tmp_path / "chain2"}, log=lambda m: None)
+                                                            "chain2": tmp_path / "chain2", "free": tmp_path / "free"},
+                                       log=lambda m: None)
     data = runtime.run_generated_only(exe, tmp_path / "out.json", seconds=0.01, states=20)
     robots = {r["name"]: r for r in data["robots"]}
     assert robots["chain3"]["nq"] == 3 and robots["chain2"]["nq"] == 2
+    assert (robots["free"]["nq"], robots["free"]["nv"]) == (8, 7)
     assert [p["role"] for p in robots["chain3"]["pairs"]] == [role for role, _, _ in runtime.PAIRS]
     assert [p["role"] for p in robots["chain2"]["pairs"]] == [*runtime.DEFAULT_ROLES, "frame_jacobians"]
     for robot in robots.values():
@@ -145,6 +156,8 @@ def _fake_results():
               "pinocchio_ns_q90": 310.0, "cpu_ratio": 0.34, "relative_error": 1e-15} for role, pin, _ in runtime.PAIRS]
     robots = [{"name": r, "nq": 6, "pinocchio_nq": 6, "pairs": [dict(p) for p in pairs]} for r in report.ROBOTS]
     robots[1]["pairs"][3]["ratio"] = 0.8  # panda forward dynamics misses the target
+    robots += [{"name": r + report.FREE_FLYER_SUFFIX, "nq": 13, "nv": 12, "free_flyer": True, "pinocchio_nq": 13,
+                "pairs": [dict(p) for p in pairs[:5]]} for r in report.ROBOTS]  # the free-flyers meet theirs
     kruns = [{"n": 4, "finished": True, "seconds": 20.0, "kane_seconds": 15.0, "cse_seconds": 5.0,
               "maxrss_kib": 90_000, "ops": {"mul": 1000, "add": 800, "div": 0, "call": 6},
               "relative_error_vs_aggsym": 1e-15, "timeout": 600},
@@ -176,8 +189,8 @@ def test_report_writer_produces_the_sections_and_the_targets(tmp_path):
     assert rows["full generation panda ≤ 5 s"] is False
     assert rows["full generation chain12 ≤ 10 s"] is True
     assert rows["full generation talos ≤ 60 s, peak memory ≤ 2 GiB"] is False  # 3 GiB
-    assert [ok for what, ok in rows.items() if "forward dynamics" in what] == [False]
-    assert [ok for what, ok in rows.items() if "A(q) ↔ crba" in what] == [True]
+    assert [ok for what, ok in rows.items() if "forward dynamics" in what] == [False, True]  # fixed, free-flyer
+    assert [ok for what, ok in rows.items() if "A(q) ↔ crba" in what] == [True, True]
     for role in runtime.EXTRA_ROLES:  # the pairs beyond the five have their rows, with the same 0.5 target
         assert [ok for what, ok in rows.items() if report.RUNTIME_LABELS[role] in what] == [True], role
     assert any(what.startswith("op count inertia at n = 6") and ok for what, ok in rows.items())

@@ -11,9 +11,10 @@ extern "C" {
 
 typedef struct {
     int count;          /* number of states */
-    int nq;
+    int nq;             /* the length of q */
+    int nv;             /* the length of qd, qdd, tau (nq - 1 with a quaternion free-flyer, else nq) */
     const double *q;    /* count x nq, row-major: our coordinates */
-    const double *qd;
+    const double *qd;   /* count x nv, as qdd and tau */
     const double *qdd;
     const double *tau;
     const double *p;    /* parameter vector (NULL when the model has none) */
@@ -31,10 +32,12 @@ typedef double (*bench_timer)(const bench_states *s, int first, int calls, doubl
 
 typedef struct {
     const char *name;
-    int nq;
+    int nq;                     /* the length of q */
+    int nv;                     /* the length of qd, qdd, tau */
+    int free_flyer;             /* generated with --floating-base quaternion: Pinocchio's JointModelFreeFlyer root */
     int np;
     const double *p;            /* default parameters or NULL */
-    const char *const *joints;  /* the joint name of each coordinate, in q order */
+    const char *const *joints;  /* the joint name of each velocity coordinate, in qd order */
     bench_fn_q inertia;         /* A(q), n*n row-major */
     bench_fn_qv nonlinear_effects; /* b + g */
     bench_fn_qvx inverse_dynamics; /* (q, qd, qdd) -> tau */
@@ -90,11 +93,11 @@ double bench_cpu_now_ns(void);  /* CLOCK_THREAD_CPUTIME_ID */
     static double T(const bench_states *s, int first, int calls, double *out, double *cpu_ns) { \
         double acc = 0.0, t0, t1, c0, c1;                                                       \
         int k, i = first;                                                                       \
-        const size_t n = (size_t)s->nq;                                                         \
+        const size_t n = (size_t)s->nv;                                                         \
         c0 = bench_cpu_now_ns();                                                                \
         t0 = bench_now_ns();                                                                    \
         for (k = 0; k < calls; ++k) {                                                           \
-            const size_t at = (size_t)i * n;                                                    \
+            const size_t at = (size_t)i * n, at_q = (size_t)i * (size_t)s->nq;                  \
             CALL;                                                                               \
             acc += out[0];                                                                      \
             if (++i == s->count) i = 0;                                                         \
@@ -105,10 +108,10 @@ double bench_cpu_now_ns(void);  /* CLOCK_THREAD_CPUTIME_ID */
         *cpu_ns = (c1 - c0) / calls;                                                            \
         return (t1 - t0) / calls;                                                               \
     }
-#define BENCH_TIMER_Q(T, F) BENCH_TIMER(T, F(s->q + at, s->p, out))
-#define BENCH_TIMER_QV(T, F) BENCH_TIMER(T, F(s->q + at, s->qd + at, s->p, out))
-#define BENCH_TIMER_QVX(T, F, X) BENCH_TIMER(T, F(s->q + at, s->qd + at, s->X + at, s->p, out))
-#define BENCH_TIMER_QVX2(T, F, X) BENCH_TIMER(T, F(s->q + at, s->qd + at, s->X + at, s->p, out, out + n * n))
+#define BENCH_TIMER_Q(T, F) BENCH_TIMER(T, F(s->q + at_q, s->p, out))
+#define BENCH_TIMER_QV(T, F) BENCH_TIMER(T, F(s->q + at_q, s->qd + at, s->p, out))
+#define BENCH_TIMER_QVX(T, F, X) BENCH_TIMER(T, F(s->q + at_q, s->qd + at, s->X + at, s->p, out))
+#define BENCH_TIMER_QVX2(T, F, X) BENCH_TIMER(T, F(s->q + at_q, s->qd + at, s->X + at, s->p, out, out + n * n))
 /* The five timers every model has (its bench_model record is written by benchmarks/runtime.py, with the
    other routines it was generated with). */
 #define BENCH_MODEL_TIMERS(NAME)                                                                \
@@ -127,7 +130,7 @@ double bench_cpu_now_ns(void);  /* CLOCK_THREAD_CPUTIME_ID */
 /* A constrained model: its timer (qdd into out, lambda after it) and its bench_constrained_model record. */
 #define BENCH_CONSTRAINED_MODEL(NAME, NQ, NC, NP, P, JOINTS)                                    \
     BENCH_TIMER(NAME##_t_constrained_forward_dynamics,                                          \
-                NAME##_constrained_forward_dynamics(s->q + at, s->qd + at, s->tau + at, s->p,   \
+                NAME##_constrained_forward_dynamics(s->q + at_q, s->qd + at, s->tau + at, s->p, \
                                                     out, out + n))                              \
     static const bench_constrained_model NAME##_constrained_bench = {                           \
         #NAME, NQ, NC, NP, P, JOINTS, NAME##_constrained_forward_dynamics,                      \

@@ -52,11 +52,11 @@ int main(int argc, char **argv) {
     fprintf(out, "{\"states\": %d, \"robots\": [", nstates);
     for (m = 0; bench_models[m]; ++m) {
         const bench_model *bm = bench_models[m];
-        const int n = bm->nq;
-        const size_t size = (size_t)nstates * (size_t)n;
+        const int n = bm->nv;
+        const size_t size = (size_t)nstates * (size_t)n, size_q = (size_t)nstates * (size_t)bm->nq;
         /* the largest output: two n*n matrices, the frames' 6 x n blocks, or the regressor */
         size_t out_size = 2 * (size_t)n * (size_t)n;
-        double *q = malloc(size * sizeof *q), *qd = malloc(size * sizeof *q), *qdd = malloc(size * sizeof *q);
+        double *q = malloc(size_q * sizeof *q), *qd = malloc(size * sizeof *q), *qdd = malloc(size * sizeof *q);
         double *tau = malloc(size * sizeof *q), *buf;
         bench_timer timers[9];
         bench_states s;
@@ -72,20 +72,22 @@ int main(int argc, char **argv) {
         if ((size_t)bm->nframes * 6 * (size_t)n > out_size) out_size = (size_t)bm->nframes * 6 * (size_t)n;
         if ((size_t)bm->regressor_cols * (size_t)n > out_size) out_size = (size_t)bm->regressor_cols * (size_t)n;
         buf = malloc(out_size * sizeof *buf);
+        for (i = 0; i < (int)size_q; ++i) q[i] = -3.141592653589793 + 6.283185307179586 * uniform01();
         for (i = 0; i < (int)size; ++i) {
-            q[i] = -3.141592653589793 + 6.283185307179586 * uniform01();
             qd[i] = normal01();
             qdd[i] = normal01();
             tau[i] = normal01();
         }
         s.count = nstates;
-        s.nq = n;
+        s.nq = bm->nq;
+        s.nv = n;
         s.q = q;
         s.qd = qd;
         s.qdd = qdd;
         s.tau = tau;
         s.p = bm->p;
-        fprintf(out, "%s{\"name\": \"%s\", \"nq\": %d, \"pairs\": [", m ? ", " : "", bm->name, n);
+        fprintf(out, "%s{\"name\": \"%s\", \"nq\": %d, \"nv\": %d, \"pairs\": [", m ? ", " : "", bm->name,
+                bm->nq, n);
         for (k = 0, written = 0; k < 9; ++k) {
             double cpu, t = 0.0;
             int batches, first;

@@ -85,8 +85,8 @@ const pinocchio::ReferenceFrame CONTACT_FRAME[] = {pinocchio::LOCAL_WORLD_ALIGNE
 const char *const CONTACT_FRAME_NAME[] = {"LOCAL_WORLD_ALIGNED", "LOCAL"};
 
 struct States {
-  int count = 0, nq = 0;
-  std::vector<double> q, qd, qdd, tau;       // ours, count x nq
+  int count = 0, nq = 0, nv = 0;
+  std::vector<double> q, qd, qdd, tau;       // ours, count x nq (q), count x nv (the others)
   std::vector<Eigen::VectorXd> Q, V, Vd, T;  // Pinocchio's
 };
 
@@ -145,7 +145,8 @@ std::string json_escape(const std::string &s) {
 }
 
 // The generated coordinates must be Pinocchio's joints in the same order; continuous[i] = 1 where coordinate i is
-// a continuous joint ((cos, sin) in Pinocchio's q).  False (with a message) when they are not.
+// a continuous joint ((cos, sin) in Pinocchio's q).  A free-flyer root (nq 7, nv 6) is aggsym's quaternion base,
+// its seven entries of q the same as Pinocchio's.  False (with a message) when they are not.
 bool same_joints(const pinocchio::Model &model, const char *const *joints, const std::string &name,
                  std::vector<int> &continuous) {
   continuous.assign(model.nv, 0);
@@ -161,6 +162,8 @@ bool same_joints(const pinocchio::Model &model, const char *const *joints, const
     }
     if (joint.nq() == 2 && joint.nv() == 1) {
       continuous[joint.idx_v()] = 1;
+    } else if (joint.shortname() == "JointModelFreeFlyer" && j == 1) {
+      continue;
     } else if (joint.nq() != joint.nv()) {
       std::fprintf(stderr, "%s: joint %s has nq %d, nv %d\n", name.c_str(), model.names[j].c_str(), joint.nq(),
                    joint.nv());
@@ -170,31 +173,42 @@ bool same_joints(const pinocchio::Model &model, const char *const *joints, const
   return true;
 }
 
-// Random states: q uniform in [-pi, pi], qd, qdd, tau standard normal; Pinocchio's q from ours.
-States random_states(const pinocchio::Model &model, const std::vector<int> &continuous, int nstates, unsigned seed) {
-  const int n = (int)model.nv;
+// Random states: q uniform in [-pi, pi] (a free-flyer's position too, its quaternion a random unit one), qd,
+// qdd, tau standard normal; Pinocchio's q from ours.  Our q has nq entries: the free-flyer's seven, then one per
+// joint (Pinocchio's q has (cos, sin) for a continuous joint).
+States random_states(const pinocchio::Model &model, const std::vector<int> &continuous, int nstates, unsigned seed,
+                     bool free_flyer) {
+  const int n = (int)model.nv, nq = free_flyer ? n + 1 : n;
   States s;
   s.count = nstates;
-  s.nq = n;
+  s.nq = nq;
+  s.nv = n;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> angle(-M_PI, M_PI);
   std::normal_distribution<double> normal(0.0, 1.0);
   for (int k = 0; k < nstates; ++k) {
     Eigen::VectorXd Q(model.nq), V(n), Vd(n), T(n);
+    for (int i = 0; i < nq; ++i) s.q.push_back(angle(rng));
+    if (free_flyer) {  // entries 3..6: a unit quaternion (x, y, z, w)
+      double quat[4], norm = 0.0;
+      for (double &x : quat) norm += (x = normal(rng)) * x;
+      for (int i = 0; i < 4; ++i) s.q[(size_t)k * nq + 3 + i] = quat[i] / std::sqrt(norm);
+    }
     for (int i = 0; i < n; ++i) {
-      s.q.push_back(angle(rng));
       s.qd.push_back(V[i] = normal(rng));
       s.qdd.push_back(Vd[i] = normal(rng));
       s.tau.push_back(T[i] = normal(rng));
     }
     for (pinocchio::JointIndex j = 1; j < (pinocchio::JointIndex)model.njoints; ++j) {
       const auto &joint = model.joints[j];
-      const int iv = joint.idx_v(), iq = joint.idx_q();
-      if (continuous[iv]) {
-        Q[iq] = std::cos(s.q[(size_t)k * n + iv]);
-        Q[iq + 1] = std::sin(s.q[(size_t)k * n + iv]);
+      const int iv = joint.idx_v(), iq = joint.idx_q(), ours = free_flyer && j > 1 ? iv + 1 : iv;
+      if (free_flyer && j == 1) {
+        for (int i = 0; i < 7; ++i) Q[iq + i] = s.q[(size_t)k * nq + i];
+      } else if (continuous[iv]) {
+        Q[iq] = std::cos(s.q[(size_t)k * nq + ours]);
+        Q[iq + 1] = std::sin(s.q[(size_t)k * nq + ours]);
       } else {
-        for (int i = 0; i < joint.nv(); ++i) Q[iq + i] = s.q[(size_t)k * n + iv + i];
+        for (int i = 0; i < joint.nv(); ++i) Q[iq + i] = s.q[(size_t)k * nq + ours + i];
       }
     }
     s.Q.push_back(Q);
@@ -282,17 +296,20 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
     return 2;
   }
   pinocchio::Model model;
-  pinocchio::urdf::buildModel(path, model);
+  if (bm->free_flyer)
+    pinocchio::urdf::buildModel(path, pinocchio::JointModelFreeFlyer(), model);
+  else
+    pinocchio::urdf::buildModel(path, model);
   pinocchio::Data data(model);
-  const int n = bm->nq;
+  const int n = bm->nv, nq = bm->nq;
   if (model.nv != n) {
-    std::fprintf(stderr, "%s: Pinocchio nv = %d, generated nq = %d\n", name.c_str(), (int)model.nv, n);
+    std::fprintf(stderr, "%s: Pinocchio nv = %d, generated nv = %d\n", name.c_str(), (int)model.nv, n);
     return 1;
   }
   std::vector<int> continuous;
   if (!same_joints(model, bm->joints, name, continuous)) return 1;
-  States s = random_states(model, continuous, nstates, seed);
-  bench_states cs = {s.count, n, s.q.data(), s.qd.data(), s.qdd.data(), s.tau.data(), bm->p};
+  States s = random_states(model, continuous, nstates, seed, bm->free_flyer != 0);
+  bench_states cs = {s.count, nq, n, s.q.data(), s.qd.data(), s.qdd.data(), s.tau.data(), bm->p};
   // the frames of frame_jacobians: Pinocchio's frames of those URDF links (BODY frames)
   std::vector<pinocchio::FrameIndex> frame_ids;
   for (int f = 0; f < bm->nframes; ++f) {
@@ -319,7 +336,7 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
   double err[NPAIRS] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   std::vector<double> frames_pin((size_t)6 * nframes * n);
   for (int k = 0; k < std::min(CHECK_STATES, nstates); ++k) {
-    const double *q = &s.q[(size_t)k * n], *qd = &s.qd[(size_t)k * n];
+    const double *q = &s.q[(size_t)k * nq], *qd = &s.qd[(size_t)k * n];
     const double *qdd = &s.qdd[(size_t)k * n], *tau = &s.tau[(size_t)k * n];
     bm->inertia(q, bm->p, buf.data());
     pinocchio::crba(model, data, s.Q[k], pinocchio::Convention::LOCAL);
@@ -448,9 +465,10 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
   for (int f = 0; f < nframes; ++f)
     frames_json += (f ? ", \"" : "\"") + json_escape(bm->frames[f]) + "\"";
   std::fprintf(out,
-               "{\"name\": \"%s\", \"urdf\": \"%s\", \"nq\": %d, \"pinocchio_nq\": %d, \"frames\": [%s], "
-               "\"regressor_cols\": %d, \"pairs\": [",
-               json_escape(name).c_str(), json_escape(path).c_str(), n, (int)model.nq, frames_json.c_str(),
+               "{\"name\": \"%s\", \"urdf\": \"%s\", \"nq\": %d, \"nv\": %d, \"free_flyer\": %s, "
+               "\"pinocchio_nq\": %d, \"frames\": [%s], \"regressor_cols\": %d, \"pairs\": [",
+               json_escape(name).c_str(), json_escape(path).c_str(), nq, n, bm->free_flyer ? "true" : "false",
+               (int)model.nq, frames_json.c_str(),
                bm->regressor ? regressor_cols : 0);
   bool first = true;
   for (int k = 0; k < NPAIRS; ++k) {
@@ -521,7 +539,7 @@ int bench_constrained(FILE *out, const std::string &name, const std::string &pat
   }
 
   // Consistent states: qd projected onto the null space of the contact points' Jacobian (world axes).
-  States s = random_states(model, continuous, nstates, seed);
+  States s = random_states(model, continuous, nstates, seed, false);
   pinocchio::Data kin(model);
   Eigen::MatrixXd J(nc, n), J6(6, n);
   for (int k = 0; k < nstates; ++k) {
@@ -536,7 +554,7 @@ int bench_constrained(FILE *out, const std::string &name, const std::string &pat
     s.V[k] -= J.transpose() * (J * J.transpose()).ldlt().solve(Jv);
     for (int i = 0; i < n; ++i) s.qd[(size_t)k * n + i] = s.V[k][i];
   }
-  bench_states cs = {s.count, n, s.q.data(), s.qd.data(), s.qdd.data(), s.tau.data(), bm->p};
+  bench_states cs = {s.count, n, n, s.q.data(), s.qd.data(), s.qdd.data(), s.tau.data(), bm->p};
   std::vector<double> buf((size_t)(n + nc));
 
   // Agreement on the first states: qdd for both reference frames, lambda in LOCAL_WORLD_ALIGNED (world axes).
