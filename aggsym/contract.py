@@ -126,10 +126,11 @@ def c_symbol(model, routine: Routine) -> str:
     return f"{model.name}_{routine.role}"
 
 
-def c_prototype(model, routine: Routine) -> str:
+def c_prototype(model, routine: Routine, scalar: str = "double") -> str:
     """``void NAME_role(const double *q, ..., double *out)``: inputs in the order q, qd, qdd|tau, t, p, then the
-    outputs."""
-    args = [f"const double *{i}" for i in signature(routine, model)] + [f"double *{o.name}" for o in routine.written]
+    outputs (``float`` in place of ``double`` for ``scalar="float"``)."""
+    args = [f"const {scalar} *{i}" for i in signature(routine, model)] + \
+        [f"{scalar} *{o.name}" for o in routine.written]
     return f"{'int' if routine.status else 'void'} {c_symbol(model, routine)}({', '.join(args)})"
 
 
@@ -150,7 +151,7 @@ def parameter_macro(model, parameter) -> str:
     return f"{model.name.upper()}_P_{parameter.name}"
 
 
-def header_macros(model, routines) -> list:
+def header_macros(model, routines, scalar: str = "double") -> list:
     """(macro, value, comment) of the header: NQ, NP, one index per parameter, one size per output array."""
     out = [(f"{model.name}_NQ".upper(), model.nq, "the length of q" if model.nq != model.nv else
             "coordinates: the length of q, qd, qdd, tau"),
@@ -166,7 +167,7 @@ def header_macros(model, routines) -> list:
             for n in shape:
                 size *= n
             out.append((size_macro(model, r, o), size,
-                        f"{r.role}: {o.name}, " + " x ".join(str(n) for n in shape) + " doubles"))
+                        f"{r.role}: {o.name}, " + " x ".join(str(n) for n in shape) + f" {scalar}s"))
     return out
 
 
@@ -1037,11 +1038,47 @@ def _coupled_outputs(routine, bound, inputs: dict) -> tuple:
 # the manifest
 
 
-def manifest(model, routines, ops: dict, omitted=None) -> dict:
+# --scalar float: per routine the bound of the float C's error against the double twin, relative to the largest
+# value the routine returns (for FLOAT_PER_CONDITION also divided by cond(A) at the state), the inputs rounded to
+# float: about 10x the worst seen over the bundled models and the suite's robots (README, "Single precision"); the
+# issue's 1e-4 on A, the inverse dynamics and the frame poses.  Models with prescribed motions get FLOAT_TIME times
+# as much: their spin angles w t are computed in float, so the error grows with t (check draws 0 <= t <= 10).
+FLOAT_TOLERANCE = {
+    "inertia": 1e-4, "inverse_dynamics": 1e-4, "frame_poses": 1e-4,
+    "bias": 5e-5, "coriolis": 2e-4, "gravity": 1e-5, "nonlinear_effects": 5e-5, "kinetic_energy": 1e-5,
+    "potential_energy": 1e-3, "momentum": 1e-5, "joint_wrenches": 1e-5, "elastic": 1e-5, "elastic_partition": 1e-5,
+    "frame_jacobians": 1e-5, "frame_accelerations": 1e-5, "center_of_mass": 1e-5, "com_jacobian": 1e-5,
+    "centroidal_map": 5e-5, "regressor": 1e-5, "base_regressor": 1e-5, "inverse_dynamics_derivatives": 2e-4,
+    "constraint_residual": 1e-5, "constraint_jacobian": 1e-5, "constraint_bias": 5e-5, "slip_velocities": 1e-5,
+    "delassus": 5e-5, "constrained_forward_dynamics": 5e-5, "support_coefficients": 1e-5, "support_direct": 2e-5,
+    "support_inverse": 1e-5,
+    "forward_dynamics": 1e-6, "inertia_inverse": 1e-6, "transvective_factors": 1e-6,
+    "forward_dynamics_derivatives": 1e-6,
+}
+FLOAT_PER_CONDITION = ("forward_dynamics", "inertia_inverse", "transvective_factors", "forward_dynamics_derivatives")
+FLOAT_TOLERANCE_DEFAULT = 1e-4  # a routine not measured in float (joint_friction, integrate, ...)
+FLOAT_TIME = 100
+
+
+def float_tolerance(model, routines) -> dict:
+    """The manifest's ``float_tolerance`` (role -> bound) and the notes that say how to read it."""
+    factor = FLOAT_TIME if model.time_dependent else 1
+    out = {"float_tolerance": {r.role: FLOAT_TOLERANCE.get(r.role, FLOAT_TOLERANCE_DEFAULT) * factor
+                               for r in routines},
+           "float_tolerance_per_condition": [r.role for r in routines if r.role in FLOAT_PER_CONDITION]}
+    if model.time_dependent:
+        out["float_time"] = (f"prescribed motions: the spin angles are computed in float, so the error grows with "
+                             f"t; the bounds ({FLOAT_TIME}x those of a model without them) hold for 0 <= t <= 10")
+    return out
+
+
+def manifest(model, routines, ops: dict, omitted=None, scalar: str = "double") -> dict:
     """The JSON manifest of the generated code: ``routines`` those emitted, ``ops[role]`` their operation counts,
-    ``omitted`` the routines left out and why."""
+    ``omitted`` the routines left out and why, ``scalar`` the C type (with ``float``, ``float_tolerance``: per
+    routine the error bound against the double twin that ``aggsym check`` holds the C to)."""
     out = {
         "name": model.name,
+        "scalar": scalar,
         "nq": model.nq,
         "nv": model.nv,
         "coordinates": [{"name": name, "joint": joint, "kind": kind} for name, joint, kind in model.positions],
@@ -1067,8 +1104,10 @@ def manifest(model, routines, ops: dict, omitted=None) -> dict:
         "bodies": len(model.bodies),
         "generator": f"aggsym {__version__}",
     }
+    if scalar == "float":
+        out.update(float_tolerance(model, routines))
     if model.time_dependent:
-        out["time"] = time_entry(model)
+        out["time"] = time_entry(model, scalar)
     if elastic.is_elastic(model):
         out["elastic"] = elastic_entry(model)
     if model.constraints:
@@ -1118,7 +1157,7 @@ def constraints_entry(model) -> dict:
     }
 
 
-def time_entry(model) -> dict:
+def time_entry(model, scalar: str = "double") -> dict:
     """The manifest's description of the time input and of the prescribed motions (rotors, (2.13))."""
     rotors = []
     for b in model.bodies:
@@ -1129,7 +1168,7 @@ def time_entry(model) -> dict:
         "input": "t",
         "length": 1,
         "meaning": ("the time: every routine takes it after its other inputs and before p (C: a pointer to one "
-                    "double; NumPy: a number or an array of the batch shape).  The prescribed angles below and "
+                    f"{scalar}; NumPy: a number or an array of the batch shape).  The prescribed angles below and "
                     "their first and second derivatives (taken symbolically) are evaluated at t; the carrier's "
                     "motion does not act on them (Prop. 2.7).  bias holds all their rate and acceleration terms."),
         "prescribed": rotors,

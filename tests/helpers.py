@@ -178,15 +178,16 @@ def compare(model, pm, rng, states: int = 3, tolerance: float = TOLERANCE) -> fl
 # generated code
 
 
-def generated_code(model, folder: Path, opt: str = "-O2", c: bool = True):
-    """Generate a model's files into ``folder``, compile its C (``opt``; -Werror flags) and import its NumPy
-    module: (C library or None, NumPy module, manifest)."""
-    write(generate(model, latex=False), folder)
+def generated_code(model, folder: Path, opt: str = "-O2", c: bool = True, scalar: str = "double"):
+    """Generate a model's files into ``folder``, compile its C (``opt``; -Werror flags, and -Wdouble-promotion
+    -Wfloat-conversion for ``scalar="float"``) and import its NumPy module: (C library or None, NumPy module,
+    manifest)."""
+    write(generate(model, latex=False, scalar=scalar), folder)
     manifest = json.loads((folder / f"{model.name}.json").read_text())
     lib = None
     if c:
-        lib = CLibrary(compile_shared(folder / f"{model.name}.c", folder / f"lib{model.name}.so", extra=(opt,)),
-                       manifest)
+        lib = CLibrary(compile_shared(folder / f"{model.name}.c", folder / f"lib{model.name}.so", extra=(opt,),
+                                      scalar=scalar), manifest)
     return lib, import_module(folder / f"{model.name}.py"), manifest
 
 

@@ -22,6 +22,8 @@ from ..errors import AggsymError
 from ..twin import NumericTwin
 
 CFLAGS = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O2", "-fPIC", "-shared"]
+FLOAT_CFLAGS = ["-Wdouble-promotion", "-Wfloat-conversion"]  # the float build: nothing silently done in double
+CTYPES = {"double": (ctypes.c_double, np.float64), "float": (ctypes.c_float, np.float32)}
 
 
 def compiler() -> str:
@@ -31,11 +33,13 @@ def compiler() -> str:
     return cc
 
 
-def compile_shared(c_file: Path, out: Path, extra=()) -> Path:
-    """cc -std=c99 -Wall -Wextra -Wpedantic -Werror -O2 -shared, then ``extra`` (e.g. the --opt level), then the
-    environment's CFLAGS (which win: ``CFLAGS=-ffast-math aggsym check ...``); CC names the compiler.  Raises
-    with the compiler's message on failure."""
-    cmd = [*shlex.split(compiler()), *CFLAGS, *extra, *shlex.split(os.environ.get("CFLAGS", "")), "-o", str(out), str(c_file),
+def compile_shared(c_file: Path, out: Path, extra=(), scalar: str = "double") -> Path:
+    """cc -std=c99 -Wall -Wextra -Wpedantic -Werror -O2 -shared (with ``scalar="float"`` also -Wdouble-promotion
+    -Wfloat-conversion), then ``extra`` (e.g. the --opt level), then the environment's CFLAGS (which win:
+    ``CFLAGS=-ffast-math aggsym check ...``); CC names the compiler.  Raises with the compiler's message on
+    failure."""
+    flags = CFLAGS + (FLOAT_CFLAGS if scalar == "float" else [])
+    cmd = [*shlex.split(compiler()), *flags, *extra, *shlex.split(os.environ.get("CFLAGS", "")), "-o", str(out), str(c_file),
            "-lm"]
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True)
@@ -47,12 +51,14 @@ def compile_shared(c_file: Path, out: Path, extra=()) -> Path:
 
 
 class CLibrary:
-    """The generated C functions of a model, callable on NumPy arrays."""
+    """The generated C functions of a model, callable on NumPy arrays (converted to the manifest's ``scalar``,
+    double or float; the outputs are arrays of that type)."""
 
     def __init__(self, lib_path: Path, manifest: dict):
         self.lib = ctypes.CDLL(str(lib_path))
         self.manifest = manifest
         self.nq = manifest["nq"]
+        self.ctype, self.dtype = CTYPES[manifest.get("scalar", "double")]
 
     def call(self, role: str, *args, p=None):
         sig = self.manifest["signatures"][role]
@@ -70,17 +76,17 @@ class CLibrary:
                 if len(pv) == 0:
                     cargs.append(None)
                     continue
-                arr = np.ascontiguousarray(pv, dtype=float)
+                arr = np.ascontiguousarray(pv, dtype=self.dtype)
             else:
-                arr = np.ascontiguousarray(values[name], dtype=float)
+                arr = np.ascontiguousarray(values[name], dtype=self.dtype)
                 size = sig.get("input_sizes", {}).get(name)
                 if size is not None and arr.size != size:
                     raise ValueError(f"{role}: {name} has {arr.size} entries, expected {size}")
             keep.append(arr)
-            cargs.append(arr.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
-        outs = [np.zeros(o["shape"]) for o in sig["outputs"]]
+            cargs.append(arr.ctypes.data_as(ctypes.POINTER(self.ctype)))
+        outs = [np.zeros(o["shape"], dtype=self.dtype) for o in sig["outputs"]]
         for o in outs:
-            cargs.append(o.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+            cargs.append(o.ctypes.data_as(ctypes.POINTER(self.ctype)))
         if sig.get("returns", "void") != "void":
             fn.restype = ctypes.c_int
             if fn(*cargs):
@@ -104,6 +110,7 @@ class CheckResult:
     role: str
     c_error: float
     py_error: float
+    c_tolerance: float | None = None  # the float C's bound (the manifest's float_tolerance); None: the --tol
 
 
 def random_inputs(model, role, rng):
@@ -147,6 +154,12 @@ CONDITIONING = {  # role -> (twin, role, args) -> the condition number that the 
 }
 
 
+def _inertia_condition(twin, role, args) -> float:
+    """The condition number of A(q) at the state of a routine's arguments (q first)."""
+    return float(np.linalg.cond(np.asarray(twin.call("inertia", args[0]), dtype=float)))
+
+
+
 def _fails(call) -> bool:
     """True when ``call()`` raises numpy.linalg.LinAlgError (a returned nonzero status)."""
     try:
@@ -160,13 +173,19 @@ def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir
     """Compile the C (with ``opt``), import the NumPy module, compare both with the numeric twin on random states.
 
     Errors are relative to the largest value a routine returns, and for the constrained forward dynamics also to
-    the condition number of J A^-1 J^T at the state (the solve's rounding grows with it)."""
+    the condition number of J A^-1 J^T at the state (the solve's rounding grows with it).  Float C (the manifest's
+    ``scalar``) gets the states rounded to float, as its caller holds them, and its bound from the manifest's
+    ``float_tolerance``; the float errors of the routines that solve with A are also divided by cond(A) at the
+    state (the manifest's ``float_tolerance_per_condition``)."""
     manifest = json.loads(files[f"{model.name}.json"])
+    scalar = manifest.get("scalar", "double")
+    bounds = manifest.get("float_tolerance", {})
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
         tmp = Path(tmp)
         for name, text in files.items():
             (tmp / name).write_text(text, encoding="utf-8")
-        lib = CLibrary(compile_shared(tmp / f"{model.name}.c", tmp / f"lib{model.name}.so", extra=(opt,)), manifest)
+        lib = CLibrary(compile_shared(tmp / f"{model.name}.c", tmp / f"lib{model.name}.so", extra=(opt,),
+                                      scalar=scalar), manifest)
         module = import_module(tmp / f"{model.name}.py")
         twin = NumericTwin(model)
         rng = np.random.default_rng(seed)
@@ -174,7 +193,7 @@ def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir
         for role in manifest["functions"]:
             worst_c = worst_py = 0.0
             for _ in range(trials):
-                args = random_inputs(model, role, rng)
+                args = _rounded(random_inputs(model, role, rng), lib.dtype)
                 try:
                     ref = twin.call(role, *args)
                 except np.linalg.LinAlgError:  # a state without a solution: C and NumPy must say so too
@@ -189,8 +208,17 @@ def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir
                 scale = max(float(np.max(np.abs(r))) if np.size(r) else 0.0 for r in refs)
                 if role in CONDITIONING:  # a solve: its rounding grows with the condition number of its matrix
                     scale *= CONDITIONING[role](twin, role, args)
+                c_scale = scale * (_inertia_condition(twin, role, args)  # float: solving with A loses cond(A)
+                                   if role in manifest.get("float_tolerance_per_condition", ()) else 1.0)
                 for r, c, p in zip(refs, cs, pys):  # relative to the largest value the routine returns
-                    worst_c = max(worst_c, relative_error(c, r, scale))
+                    worst_c = max(worst_c, relative_error(c, r, c_scale))
                     worst_py = max(worst_py, relative_error(p, r, scale))
-            results.append(CheckResult(role, worst_c, worst_py))
+            results.append(CheckResult(role, worst_c, worst_py, bounds.get(role)))
         return results
+
+
+def _rounded(args, dtype):
+    """The arguments as the C's scalar type holds them (unchanged for double), as double again."""
+    if dtype == np.float64:
+        return args
+    return [float(dtype(a)) if np.isscalar(a) else np.asarray(a, dtype=dtype).astype(float) for a in args]

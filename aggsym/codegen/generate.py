@@ -36,7 +36,7 @@ from ..mechanics.kinematics import TreeKinematics
 from ..model.tree import Tree
 from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import FILTERS, check_c_identifier, check_module_name
-from .printing import CPrinter, Converter, NumPyPrinter, _number, count_ops
+from .printing import SCALARS, CPrinter, Converter, LiteralError, NumPyPrinter, _number, count_ops
 
 
 @dataclass
@@ -110,32 +110,42 @@ def _input_symbols(sl):
     return {sl.program.inputs[(kind, index)].id: f"{kind}_{index}" for kind, index in sl.inputs}
 
 
-def emit_routine(model, prog, routine: Routine, outputs) -> EmittedRoutine:
-    """C and Python statements of one routine, and the operation count of the C."""
+def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double") -> EmittedRoutine:
+    """C and Python statements of one routine, and the operation count of the C (its arrays, temporaries and
+    literals of the C type ``scalar``, double or float)."""
+    try:
+        return _emit_routine(model, prog, routine, outputs, scalar)
+    except LiteralError as exc:
+        raise AggsymError(f"{model.source or model.name}: routine {routine.role}: {exc}"
+                          + ("; generate with --scalar double, or choose units in which the model's numbers fit"
+                             if scalar == "float" else "")) from None
+
+
+def _emit_routine(model, prog, routine: Routine, outputs, scalar: str) -> EmittedRoutine:
     sl = straight_line(prog, outputs)
     inputs = signature(routine, model)
     allowed = set(inputs)
     for kind, _ in sl.inputs:
         if kind not in allowed:
             raise RuntimeError(f"routine {routine.role} depends on input {kind!r} outside its signature")
-    cp, pp = CPrinter(), NumPyPrinter()
+    cp, pp = CPrinter(scalar), NumPyPrinter()
     temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
     c_names = py_names = {**_input_symbols(sl), **temp_names}
     c_conv, py_conv = Converter(prog, c_names), Converter(prog, py_names)
     c_body, py_body = [], []
     status = routine.status
     if status is not None:
-        c_body.append(f"double {status.name}[1];")
+        c_body.append(f"{scalar} {status.name}[1];")
     for kind in inputs:  # every input is read before any output is written: outputs may alias inputs
         used = [i for k, i in sl.inputs if k == kind]
         if not used:
             c_body.append(f"(void){kind};")
         elif kind == "p":  # p == NULL means the defaults, as in the NumPy module
-            defaults = ", ".join(_number(float(x.value)) for x in model.parameters)
-            c_body.append(f"static const double p_defaults[{len(model.parameters)}] = {{{defaults}}};")
+            defaults = ", ".join(_number(float(x.value), scalar) for x in model.parameters)
+            c_body.append(f"static const {scalar} p_defaults[{len(model.parameters)}] = {{{defaults}}};")
             c_body.append("if (!p) p = p_defaults;")
         for i in used:
-            c_body.append(f"const double {kind}_{i} = {kind}[{i}];")
+            c_body.append(f"const {scalar} {kind}_{i} = {kind}[{i}];")
             py_body.append(f"{kind}_{i} = {kind}[..., {i}]")
     for out, flat in zip(routine.outputs, outputs):
         if not flat:
@@ -158,7 +168,7 @@ def emit_routine(model, prog, routine: Routine, outputs) -> EmittedRoutine:
         node = prog.nodes[i]
         py_body.append(f"{py_names[i]} = {pp._print(py_conv(node))}")
         if i not in trig:
-            c_body.append(f"const double {c_names[i]} = {cp._print(c_conv(node))};")
+            c_body.append(f"const {scalar} {c_names[i]} = {cp._print(c_conv(node))};")
             continue
         sin_id, cos_id, arg = trig[i]
         if (sin_id, cos_id) in done:
@@ -166,12 +176,12 @@ def emit_routine(model, prog, routine: Routine, outputs) -> EmittedRoutine:
         done.add((sin_id, cos_id))
         s_name = c_names[sin_id] if sin_id is not None else c_names[cos_id] + "_sin"
         c_name = c_names[cos_id] if cos_id is not None else c_names[sin_id] + "_cos"
-        c_body.append(f"double {s_name}, {c_name};")
+        c_body.append(f"{scalar} {s_name}, {c_name};")
         c_body.append(f"aggsym_sincos({cp._print(c_conv(arg, top=False))}, &{s_name}, &{c_name});")
     if status is not None:
-        c_body.append(f"return {status.name}[0] != 0.0;")
+        c_body.append(f"return {status.name}[0] != {_number(0.0, scalar)};")
     ops = count_ops("\n".join(c_body))
-    return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine),
+    return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine, scalar),
                           python_parameters(model, routine), c_body, py_body, ops, len(sl.temps))
 
 
@@ -209,8 +219,9 @@ def check_constraints(model) -> None:
                                            f"'regularization: epsilon' (J A^-1 J^T + epsilon E)", c.line)
 
 
-def generate(model, progress=None, latex: bool = True) -> Generated:
-    """Generate all files of a model in memory."""
+def generate(model, progress=None, latex: bool = True, scalar: str = "double") -> Generated:
+    """Generate all files of a model in memory; ``scalar`` is the C type (``float``: single-precision C, its
+    bounds against the twin in the manifest's ``float_tolerance``; the NumPy module stays double)."""
     from .latex import latex_document
 
     check_names(model)
@@ -224,7 +235,9 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
                                    f"{', '.join(singular)} left out (see the manifest's 'omitted')"))
     prog, outputs = symbolic_routines(model, tree, omitted=omitted)
     stages.done("recursions")
-    emitted = [emit_routine(model, prog, ROUTINES[role], outs) for role, outs in outputs.items()]
+    if scalar not in SCALARS:
+        raise AggsymError(f"--scalar: {scalar!r} is not one of {', '.join(SCALARS)}")
+    emitted = [emit_routine(model, prog, ROUTINES[role], outs, scalar) for role, outs in outputs.items()]
     stages.done("printing")
     env = templates()
     ctx = {
@@ -238,7 +251,10 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
         "description": model.description,
         "version": __version__,
         "parameters": [(p.name, repr(float(p.value))) for p in model.parameters],
-        "macros": header_macros(model, [e.routine for e in emitted]),
+        "p_defaults": [_number(float(p.value), scalar) for p in model.parameters],
+        "scalar": scalar,
+        "zero": _number(0.0, scalar),
+        "macros": header_macros(model, [e.routine for e in emitted], scalar),
         "coordinates": [SimpleNamespace(name=n, joint=j, kind=k) for n, j, k in model.positions],
         "velocities": model.coordinates if model.nq != model.nv else None,
         "nv": model.nv,
@@ -253,7 +269,7 @@ def generate(model, progress=None, latex: bool = True) -> Generated:
     gen.files[f"{model.name}.c"] = env.get_template("model.c.j2").render(ctx)
     gen.files[f"{model.name}.py"] = env.get_template("model.py.j2").render(ctx)
     gen.files[f"{model.name}.json"] = json.dumps(
-        manifest(model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted}, omitted),
+        manifest(model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted}, omitted, scalar),
         indent=2) + "\n"
     stages.done("templates")
     if latex:

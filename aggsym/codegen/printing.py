@@ -14,6 +14,7 @@ and ``-`` additions (subtractions count as additions), and function calls; unary
 from __future__ import annotations
 
 import re
+import struct
 from fractions import Fraction
 
 from sympy.printing.c import C99CodePrinter
@@ -157,23 +158,43 @@ def _merge_constants(terms: list) -> list:
     return out or [(1, Num(0))]
 
 
-def _float_literal(value: float) -> str:
-    """A double literal that reads back as exactly ``value`` (Python's repr is the shortest round-trip form)."""
+SCALARS = ("double", "float")  # the C types of the generated code (--scalar); the NumPy module is always double
+
+
+class LiteralError(ValueError):
+    """A constant that the scalar type cannot hold (not finite; a float's overflow or underflow to 0)."""
+
+
+def _float_literal(value: float, scalar: str = "double") -> str:
+    """A literal that reads back as exactly ``value`` (Python's repr is the shortest round-trip form); for
+    ``float`` the same decimal with the suffix ``f``, which the compiler rounds straight to the nearest float (a
+    ValueError when that overflows, or is 0 for a nonzero ``value``)."""
     value = float(value)
     if value != value or value in (float("inf"), float("-inf")):
-        raise ValueError(f"the constant {value!r} is not a finite double")
+        raise LiteralError(f"the constant {value!r} is not a finite double")
     text = repr(value)
-    return text if ("." in text or "e" in text) else text + ".0"
+    text = text if ("." in text or "e" in text) else text + ".0"
+    if scalar == "double":
+        return text
+    try:
+        single = struct.unpack("f", struct.pack("f", value))[0]
+    except OverflowError:
+        single = float("inf")
+    if single in (float("inf"), float("-inf")) or (single == 0.0 and value != 0.0):
+        raise LiteralError(f"the constant {value!r} {'overflows' if single else 'underflows to 0 in'} a float "
+                         f"(single precision holds magnitudes from about 1.4e-45 to 3.4e+38)")
+    return text + "f"
 
 
-def _number(value) -> str:
-    """A constant as C/NumPy source: small integers as they are, everything else as an exact double literal
-    (integers beyond 2^53 are doubles: an integer literal of 2^64 or more is undefined in C)."""
-    if type(value) is int and abs(value) < 2 ** 53:
+def _number(value, scalar: str = "double") -> str:
+    """A constant as C/NumPy source: small integers as they are, everything else as an exact literal of the
+    scalar type (integers beyond 2^53, or 2^24 for float, are not exact in it: an integer literal of 2^64 or more
+    is undefined in C)."""
+    if type(value) is int and abs(value) < 2 ** (53 if scalar == "double" else 24):
         return str(value)
     if isinstance(value, Fraction):
-        return _float_literal(value.numerator / value.denominator)
-    return _float_literal(value)
+        return _float_literal(value.numerator / value.denominator, scalar)
+    return _float_literal(value, scalar)
 
 
 class _Common:
@@ -225,10 +246,17 @@ class _Common:
 class CPrinter(_Common, C99CodePrinter):
     """C99 for aggsym: round-trip float literals, sin/cos/sqrt from <math.h>; sign(x) is the emitted
     ``aggsym_sign``: (x > 0) - (x < 0), and NaN for NaN as NumPy's sign (a returned status then stays nonzero when
-    a solve meets a NaN)."""
+    a solve meets a NaN).  ``scalar="float"``: literals with the suffix f and <math.h>'s float functions (sinf,
+    fabsf, ...), so that nothing is promoted to double."""
 
-    def __init__(self):
+    def __init__(self, scalar: str = "double"):
         super().__init__({"order": "none", "strict": False})
+        self.scalar = scalar
+        if scalar == "float":
+            self.functions = {name: c_name + "f" for name, c_name in _Common.functions.items()}
+
+    def _print_Num(self, e):
+        return _number(e.value, self.scalar)
 
     def _print_Call(self, e):
         if e.name == "sign":
