@@ -15,6 +15,8 @@ from pathlib import Path
 
 from .errors import AggsymError
 
+FLOATING_BASE_KINDS = ("euler", "quaternion")  # --floating-base KIND; bare --floating-base is euler
+
 EXAMPLES = {
     "generate": "example:\n  aggsym generate models/double_pendulum.yaml             # writes generated/double_pendulum/\n"
                 "  aggsym generate robot.urdf --floating-base -o build/robot",
@@ -41,7 +43,7 @@ def _parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_text, description=help_text, epilog=EXAMPLES[name],
                            formatter_class=argparse.RawDescriptionHelpFormatter)
         p.add_argument("model", metavar="MODEL", help="a .yaml model or a .urdf robot")
-        p.add_argument("--floating-base", nargs="?", const="euler", choices=["euler", "quaternion"], default=None,
+        p.add_argument("--floating-base", choices=FLOATING_BASE_KINDS, default=None,
                        help="URDF only: a free root. euler (the default when no kind is given): the 6-coordinate "
                             "pair o1 o2 o3 theta4 theta5 theta6; quaternion: Pinocchio's free-flyer, q = (x, y, z, "
                             "qx, qy, qz, qw, joints) (nq = n + 7), velocities (v, w of the base in its own axes, "
@@ -252,9 +254,19 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
     print(f"aggsym: warning: {message}", file=sys.stderr)
 
 
+def _bare_floating_base(argv: list) -> list:
+    """``--floating-base`` not followed by its kind means ``euler`` (so that ``--floating-base robot.urdf`` does
+    not read the model's path as the kind)."""
+    out = list(argv)
+    for i, a in enumerate(out):
+        if a == "--floating-base" and (i + 1 == len(out) or out[i + 1] not in FLOATING_BASE_KINDS):
+            out[i] = "--floating-base=euler"
+    return out
+
+
 def main(argv=None) -> int:
     warnings.showwarning = _show_warning
-    args = _parser().parse_args(argv)
+    args = _parser().parse_args(_bare_floating_base(sys.argv[1:] if argv is None else argv))
     try:
         return COMMANDS[args.command](args)
     except AggsymError as exc:

@@ -1049,13 +1049,14 @@ FLOAT_TOLERANCE = {
     "potential_energy": 1e-3, "momentum": 1e-5, "joint_wrenches": 1e-5, "elastic": 1e-5, "elastic_partition": 1e-5,
     "frame_jacobians": 1e-5, "frame_accelerations": 1e-5, "center_of_mass": 1e-5, "com_jacobian": 1e-5,
     "centroidal_map": 5e-5, "regressor": 1e-5, "base_regressor": 1e-5, "inverse_dynamics_derivatives": 2e-4,
-    "constraint_residual": 1e-5, "constraint_jacobian": 1e-5, "constraint_bias": 5e-5, "slip_velocities": 1e-5,
-    "delassus": 5e-5, "constrained_forward_dynamics": 5e-5, "support_coefficients": 1e-5, "support_direct": 2e-5,
+    "constraint_residual": 1e-4, "constraint_jacobian": 1e-5, "constraint_bias": 5e-5, "slip_velocities": 1e-5,
+    "delassus": 1e-6, "constrained_forward_dynamics": 5e-5, "support_coefficients": 1e-5, "support_direct": 2e-5,
     "support_inverse": 1e-5,
     "forward_dynamics": 1e-6, "inertia_inverse": 1e-6, "transvective_factors": 1e-6,
     "forward_dynamics_derivatives": 1e-6,
 }
-FLOAT_PER_CONDITION = ("forward_dynamics", "inertia_inverse", "transvective_factors", "forward_dynamics_derivatives")
+FLOAT_PER_CONDITION = ("forward_dynamics", "inertia_inverse", "transvective_factors", "forward_dynamics_derivatives",
+                       "delassus")
 FLOAT_TOLERANCE_DEFAULT = 1e-4  # a routine not measured in float (joint_friction, integrate, ...)
 FLOAT_TIME = 100
 

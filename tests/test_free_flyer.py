@@ -243,6 +243,8 @@ def test_fixed_and_euler_bases_keep_their_layout(tmp_path):
     assert cli.main(["generate", str(robot_path("ur5")), "--floating-base", "euler", "-o", str(tmp_path / "f"),
                      "-q"]) == 0
     assert json.loads((tmp_path / "f" / "ur5.json").read_text())["nq"] == 12
+    assert cli.main(["generate", "--floating-base", str(robot_path("ur5")), "-o", str(tmp_path / "h"), "-q"]) == 0
+    assert json.loads((tmp_path / "h" / "ur5.json").read_text())["nq"] == 12  # the path is not read as the kind
     assert cli.main(["generate", str(robot_path("ur5")), "-o", str(tmp_path / "g"), "-q"]) == 0
     assert "#define UR5_NV 6  /* velocities: the length of qd, qdd, tau (= NQ) */" in \
         (tmp_path / "g" / "ur5.h").read_text()

@@ -159,7 +159,6 @@ def _inertia_condition(twin, role, args) -> float:
     return float(np.linalg.cond(np.asarray(twin.call("inertia", args[0]), dtype=float)))
 
 
-
 def _fails(call) -> bool:
     """True when ``call()`` raises numpy.linalg.LinAlgError (a returned nonzero status)."""
     try:

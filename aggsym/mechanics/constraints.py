@@ -52,7 +52,8 @@ from .kinematics import TreeKinematics, point_motion, point_rows, world_poses
 from .linalg import EYE3, add, cross, dot, mm, mtv, mul, mv, scale, sub, transpose
 from .transvective import apply_T_transpose_tree, apply_T_tree, articulated_factors, transvected_forces
 
-EPS = 1e-300  # the log map's guard at theta = 0: (theta + EPS) / (|s| + EPS) is theta/sin(theta) in doubles
+EPS = 1e-30  # the log map's guard at theta = 0: (theta + EPS) / (|s| + EPS) is theta/sin(theta) (relative error
+# below EPS/theta, i.e. none a double sees where theta/sin(theta) differs from 1 at all); a normal number in float
 SINGULAR = 1e-12  # a pivot of G below SINGULAR * trace(G) / m makes constrained_forward_dynamics return nonzero
 SLIP = 1e-9  # Coulomb friction acts where the slip speed |w| is at least SLIP (m/s), and is zero below
 

@@ -3143,7 +3143,7 @@ void delta_robot_constraint_residual(const double *q, const double *p, double *p
     const double x105 = 0.5*(x32*x95 + x34*x98 - x31*x101 + 0.8660254037844386*x94 + 0.5*x97);
     const double x106 = sqrt(x103*x103 + x104*x104 + x105*x105);
     const double x107 = atan2(x106, 0.5*(x34*x97 - x32*x94 - x31*x100 + 0.8660254037844386*x95 - 0.5*x98 - x33*x96 - x35*x99 - x30*x102 - 1));
-    const double x108 = (1e-300 + x107)/(1e-300 + x106);
+    const double x108 = (1e-30 + x107)/(1e-30 + x106);
     phi[6] = x103*x108;
     phi[7] = -x105*x108;
 }
@@ -4964,7 +4964,7 @@ int delta_robot_constrained_forward_dynamics(const double *q, const double *qd, 
     const double x433 = 0.5*(x44*x422 + x46*x426 - x43*x429 + 0.8660254037844386*x421 + 0.5*x424);
     const double x434 = sqrt(x431*x431 + x432*x432 + x433*x433);
     const double x435 = atan2(x434, 0.5*(x46*x424 - x44*x421 - x43*x428 + 0.8660254037844386*x422 - 0.5*x426 - x45*x423 - x47*x427 - x42*x430 - 1));
-    const double x436 = (1e-300 + x435)/(1e-300 + x434);
+    const double x436 = (1e-30 + x435)/(1e-30 + x434);
     const double x437 = x399 - p_0;
     const double x438 = x185*x400;
     const double x439 = x226*x401;

@@ -30909,7 +30909,7 @@ void test_bench_constrained_constraint_residual(const double *q, const double *p
     const double x345 = 0.5*(x166*x337 + x242*x338 - x96*x337 - x93*x338);
     const double x346 = sqrt(x343*x343 + x344*x344 + x345*x345);
     const double x347 = atan2(x346, 0.5*(x337*x342 - x338*x340 + x16*x94 + x17*x95 + x337*x339 + x338*x341 - 1));
-    const double x348 = (1e-300 + x347)/(1e-300 + x346);
+    const double x348 = (1e-30 + x347)/(1e-30 + x346);
     phi[5] = x343*x348;
     phi[6] = x344*x348;
     phi[7] = x321 + 0.15*x105 + 0.2*x106 - 0.6;
@@ -30926,7 +30926,7 @@ void test_bench_constrained_constraint_residual(const double *q, const double *p
     const double x355 = 0.5*(x178*x337 + x254*x338 - x107*x337 - x104*x338);
     const double x356 = sqrt(x353*x353 + x354*x354 + x355*x355);
     const double x357 = atan2(x356, 0.5*(x337*x352 - x338*x350 + x29*x105 + x30*x106 + x337*x349 + x338*x351 - 1));
-    const double x358 = (1e-300 + x357)/(1e-300 + x356);
+    const double x358 = (1e-30 + x357)/(1e-30 + x356);
     phi[12] = x353*x358;
     phi[13] = x354*x358;
     phi[14] = 0.30000000000000004 + x325 + 0.15*x116 + 0.2*x117;
@@ -30943,7 +30943,7 @@ void test_bench_constrained_constraint_residual(const double *q, const double *p
     const double x365 = 0.5*(x190*x337 + x266*x338 - x118*x337 - x115*x338);
     const double x366 = sqrt(x363*x363 + x364*x364 + x365*x365);
     const double x367 = atan2(x366, 0.5*(x337*x362 - x338*x360 + x42*x116 + x43*x117 + x337*x359 + x338*x361 - 1));
-    const double x368 = (1e-300 + x367)/(1e-300 + x366);
+    const double x368 = (1e-30 + x367)/(1e-30 + x366);
     phi[19] = x363*x368;
     phi[20] = x364*x368;
     phi[21] = 0.75 + x328 + 0.15*x127 + 0.2*x128;
@@ -30960,7 +30960,7 @@ void test_bench_constrained_constraint_residual(const double *q, const double *p
     const double x375 = 0.5*(x202*x337 + x278*x338 - x129*x337 - x126*x338);
     const double x376 = sqrt(x373*x373 + x374*x374 + x375*x375);
     const double x377 = atan2(x376, 0.5*(x337*x372 - x338*x370 + x55*x127 + x56*x128 + x337*x369 + x338*x371 - 1));
-    const double x378 = (1e-300 + x377)/(1e-300 + x376);
+    const double x378 = (1e-30 + x377)/(1e-30 + x376);
     phi[26] = x373*x378;
     phi[27] = x374*x378;
     phi[28] = 0.30000000000000004 + x331 + 0.15*x138 + 0.2*x139;
@@ -30977,7 +30977,7 @@ void test_bench_constrained_constraint_residual(const double *q, const double *p
     const double x385 = 0.5*(x214*x337 + x290*x338 - x140*x337 - x137*x338);
     const double x386 = sqrt(x383*x383 + x384*x384 + x385*x385);
     const double x387 = atan2(x386, 0.5*(x337*x382 - x338*x380 + x68*x138 + x69*x139 + x337*x379 + x338*x381 - 1));
-    const double x388 = (1e-300 + x387)/(1e-300 + x386);
+    const double x388 = (1e-30 + x387)/(1e-30 + x386);
     phi[33] = x383*x388;
     phi[34] = x384*x388;
     phi[35] = x334 + 0.15*x149 + 0.2*x150 - 0.6;
@@ -30994,7 +30994,7 @@ void test_bench_constrained_constraint_residual(const double *q, const double *p
     const double x395 = 0.5*(x226*x337 + x302*x338 - x151*x337 - x148*x338);
     const double x396 = sqrt(x393*x393 + x394*x394 + x395*x395);
     const double x397 = atan2(x396, 0.5*(x337*x392 - x338*x390 + x81*x149 + x82*x150 + x337*x389 + x338*x391 - 1));
-    const double x398 = (1e-300 + x397)/(1e-300 + x396);
+    const double x398 = (1e-30 + x397)/(1e-30 + x396);
     phi[40] = x393*x398;
     phi[41] = x394*x398;
 }
@@ -44677,7 +44677,7 @@ int test_bench_constrained_constrained_forward_dynamics(const double *q, const d
     const double x2518 = 0.5*(x714*x2468 + x790*x2469 - x639*x2468 - x635*x2469);
     const double x2519 = sqrt(x2516*x2516 + x2517*x2517 + x2518*x2518);
     const double x2520 = atan2(x2519, 0.5*(x2468*x2515 - x2469*x2510 + x638 + x2468*x2508 + x2469*x2512 - 1));
-    const double x2521 = (1e-300 + x2520)/(1e-300 + x2519);
+    const double x2521 = (1e-30 + x2520)/(1e-30 + x2519);
     const double x2522 = x727*x2468;
     const double x2523 = x723*x2469;
     const double x2524 = x2522 + x2523;
@@ -44693,7 +44693,7 @@ int test_bench_constrained_constrained_forward_dynamics(const double *q, const d
     const double x2534 = 0.5*(x726*x2468 + x802*x2469 - x651*x2468 - x647*x2469);
     const double x2535 = sqrt(x2532*x2532 + x2533*x2533 + x2534*x2534);
     const double x2536 = atan2(x2535, 0.5*(x2468*x2531 - x2469*x2526 + x650 + x2468*x2524 + x2469*x2528 - 1));
-    const double x2537 = (1e-300 + x2536)/(1e-300 + x2535);
+    const double x2537 = (1e-30 + x2536)/(1e-30 + x2535);
     const double x2538 = x739*x2468;
     const double x2539 = x735*x2469;
     const double x2540 = x2538 + x2539;
@@ -44709,7 +44709,7 @@ int test_bench_constrained_constrained_forward_dynamics(const double *q, const d
     const double x2550 = 0.5*(x738*x2468 + x814*x2469 - x663*x2468 - x659*x2469);
     const double x2551 = sqrt(x2548*x2548 + x2549*x2549 + x2550*x2550);
     const double x2552 = atan2(x2551, 0.5*(x2468*x2547 - x2469*x2542 + x662 + x2468*x2540 + x2469*x2544 - 1));
-    const double x2553 = (1e-300 + x2552)/(1e-300 + x2551);
+    const double x2553 = (1e-30 + x2552)/(1e-30 + x2551);
     const double x2554 = x751*x2468;
     const double x2555 = x747*x2469;
     const double x2556 = x2554 + x2555;
@@ -44725,7 +44725,7 @@ int test_bench_constrained_constrained_forward_dynamics(const double *q, const d
     const double x2566 = 0.5*(x750*x2468 + x826*x2469 - x675*x2468 - x671*x2469);
     const double x2567 = sqrt(x2564*x2564 + x2565*x2565 + x2566*x2566);
     const double x2568 = atan2(x2567, 0.5*(x2468*x2563 - x2469*x2558 + x674 + x2468*x2556 + x2469*x2560 - 1));
-    const double x2569 = (1e-300 + x2568)/(1e-300 + x2567);
+    const double x2569 = (1e-30 + x2568)/(1e-30 + x2567);
     const double x2570 = x763*x2468;
     const double x2571 = x759*x2469;
     const double x2572 = x2570 + x2571;
@@ -44741,7 +44741,7 @@ int test_bench_constrained_constrained_forward_dynamics(const double *q, const d
     const double x2582 = 0.5*(x762*x2468 + x838*x2469 - x687*x2468 - x683*x2469);
     const double x2583 = sqrt(x2580*x2580 + x2581*x2581 + x2582*x2582);
     const double x2584 = atan2(x2583, 0.5*(x2468*x2579 - x2469*x2574 + x686 + x2468*x2572 + x2469*x2576 - 1));
-    const double x2585 = (1e-300 + x2584)/(1e-300 + x2583);
+    const double x2585 = (1e-30 + x2584)/(1e-30 + x2583);
     const double x2586 = x775*x2468;
     const double x2587 = x771*x2469;
     const double x2588 = x2586 + x2587;
@@ -44757,7 +44757,7 @@ int test_bench_constrained_constrained_forward_dynamics(const double *q, const d
     const double x2598 = 0.5*(x774*x2468 + x850*x2469 - x699*x2468 - x695*x2469);
     const double x2599 = sqrt(x2596*x2596 + x2597*x2597 + x2598*x2598);
     const double x2600 = atan2(x2599, 0.5*(x2468*x2595 - x2469*x2590 + x698 + x2468*x2588 + x2469*x2592 - 1));
-    const double x2601 = (1e-300 + x2600)/(1e-300 + x2599);
+    const double x2601 = (1e-30 + x2600)/(1e-30 + x2599);
     const double x2602 = x2470 - q_0;
     const double x2603 = x2471 - q_1;
     const double x2604 = x2472 - q_2;
