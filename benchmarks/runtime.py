@@ -162,8 +162,8 @@ def _model_arrays(m: dict) -> tuple:
 
 
 def _model_record(m: dict) -> list:
-    """C lines of one fixed-base model: its arrays, timers and bench_model record (the routines beyond the five
-    that its manifest lists get their timers; the others NULL)."""
+    """C lines of one model (fixed base or free-flyer): its arrays, timers and bench_model record (the routines
+    beyond the five that its manifest lists get their timers; the others NULL)."""
     name = m["name"]
     arrays, p = _model_arrays(m)
     has = [role for role in EXTRA_ROLES if role in m["functions"]]
@@ -173,8 +173,8 @@ def _model_record(m: dict) -> list:
         lines.append(f"static const char *const {name}_frames[] = {{{', '.join(c_string(f) for f in frames)}}};")
     cols = m["layouts"]["regressor"]["Y"]["shape"][1] if "regressor" in has else 0
     free_flyer = any(c["kind"] == "quaternion" for c in m["coordinates"])
-    fields = [c_string(name), str(m["nq"]), str(m.get("nv", m["nq"])), str(int(free_flyer)), str(len(m["parameters"])),
-              p, f"{name}_joints"]
+    fields = [c_string(name), str(m["nq"]), str(m.get("nv", m["nq"])), str(int(free_flyer)),
+              str(len(m["parameters"])), p, f"{name}_joints"]
     fields += [f"{name}_{role}" for role in DEFAULT_ROLES] + [f"{name}_t_{role}" for role in DEFAULT_ROLES]
     fields += [str(len(frames)), f"{name}_frames" if frames else "NULL", str(cols)]
     fields += [f"{name}_{role}" if role in has else "NULL" for role in EXTRA_ROLES]
