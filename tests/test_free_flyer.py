@@ -100,7 +100,7 @@ def inputs(role, q, v, a, tau):
             "nonlinear_effects": (q, v), "kinetic_energy": (q, v)}.get(role, (q,))
 
 
-def worst_errors(model, call, pm, rng, states=2) -> dict:
+def worst_errors(model, call, pm, rng, states=2, roles=None) -> dict:
     """The largest relative error of every routine of the comparison over random states (those defined only where
     A(q) is regular left out where a joint moves no mass: the generator omits them there too)."""
     frames = [f.name for f in model.frames]
@@ -111,7 +111,7 @@ def worst_errors(model, call, pm, rng, states=2) -> dict:
         v, a, tau = rng.normal(size=model.nv), rng.normal(size=model.nv), rng.normal(size=model.nv)
         theirs = reference(pm, pinocchio_configuration(pm, q), v, a, tau, frames)
         for role, ref in theirs.items():
-            if singular and ROUTINES[role].regular:
+            if (singular and ROUTINES[role].regular) or (roles is not None and role not in roles):
                 continue
             got = call(role, *inputs(role, q, v, a, tau))
             pairs = zip(got, ref) if isinstance(ref, tuple) else [(got, ref)]
@@ -191,17 +191,22 @@ def test_derivatives_equal_central_differences_on_the_manifold(rng):
 
 @pytest.fixture(scope="module")
 def solo_code(tmp_path_factory):
-    model = select_routines(load(robot_path("solo12")), ["all"])
+    # the routines compared with Pinocchio, less the derivatives (solo12's are 0.8 MB of C, 50 s to compile; their
+    # program is the twin's, compared with Pinocchio above, and its C printing is the other routines')
+    compared = ["inertia", "nonlinear_effects", "gravity", "inverse_dynamics", "forward_dynamics", "inertia_inverse",
+                "regressor", "frame_poses", "frame_jacobians", "frame_accelerations", "center_of_mass",
+                "com_jacobian", "centroidal_map", "kinetic_energy", "potential_energy", "integrate"]
+    model = select_routines(load(robot_path("solo12")), compared)
     lib, module, manifest = generated_code(model, tmp_path_factory.mktemp("solo_ff"), opt="-O2")
     return model, lib, module, manifest
 
 
 def test_generated_c_and_numpy_equal_pinocchio(solo_code, rng):
-    model, lib, module, _ = solo_code
+    model, lib, module, manifest = solo_code
     pm = free_flyer(robot_path("solo12"))
     for call in (lib.call, lambda role, *args: getattr(module, role)(*args)):
-        worst = worst_errors(model, call, pm, rng, states=2)
-        assert len(worst) == 17
+        worst = worst_errors(model, call, pm, rng, states=2, roles=manifest["functions"])
+        assert len(worst) == 15
         assert max(worst.values()) < TOLERANCE, worst
     q = sample_configurations(model, rng)
     v = rng.normal(size=model.nv)
