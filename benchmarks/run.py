@@ -40,7 +40,7 @@ ROOT = HERE.parent
 BUILD = HERE / "build"
 
 # example-robot-data files (as in tests/pinocchio_reference.py; talos is the reduced 32-DOF model)
-FREE_FLYER_SUFFIX = "_ff"  # the label of a robot generated with --floating-base quaternion
+FREE_FLYER_SUFFIX = report.FREE_FLYER_SUFFIX  # the label of a robot generated with --floating-base quaternion
 ROBOT_FILES = {
     "ur5": "ur_description/urdf/ur5_robot.urdf",
     "panda": "panda_description/urdf/panda.urdf",
