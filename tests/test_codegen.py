@@ -377,3 +377,16 @@ def test_version_flag(capsys):
     with pytest.raises(SystemExit) as info:
         cli.main(["--version"])
     assert info.value.code == 0 and capsys.readouterr().out.strip() == f"aggsym {aggsym.__version__}"
+
+
+def test_latex_closed_forms_need_the_programs_that_size_them():
+    """With A, b or g not emitted (--routines without them) the closed forms are not attempted: their size is
+    measured on those programs, and without them SymPy once spent many minutes on a 4-link chain's derivatives
+    alone.  The document then shows the intermediate-variable form of what was emitted."""
+    from aggsym.contract import select_routines
+
+    model = aggsym.load(model_path("double_pendulum"))
+    full = generate(model).files["double_pendulum.tex"]
+    only = generate(select_routines(model, ["inverse_dynamics_derivatives"])).files["double_pendulum.tex"]
+    assert r"Inertia matrix $A(q)$" in full
+    assert r"Inertia matrix $A(q)$" not in only and r"\section*{Equations of motion}" in only

@@ -275,8 +275,11 @@ def constraint_section(model, prog, outputs, small: bool):
 
 def latex_document(model, env, prog, outputs) -> str:
     """The standalone LaTeX document (rendered through templates/model.tex.j2)."""
+    # the closed forms are sized by the programs of A, b and g: without all three emitted there is no measure of
+    # what SymPy would be asked to simplify (a 4-link chain's derivatives alone once ran it for many minutes)
+    sized = all(role in outputs for role in ("inertia", "bias", "gravity"))
     flat = [x for role in ("inertia", "bias", "gravity") if role in outputs for o in outputs[role] for x in o]
-    small = (not model.couplings and model.nv <= CLOSED_FORM_MAX_NQ
+    small = (sized and not model.couplings and model.nv <= CLOSED_FORM_MAX_NQ
              and len(prog.reachable(flat)) <= CLOSED_FORM_MAX_NODES
              and expanded_terms(prog, flat) <= CLOSED_FORM_MAX_TERMS)
     names = symbol_names(model)
