@@ -36,8 +36,12 @@ tex:
 	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends texlive-latex-base \
 	    > /dev/null; }
 
+# the suite on one process per core, at most 4 (each holds its own SymPy programs; a test file stays on one
+# process, so its module fixtures are built once)
+JOBS ?= $(shell n=$$(nproc 2>/dev/null || echo 1); [ $$n -gt 4 ] && n=4; echo $$n)
+
 test: $(VENV)/.test tex
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n $(JOBS) --dist loadfile
 
 # the committed outputs of every model in models/ (reproducible: make generate && git diff --exit-code generated/)
 generate: $(VENV)/.runtime
