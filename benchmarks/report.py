@@ -274,7 +274,8 @@ def host_lines(results) -> list:
         cells = [f"{p['pinocchio'].split(' ')[0]} {p['pinocchio_ns']:.0f}" for role in PINOCCHIO_HOST_ROLES
                  for p in [got.get(role)] if p]
         if cells:
-            out.append(f"Pinocchio ns on {robot['name']}: " + ", ".join(cells))
+            out.append(f"Pinocchio ns on {robot['name']}" + (" (an earlier run)" if robot.get("earlier_run") else "")
+                       + ": " + ", ".join(cells))
     return out
 
 
@@ -621,13 +622,19 @@ def _runtime(results) -> str:
                          f"{p['pinocchio_ns']:.0f} [{p['pinocchio_ns_q10']:.0f}–{p['pinocchio_ns_q90']:.0f}]",
                          f"{p['ratio']:.3f}", _fmt(p.get("cpu_ratio"), 3), f"{p['relative_error']:.1e}",
                          str(p["batches"])))
-        lines += [f"### {robot['name']} (n = {robot['nq']}, Pinocchio nq = {robot['pinocchio_nq']})", "",
+        lines += [f"### {robot['name']} (n = {robot['nq']}, Pinocchio nq = {robot['pinocchio_nq']})"
+                  + (" — from the earlier run" if robot.get("earlier_run") else ""), "",
                   table(("pair", "Pinocchio function", "generated ns", "Pinocchio ns", "ratio", "CPU-time ratio",
                          "rel. error", "batches"),
                         rows), ""]
         if robot.get("frames"):
             lines += [f"Frames of the frame Jacobians ({len(robot['frames'])}): "
                       + ", ".join(f"`{f}`" for f in robot["frames"]) + ".", ""]
+    if rt.get("kept_from_earlier_run"):
+        lines += ["**This run timed a subset of the robots** (AGGSYM_BENCH_RUNTIME_ROBOTS); the rows of "
+                  + ", ".join(rt["kept_from_earlier_run"]) + " are those of the earlier run, kept from runtime.json "
+                  "(each ratio is measured within one run, on one robot, so rows of different runs can stand side "
+                  "by side; their absolute times cannot be compared).", ""]
     lines += _peers(results)
     lines += _host(results)
     lines += _constrained(rt)
@@ -673,8 +680,8 @@ def _peers(results) -> list:
              "the generated code's does, unlike Pinocchio's (templated C++ from the `pin` wheel).  Both C codes "
              "are compiled with the same `cc` and flags (`-std=c99 -fPIC`, `-O2` and `-O3`), and every one of the "
              "five timers below runs in the same interleaved batches, on the same states, as the generated "
-             "code's and Pinocchio's; each peer is checked against Pinocchio on the first states (*peer err.*: the "
-             "largest relative error of the two CasADi builds and of the -O3 build of the generated code).  "
+             "code's and Pinocchio's; each peer is checked against Pinocchio on the first states (*err.*: the "
+             "largest relative error against Pinocchio of the four builds).  "
              "solo12_euler: `--floating-base euler` (Pinocchio's composite root PX PY PZ RX RY RZ; the peer "
              "expands it into six one-axis joints joined by massless links).  chain24 and chain48: the chains of "
              "`benchmarks/chain.py` written as URDF (`chain_urdf`; the same numbers as the YAML), which all three "
@@ -693,7 +700,17 @@ def _peers(results) -> list:
                          f"{p['pinocchio_ns']:.0f}", f"{p['generated_ns']:.0f}", ns(GEN_O3), ns(CASADI_O2),
                          ns(CASADI_O3), f"{p['ratio']:.3f}", _fmt(r2, 3), _fmt(r3, 3), f"{err:.1e}"))
     lines += [table(("robot", "routine", "Pinocchio ns", "generated -O2 ns", "generated -O3 ns", "CasADi -O2 ns",
-                     "CasADi -O3 ns", "gen/Pin", "gen/CasADi -O2", "gen/CasADi -O3", "peer err."), rows), ""]
+                     "CasADi -O3 ns", "gen/Pin", "gen/CasADi -O2", "gen/CasADi -O3", "err."), rows,
+                    "ll" + "r" * 9), ""]
+    target_rows = [(robot["name"], p) for robot in robots for p in robot["pairs"]
+                   if p.get("peers") and p["role"] in PEER_TARGET_ROLES]
+    if target_rows:
+        vs_pin = [x for x in target_rows if x[1]["ratio"] <= RUNTIME_RATIO_TARGET]
+        vs_cas = [x for x in target_rows if (peer_ratio(x[1]) or math.inf) <= RUNTIME_RATIO_TARGET]
+        lines += [f"The issue's target (generated ≤ {RUNTIME_RATIO_TARGET:g} × the peer, A, b+g, ID, FD) in this "
+                  f"table: against Pinocchio it holds on {len(vs_pin)} of {len(target_rows)} rows, against the "
+                  f"CasADi peer (-O2 both) on {len(vs_cas)} of {len(target_rows)}"
+                  + (" (" + ", ".join(f"{r} {p['role']}" for r, p in vs_cas) + ")" if vs_cas else "") + ".", ""]
     info = rt.get("casadi") or {}
     if info:
         lines += ["CasADi peer build (SX expressions + cse, then C): " + "; ".join(

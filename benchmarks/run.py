@@ -351,6 +351,20 @@ def section_opsn(cfg) -> dict:
     return {"rows": rows, "targets": {"inverse_dynamics": 70, "forward_dynamics": 140}}
 
 
+def _keep_earlier_robots(runtime: dict, earlier: dict) -> dict:
+    """A run on a subset of the robots (AGGSYM_BENCH_RUNTIME_ROBOTS) keeps the other robots' rows, and the
+    constrained model's, from the earlier runtime.json, each marked ``earlier_run`` (the report says which)."""
+    have = {r["name"] for r in runtime["robots"]}
+    kept = [dict(r, earlier_run=True) for r in earlier.get("robots", []) if r["name"] not in have]
+    runtime["robots"] += kept
+    runtime["kept_from_earlier_run"] = [r["name"] for r in kept]
+    if not runtime.get("constrained") and earlier.get("constrained"):
+        runtime["constrained"] = [dict(r, earlier_run=True) for r in earlier["constrained"]]
+        runtime.pop("constrained_error", None)
+        runtime["kept_from_earlier_run"] += [r["name"] for r in earlier["constrained"]]
+    return runtime
+
+
 def main() -> int:
     t_start = time.perf_counter()
     cfg = config()
@@ -372,6 +386,8 @@ def main() -> int:
         except Exception as exc:  # reported, not fatal: the other sections still make a report
             runtime = {"error": f"{exc.__class__.__name__}: {exc}"}
             log(f"runtime section failed: {runtime['error']}")
+        if cfg["AGGSYM_BENCH_RUNTIME_ROBOTS"] and runtime.get("robots"):
+            runtime = _keep_earlier_robots(runtime, _load("runtime"))
         _save("runtime", runtime)
     else:
         runtime = _load("runtime")
