@@ -177,7 +177,7 @@ def peer_targets(results) -> list:
     flags of the generated code's rows), on the robots of PEER_ROBOTS that ran."""
     rows = []
     pairs = _runtime_pairs(results)
-    robots = [r for r in PEER_ROBOTS if any((r, role) in pairs for role in PEER_TARGET_ROLES)]
+    robots = [r for r in PEER_ROBOTS if any((pairs.get((r, role)) or {}).get("peers") for role in PEER_TARGET_ROLES)]
     for role in PEER_TARGET_ROLES:
         what = (f"runtime against the CasADi peer, `{role}`: generated/CasADi (both -O2) ≤ "
                 f"{RUNTIME_RATIO_TARGET:g} on " + (", ".join(robots) or "the peer robots"))
