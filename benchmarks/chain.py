@@ -97,3 +97,47 @@ def chain_model(n: int, folder):
     import aggsym
 
     return aggsym.load(write_chain(n, folder))
+
+
+_URDF_AXES = {"theta6": "0 0 1", "theta5": "0 1 0", "theta4": "1 0 0"}
+
+
+def chain_urdf(n: int) -> str:
+    """The n-link chain as a URDF (``chain{n}``), for the runtime section's three-way comparison (aggsym, Pinocchio
+    and the CasADi peer all read this one file): link k's joint ``joint{k}`` is a revolute joint about the link's
+    axis code (z, y, x, ...) at ``offset``, its inertial block the same mass, centre of mass and inertia tensor
+    about the centre of mass (the tensor's entries as URDF's ixx ... izz) as :func:`link` gives the YAML."""
+    if n < 1:
+        raise ValueError("a chain has at least one link")
+    lines = ['<?xml version="1.0"?>', f'<!-- {n}-link spatial serial arm (benchmarks/chain.py). Generated. -->',
+             f'<robot name="chain{n}">', '  <link name="world"/>']
+    for k in range(1, n + 1):
+        d = link(k)
+        i = d["inertia"]
+        lines += [f'  <link name="link{k}">',
+                  '    <inertial>',
+                  f'      <origin xyz="{" ".join(repr(float(x)) for x in d["com"])}" rpy="0 0 0"/>',
+                  f'      <mass value="{d["mass"]!r}"/>',
+                  f'      <inertia ixx="{i["xx"]!r}" ixy="{i["xy"]!r}" ixz="{i["xz"]!r}" iyy="{i["yy"]!r}" '
+                  f'iyz="{i["yz"]!r}" izz="{i["zz"]!r}"/>',
+                  '    </inertial>',
+                  '  </link>',
+                  f'  <joint name="joint{k}" type="revolute">',
+                  f'    <parent link="{"world" if k == 1 else f"link{k - 1}"}"/>',
+                  f'    <child link="link{k}"/>',
+                  f'    <origin xyz="{" ".join(repr(float(x)) for x in d["offset"])}" rpy="0 0 0"/>',
+                  f'    <axis xyz="{_URDF_AXES[d["axis"]]}"/>',
+                  '    <limit lower="-3.1416" upper="3.1416" effort="100" velocity="10"/>',
+                  '  </joint>']
+    return "\n".join(lines + ["</robot>"]) + "\n"
+
+
+def write_chain_urdf(n: int, folder) -> Path:
+    """Write ``chain{n}.urdf`` into ``folder`` (created) and return its path."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"chain{n}.urdf"
+    text = chain_urdf(n)
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+    return path

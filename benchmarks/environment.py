@@ -26,6 +26,35 @@ def cpu_model() -> str:
     return platform.processor() or "unknown"
 
 
+def cpu_details() -> dict:
+    """The first processor's identification in /proc/cpuinfo (vendor, family, model, stepping, MHz, cache) and
+    which of the vector extensions that matter to compiled straight-line code it has: hosts that print the same
+    model name can still differ here."""
+    keys = {"vendor_id": "vendor", "cpu family": "family", "model": "model", "stepping": "stepping",
+            "cpu MHz": "mhz", "cache size": "cache", "microcode": "microcode"}
+    out = {}
+    for line in _read("/proc/cpuinfo").splitlines():
+        if not line.strip():
+            break
+        key, _, value = line.partition(":")
+        key = key.strip()
+        if key in keys:
+            out[keys[key]] = value.strip()
+        elif key == "flags":
+            flags = set(value.split())
+            out["vector"] = [f for f in ("sse4_2", "avx", "avx2", "fma", "avx512f") if f in flags]
+    return out
+
+
+def cpu_line() -> str:
+    """One line naming the host's CPU for logs and reports."""
+    d = cpu_details()
+    extra = ", ".join(x for x in (f"family {d['family']} model {d['model']} stepping {d['stepping']}"
+                                  if "family" in d else "", f"{float(d['mhz']):.0f} MHz" if "mhz" in d else "",
+                                  d.get("cache", ""), "/".join(d.get("vector", []))) if x)
+    return cpu_model() + (f" ({extra})" if extra else "")
+
+
 def memory_gib() -> float | None:
     for line in _read("/proc/meminfo").splitlines():
         if line.startswith("MemTotal:"):
@@ -77,6 +106,8 @@ def environment() -> dict:
     return {
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "cpu": cpu_model(),
+        "cpu_details": cpu_details(),
+        "cpu_line": cpu_line(),
         "logical_cpus": os.cpu_count(),
         "memory_gib": memory_gib(),
         "os": os_name(),

@@ -29,6 +29,12 @@ GEN_TARGETS = (("panda", 5.0, None), ("chain12", 10.0, None), ("talos", 60.0, 2 
 RUNTIME_RATIO_TARGET = 0.5
 CONSTRAINED_RATIO_TARGET = 1.0  # solo12 on four point feet, constrained_forward_dynamics vs constraintDynamics
 OPS_TARGET_MODEL = "manipulator6"
+# the second peer (benchmarks/casadi_peer.py) and the generated code at -O3 (harness/bench.h, bench_peer)
+PEER_ROBOTS = ("ur5", "panda", "solo12_euler", "talos", "chain24", "chain48")
+PEER_TARGET_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics")
+PEER_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics", "inertia_inverse")
+GEN_O3, CASADI_O2, CASADI_O3 = "aggsym -O3", "CasADi -O2", "CasADi -O3"
+PINOCCHIO_HOST_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics", "inertia_inverse")
 
 
 # ---------------------------------------------------------------------------------------------- helpers
@@ -131,6 +137,8 @@ def targets(results) -> list:
         for r, p in got:
             measured = f"{r['name']} {p['ratio']:.2f} ({p['generated_ns']:.0f} ns vs {p['pinocchio_ns']:.0f} ns)"
             rows.append((what, measured, p["ratio"] < CONSTRAINED_RATIO_TARGET))
+    rows += peer_targets(results)
+    rows += opsn_targets(results)
     inputs = results.get("inputs", {})
     for row in inputs.get("rows", []):
         target = row.get("target_seconds", inputs.get("target_seconds"))
@@ -151,6 +159,49 @@ def targets(results) -> list:
                    ", ".join(_short(r["reference"]) for r in rs)
             measured = f"{rs[0]['ours']} vs " + ", ".join(str(r["ref_total"]) for r in rs)
             rows.append((what, measured, all(r["ours"] < r["ref_total"] for r in rs)))
+    return rows
+
+
+def peer_ratio(pair: dict, level: str = "O2"):
+    """generated / CasADi at the same optimisation level (None when the pair has no CasADi peer)."""
+    peers = pair.get("peers") or {}
+    casadi = peers.get(CASADI_O2 if level == "O2" else CASADI_O3)
+    ours = pair["generated_ns"] if level == "O2" else (peers.get(GEN_O3) or {}).get("ns")
+    if not casadi or ours is None:
+        return None
+    return ours / casadi["ns"]
+
+
+def peer_targets(results) -> list:
+    """Rows (target, measured, met) of the issue's runtime target against the CasADi peer (-O2 both sides, the
+    flags of the generated code's rows), on the robots of PEER_ROBOTS that ran."""
+    rows = []
+    pairs = _runtime_pairs(results)
+    robots = [r for r in PEER_ROBOTS if any((pairs.get((r, role)) or {}).get("peers") for role in PEER_TARGET_ROLES)]
+    for role in PEER_TARGET_ROLES:
+        what = (f"runtime against the CasADi peer, `{role}`: generated/CasADi (both -O2) ≤ "
+                f"{RUNTIME_RATIO_TARGET:g} on " + (", ".join(robots) or "the peer robots"))
+        got = [(robot, peer_ratio(pairs[(robot, role)])) for robot in robots if (robot, role) in pairs]
+        if not got or any(x is None for _, x in got):
+            rows.append((what, "not measured", None))
+            continue
+        rows.append((what, ", ".join(f"{robot} {x:.2f}" for robot, x in got),
+                     all(x <= RUNTIME_RATIO_TARGET for _, x in got)))
+    return rows
+
+
+def opsn_targets(results) -> list:
+    """Rows (target, measured, met) of item 7: ops per coordinate of inverse and forward dynamics."""
+    opsn = results.get("opsn") or {}
+    rows = []
+    for role, limit in (opsn.get("targets") or {}).items():
+        got = [r for r in opsn.get("rows", []) if role in r]
+        what = f"op count {role} ≤ {limit} n (mul+add+div) on " + ", ".join(r["robot"] for r in opsn["rows"])
+        if not got or len(got) < len(opsn["rows"]):
+            rows.append((what, "not measured" if not got else "a generation failed", None))
+            continue
+        rows.append((what, ", ".join(f"{r['robot']} {r[role]['per_n']:.1f} n" for r in got),
+                     all(r[role]["per_n"] <= limit for r in got)))
     return rows
 
 
@@ -210,12 +261,31 @@ def diagnose(results) -> list:
     return notes
 
 
+def host_lines(results) -> list:
+    """The host of the runtime section and Pinocchio's absolute times there, so that hosts can be compared."""
+    rt = results.get("runtime", {})
+    if not rt.get("robots"):
+        return []
+    out = [f"host: {rt.get('cpu') or results.get('environment', {}).get('cpu', '?')}; load average before / after "
+           f"the harness {rt.get('load_average_before', '?')} / {rt.get('load_average_after', '?')}; harness pinned "
+           f"to CPU {rt.get('pinned_cpu', '—')}"]
+    for robot in rt["robots"]:
+        got = {p["role"]: p for p in robot["pairs"]}
+        cells = [f"{p['pinocchio'].split(' ')[0]} {p['pinocchio_ns']:.0f}" for role in PINOCCHIO_HOST_ROLES
+                 for p in [got.get(role)] if p]
+        if cells:
+            out.append(f"Pinocchio ns on {robot['name']}" + (" (an earlier run)" if robot.get("earlier_run") else "")
+                       + ": " + ", ".join(cells))
+    return out
+
+
 def summary_text(results) -> str:
     rows = targets(results)
     met = sum(1 for r in rows if r[2] is True)
     body = text_table(("target", "measured", "met"),
                       [(w, m, {True: "yes", False: "NO", None: "not measured"}[ok]) for w, m, ok in rows])
-    return f"aggsym benchmark targets: {met} of {len(rows)} met\n{body}"
+    host = "\n".join(host_lines(results))
+    return (host + "\n\n" if host else "") + f"aggsym benchmark targets: {met} of {len(rows)} met\n{body}"
 
 
 # ---------------------------------------------------------------------------------------------- plots
@@ -552,17 +622,26 @@ def _runtime(results) -> str:
                          f"{p['pinocchio_ns']:.0f} [{p['pinocchio_ns_q10']:.0f}–{p['pinocchio_ns_q90']:.0f}]",
                          f"{p['ratio']:.3f}", _fmt(p.get("cpu_ratio"), 3), f"{p['relative_error']:.1e}",
                          str(p["batches"])))
-        lines += [f"### {robot['name']} (n = {robot['nq']}, Pinocchio nq = {robot['pinocchio_nq']})", "",
+        lines += [f"### {robot['name']} (n = {robot['nq']}, Pinocchio nq = {robot['pinocchio_nq']})"
+                  + (" — from the earlier run" if robot.get("earlier_run") else ""), "",
                   table(("pair", "Pinocchio function", "generated ns", "Pinocchio ns", "ratio", "CPU-time ratio",
                          "rel. error", "batches"),
                         rows), ""]
         if robot.get("frames"):
             lines += [f"Frames of the frame Jacobians ({len(robot['frames'])}): "
                       + ", ".join(f"`{f}`" for f in robot["frames"]) + ".", ""]
+    if rt.get("kept_from_earlier_run"):
+        lines += ["**This run timed a subset of the robots** (AGGSYM_BENCH_RUNTIME_ROBOTS); the rows of "
+                  + ", ".join(rt["kept_from_earlier_run"]) + " are those of the earlier run, kept from runtime.json "
+                  "(each ratio is measured within one run, on one robot, so rows of different runs can stand side "
+                  "by side; their absolute times cannot be compared).", ""]
+    lines += _peers(results)
+    lines += _host(results)
     lines += _constrained(rt)
     comp = rt.get("compile_seconds", {})
     if comp:
-        lines += ["Compile times in this run: " + ", ".join(f"{k}: {v:.1f} s" for k, v in comp.items()) + ".", ""]
+        lines += ["Compile times in this run: " + ", ".join(f"{k}: {v:.1f} s" if isinstance(v, (int, float)) else f"{k}: {v} (left out)"
+                                                for k, v in comp.items()) + ".", ""]
     pairs = _runtime_pairs(results)
     rows = []
     for robot, figures in DESIGN_PINOCCHIO_NS.items():
@@ -581,6 +660,95 @@ def _runtime(results) -> str:
                   table(("robot", "pair", "Pinocchio here ns", "DESIGN.md ns", "here / DESIGN.md", "generated ns",
                          "generated / DESIGN.md"), rows), ""]
     lines += ["![runtime ratios](runtime.png)", ""]
+    return "\n".join(lines)
+
+
+def _peers(results) -> list:
+    """The three-way table: generated (-O2, -O3), the CasADi peer (-O2, -O3) and Pinocchio, same run, same
+    batches."""
+    rt = results.get("runtime", {})
+    robots = [r for r in rt.get("robots", []) if any(p.get("peers") for p in r["pairs"])]
+    if not robots:
+        return []
+    lines = ["### Generated code, the CasADi peer and Pinocchio in the same batches", "",
+             "The second peer (`benchmarks/casadi_peer.py`): Featherstone's CRBA, RNEA (b+g is RNEA with q̈ = 0), "
+             "ABA and A⁻¹ (ABA columns sharing the articulated inertias) written with CasADi SX in body coordinates "
+             "from Pinocchio's model of the same URDF (`pin.buildModelFromUrdf`: parents, placements, axes, "
+             "inertias), one-column motion subspaces (Sᵀf is one component, S q̇ one entry), constants folded, "
+             "`casadi.cse` on each output, then CasADi's `CodeGenerator` C with wrappers of the generated code's "
+             "signatures.  Like the generated code it is straight-line C, so its time depends on the host much as "
+             "the generated code's does, unlike Pinocchio's (templated C++ from the `pin` wheel).  Both C codes "
+             "are compiled with the same `cc` and flags (`-std=c99 -fPIC`, `-O2` and `-O3`), and every one of the "
+             "five timers below runs in the same interleaved batches, on the same states, as the generated "
+             "code's and Pinocchio's; each peer is checked against Pinocchio on the first states (*err.*: the "
+             "largest relative error against Pinocchio of the four builds).  "
+             "solo12_euler: `--floating-base euler` (Pinocchio's composite root PX PY PZ RX RY RZ; the peer "
+             "expands it into six one-axis joints joined by massless links).  chain24 and chain48: the chains of "
+             "`benchmarks/chain.py` written as URDF (`chain_urdf`; the same numbers as the YAML), which all three "
+             "read.  *gen/Pin*: generated -O2 over Pinocchio; *gen/CasADi*: generated over CasADi at the same "
+             "level.", ""]
+    rows = []
+    for robot in robots:
+        for p in robot["pairs"]:
+            peers = p.get("peers") or {}
+            if not peers:
+                continue
+            ns = lambda label: f"{peers[label]['ns']:.0f}" if label in peers else "—"  # noqa: E731
+            err = max([p["relative_error"]] + [x["relative_error"] for x in peers.values()])
+            r2, r3 = peer_ratio(p, "O2"), peer_ratio(p, "O3")
+            rows.append((robot["name"], RUNTIME_LABELS.get(p["role"], p["role"]).split(" ↔")[0],
+                         f"{p['pinocchio_ns']:.0f}", f"{p['generated_ns']:.0f}", ns(GEN_O3), ns(CASADI_O2),
+                         ns(CASADI_O3), f"{p['ratio']:.3f}", _fmt(r2, 3), _fmt(r3, 3), f"{err:.1e}"))
+    lines += [table(("robot", "routine", "Pinocchio ns", "generated -O2 ns", "generated -O3 ns", "CasADi -O2 ns",
+                     "CasADi -O3 ns", "gen/Pin", "gen/CasADi -O2", "gen/CasADi -O3", "err."), rows,
+                    "ll" + "r" * 9), ""]
+    target_rows = [(robot["name"], p) for robot in robots for p in robot["pairs"]
+                   if p.get("peers") and p["role"] in PEER_TARGET_ROLES]
+    if target_rows:
+        vs_pin = [x for x in target_rows if x[1]["ratio"] <= RUNTIME_RATIO_TARGET]
+        vs_cas = [x for x in target_rows if (peer_ratio(x[1]) or math.inf) <= RUNTIME_RATIO_TARGET]
+        lines += [f"The issue's target (generated ≤ {RUNTIME_RATIO_TARGET:g} × the peer, A, b+g, ID, FD) in this "
+                  f"table: against Pinocchio it holds on {len(vs_pin)} of {len(target_rows)} rows, against the "
+                  f"CasADi peer (-O2 both) on {len(vs_cas)} of {len(target_rows)}"
+                  + (" (" + ", ".join(f"{r} {p['role']}" for r, p in vs_cas) + ")" if vs_cas else "") + ".", ""]
+    info = rt.get("casadi") or {}
+    if info:
+        lines += ["CasADi peer build (SX expressions + cse, then C): " + "; ".join(
+            f"{label} {d['build_seconds']:.1f} s + {d['codegen_seconds']:.1f} s, "
+            f"{sum(d['instructions'].values())} CasADi instructions" for label, d in info.items()) + ".", ""]
+    return lines
+
+
+def _host(results) -> list:
+    lines = host_lines(results)
+    if not lines:
+        return []
+    return ["### Host of this run", "",
+            "To compare hosts: the CPU (from /proc/cpuinfo), the load average just before and after the harness, "
+            "the CPU it was pinned to (`os.sched_setaffinity`, AGGSYM_BENCH_CPU), and Pinocchio's absolute "
+            "times per robot (the faster convention where two are timed).", ""] + [f"- {x}" for x in lines] + [""]
+
+
+def _opsn(results) -> str:
+    opsn = results.get("opsn") or {}
+    lines = ["## 2b. Operations per coordinate (issue 18, item 7)", ""]
+    if not opsn.get("rows"):
+        return "\n".join(lines + ["Not run.", ""])
+    t = opsn["targets"]
+    lines += ["mul + add + div of `inverse_dynamics` and `forward_dynamics` from each robot's manifest (`aggsym "
+              "generate URDF`, default routines, into `benchmarks/build/opsn/`), divided by n; the calls (sin, cos) "
+              f"beside.  Targets: ≤ {t['inverse_dynamics']} n (ID), ≤ {t['forward_dynamics']} n (FD).", ""]
+    rows = []
+    for r in opsn["rows"]:
+        if "error" in r:
+            rows.append((r["robot"], r["urdf"], "—", "generation failed", "", "", "", "", ""))
+            continue
+        i, f = r["inverse_dynamics"], r["forward_dynamics"]
+        rows.append((r["robot"], f"`{r['urdf']}`", str(r["n"]), str(i["ops"]), f"{i['per_n']:.1f}",
+                     "yes" if i["per_n"] <= t["inverse_dynamics"] else "**no**", str(f["ops"]), f"{f['per_n']:.1f}",
+                     "yes" if f["per_n"] <= t["forward_dynamics"] else "**no**"))
+    lines += [table(("robot", "URDF (example-robot-data)", "n", "ID ops", "ID ops / n", f"≤ {t['inverse_dynamics']} n",
+                     "FD ops", "FD ops / n", f"≤ {t['forward_dynamics']} n"), rows, "llrrrrrrr"), ""]
     return "\n".join(lines)
 
 
@@ -650,7 +818,8 @@ def write_report(results, folder) -> Path:
              "Produced by `make bench` (`benchmarks/run.py`); raw results in `benchmarks/*.json`.  Sections: "
              "1. generation time and peak memory (with KanesMethod), 2. operation counts against the book and "
              "Featherstone, 3. runtime against Pinocchio, 4. the targets and whether each is met.", "",
-             _environment(results), _generation(results), _opcounts(results), _runtime(results), _targets(results)]
+             _environment(results), _generation(results), _opcounts(results), _opsn(results), _runtime(results),
+             _targets(results)]
     path = folder / "REPORT.md"
     path.write_text("\n".join(parts).rstrip() + "\n")
     return path

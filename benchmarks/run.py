@@ -13,7 +13,13 @@ Settings (environment variables; defaults in brackets):
     AGGSYM_BENCH_RUNTIME_SECONDS   timing budget per routine pair and robot             [0.5]
     AGGSYM_BENCH_STATES            precomputed random states per robot                  [1000]
     AGGSYM_BENCH_CALLS             calls per timed batch (cycling through the states)  [100]
-    AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane,inputs      [all]
+    AGGSYM_BENCH_RUNTIME_ROBOTS    robots of section 3 (a subset, for a quick run)       [all: ur5,panda,hyq,
+                                   talos, their _ff variants, solo12_euler,chain24,chain48]
+    AGGSYM_BENCH_PEER_ROBOTS       robots also timed against the CasADi peer and -O3    [ur5,panda,solo12_euler,
+                                                                                         talos,chain24,chain48]
+    AGGSYM_BENCH_CPU               the CPU the harness is pinned to                      [the last allowed]
+    AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane,inputs,     [all]
+                                   opsn
                                    (a section left out is read back from its JSON of an earlier run)
 
 Sections: 1. generation time and peak memory of every models/*.yaml, the four example-robot-data robots and
@@ -21,7 +27,14 @@ the chains, with KanesMethod on the chains (generation.json, kane.json); 2. oper
 manifests (opcounts.json); 3. runtime of the generated C against Pinocchio C++ (runtime.json; the four robots generated again, untimed, with
 the routines on request: derivatives, regressor; with solo12
 standing on its four feet, constrained forward dynamics against constraintDynamics, :mod:`benchmarks.constrained`);
-4. reading and ordering a 2000-body YAML and URDF chain (inputs.json, :mod:`benchmarks.inputs`).
+4. reading and ordering a 2000-body YAML and URDF chain (inputs.json, :mod:`benchmarks.inputs`); opsn: the
+operations per coordinate of inverse_dynamics and forward_dynamics from the manifests of four arms (opsn.json).
+
+Section 3 also times, for the robots of AGGSYM_BENCH_PEER_ROBOTS (solo12 with the 6-coordinate Euler root, the
+24- and 48-link chains of :mod:`benchmarks.chain` written as URDF, generated for this section alone), the
+generated C compiled -O3 and a CasADi peer (:mod:`benchmarks.casadi_peer`) compiled -O2 and -O3, in the same
+batches as the generated code and Pinocchio; the harness runs pinned to one CPU, and the host's CPU model and
+load average are recorded beside Pinocchio's absolute times.
 """
 from __future__ import annotations
 
@@ -33,7 +46,7 @@ from pathlib import Path
 
 from . import report
 from .chain import write_chain
-from .environment import environment, load_average
+from .environment import cpu_line, environment, load_average
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -46,6 +59,26 @@ ROBOT_FILES = {
     "panda": "panda_description/urdf/panda.urdf",
     "hyq": "hyq_description/robots/hyq_no_sensors.urdf",
     "talos": "talos_data/robots/talos_reduced.urdf",
+}
+# Section 3's robots beyond ROBOT_FILES, generated with the routines FIVE alone: label -> (example-robot-data
+# file or chain length, aggsym options, Pinocchio root for the CasADi peer)
+SOLO12 = "solo_description/robots/solo12.urdf"
+EXTRA_RUNTIME_ROBOTS = {
+    "solo12_euler": (SOLO12, ("--floating-base", "euler", "--name", "solo12_euler"), "euler"),
+    "chain24": (24, (), None),
+    "chain48": (48, (), None),
+}
+PEER_ROBOTS = "ur5,panda,solo12_euler,talos,chain24,chain48"
+# the routines the peers have: EXTRA_RUNTIME_ROBOTS are generated with these alone, and the -O3 build of a robot of
+# ROBOT_FILES is compiled from a copy generated with these alone (its full file with the derivatives and the
+# regressor takes minutes to compile at -O3: talos' is 3.4 MB)
+FIVE = "inertia,nonlinear_effects,inverse_dynamics,forward_dynamics,inertia_inverse"
+# item 7 of issue 18: operations per coordinate of these arms' inverse and forward dynamics (section opsn)
+OPSN_ROBOTS = {
+    "ur5": "ur_description/urdf/ur5_robot.urdf",
+    "panda": "panda_description/urdf/panda.urdf",
+    "so100": "so_arm_description/urdf/so100.urdf",
+    "xarm7": "xarm_description/urdf/xarm7.urdf",
 }
 
 
@@ -60,7 +93,9 @@ def config() -> dict:
         "AGGSYM_BENCH_RUNTIME_SECONDS": float(env.get("AGGSYM_BENCH_RUNTIME_SECONDS", "0.5")),
         "AGGSYM_BENCH_STATES": int(env.get("AGGSYM_BENCH_STATES", "1000")),
         "AGGSYM_BENCH_CALLS": int(env.get("AGGSYM_BENCH_CALLS", "100")),
-        "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS", "generation,runtime,kane,inputs"),
+        "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS", "generation,runtime,kane,inputs,opsn"),
+        "AGGSYM_BENCH_RUNTIME_ROBOTS": env.get("AGGSYM_BENCH_RUNTIME_ROBOTS", ""),
+        "AGGSYM_BENCH_PEER_ROBOTS": env.get("AGGSYM_BENCH_PEER_ROBOTS", PEER_ROBOTS),
     }
 
 
@@ -161,16 +196,26 @@ def section_kane(cfg) -> dict:
     return {"timeout": timeout, "runs": runs, "timed_out_at": timed_out_at}
 
 
+def _names(text: str) -> list:
+    return [x.strip() for x in str(text).split(",") if x.strip()]
+
+
 def section_runtime(cfg) -> dict:
-    from . import constrained
+    from . import casadi_peer, constrained
+    from .chain import write_chain_urdf
     from .generation import generate_measured
-    from .runtime import ROUTINES, build_harness, run_harness
+    from .runtime import ROUTINES, bench_cpu, build_harness, run_harness
 
     # The robots' code for this section: its own folders, with the routines on request (section 1 times the
     # default set alone, in build/gen); this generation is not timed.
+    root = robots_directory()
     paths = robot_paths()
+    wanted = _names(cfg["AGGSYM_BENCH_RUNTIME_ROBOTS"])
+    take = (lambda label: not wanted or label in wanted)
     runs = {}
     for name in ROBOT_FILES:
+        if not take(name):
+            continue
         outdir = BUILD / "runtime" / "gen" / name
         log(f"generating {name} into {outdir.relative_to(ROOT)} with --routines {ROUTINES} (not timed) ...")
         runs[name] = generate_measured(name, paths[name], outdir, timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"],
@@ -180,32 +225,75 @@ def section_runtime(cfg) -> dict:
     # the same robots on Pinocchio's free-flyer (--floating-base quaternion), the default routines, named NAME_ff
     for name in ROBOT_FILES:
         label = f"{name}{FREE_FLYER_SUFFIX}"
+        if not take(label):
+            continue
         outdir = BUILD / "runtime" / "gen" / label
         log(f"generating {name} with --floating-base quaternion into {outdir.relative_to(ROOT)} (not timed) ...")
         runs[label] = generate_measured(label, paths[name], outdir, timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"],
                                         options=("--floating-base", "quaternion", "--name", label))
         if not runs[label]["ok"]:
             return {"error": f"generating {label} failed:\n{runs[label].get('stderr', '')}"}
-    labels = list(ROBOT_FILES) + [f"{name}{FREE_FLYER_SUFFIX}" for name in ROBOT_FILES]
+    # solo12 on the Euler root and the chains as URDF: the five routines of the CasADi peer's table
+    peer_roots = {name: None for name in ROBOT_FILES}
+    for label, (source, options, peer_root) in EXTRA_RUNTIME_ROBOTS.items():
+        if not take(label):
+            continue
+        paths[label] = write_chain_urdf(source, BUILD / "chains") if isinstance(source, int) else root / source
+        peer_roots[label] = peer_root
+        outdir = BUILD / "runtime" / "gen" / label
+        log(f"generating {label} into {outdir.relative_to(ROOT)} with --routines {FIVE} (not timed) ...")
+        runs[label] = generate_measured(label, paths[label], outdir, timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"],
+                                        routines=FIVE, options=options)
+        if not runs[label]["ok"]:
+            return {"error": f"generating {label} failed:\n{runs[label].get('stderr', '')}"}
+    labels = list(runs)
     generated = {runs[label]["name"]: Path(runs[label]["outdir"]) for label in labels}
+    # the CasADi peer of each robot of AGGSYM_BENCH_PEER_ROBOTS, from Pinocchio's model of the same URDF
+    peers, peer_info = {}, {}
+    for label in _names(cfg["AGGSYM_BENCH_PEER_ROBOTS"]):
+        if label not in runs:
+            continue
+        name = runs[label]["name"]
+        folder = BUILD / "runtime" / "casadi"
+        log(f"CasADi peer of {label}: building the SX expressions and writing {name}_casadi.c ...")
+        info = casadi_peer.write_peer(name, paths[label], folder, root=peer_roots[label])
+        log(f"  {info['n']} coordinates, {info['build_seconds']:.1f} s SX + cse, {info['codegen_seconds']:.1f} s "
+            f"C; CasADi instructions {info['instructions']}")
+        five = Path(runs[label]["outdir"])
+        if label in ROBOT_FILES:
+            five = BUILD / "runtime" / "gen_five" / label
+            log(f"generating {label} with --routines {FIVE} into {five.relative_to(ROOT)} for its -O3 build ...")
+            r = generate_measured(label, paths[label], five, timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"], routines=FIVE)
+            if not r["ok"]:
+                return {"error": f"generating {label} with --routines {FIVE} failed:\n{r.get('stderr', '')}"}
+        peers[name] = {"casadi": folder, "generated": five}
+        peer_info[label] = {k: (str(v) if isinstance(v, Path) else v) for k, v in info.items()}
     # solo12 on its four feet: generated and checked against the pin bindings; a failure here leaves the rest
-    try:
-        feet = constrained.prepare(robots_directory() / constrained.URDF, BUILD / "runtime" / constrained.NAME,
-                                   timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"], log=log)
-    except Exception as exc:
-        feet = {"error": f"{exc.__class__.__name__}: {exc}"}
-        log(f"constrained {constrained.LABEL} left out: {feet['error']}")
+    feet = {"error": "not among AGGSYM_BENCH_RUNTIME_ROBOTS"}
+    if take(constrained.LABEL):
+        try:
+            feet = constrained.prepare(root / constrained.URDF, BUILD / "runtime" / constrained.NAME,
+                                       timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"], log=log)
+        except Exception as exc:
+            feet = {"error": f"{exc.__class__.__name__}: {exc}"}
+            log(f"constrained {constrained.LABEL} left out: {feet['error']}")
     with_feet = "error" not in feet
     log("building the runtime harness (the Pinocchio C++ side takes minutes) ...")
     t0 = time.perf_counter()
     built = build_harness(BUILD / "runtime", generated, log=lambda m: log("  " + m[:200]),
-                          constrained={constrained.NAME: feet["outdir"]} if with_feet else None)
+                          constrained={constrained.NAME: feet["outdir"]} if with_feet else None, peers=peers)
     log(f"built in {time.perf_counter() - t0:.0f} s")
     robots = {runs[label]["name"]: paths[label.removesuffix(FREE_FLYER_SUFFIX)] for label in labels}
+    cpu = bench_cpu()
+    log(f"host: {cpu_line()}; load average {load_average()}; the harness pinned to CPU {cpu}")
     data = run_harness(built["executable"], robots, BUILD / "runtime" / "runtime_raw.json",
                        seconds=cfg["AGGSYM_BENCH_RUNTIME_SECONDS"], states=cfg["AGGSYM_BENCH_STATES"],
                        calls=cfg["AGGSYM_BENCH_CALLS"], log=log,
-                       constrained={constrained.NAME: (feet["urdf"], feet["frames"])} if with_feet else None)
+                       constrained={constrained.NAME: (feet["urdf"], feet["frames"])} if with_feet else None,
+                       cpu=cpu)
+    data["cpu"] = cpu_line()
+    data["load_average_after"] = load_average()
+    data["casadi"] = peer_info
     data["compile_seconds"] = built["compile_seconds"]
     for entry in data.get("constrained", []):
         entry.update({"model_name": entry["name"], "name": constrained.LABEL, "ops": feet["ops"],
@@ -223,15 +311,58 @@ def section_runtime(cfg) -> dict:
     data["routines"] = ROUTINES
     bad = [(r["name"], p["role"], p["relative_error"]) for r in data["robots"] for p in r["pairs"]
            if not p["relative_error"] <= 1e-9]
+    bad += [(r["name"], p["role"], label, peer["relative_error"]) for r in data["robots"] for p in r["pairs"]
+            for label, peer in p.get("peers", {}).items() if not peer["relative_error"] <= 1e-9]
     tolerance = constrained.TOLERANCE  # qdd of the constrained model, in C (harness) and NumPy (pin bindings)
     bad += [(r["name"], p["role"], p["relative_error"], r["pinocchio_check"]["qdd_relative_error"])
             for r in data.get("constrained", []) for p in r["pairs"]
             if not (p["relative_error"] <= tolerance and r["pinocchio_check"]["ok"])]
-    data["agreement"] = ("all pairs within 1e-9 relative" + (f", constrained qdd within {tolerance:g}"
+    data["agreement"] = ("all pairs (and peers) within 1e-9 relative" + (f", constrained qdd within {tolerance:g}"
                                                               if data.get("constrained") else "")
                          if not bad else f"DISAGREEMENT: {bad}")
     log(f"runtime: {data['agreement']}")
     return data
+
+
+def section_opsn(cfg) -> dict:
+    """Item 7 of issue 18: ops of inverse_dynamics and forward_dynamics per coordinate (mul + add + div of the
+    manifest's counts, divided by n) of OPSN_ROBOTS, each generated with the default routines (not timed)."""
+    from aggsym.codegen.ops import arithmetic
+
+    from .generation import generate_measured
+
+    root = robots_directory()
+    rows = []
+    for label, rel in OPSN_ROBOTS.items():
+        outdir = BUILD / "opsn" / label
+        run = generate_measured(label, root / rel, outdir, timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"])
+        if not run["ok"]:
+            rows.append({"robot": label, "urdf": rel, "error": run.get("stderr", "")[-500:]})
+            log(f"opsn {label}: generation FAILED")
+            continue
+        n = run["nq"]
+        row = {"robot": label, "urdf": rel, "name": run["name"], "n": n}
+        for role in ("inverse_dynamics", "forward_dynamics"):
+            o = run["ops"][role]
+            row[role] = {**o, "ops": arithmetic(o), "per_n": arithmetic(o) / n}
+        rows.append(row)
+        log(f"opsn {label} (n = {n}): inverse_dynamics {row['inverse_dynamics']['per_n']:.1f} n, forward_dynamics "
+            f"{row['forward_dynamics']['per_n']:.1f} n")
+    return {"rows": rows, "targets": {"inverse_dynamics": 70, "forward_dynamics": 140}}
+
+
+def _keep_earlier_robots(runtime: dict, earlier: dict) -> dict:
+    """A run on a subset of the robots (AGGSYM_BENCH_RUNTIME_ROBOTS) keeps the other robots' rows, and the
+    constrained model's, from the earlier runtime.json, each marked ``earlier_run`` (the report says which)."""
+    have = {r["name"] for r in runtime["robots"]}
+    kept = [dict(r, earlier_run=True) for r in earlier.get("robots", []) if r["name"] not in have]
+    runtime["robots"] += kept
+    runtime["kept_from_earlier_run"] = [r["name"] for r in kept]
+    if not runtime.get("constrained") and earlier.get("constrained"):
+        runtime["constrained"] = [dict(r, earlier_run=True) for r in earlier["constrained"]]
+        runtime.pop("constrained_error", None)
+        runtime["kept_from_earlier_run"] += [r["name"] for r in earlier["constrained"]]
+    return runtime
 
 
 def main() -> int:
@@ -240,7 +371,7 @@ def main() -> int:
     sections = {s.strip() for s in cfg["AGGSYM_BENCH_SECTIONS"].split(",") if s.strip()}
     BUILD.mkdir(parents=True, exist_ok=True)
     env = environment()
-    log(f"{env['cpu']}, {env['logical_cpus']} CPUs, load {env['load_average_start']}; settings {cfg}")
+    log(f"{env['cpu_line']}, {env['logical_cpus']} CPUs, load {env['load_average_start']}; settings {cfg}")
 
     generation = section_generation(cfg) if "generation" in sections else _load("generation")
     if "generation" in sections:
@@ -255,6 +386,8 @@ def main() -> int:
         except Exception as exc:  # reported, not fatal: the other sections still make a report
             runtime = {"error": f"{exc.__class__.__name__}: {exc}"}
             log(f"runtime section failed: {runtime['error']}")
+        if cfg["AGGSYM_BENCH_RUNTIME_ROBOTS"] and runtime.get("robots"):
+            runtime = _keep_earlier_robots(runtime, _load("runtime"))
         _save("runtime", runtime)
     else:
         runtime = _load("runtime")
@@ -271,10 +404,16 @@ def main() -> int:
     else:
         inputs = _load("inputs")
 
+    if "opsn" in sections:
+        opsn = section_opsn(cfg)
+        _save("opsn", opsn)
+    else:
+        opsn = _load("opsn")
+
     env["load_average_end"] = load_average()
     env["bench_wall_seconds"] = round(time.perf_counter() - t_start, 1)
     results = {"environment": env, "config": cfg, "generation": generation, "kane": kane, "opcounts": opcounts,
-               "runtime": runtime, "inputs": inputs}
+               "runtime": runtime, "inputs": inputs, "opsn": opsn}
     _save("environment", {"environment": env, "config": cfg})
     path = report.write_report(results, HERE)
     log(f"wrote {path.relative_to(ROOT)} and the plots in {env['bench_wall_seconds']:.0f} s")

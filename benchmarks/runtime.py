@@ -8,6 +8,9 @@ wheel's CMake config lists, linked to ``pinocchio_default``, ``pinocchio_parsers
 One run of that program checks, for each robot, that both sides compute the same thing on the first states,
 then times the pairs in interleaved batches (median of per-batch means).  A model generated with constraints
 (:mod:`benchmarks.constrained`) joins the same library and is timed the same way against ``constraintDynamics``.
+The PEERS of a robot (its five routines compiled -O3, and the CasADi peer of :mod:`benchmarks.casadi_peer`
+compiled -O2 and -O3, each object's symbols renamed with objcopy) join the library too and are timed in the
+same batches; the harness runs pinned to one CPU (:func:`bench_cpu`).
 """
 from __future__ import annotations
 
@@ -23,6 +26,20 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 HARNESS = HERE / "harness"
 C_STD = ["-std=c99", "-O2", "-fPIC", "-Wall", "-Wextra", "-Wpedantic"]
+# The peers of a generated model, timed beside it (harness/bench.h, bench_peer): (tag, label, source, level).  Each
+# peer object is the source compiled with C_STD at that level, its defined global symbols prefixed with TAG_
+# (objcopy), so the same functions at -O2 and -O3, and the CasADi peer's wrappers that carry the generated
+# names, live in one library.  source "generated": NAME.c; "casadi": NAME_casadi.c (benchmarks/casadi_peer.py).
+PEERS = (("aggsym_O3", "aggsym -O3", "generated", "-O3"),
+         ("casadi_O2", "CasADi -O2", "casadi", "-O2"),
+         ("casadi_O3", "CasADi -O3", "casadi", "-O3"))
+_PEER_SIGNATURES = {
+    "inertia": "const double *q, const double *p, double *out",
+    "nonlinear_effects": "const double *q, const double *qd, const double *p, double *out",
+    "inverse_dynamics": "const double *q, const double *qd, const double *qdd, const double *p, double *out",
+    "forward_dynamics": "const double *q, const double *qd, const double *tau, const double *p, double *out",
+    "inertia_inverse": "const double *q, const double *p, double *out",
+}
 CXX_STD = ["-std=c++17", "-O2", "-DNDEBUG", "-fPIC"]
 # pinocchio targets whose INTERFACE_COMPILE_DEFINITIONS we compile with (the ones we link)
 TARGETS = ("pinocchio_headers", "pinocchio_default", "pinocchio_parsers")
@@ -172,7 +189,7 @@ def _model_record(m: dict) -> list:
     if frames:
         lines.append(f"static const char *const {name}_frames[] = {{{', '.join(c_string(f) for f in frames)}}};")
     cols = m["layouts"]["regressor"]["Y"]["shape"][1] if "regressor" in has else 0
-    free_flyer = any(c["kind"] == "quaternion" for c in m["coordinates"])
+    free_flyer = 1 if any(c["kind"] == "quaternion" for c in m["coordinates"]) else 2 if euler_root(m) else 0
     fields = [c_string(name), str(m["nq"]), str(m.get("nv", m["nq"])), str(int(free_flyer)),
               str(len(m["parameters"])), p, f"{name}_joints"]
     fields += [f"{name}_{role}" for role in DEFAULT_ROLES] + [f"{name}_t_{role}" for role in DEFAULT_ROLES]
@@ -183,9 +200,36 @@ def _model_record(m: dict) -> list:
     return lines
 
 
-def bench_models_source(manifests: list, constrained: list = ()) -> str:
+def euler_root(m: dict) -> bool:
+    """Whether a manifest's model was generated with ``--floating-base euler``: its first six coordinates are one
+    joint's x, y, z translations and x, y, z rotations (Pinocchio's composite root PX PY PZ RX RY RZ)."""
+    c = m["coordinates"][:6]
+    return len(c) == 6 and len({x["joint"] for x in c}) == 1 and \
+        [x["kind"] for x in c] == ["translation"] * 3 + ["rotation"] * 3 and \
+        len(m["coordinates"]) == m.get("nv", m["nq"])
+
+
+def _peer_record(tag: str, label: str, m: dict) -> list:
+    """C lines of one peer of the model of manifest ``m``: the prototypes of its renamed functions, their timers,
+    its bench_model record (the generated model's name, joints and parameters) and its bench_peer."""
+    name, peer = m["name"], f"{tag}_{m['name']}"
+    lines = [f"void {peer}_{role}({sig});" for role, sig in _PEER_SIGNATURES.items()]
+    lines.append(f"BENCH_MODEL_TIMERS({peer})")
+    p = f"{name}_p" if m["parameters"] else "NULL"
+    fields = [c_string(name), str(m["nq"]), str(m.get("nv", m["nq"])),
+              str(1 if any(c["kind"] == "quaternion" for c in m["coordinates"]) else 2 if euler_root(m) else 0),
+              str(len(m["parameters"])), p, f"{name}_joints"]
+    fields += [f"{peer}_{role}" for role in DEFAULT_ROLES] + [f"{peer}_t_{role}" for role in DEFAULT_ROLES]
+    fields += ["0", "NULL", "0"] + ["NULL"] * (2 * len(EXTRA_ROLES))
+    lines.append(f"static const bench_model {peer}_bench = {{{', '.join(fields)}}};")
+    lines.append(f"static const bench_peer {peer}_peer = {{{c_string(label)}, &{peer}_bench}};")
+    return lines
+
+
+def bench_models_source(manifests: list, constrained: list = (), peers: list = ()) -> str:
     """bench_models.c: the batch timers and records of the generated models (harness/bench.h); ``constrained``:
-    the manifests of models timed for their constrained forward dynamics alone."""
+    the manifests of models timed for their constrained forward dynamics alone; ``peers``: (tag, label,
+    manifest) of the peers (PEERS) of generated models."""
     lines = ["/* Generated by benchmarks/runtime.py: direct-call batch timers of the generated code. */",
              "#define _POSIX_C_SOURCE 200809L", "#include <stddef.h>", "#include <time.h>", '#include "bench.h"']
     lines += [f'#include "{m["name"]}.h"' for m in [*manifests, *constrained]]
@@ -205,18 +249,60 @@ def bench_models_source(manifests: list, constrained: list = ()) -> str:
                      f"{p}, {name}_joints)")
     lines.append("const bench_model *const bench_models[] = {"
                  + "".join(f"&{m['name']}_bench, " for m in manifests) + "NULL};")
+    for tag, label, m in peers:
+        lines += _peer_record(tag, label, m)
+    lines.append("const bench_peer *const bench_peers[] = {"
+                 + "".join(f"&{tag}_{m['name']}_peer, " for tag, _, m in peers) + "NULL};")
     lines.append("const bench_constrained_model *const bench_constrained_models[] = {"
                  + "".join(f"&{m['name']}_constrained_bench, " for m in constrained) + "NULL};")
     return "\n".join(lines) + "\n"
 
 
-def _build_generated(build: Path, generated: dict, log=print, constrained: dict | None = None) -> tuple:
+def peer_compile_timeout() -> float:
+    """Seconds one peer object may take to compile (AGGSYM_BENCH_PEER_COMPILE_TIMEOUT, default 420): gcc on one
+    straight-line function of 10^5 statements (the CasADi A^-1 of a 48-link chain) can take far longer."""
+    return float(os.environ.get("AGGSYM_BENCH_PEER_COMPILE_TIMEOUT", "420"))
+
+
+def _compile_renamed(src: Path, obj: Path, level: str, tag: str, log=print, timeout: float | None = None):
+    """``src`` compiled with C_STD at ``level`` into ``obj``, every defined global symbol renamed TAG_symbol;
+    returns the compile seconds (None when the object was up to date), or the string "timed out after T s"
+    when the compiler was stopped at ``timeout`` (no object then)."""
+    cc = os.environ.get("CC", "cc")
+    cmd = [cc, *[level if f == "-O2" else f for f in C_STD], "-c", str(src), "-o", str(obj)]
+    key = hashlib.sha256((" ".join(cmd) + tag + src.read_text()).encode()).hexdigest()
+    if _stamp(obj, key):
+        return None
+    log(" ".join(shlex.quote(str(c)) for c in cmd) + (f"  (timeout {timeout:g} s)" if timeout else ""))
+    t0 = time.perf_counter()
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        obj.unlink(missing_ok=True)
+        return f"timed out after {timeout:g} s"
+    if proc.returncode != 0:
+        raise RuntimeError(f"command failed ({proc.returncode}): {' '.join(cmd)}\n{proc.stderr[-4000:]}")
+    seconds = time.perf_counter() - t0
+    _, proc = _run(["nm", "-g", "--defined-only", "-P", obj], lambda m: None)
+    symbols = sorted({line.split()[0] for line in proc.stdout.splitlines() if line.strip()})
+    mapping = obj.with_suffix(".syms")
+    mapping.write_text("".join(f"{s} {tag}_{s}\n" for s in symbols))
+    _run(["objcopy", f"--redefine-syms={mapping}", obj], log)
+    _write_stamp(obj, key)
+    return seconds
+
+
+def _build_generated(build: Path, generated: dict, log=print, constrained: dict | None = None,
+                     peers: dict | None = None) -> tuple:
     """The generated C of every model as one shared library (cc -O2 -fPIC, each model its own translation unit)
     and bench_models.o (the direct-call timers).  ``constrained``: name -> folder of the models timed for their
-    constrained forward dynamics alone.  Returns the compile times."""
+    constrained forward dynamics alone; ``peers``: name -> {"casadi": the folder of NAME_casadi.c, "generated": the
+    folder of the NAME.c the -O3 build compiles} for the generated models that get the PEERS.  Returns the
+    compile times."""
     build.mkdir(parents=True, exist_ok=True)
     cc = os.environ.get("CC", "cc")
     constrained = constrained or {}
+    peers = peers or {}
     manifests = [json.loads((Path(d) / f"{name}.json").read_text()) for name, d in generated.items()]
     constrained_manifests = [json.loads((Path(d) / f"{name}.json").read_text()) for name, d in constrained.items()]
     times = {}
@@ -229,19 +315,43 @@ def _build_generated(build: Path, generated: dict, log=print, constrained: dict 
             times[f"cc -O2 {name}.c"], _ = _run(cmd, log)
             _write_stamp(obj, key)
         objects.append(obj)
+    by_name = {m["name"]: m for m in manifests}
+    peer_records = []
+    for name, folders in peers.items():
+        timed_out = set()  # sources whose -O2 build timed out: their -O3 build (slower still) is not tried
+        for tag, label, source, level in PEERS:
+            src = Path(folders[source]) / (f"{name}.c" if source == "generated" else f"{name}_casadi.c")
+            obj = build / f"{tag}_{name}.o"
+            what = f"cc {level} {src.name}" + (" (the five routines)" if source == "generated" else "")
+            if source in timed_out:
+                times[what] = "not tried (its -O2 build timed out)"
+                continue
+            seconds = _compile_renamed(src, obj, level, tag, log, peer_compile_timeout())
+            if isinstance(seconds, str):  # left out of this run: the report says so
+                times[what] = seconds
+                timed_out.add(source)
+                log(f"{what}: {seconds}; {label} of {name} left out")
+                continue
+            if seconds is not None:
+                times[what] = seconds
+            objects.append(obj)
+            peer_records.append((tag, label, by_name[name]))
     _run([cc, "-shared", "-o", build / "libaggsym_bench_models.so", *objects, "-lm"], log)
     src = build / "bench_models.c"
-    src.write_text(bench_models_source(manifests, constrained_manifests))
+    src.write_text(bench_models_source(manifests, constrained_manifests, peer_records))
     includes = [f"-I{HARNESS}", *sorted({f"-I{Path(d)}" for d in [*generated.values(), *constrained.values()]})]
     _run([cc, *C_STD, *includes, "-c", src, "-o", build / "bench_models.o"], log)
     return times
 
 
-def build_harness(build: Path, generated: dict, log=print, constrained: dict | None = None) -> dict:
+def build_harness(build: Path, generated: dict, log=print, constrained: dict | None = None,
+                  peers: dict | None = None) -> dict:
     """Compile the generated C (one shared library) and link the Pinocchio harness.  ``generated``: name ->
     folder with NAME.c, NAME.h, NAME.json; ``constrained`` the same for models with constraints (their
-    constrained forward dynamics only).  Returns the executable and the compile times."""
-    times = _build_generated(build, generated, log, constrained)
+    constrained forward dynamics only); ``peers``: name -> {"casadi": folder of NAME_casadi.c, "generated":
+    folder of the NAME.c of the -O3 build} (the PEERS of those models).
+    Returns the executable and the compile times."""
+    times = _build_generated(build, generated, log, constrained, peers)
     obj, seconds = build_pinocchio_object(build, log)
     if seconds:
         times["c++ -O2 pinocchio_bench.cpp"] = seconds
@@ -261,22 +371,43 @@ def build_generated_only(build: Path, generated: dict, log=print) -> Path:
     return exe
 
 
+def bench_cpu() -> int | None:
+    """The CPU the harness is pinned to: AGGSYM_BENCH_CPU, else the last one this process may run on (the first
+    is where a shared machine's interrupts and other jobs tend to land); None where affinity is not supported."""
+    if not hasattr(os, "sched_getaffinity"):
+        return None
+    allowed = sorted(os.sched_getaffinity(0))
+    want = os.environ.get("AGGSYM_BENCH_CPU")
+    if want not in (None, ""):
+        if int(want) not in allowed:
+            raise ValueError(f"AGGSYM_BENCH_CPU={want}: this process may run on CPUs {allowed} only")
+        return int(want)
+    return allowed[-1]
+
+
 def run_harness(exe: Path, robots: dict, out_json: Path, seconds: float = 0.5, states: int = 1000,
-                calls: int = 100, log=print, constrained: dict | None = None) -> dict:
+                calls: int = 100, log=print, constrained: dict | None = None, cpu: int | None = None) -> dict:
     """Run the harness on ``robots`` (name -> URDF path) and the ``constrained`` models (name -> (URDF path,
-    contact frames), floating base); returns its JSON."""
+    contact frames), floating base), pinned to ``cpu`` (os.sched_setaffinity in the child) when given; returns its
+    JSON with ``pinned_cpu`` and ``load_average_before`` added."""
+    from .environment import load_average
     cmd = [exe, str(seconds), str(states), str(calls), out_json]
     for name, path in robots.items():
         cmd += [name, path]
     for name, (path, frames) in (constrained or {}).items():
         cmd += ["--constrained", name, path, ",".join(frames)]
-    log(" ".join(shlex.quote(str(c)) for c in cmd))
-    proc = subprocess.run([str(c) for c in cmd], text=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    log(("" if cpu is None else f"taskset -c {cpu} ") + " ".join(shlex.quote(str(c)) for c in cmd))
+    load = load_average()
+    pin = (lambda: os.sched_setaffinity(0, {cpu})) if cpu is not None else None
+    proc = subprocess.run([str(c) for c in cmd], text=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          preexec_fn=pin)
     for line in proc.stderr.splitlines():
         log("  " + line)
     if proc.returncode != 0:
         raise RuntimeError(f"harness failed ({proc.returncode}):\n{proc.stderr[-4000:]}")
-    return json.loads(Path(out_json).read_text())
+    data = json.loads(Path(out_json).read_text())
+    data.update({"pinned_cpu": cpu, "load_average_before": load})
+    return data
 
 
 def run_generated_only(exe: Path, out_json: Path, seconds: float = 0.05, states: int = 100, calls: int = 100) -> dict:

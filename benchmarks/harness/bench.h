@@ -34,7 +34,8 @@ typedef struct {
     const char *name;
     int nq;                     /* the length of q */
     int nv;                     /* the length of qd, qdd, tau */
-    int free_flyer;             /* generated with --floating-base quaternion: Pinocchio's JointModelFreeFlyer root */
+    int free_flyer;             /* 1: generated with --floating-base quaternion (Pinocchio's JointModelFreeFlyer root);
+                                   2: with --floating-base euler (Pinocchio's composite root PX PY PZ RX RY RZ) */
     int np;
     const double *p;            /* default parameters or NULL */
     const char *const *joints;  /* the joint name of each velocity coordinate, in qd order */
@@ -77,7 +78,17 @@ typedef struct {
     bench_timer t_constrained_forward_dynamics; /* out: nq + nc doubles (qdd, then lambda) */
 } bench_constrained_model;
 
+/* A peer of a generated model: the same five routines by other code, timed beside the generated code and
+   Pinocchio on the same states in the same batches (the generated C compiled -O3, the CasADi peer of
+   benchmarks/casadi_peer.py at -O2 and -O3).  Its model has the generated model's name, joints and parameters;
+   only the five routines and their timers are set. */
+typedef struct {
+    const char *label;          /* e.g. "aggsym -O3", "CasADi -O2" */
+    const bench_model *model;
+} bench_peer;
+
 extern const bench_model *const bench_models[]; /* NULL-terminated, bench_models.c */
+extern const bench_peer *const bench_peers[];   /* NULL-terminated, bench_models.c */
 extern const bench_constrained_model *const bench_constrained_models[]; /* NULL-terminated, bench_models.c */
 extern volatile double bench_sink;
 double bench_now_ns(void);      /* CLOCK_MONOTONIC */

@@ -2,7 +2,9 @@
 //
 //   pinocchio_bench SECONDS STATES CALLS OUT.json NAME URDF [NAME URDF ...] [--constrained NAME URDF FRAMES ...]
 //
-// For each robot: the Pinocchio fixed-base model of the URDF (pinocchio::urdf::buildModel(path, model)); the
+// For each robot: the Pinocchio model of the URDF (pinocchio::urdf::buildModel(path, model): fixed base; with
+// JointModelFreeFlyer for a model generated with --floating-base quaternion; with the composite root PX PY PZ RX RY
+// RZ for --floating-base euler); the
 // joint order is checked against the generated code's coordinates; STATES random states (q uniform in
 // [-pi, pi], qd, qdd, tau standard normal; continuous joints get (cos, sin) in Pinocchio's q) are precomputed.
 // First both sides are evaluated on the first few states and compared (relative error per pair); then each
@@ -17,6 +19,10 @@
 // BODY frames), regressor against computeJointTorqueRegressor (the full matrices compared).  Batches are short
 // (tens of microseconds) so that most hold no preemption on a shared machine and the median ignores those that
 // do.
+//
+// Peers (bench.h, bench_peer: the generated C compiled -O3, the CasADi peer at -O2 and -O3) of a robot: each is
+// checked against Pinocchio on the first states for the five routines, then its timer runs in the same batches as
+// the generated one (after it, before Pinocchio's), and its median, quantiles and error go to the pair's "peers".
 //
 // --constrained NAME URDF FRAME,FRAME,...: a model generated with --floating-base and --constraints, each listed
 // frame a point contact with the world; its constrained forward dynamics is timed against
@@ -237,15 +243,24 @@ double batch(int count, int calls, int first, double *cpu_ns, Call &&call) {
 
 // One pair timed in interleaved batches (the generated timer, then each Pinocchio variant, on the same states);
 // writes the pair's JSON object (with `extra` fields appended) and a line on stderr.
+// `peers`: (label, timer, relative error against Pinocchio) of other code for the same routine (the generated C at
+// -O3, the CasADi peer), timed in the same batches right after the generated one.
+struct Peer {
+  std::string label;
+  bench_timer timer;
+  double err;
+};
+
 void time_pair(FILE *out, bool first_pair, const std::string &robot, const char *role, const char *pinocchio,
                const std::vector<std::pair<std::string, Timer>> &pin_timer, bench_timer ours,
                const bench_states &cs, double *buf, double seconds, int calls, double err,
-               const std::string &extra = "") {
-  const int nv = (int)pin_timer.size(), nstates = cs.count;
+               const std::string &extra = "", const std::vector<Peer> &peers = {}) {
+  const int nv = (int)pin_timer.size(), nstates = cs.count, npeers = (int)peers.size();
   // warm-up and calibration: once through all states on each side
   double cpu = 0.0, tg = 0.0, tp = 0.0;
   for (int first = 0; first < nstates; first += calls) {
     tg += ours(&cs, first, calls, buf, &cpu) * calls;
+    for (int e = 0; e < npeers; ++e) tg += peers[e].timer(&cs, first, calls, buf, &cpu) * calls;
     for (int v = 0; v < nv; ++v) tp += pin_timer[v].second(first, &cpu) * calls;
   }
   const double per_batch = (tg + tp) / nstates * calls;  // ns for one generated + one Pinocchio batch each
@@ -253,9 +268,11 @@ void time_pair(FILE *out, bool first_pair, const std::string &robot, const char 
   batches = std::max(51, std::min(batches, 400001));
   std::vector<double> g(batches), gc(batches);
   std::vector<std::vector<double>> p(nv, std::vector<double>(batches)), pc(nv, std::vector<double>(batches));
+  std::vector<std::vector<double>> e(npeers, std::vector<double>(batches)), ec(npeers, std::vector<double>(batches));
   for (int b = 0; b < batches; ++b) {
     const int first = (int)(((long long)b * calls) % nstates);
     g[b] = ours(&cs, first, calls, buf, &gc[b]);
+    for (int k = 0; k < npeers; ++k) e[k][b] = peers[k].timer(&cs, first, calls, buf, &ec[k][b]);
     for (int v = 0; v < nv; ++v) p[v][b] = pin_timer[v].second(first, &pc[v][b]);
   }
   int best = 0;
@@ -269,19 +286,33 @@ void time_pair(FILE *out, bool first_pair, const std::string &robot, const char 
     variants += std::string(v ? ", " : "") + "\"" + (nv > 1 ? pin_timer[v].first : "default") + "\": " +
                 std::to_string(median(p[v]));
   variants += "}";
+  std::string peers_json = "{";
+  for (int k = 0; k < npeers; ++k) {
+    char one[400];
+    std::snprintf(one, sizeof one,
+                  "%s\"%s\": {\"ns\": %.3f, \"ns_q10\": %.3f, \"ns_q90\": %.3f, \"cpu_ns\": %.3f, "
+                  "\"relative_error\": %.3e}",
+                  k ? ", " : "", peers[k].label.c_str(), median(e[k]), quantile(e[k], 0.1), quantile(e[k], 0.9),
+                  median(ec[k]), peers[k].err);
+    peers_json += one;
+  }
+  peers_json += "}";
   std::fprintf(out,
                "%s{\"role\": \"%s\", \"pinocchio\": \"%s\", \"batches\": %d, \"generated_ns\": %.3f, "
                "\"pinocchio_ns\": %.3f, \"ratio\": %.5f, \"generated_ns_q10\": %.3f, \"generated_ns_q90\": %.3f, "
                "\"pinocchio_ns_q10\": %.3f, \"pinocchio_ns_q90\": %.3f, \"generated_cpu_ns\": %.3f, "
                "\"pinocchio_cpu_ns\": %.3f, \"cpu_ratio\": %.5f, \"pinocchio_variants_ns\": %s, "
-               "\"check_states\": %d, \"relative_error\": %.3e%s}",
+               "\"check_states\": %d, \"relative_error\": %.3e, \"peers\": %s%s}",
                first_pair ? "" : ", ", role, label.c_str(), batches, mg, mp, mg / mp, quantile(g, 0.1),
                quantile(g, 0.9), quantile(p[best], 0.1), quantile(p[best], 0.9), mgc, mpc, mgc / mpc,
-               variants.c_str(), std::min(CHECK_STATES, nstates), err, extra.c_str());
+               variants.c_str(), std::min(CHECK_STATES, nstates), err, peers_json.c_str(), extra.c_str());
   std::fprintf(stderr,
                "%s %-18s generated %9.1f ns  Pinocchio %-24s %9.1f ns  ratio %.3f  (CPU-time ratio %.3f, "
                "err %.1e, %d batches of %d)\n",
                robot.c_str(), role, mg, label.c_str(), mp, mg / mp, mgc / mpc, err, batches, calls);
+  for (int k = 0; k < npeers; ++k)
+    std::fprintf(stderr, "%s %-18s   %-14s %9.1f ns  generated/it %.3f  (err %.1e)\n", robot.c_str(), role,
+                 peers[k].label.c_str(), median(e[k]), mg / median(e[k]), peers[k].err);
 }
 
 // The pairs of one fixed-base robot (the five, then those beyond them the generated model has); returns nonzero
@@ -296,10 +327,20 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
     return 2;
   }
   pinocchio::Model model;
-  if (bm->free_flyer)
+  if (bm->free_flyer == 2) {  // aggsym's --floating-base euler: o1 o2 o3 theta4 theta5 theta6 = PX PY PZ RX RY RZ
+    pinocchio::JointModelComposite root;
+    root.addJoint(pinocchio::JointModelPX());
+    root.addJoint(pinocchio::JointModelPY());
+    root.addJoint(pinocchio::JointModelPZ());
+    root.addJoint(pinocchio::JointModelRX());
+    root.addJoint(pinocchio::JointModelRY());
+    root.addJoint(pinocchio::JointModelRZ());
+    pinocchio::urdf::buildModel(path, root, "root_joint", model);
+  } else if (bm->free_flyer) {
     pinocchio::urdf::buildModel(path, pinocchio::JointModelFreeFlyer(), model);
-  else
+  } else {
     pinocchio::urdf::buildModel(path, model);
+  }
   pinocchio::Data data(model);
   const int n = bm->nv, nq = bm->nq;
   if (model.nv != n) {
@@ -308,7 +349,7 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
   }
   std::vector<int> continuous;
   if (!same_joints(model, bm->joints, name, continuous)) return 1;
-  States s = random_states(model, continuous, nstates, seed, bm->free_flyer != 0);
+  States s = random_states(model, continuous, nstates, seed, bm->free_flyer == 1);
   bench_states cs = {s.count, nq, n, s.q.data(), s.qd.data(), s.qdd.data(), s.tau.data(), bm->p};
   // the frames of frame_jacobians: Pinocchio's frames of those URDF links (BODY frames)
   std::vector<pinocchio::FrameIndex> frame_ids;
@@ -389,6 +430,36 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
       err[8] = std::max(err[8], relative_error(buf.data(), row_major(data.jointTorqueRegressor).data(),
                                                n * regressor_cols));
     }
+  }
+
+  // The peers of this robot (the five routines only), checked against Pinocchio on the same first states.
+  std::vector<Peer> peers[NPAIRS];
+  for (int k = 0; bench_peers[k]; ++k) {
+    const bench_model *pm = bench_peers[k]->model;
+    if (name != pm->name) continue;
+    double perr[5] = {0, 0, 0, 0, 0};
+    for (int i = 0; i < std::min(CHECK_STATES, nstates); ++i) {
+      const double *q = &s.q[(size_t)i * nq], *qd = &s.qd[(size_t)i * n];
+      const double *qdd = &s.qdd[(size_t)i * n], *tau = &s.tau[(size_t)i * n];
+      pm->inertia(q, pm->p, buf.data());
+      pinocchio::crba(model, data, s.Q[i]);
+      perr[0] = std::max(perr[0], relative_error(buf.data(), symmetric_from_upper(data.M).data(), n * n));
+      pm->nonlinear_effects(q, qd, pm->p, buf.data());
+      pinocchio::nonLinearEffects(model, data, s.Q[i], s.V[i]);
+      perr[1] = std::max(perr[1], relative_error(buf.data(), data.nle.data(), n));
+      pm->inverse_dynamics(q, qd, qdd, pm->p, buf.data());
+      pinocchio::rnea(model, data, s.Q[i], s.V[i], s.Vd[i]);
+      perr[2] = std::max(perr[2], relative_error(buf.data(), data.tau.data(), n));
+      pm->forward_dynamics(q, qd, tau, pm->p, buf.data());
+      pinocchio::aba(model, data, s.Q[i], s.V[i], s.T[i]);
+      perr[3] = std::max(perr[3], relative_error(buf.data(), data.ddq.data(), n));
+      pm->inertia_inverse(q, pm->p, buf.data());
+      pinocchio::computeMinverse(model, data, s.Q[i]);
+      perr[4] = std::max(perr[4], relative_error(buf.data(), symmetric_from_upper(data.Minv).data(), n * n));
+    }
+    const bench_timer pt[5] = {pm->t_inertia, pm->t_nonlinear_effects, pm->t_inverse_dynamics,
+                               pm->t_forward_dynamics, pm->t_inertia_inverse};
+    for (int r = 0; r < 5; ++r) peers[r].push_back({bench_peers[k]->label, pt[r], perr[r]});
   }
 
   auto timer = [&](auto &&call) -> Timer {
@@ -474,7 +545,7 @@ int bench_robot(FILE *out, const std::string &name, const std::string &path, uns
   for (int k = 0; k < NPAIRS; ++k) {
     if (!ours_timer[k]) continue;  // a routine the model was generated without
     time_pair(out, first, name, PAIRS[k], PINOCCHIO[k], pin_timer[k], ours_timer[k], cs, buf.data(), seconds, calls,
-              err[k]);
+              err[k], "", peers[k]);
     first = false;
   }
   std::fprintf(out, "]}");
