@@ -36,7 +36,7 @@ from ..mechanics.kinematics import TreeKinematics
 from ..model.tree import Tree
 from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import FILTERS, check_c_identifier, check_module_name
-from .printing import SCALARS, CPrinter, Converter, LiteralError, NumPyPrinter, _number, count_ops
+from .printing import SCALARS, CPrinter, Converter, LiteralError, NumPyPrinter, _number
 
 
 @dataclass
@@ -130,8 +130,8 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str) -> Emitte
             raise RuntimeError(f"routine {routine.role} depends on input {kind!r} outside its signature")
     cp, pp = CPrinter(scalar), NumPyPrinter()
     temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
-    c_names = py_names = {**_input_symbols(sl), **temp_names}
-    c_conv, py_conv = Converter(prog, c_names), Converter(prog, py_names)
+    names = {**_input_symbols(sl), **temp_names}
+    conv = Converter(prog, names)  # one expression tree per statement, printed as C and as NumPy
     c_body, py_body = [], []
     status = routine.status
     if status is not None:
@@ -158,29 +158,32 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str) -> Emitte
             _, o, k = step
             x = outputs[o][k]
             name = routine.outputs[o].name
-            rhs_c = cp._print(c_conv(x, top=not (isinstance(x, Node) and x.id in c_names)))
-            rhs_py = pp._print(py_conv(x, top=not (isinstance(x, Node) and x.id in py_names)))
+            tree = conv(x, top=not (isinstance(x, Node) and x.id in names))
+            rhs_c, rhs_py = cp._print(tree), pp._print(tree)
             c_body.append(f"{name}[{k}] = {rhs_c};")
             idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
             py_body.append(f"{routine.outputs[o].py}[..., {idx}] = {rhs_py}")
             continue
         i = step[1]
-        node = prog.nodes[i]
-        py_body.append(f"{py_names[i]} = {pp._print(py_conv(node))}")
+        tree = conv(prog.nodes[i])
+        py_body.append(f"{names[i]} = {pp._print(tree)}")
         if i not in trig:
-            c_body.append(f"const {scalar} {c_names[i]} = {cp._print(c_conv(node))};")
+            c_body.append(f"const {scalar} {names[i]} = {cp._print(tree)};")
             continue
         sin_id, cos_id, arg = trig[i]
         if (sin_id, cos_id) in done:
             continue
         done.add((sin_id, cos_id))
-        s_name = c_names[sin_id] if sin_id is not None else c_names[cos_id] + "_sin"
-        c_name = c_names[cos_id] if cos_id is not None else c_names[sin_id] + "_cos"
+        s_name = names[sin_id] if sin_id is not None else names[cos_id] + "_sin"
+        c_name = names[cos_id] if cos_id is not None else names[sin_id] + "_cos"
         c_body.append(f"{scalar} {s_name}, {c_name};")
-        c_body.append(f"aggsym_sincos({cp._print(c_conv(arg, top=False))}, &{s_name}, &{c_name});")
+        c_body.append(f"aggsym_sincos({cp._print(conv(arg, top=False))}, &{s_name}, &{c_name});")
+        cp.counts["call"] += 1
     if status is not None:
         c_body.append(f"return {status.name}[0] != {_number(0.0, scalar)};")
-    ops = count_ops("\n".join(c_body))
+    # what count_ops reads from "\n".join(c_body), counted while printing (the other statements hold none);
+    # the C printer prints only what is emitted, the sincos pair's discarded sin/cos trees were never printed
+    ops = dict(cp.counts)
     return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine, scalar),
                           python_parameters(model, routine), c_body, py_body, ops, len(sl.temps))
 
