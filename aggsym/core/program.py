@@ -93,33 +93,33 @@ class Node:
         self.prog = prog
         self.id = ident
 
-    # arithmetic -----------------------------------------------------------------------------------
+    # arithmetic (self is a node, so only the other operand needs folding; the rules are :meth:`Program.op`'s)
     def __add__(self, other):
-        return self.prog.op(ADD, self, other)
+        return self.prog._add(self, fold(other))
 
     def __radd__(self, other):
-        return self.prog.op(ADD, other, self)
+        return self.prog._add(fold(other), self)
 
     def __sub__(self, other):
-        return self.prog.op(SUB, self, other)
+        return self.prog._sub(self, fold(other))
 
     def __rsub__(self, other):
-        return self.prog.op(SUB, other, self)
+        return self.prog._sub(fold(other), self)
 
     def __mul__(self, other):
-        return self.prog.op(MUL, self, other)
+        return self.prog._mul(self, fold(other))
 
     def __rmul__(self, other):
-        return self.prog.op(MUL, other, self)
+        return self.prog._mul(fold(other), self)
 
     def __truediv__(self, other):
-        return self.prog.op(DIV, self, other)
+        return self.prog._div(self, fold(other))
 
     def __rtruediv__(self, other):
-        return self.prog.op(DIV, other, self)
+        return self.prog._div(fold(other), self)
 
     def __neg__(self):
-        return self.prog.op(NEG, self)
+        return self.prog._neg(self)
 
     def __pos__(self):
         return self
@@ -195,9 +195,32 @@ class Program:
         return node
 
     def _make(self, opcode, *args):
-        if opcode in _COMMUTATIVE and _key(args[0]) > _key(args[1]):
-            args = (args[1], args[0])
-        key = (opcode,) + tuple(_key(a) for a in args)
+        """The node ``opcode(*args)``, created unless it exists (hash-consing).  The key holds a node operand's id
+        and a constant operand's repr (a str: never equal to an id); a commutative operation's operands are put in
+        order, constants first, then nodes by id."""
+        if len(args) == 2:
+            a, b = args
+            if a.__class__ is Node:
+                if b.__class__ is Node:
+                    ka, kb = a.id, b.id
+                    if ka > kb and opcode in _COMMUTATIVE:
+                        a, b, ka, kb = b, a, kb, ka
+                else:
+                    ka, kb = a.id, repr(b)
+                    if opcode in _COMMUTATIVE:
+                        a, b, ka, kb = b, a, kb, ka
+            else:
+                ka = repr(a)
+                if b.__class__ is Node:
+                    kb = b.id
+                else:
+                    kb = repr(b)
+                    if ka > kb and opcode in _COMMUTATIVE:
+                        a, b, ka, kb = b, a, kb, ka
+            key = (opcode, ka, kb)
+            args = (a, b)
+        else:
+            key = (opcode,) + tuple(a.id if a.__class__ is Node else repr(a) for a in args)
         node = self._table.get(key)
         if node is None:
             node = self._new((opcode,) + args)
@@ -206,7 +229,7 @@ class Program:
 
     def _neg_arg(self, x):
         """``y`` when ``x`` is the node ``-y``, else None."""
-        if isinstance(x, Node):
+        if x.__class__ is Node:
             entry = self.ops[x.id]
             if entry[0] == NEG:
                 return entry[1]
@@ -239,87 +262,104 @@ class Program:
         raise ValueError(f"unknown operation {opcode!r}")
 
     def _neg(self, a):
-        if is_const(a):
+        if a.__class__ is not Node:
             return normalize_const(-a)
-        inner = self._neg_arg(a)
-        if inner is not None:
-            return inner
         entry = self.ops[a.id]
+        if entry[0] == NEG:
+            return entry[1]
         if entry[0] == SUB:  # -(x - y) = y - x, free
             return self._sub(entry[2], entry[1])
         return self._make(NEG, a)
 
     def _add(self, a, b):
-        if is_zero(a):
+        # (the tests of is_zero, _neg_arg and is_const written out: this runs for every addition recorded)
+        if type(a) in _EXACT and a == 0:
             return b
-        if is_zero(b):
+        if type(b) in _EXACT and b == 0:
             return a
-        nb = self._neg_arg(b)
-        if nb is not None:
-            return self._sub(a, nb)
-        na = self._neg_arg(a)
-        if na is not None:
-            return self._sub(b, na)
-        if is_const(b) and b < 0:
+        ops = self.ops
+        b_node = b.__class__ is Node
+        if b_node and ops[b.id][0] == NEG:
+            return self._sub(a, ops[b.id][1])
+        a_node = a.__class__ is Node
+        if a_node and ops[a.id][0] == NEG:
+            return self._sub(b, ops[a.id][1])
+        if not b_node and b < 0:
             return self._sub(a, normalize_const(-b))
-        if is_const(a) and a < 0:
+        if not a_node and a < 0:
             return self._sub(b, normalize_const(-a))
         return self._make(ADD, a, b)
 
     def _sub(self, a, b):
-        if is_zero(b):
+        if type(b) in _EXACT and b == 0:
             return a
-        if is_zero(a):
+        if type(a) in _EXACT and a == 0:
             return self._neg(b)
-        if isinstance(a, Node) and isinstance(b, Node) and a.id == b.id:
+        ops = self.ops
+        a_node, b_node = a.__class__ is Node, b.__class__ is Node
+        if a_node and b_node and a.id == b.id:
             return 0
-        nb = self._neg_arg(b)
-        if nb is not None:
-            return self._add(a, nb)
-        na = self._neg_arg(a)
-        if na is not None:  # -x - b = -(x + b)
-            return self._neg(self._add(na, b))
-        if is_const(b) and b < 0:
+        if b_node and ops[b.id][0] == NEG:
+            return self._add(a, ops[b.id][1])
+        if a_node and ops[a.id][0] == NEG:  # -x - b = -(x + b)
+            return self._neg(self._add(ops[a.id][1], b))
+        if not b_node and b < 0:
             return self._add(a, normalize_const(-b))
         return self._make(SUB, a, b)
 
     def _mul(self, a, b):
-        if is_zero(a) or is_zero(b):
+        ta, tb = type(a), type(b)
+        if (ta in _EXACT and a == 0) or (tb in _EXACT and b == 0):
             return 0
-        if is_one(a):
+        if ta in _EXACT and a == 1:
             return b
-        if is_one(b):
+        if tb in _EXACT and b == 1:
             return a
-        if type(a) is int and a == -1:
+        if ta is int and a == -1:
             return self._neg(b)
-        if type(b) is int and b == -1:
+        if tb is int and b == -1:
             return self._neg(a)
-        na, nb = self._neg_arg(a), self._neg_arg(b)
+        ops = self.ops
+        a_node, b_node = ta is Node, tb is Node
+        ea = ops[a.id] if a_node else None
+        eb = ops[b.id] if b_node else None
+        na = ea[1] if a_node and ea[0] == NEG else None
+        nb = eb[1] if b_node and eb[0] == NEG else None
         if na is not None and nb is not None:
             return self._mul(na, nb)
         if na is not None:
             return self._neg(self._mul(na, b))
         if nb is not None:
             return self._neg(self._mul(a, nb))
-        if is_const(a) and a < 0:
+        if not a_node and a < 0:
             return self._neg(self._mul(normalize_const(-a), b))
-        if is_const(b) and b < 0:
+        if not b_node and b < 0:
             return self._neg(self._mul(a, normalize_const(-b)))
         # c1 * (c2 * x) -> (c1*c2) * x
-        if is_const(a) and isinstance(b, Node):
-            entry = self.ops[b.id]
-            if entry[0] == MUL and is_const(entry[1]):
-                return self._mul(normalize_const(a * entry[1]), entry[2])
-        if is_const(b) and isinstance(a, Node):
-            entry = self.ops[a.id]
-            if entry[0] == MUL and is_const(entry[1]):
-                return self._mul(normalize_const(b * entry[1]), entry[2])
-        coefficient, factors = self._product_signature(a, b)
+        if not a_node and b_node:
+            if eb[0] == MUL and eb[1].__class__ is not Node:
+                return self._mul(normalize_const(a * eb[1]), eb[2])
+        if not b_node and a_node:
+            if ea[0] == MUL and ea[1].__class__ is not Node:
+                return self._mul(normalize_const(b * ea[1]), ea[2])
+        signatures = self._signatures
+        if a_node:
+            ca, fa = signatures.get(a.id) or (1, (a.id,))
+        else:
+            ca, fa = a, ()
+        if b_node:
+            cb, fb = signatures.get(b.id) or (1, (b.id,))
+        else:
+            cb, fb = b, ()
+        coefficient = normalize_const(ca * cb)
+        factors = fa + fb
+        if len(factors) > 1:
+            factors = tuple(sorted(factors))
         key = (repr(coefficient), factors)
         node = self._products.get(key)
         if node is None:
             node = self._make(MUL, a, b)
-            self._signatures.setdefault(node.id, (coefficient, factors))
+            signatures.setdefault(node.id, (coefficient, factors))
             self._products.setdefault(key, node)
         return node
 
