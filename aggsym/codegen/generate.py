@@ -132,6 +132,12 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str) -> Emitte
     temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
     names = {**_input_symbols(sl), **temp_names}
     conv = Converter(prog, names)  # one expression tree per statement, printed as C and as NumPy
+
+    def both(tree, calls):
+        """(C, NumPy) text of a tree; one text for both when it holds no function call and the C is double (the
+        printers differ only in function names and in float literals)."""
+        c = cp._print(tree)
+        return (c, c) if scalar == "double" and conv.calls == calls else (c, pp._print(tree))
     c_body, py_body = [], []
     status = routine.status
     if status is not None:
@@ -158,18 +164,21 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str) -> Emitte
             _, o, k = step
             x = outputs[o][k]
             name = routine.outputs[o].name
-            tree = conv(x, top=not (isinstance(x, Node) and x.id in names))
-            rhs_c, rhs_py = cp._print(tree), pp._print(tree)
+            calls = conv.calls
+            rhs_c, rhs_py = both(conv(x, top=not (isinstance(x, Node) and x.id in names)), calls)
             c_body.append(f"{name}[{k}] = {rhs_c};")
             idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
             py_body.append(f"{routine.outputs[o].py}[..., {idx}] = {rhs_py}")
             continue
         i = step[1]
+        calls = conv.calls
         tree = conv(prog.nodes[i])
-        py_body.append(f"{names[i]} = {pp._print(tree)}")
         if i not in trig:
-            c_body.append(f"const {scalar} {names[i]} = {cp._print(tree)};")
+            rhs_c, rhs_py = both(tree, calls)
+            py_body.append(f"{names[i]} = {rhs_py}")
+            c_body.append(f"const {scalar} {names[i]} = {rhs_c};")
             continue
+        py_body.append(f"{names[i]} = {pp._print(tree)}")
         sin_id, cos_id, arg = trig[i]
         if (sin_id, cos_id) in done:
             continue

@@ -87,7 +87,8 @@ class Converter:
 
     def __init__(self, program, names: dict):
         self.program = program
-        self.names = names  # node id -> name (inputs and named temps)
+        self.names = names  # node id -> name (a str; inputs and named temps)
+        self.calls = 0  # the Call nodes built so far (a tree without one prints alike in C and NumPy)
 
     def __call__(self, x, top: bool = True):
         if x.__class__ is not Node:
@@ -115,6 +116,7 @@ class Converter:
         if code == DIV:
             return Ratio(self(entry[1], False), self(entry[2], False))
         if code in FUNCTIONS:
+            self.calls += 1
             return Call(code, tuple(self(a, False) for a in entry[1:]))
         raise ValueError(code)
 
@@ -235,21 +237,25 @@ class _Common:
         return f"{self.functions[e.name]}({', '.join(self._print(a) for a in e.args)})"
 
     def _operand(self, e):
+        cls = e.__class__
+        if cls is Ref:  # the commonest operand, printed without a dispatch
+            return str(e.symbol)
         text = self._print(e)
-        if isinstance(e, LinComb) or (isinstance(e, Prod) and e.sign < 0) or \
-                (isinstance(e, Num) and not isinstance(e.value, Fraction) and e.value < 0):
+        if cls is LinComb or (cls is Prod and e.sign < 0) or \
+                (cls is Num and not isinstance(e.value, Fraction) and e.value < 0):
             return f"({text})"
         return text
 
     def _print_Prod(self, e):
-        body = self.times.join(self._operand(f) for f in e.factors)
+        body = self.times.join([self._operand(f) for f in e.factors])
         return f"-{body}" if e.sign < 0 else body
 
     def _print_LinComb(self, e):
         parts = []
         for k, (sign, term) in enumerate(e.terms):
-            text = self._print(term)
-            if isinstance(term, LinComb) and (sign < 0 or len(term.terms) > 1 and k > 0):
+            cls = term.__class__
+            text = str(term.symbol) if cls is Ref else self._print(term)
+            if cls is LinComb and (sign < 0 or len(term.terms) > 1 and k > 0):
                 text = f"({text})"
             if k == 0:
                 parts.append(f"-{text}" if sign < 0 else text)
