@@ -400,6 +400,7 @@ class Program:
 
     def reachable(self, outputs) -> list[int]:
         """Ids of the nodes the outputs depend on, in topological (creation) order."""
+        ops = self.ops
         seen = set()
         stack = [o.id for o in outputs if isinstance(o, Node)]
         while stack:
@@ -407,9 +408,11 @@ class Program:
             if i in seen:
                 continue
             seen.add(i)
-            for a in self.operands(i):
-                if isinstance(a, Node) and a.id not in seen:
-                    stack.append(a.id)
+            entry = ops[i]
+            if entry[0] != INPUT:
+                for a in entry[1:]:
+                    if a.__class__ is Node and a.id not in seen:
+                        stack.append(a.id)
         return sorted(seen)
 
     def interpret(self, outputs, leaf, apply, constant=lambda x: x):
@@ -508,26 +511,44 @@ def straight_line(program, outputs) -> StraightLine:
     soon as its value exists so that it does not stay live to the end."""
     flat = [x for out in outputs for x in out]
     ids = program.reachable(flat)
-    uses: Counter = Counter()
+    ops = program.ops
+    uses: dict = {}
+    inputs = []
     for i in ids:
-        for a in program.operands(i):
-            if isinstance(a, Node):
-                uses[a.id] += 1
+        entry = ops[i]
+        if entry[0] == INPUT:
+            inputs.append(entry[1:])
+            continue
+        for a in entry[1:]:
+            if a.__class__ is Node:
+                j = a.id
+                uses[j] = uses.get(j, 0) + 1
     for x in flat:
         if isinstance(x, Node):
-            uses[x.id] += 1
-    inputs = [program.ops[i][1:] for i in ids if program.ops[i][0] == INPUT]
-    named = {i for i in ids if program.ops[i][0] != INPUT and (uses[i] >= 2 or program.ops[i][0] in FUNCTIONS)}
+            uses[x.id] = uses.get(x.id, 0) + 1
+    named = set()
     depth: dict[int, int] = {}  # depth of the expression a node inlines (0: a name)
     for i in ids:
-        entry = program.ops[i]
-        if entry[0] == INPUT:
+        entry = ops[i]
+        code = entry[0]
+        if code == INPUT:
             depth[i] = 0
             continue
-        d = 1 + max((depth[a.id] for a in entry[1:] if isinstance(a, Node)), default=0)
+        if uses.get(i, 0) >= 2 or code in FUNCTIONS:
+            named.add(i)
+            depth[i] = 0
+            continue
+        d = 0
+        for a in entry[1:]:
+            if a.__class__ is Node:
+                da = depth[a.id]
+                if da > d:
+                    d = da
+        d += 1
         if d > INLINE_DEPTH:
             named.add(i)
-        depth[i] = 0 if i in named else d
+            d = 0
+        depth[i] = d
     temps = [i for i in ids if i in named]
     at: dict = {}
     for o, out in enumerate(outputs):
