@@ -45,6 +45,10 @@ FUNCTIONS = {
     "atan2": (2, math.atan2), "sign": (1, lambda x: (x > 0) - (x < 0)),
 }
 _COMMUTATIVE = (ADD, MUL)
+# the operation's part of the int key of an operation on two nodes (:meth:`Program._make`)
+_CODE_INDEX = {code: k for k, code in enumerate((ADD, SUB, MUL, DIV, NEG) + tuple(FUNCTIONS))}
+_CODE_BITS = 5
+assert len(_CODE_INDEX) <= 1 << _CODE_BITS
 _NUMBERS = (int, float, Fraction)
 INLINE_DEPTH = 64  # the deepest expression a named value inlines: what printers may recurse through
 
@@ -152,8 +156,9 @@ class Program:
         self.ops: list[tuple] = []
         self.nodes: list[Node] = []
         self._table: dict = {}
-        self._products: dict = {}  # product signature -> Node
-        self._signatures: dict = {}  # MUL node id -> (coefficient, sorted factor ids)
+        self._products: dict = {}  # product signature -> Node (the factor ids alone when the coefficient is 1)
+        self._signatures: dict = {}  # MUL node id -> sorted factor ids
+        self._coefficients: dict = {}  # MUL node id -> its constant coefficient, where that is not 1
         self.inputs: dict = {}  # (kind, index) -> Node
 
     # construction ---------------------------------------------------------------------------------
@@ -201,10 +206,15 @@ class Program:
         if len(args) == 2:
             a, b = args
             if a.__class__ is Node:
-                if b.__class__ is Node:
+                if b.__class__ is Node:  # the key of an operation on two nodes: one int
                     ka, kb = a.id, b.id
                     if ka > kb and opcode in _COMMUTATIVE:
                         a, b, ka, kb = b, a, kb, ka
+                    key = ((ka << 32 | kb) << _CODE_BITS) | _CODE_INDEX[opcode]
+                    node = self._table.get(key)
+                    if node is None:
+                        node = self._table[key] = self._new((opcode, a, b))
+                    return node
                 else:
                     ka, kb = a.id, repr(b)
                     if opcode in _COMMUTATIVE:
@@ -342,24 +352,29 @@ class Program:
         if not b_node and a_node:
             if ea[0] == MUL and ea[1].__class__ is not Node:
                 return self._mul(normalize_const(b * ea[1]), ea[2])
-        signatures = self._signatures
+        signatures, coefficients = self._signatures, self._coefficients
         if a_node:
-            ca, fa = signatures.get(a.id) or (1, (a.id,))
+            ca, fa = coefficients.get(a.id, 1), signatures.get(a.id) or (a.id,)
         else:
             ca, fa = a, ()
         if b_node:
-            cb, fb = signatures.get(b.id) or (1, (b.id,))
+            cb, fb = coefficients.get(b.id, 1), signatures.get(b.id) or (b.id,)
         else:
             cb, fb = b, ()
         coefficient = normalize_const(ca * cb)
         factors = fa + fb
         if len(factors) > 1:
             factors = tuple(sorted(factors))
-        key = (repr(coefficient), factors)
+        # the product's signature: its factor ids and coefficient (by repr, so 1/2 and 0.5 stay apart); a tuple of
+        # ids alone when the coefficient is the int 1 (never equal to a (str, tuple) pair)
+        key = factors if coefficient.__class__ is int and coefficient == 1 else (repr(coefficient), factors)
         node = self._products.get(key)
         if node is None:
             node = self._make(MUL, a, b)
-            signatures.setdefault(node.id, (coefficient, factors))
+            if node.id not in signatures:
+                signatures[node.id] = factors
+                if key is not factors:
+                    coefficients[node.id] = coefficient
             self._products.setdefault(key, node)
         return node
 
@@ -368,7 +383,7 @@ class Program:
         if not isinstance(x, Node):
             return x, ()
         sig = self._signatures.get(x.id)
-        return sig if sig is not None else (1, (x.id,))
+        return (self._coefficients.get(x.id, 1), sig) if sig is not None else (1, (x.id,))
 
     def _product_signature(self, a, b):
         ca, fa = self._factors(a)
