@@ -132,6 +132,13 @@ class Converter:
             if code == NEG:
                 self._terms(entry[1], False, -sign, out)
                 return
+        if x.__class__ is not Node:
+            out.append((sign, Num(x)))
+            return
+        name = self.names.get(x.id)
+        if name is not None:  # (inputs are always named)
+            out.append((sign, Ref(name)))
+            return
         term = self(x, False)
         if term.__class__ is Prod and term.sign < 0:
             out.append((-sign, Prod(1, term.factors)))
@@ -148,7 +155,11 @@ class Converter:
                 return self._factors(entry[2], False, sign, out)
             if code == NEG:
                 return self._factors(entry[1], False, -sign, out)
-        out.append(self(x, False))
+        if x.__class__ is not Node:
+            out.append(Num(x))
+        else:
+            name = self.names.get(x.id)
+            out.append(Ref(name) if name is not None else self(x, False))
         return sign
 
 

@@ -99,28 +99,28 @@ class Node:
 
     # arithmetic (self is a node, so only the other operand needs folding; the rules are :meth:`Program.op`'s)
     def __add__(self, other):
-        return self.prog._add(self, fold(other))
+        return self.prog._add(self, other if other.__class__ is Node else fold(other))
 
     def __radd__(self, other):
-        return self.prog._add(fold(other), self)
+        return self.prog._add(other if other.__class__ is Node else fold(other), self)
 
     def __sub__(self, other):
-        return self.prog._sub(self, fold(other))
+        return self.prog._sub(self, other if other.__class__ is Node else fold(other))
 
     def __rsub__(self, other):
-        return self.prog._sub(fold(other), self)
+        return self.prog._sub(other if other.__class__ is Node else fold(other), self)
 
     def __mul__(self, other):
-        return self.prog._mul(self, fold(other))
+        return self.prog._mul(self, other if other.__class__ is Node else fold(other))
 
     def __rmul__(self, other):
-        return self.prog._mul(fold(other), self)
+        return self.prog._mul(other if other.__class__ is Node else fold(other), self)
 
     def __truediv__(self, other):
-        return self.prog._div(self, fold(other))
+        return self.prog._div(self, other if other.__class__ is Node else fold(other))
 
     def __rtruediv__(self, other):
-        return self.prog._div(fold(other), self)
+        return self.prog._div(other if other.__class__ is Node else fold(other), self)
 
     def __neg__(self):
         return self.prog._neg(self)
