@@ -87,8 +87,8 @@ def _arith(ops: dict) -> int:
     return ops["mul"] + ops["add"] + ops["div"]
 
 
-def _measure(label, path, outdir, routines=None) -> dict:
-    run = generate_measured(label, path, outdir, timeout=TIMEOUT, routines=routines, options=["-q"])
+def _measure(label, path, outdir, routines=None, timeout=TIMEOUT) -> dict:
+    run = generate_measured(label, path, outdir, timeout=timeout, routines=routines, options=["-q"])
     row = {"ok": run["ok"], "timed_out": run["timed_out"], "wall_seconds": round(run["wall_seconds"], 3),
            "cpu_seconds": round(run["cpu_seconds"], 3), "peak_mib": round(run["maxrss_kib"] / 1024, 1)}
     if run["ok"]:
@@ -149,21 +149,22 @@ def verdicts(results: dict) -> dict:
     return out
 
 
-def run(out_dir, chains=CHAINS, tree: int | None = TREE_BODIES, progress=print) -> dict:
+def run(out_dir, chains=CHAINS, tree: int | None = TREE_BODIES, progress=print, timeout: float = TIMEOUT) -> dict:
     """Generate every model (default set, then the O(n) set) in fresh processes under ``out_dir``; write
     ``benchmarks/scaling.json`` and ``benchmarks/scaling.png``; return the results."""
     out_dir = Path(out_dir)
     models = [("chain", n, write_chain(n, out_dir / "models")) for n in chains]
     if tree:
         models.append(("tree", tree, write_tree(tree, out_dir / "models")))
-    results = {"load_before": [round(x, 2) for x in os.getloadavg()], "cpus": os.cpu_count(), "fit_from": FIT_FROM,
+    results = {"timeout": timeout, "load_before": [round(x, 2) for x in os.getloadavg()], "cpus": os.cpu_count(), "fit_from": FIT_FROM,
                "linear_routines": list(LINEAR), "models": []}
     t0 = time.perf_counter()
     for kind, n, path in models:
         label = path.stem
         row = {"label": label, "kind": kind, "n": n}
-        row["all"] = _measure(label, path, out_dir / "out" / label)
-        row["linear"] = _measure(label, path, out_dir / "out" / f"{label}_linear", routines=",".join(LINEAR))
+        row["all"] = _measure(label, path, out_dir / "out" / label, timeout=timeout)
+        row["linear"] = _measure(label, path, out_dir / "out" / f"{label}_linear", routines=",".join(LINEAR),
+                                 timeout=timeout)
         results["models"].append(row)
         if progress:
             a, lin = row["all"], row["linear"]
@@ -252,13 +253,14 @@ def main(argv=None) -> int:
     parser.add_argument("--out", help="folder for the models and the generated code (default: a temporary one)")
     parser.add_argument("--chains", default=",".join(map(str, CHAINS)), help="chain lengths, comma-separated")
     parser.add_argument("--tree", type=int, default=TREE_BODIES, help="bodies of the tree (0: none)")
+    parser.add_argument("--timeout", type=float, default=TIMEOUT, help="seconds per generate process")
     args = parser.parse_args(argv)
     chains = tuple(int(x) for x in args.chains.split(",") if x)
     if args.out:
-        results = run(args.out, chains, args.tree or None)
+        results = run(args.out, chains, args.tree or None, timeout=args.timeout)
     else:
         with tempfile.TemporaryDirectory(prefix="aggsym-scaling-") as tmp:
-            results = run(tmp, chains, args.tree or None)
+            results = run(tmp, chains, args.tree or None, timeout=args.timeout)
     print(markdown(results))
     return 0
 
