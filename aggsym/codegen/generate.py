@@ -9,12 +9,14 @@ generated, through a temporary folder, so a failure leaves the output folder as 
 """
 from __future__ import annotations
 
+import gc
 import json
 import os
 import shutil
 import tempfile
 import time
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from importlib.resources import files
 from types import SimpleNamespace
@@ -36,7 +38,7 @@ from ..mechanics.kinematics import TreeKinematics
 from ..model.tree import Tree
 from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import FILTERS, check_c_identifier, check_module_name
-from .printing import SCALARS, CPrinter, Converter, LiteralError, NumPyPrinter, _number, count_ops
+from .printing import SCALARS, CPrinter, Converter, LiteralError, NumPyPrinter, _number
 
 
 @dataclass
@@ -74,6 +76,20 @@ def templates() -> jinja2.Environment:
     )
     env.filters.update(FILTERS)  # user text reaches a template only through these (aggsym.codegen.escape)
     return env
+
+
+@contextmanager
+def _collector_paused():
+    """Python's cyclic garbage collector off for a while: the program's nodes are many, long-lived and freed by
+    reference counting, and the collector's passes over them cost about a third of the recursions' time (a
+    96-body chain: millions of objects traversed again and again)."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
 
 
 class _Stages:
@@ -130,8 +146,14 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str) -> Emitte
             raise RuntimeError(f"routine {routine.role} depends on input {kind!r} outside its signature")
     cp, pp = CPrinter(scalar), NumPyPrinter()
     temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
-    c_names = py_names = {**_input_symbols(sl), **temp_names}
-    c_conv, py_conv = Converter(prog, c_names), Converter(prog, py_names)
+    names = {**_input_symbols(sl), **temp_names}
+    conv = Converter(prog, names)  # one expression tree per statement, printed as C and as NumPy
+
+    def both(tree, calls):
+        """(C, NumPy) text of a tree; one text for both when it holds no function call and the C is double (the
+        printers differ only in function names and in float literals)."""
+        c = cp._print(tree)
+        return (c, c) if scalar == "double" and conv.calls == calls else (c, pp._print(tree))
     c_body, py_body = [], []
     status = routine.status
     if status is not None:
@@ -158,29 +180,35 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str) -> Emitte
             _, o, k = step
             x = outputs[o][k]
             name = routine.outputs[o].name
-            rhs_c = cp._print(c_conv(x, top=not (isinstance(x, Node) and x.id in c_names)))
-            rhs_py = pp._print(py_conv(x, top=not (isinstance(x, Node) and x.id in py_names)))
+            calls = conv.calls
+            rhs_c, rhs_py = both(conv(x, top=not (isinstance(x, Node) and x.id in names)), calls)
             c_body.append(f"{name}[{k}] = {rhs_c};")
             idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
             py_body.append(f"{routine.outputs[o].py}[..., {idx}] = {rhs_py}")
             continue
         i = step[1]
-        node = prog.nodes[i]
-        py_body.append(f"{py_names[i]} = {pp._print(py_conv(node))}")
+        calls = conv.calls
+        tree = conv(prog.nodes[i])
         if i not in trig:
-            c_body.append(f"const {scalar} {c_names[i]} = {cp._print(c_conv(node))};")
+            rhs_c, rhs_py = both(tree, calls)
+            py_body.append(f"{names[i]} = {rhs_py}")
+            c_body.append(f"const {scalar} {names[i]} = {rhs_c};")
             continue
+        py_body.append(f"{names[i]} = {pp._print(tree)}")
         sin_id, cos_id, arg = trig[i]
         if (sin_id, cos_id) in done:
             continue
         done.add((sin_id, cos_id))
-        s_name = c_names[sin_id] if sin_id is not None else c_names[cos_id] + "_sin"
-        c_name = c_names[cos_id] if cos_id is not None else c_names[sin_id] + "_cos"
+        s_name = names[sin_id] if sin_id is not None else names[cos_id] + "_sin"
+        c_name = names[cos_id] if cos_id is not None else names[sin_id] + "_cos"
         c_body.append(f"{scalar} {s_name}, {c_name};")
-        c_body.append(f"aggsym_sincos({cp._print(c_conv(arg, top=False))}, &{s_name}, &{c_name});")
+        c_body.append(f"aggsym_sincos({cp._print(conv(arg, top=False))}, &{s_name}, &{c_name});")
+        cp.counts["call"] += 1
     if status is not None:
         c_body.append(f"return {status.name}[0] != {_number(0.0, scalar)};")
-    ops = count_ops("\n".join(c_body))
+    # what count_ops reads from "\n".join(c_body), counted while printing (the other statements hold none);
+    # the C printer prints only what is emitted, the sincos pair's discarded sin/cos trees were never printed
+    ops = dict(cp.counts)
     return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine, scalar),
                           python_parameters(model, routine), c_body, py_body, ops, len(sl.temps))
 
@@ -219,6 +247,7 @@ def check_constraints(model) -> None:
                                            f"'regularization: epsilon' (J A^-1 J^T + epsilon E)", c.line)
 
 
+@_collector_paused()
 def generate(model, progress=None, latex: bool = True, scalar: str = "double") -> Generated:
     """Generate all files of a model in memory; ``scalar`` is the C type (``float``: single-precision C, its
     bounds against the twin in the manifest's ``float_tolerance``; the NumPy module stays double)."""

@@ -171,7 +171,14 @@ class IntermediatePrinter(_Common, LatexPrinter):
     times = " "
 
     def _print_Num(self, e):
-        return sp.latex(sp.nsimplify(e.value) if not isinstance(e.value, float) else sp.Float(e.value, 6))
+        # SymPy's LaTeX of a number costs tens of microseconds; a large model repeats its constants many times
+        key = (e.value.__class__, e.value)
+        cache = self.__dict__.setdefault("_numbers", {})
+        text = cache.get(key)
+        if text is None:
+            text = cache[key] = sp.latex(sp.nsimplify(e.value) if not isinstance(e.value, float)
+                                         else sp.Float(e.value, 6))
+        return text
 
     def _print_Call(self, e):
         arg = ", ".join(self._print(a) for a in e.args)

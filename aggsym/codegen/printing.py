@@ -80,65 +80,87 @@ class Call:
 
 class Converter:
     """The right-hand side of an assignment as a small expression tree (:class:`LinComb`, :class:`Prod`, ...)
-    with chains of inlined additions and multiplications flattened; named nodes appear as :class:`Ref`."""
+    with chains of inlined additions and multiplications flattened; named nodes appear as :class:`Ref`.
+
+    One pass over the inlined nodes (each is inlined into its single use, so a statement costs its own size);
+    the flattening appends to one list per chain instead of concatenating partial lists."""
 
     def __init__(self, program, names: dict):
         self.program = program
-        self.names = names  # node id -> name (inputs and named temps)
+        self.names = names  # node id -> name (a str; inputs and named temps)
+        self.calls = 0  # the Call nodes built so far (a tree without one prints alike in C and NumPy)
 
     def __call__(self, x, top: bool = True):
-        if not isinstance(x, Node):
+        if x.__class__ is not Node:
             return Num(x)
-        if not top and x.id in self.names:
-            return Ref(self.names[x.id])
-        entry = self.program.ops[x.id]
+        ident = x.id
+        if not top and ident in self.names:
+            return Ref(self.names[ident])
+        entry = self.program.ops[ident]
         code = entry[0]
         if code == INPUT:
-            return Ref(self.names[x.id])
+            return Ref(self.names[ident])
+        if code == ADD or code == SUB:
+            terms = []
+            self._terms(x, True, 1, terms)
+            return LinComb(_merge_constants(terms))
+        if code == MUL:
+            factors = []
+            sign = self._factors(x, True, 1, factors)
+            return Prod(sign, factors)
         if code == NEG:
             inner = self(entry[1], False)
-            if isinstance(inner, Prod):
+            if inner.__class__ is Prod:
                 return Prod(-inner.sign, inner.factors)
             return LinComb([(-1, inner)])
-        if code in FUNCTIONS:
-            return Call(code, tuple(self(a, False) for a in entry[1:]))
-        if code in (ADD, SUB):
-            return LinComb(_merge_constants(self._terms(x, top, 1)))
-        if code == MUL:
-            sign, factors = self._factors(x, top)
-            return Prod(sign, factors)
         if code == DIV:
             return Ratio(self(entry[1], False), self(entry[2], False))
+        if code in FUNCTIONS:
+            self.calls += 1
+            return Call(code, tuple(self(a, False) for a in entry[1:]))
         raise ValueError(code)
 
-    def _inlined(self, x, top):
-        return isinstance(x, Node) and (top or x.id not in self.names)
-
-    def _terms(self, x, top, sign):
-        """Flatten a chain of inlined additions, subtractions and negations into signed terms."""
-        if self._inlined(x, top):
+    def _terms(self, x, top, sign, out):
+        """Append the signed terms of a chain of inlined additions, subtractions and negations to ``out``."""
+        if x.__class__ is Node and (top or x.id not in self.names):
             entry = self.program.ops[x.id]
-            if entry[0] in (ADD, SUB):
-                return self._terms(entry[1], False, sign) + \
-                    self._terms(entry[2], False, sign if entry[0] == ADD else -sign)
-            if entry[0] == NEG:
-                return self._terms(entry[1], False, -sign)
+            code = entry[0]
+            if code == ADD or code == SUB:
+                self._terms(entry[1], False, sign, out)
+                self._terms(entry[2], False, sign if code == ADD else -sign, out)
+                return
+            if code == NEG:
+                self._terms(entry[1], False, -sign, out)
+                return
+        if x.__class__ is not Node:
+            out.append((sign, Num(x)))
+            return
+        name = self.names.get(x.id)
+        if name is not None:  # (inputs are always named)
+            out.append((sign, Ref(name)))
+            return
         term = self(x, False)
-        if isinstance(term, Prod) and term.sign < 0:
-            return [(-sign, Prod(1, term.factors))]
-        return [(sign, term)]
+        if term.__class__ is Prod and term.sign < 0:
+            out.append((-sign, Prod(1, term.factors)))
+        else:
+            out.append((sign, term))
 
-    def _factors(self, x, top):
-        if self._inlined(x, top):
+    def _factors(self, x, top, sign, out):
+        """Append the factors of a chain of inlined products (and negations) to ``out``; returns the sign."""
+        if x.__class__ is Node and (top or x.id not in self.names):
             entry = self.program.ops[x.id]
-            if entry[0] == MUL:
-                sa, fa = self._factors(entry[1], False)
-                sb, fb = self._factors(entry[2], False)
-                return sa * sb, fa + fb
-            if entry[0] == NEG:
-                sa, fa = self._factors(entry[1], False)
-                return -sa, fa
-        return 1, [self(x, False)]
+            code = entry[0]
+            if code == MUL:
+                sign = self._factors(entry[1], False, sign, out)
+                return self._factors(entry[2], False, sign, out)
+            if code == NEG:
+                return self._factors(entry[1], False, -sign, out)
+        if x.__class__ is not Node:
+            out.append(Num(x))
+        else:
+            name = self.names.get(x.id)
+            out.append(Ref(name) if name is not None else self(x, False))
+        return sign
 
 
 def _merge_constants(terms: list) -> list:
@@ -157,6 +179,8 @@ def _merge_constants(terms: list) -> list:
             out.append(term)
     return out or [(1, Num(0))]
 
+
+_TREE = (Num, Ref, LinComb, Prod, Ratio, Call)
 
 SCALARS = ("double", "float")  # the C types of the generated code (--scalar); the NumPy module is always double
 
@@ -203,6 +227,17 @@ class _Common:
     functions = {name: name for name in FUNCTIONS} | {"abs": "fabs"}
     times = "*"
 
+    def _print(self, expr, **kwargs):
+        """The ``_print_<Class>`` method of an expression tree node, looked up once per printer and class (SymPy's
+        own dispatch walks the class's MRO by name on every call); anything else goes to SymPy's dispatch."""
+        methods = self.__dict__.get("_tree_methods")
+        if methods is None:
+            methods = self._tree_methods = {cls: getattr(self, "_print_" + cls.__name__) for cls in _TREE}
+        method = methods.get(expr.__class__)
+        if method is None or kwargs:
+            return super()._print(expr, **kwargs)
+        return method(expr)
+
     def _print_Num(self, e):
         return _number(e.value)
 
@@ -213,21 +248,25 @@ class _Common:
         return f"{self.functions[e.name]}({', '.join(self._print(a) for a in e.args)})"
 
     def _operand(self, e):
+        cls = e.__class__
+        if cls is Ref:  # the commonest operand, printed without a dispatch
+            return str(e.symbol)
         text = self._print(e)
-        if isinstance(e, LinComb) or (isinstance(e, Prod) and e.sign < 0) or \
-                (isinstance(e, Num) and not isinstance(e.value, Fraction) and e.value < 0):
+        if cls is LinComb or (cls is Prod and e.sign < 0) or \
+                (cls is Num and not isinstance(e.value, Fraction) and e.value < 0):
             return f"({text})"
         return text
 
     def _print_Prod(self, e):
-        body = self.times.join(self._operand(f) for f in e.factors)
+        body = self.times.join([self._operand(f) for f in e.factors])
         return f"-{body}" if e.sign < 0 else body
 
     def _print_LinComb(self, e):
         parts = []
         for k, (sign, term) in enumerate(e.terms):
-            text = self._print(term)
-            if isinstance(term, LinComb) and (sign < 0 or len(term.terms) > 1 and k > 0):
+            cls = term.__class__
+            text = str(term.symbol) if cls is Ref else self._print(term)
+            if cls is LinComb and (sign < 0 or len(term.terms) > 1 and k > 0):
                 text = f"({text})"
             if k == 0:
                 parts.append(f"-{text}" if sign < 0 else text)
@@ -254,14 +293,31 @@ class CPrinter(_Common, C99CodePrinter):
         self.scalar = scalar
         if scalar == "float":
             self.functions = {name: c_name + "f" for name, c_name in _Common.functions.items()}
+        self.counts = {"mul": 0, "add": 0, "div": 0, "call": 0}
 
+    # The operations of everything printed, counted as it is printed (what :func:`count_ops` reads back from the
+    # text: one binary ``*``, ``+``/``-`` or ``/`` between every two factors, terms or operands, one call per
+    # function; signs of first terms and of negative constants are unary).
     def _print_Num(self, e):
         return _number(e.value, self.scalar)
 
+    def _print_Prod(self, e):
+        self.counts["mul"] += len(e.factors) - 1
+        return _Common._print_Prod(self, e)
+
+    def _print_LinComb(self, e):
+        self.counts["add"] += len(e.terms) - 1
+        return _Common._print_LinComb(self, e)
+
+    def _print_Ratio(self, e):
+        self.counts["div"] += 1
+        return _Common._print_Ratio(self, e)
+
     def _print_Call(self, e):
+        self.counts["call"] += 1
         if e.name == "sign":
             return f"aggsym_sign({self._print(e.args[0])})"
-        return super()._print_Call(e)
+        return _Common._print_Call(self, e)
 
 
 class NumPyPrinter(_Common, _SympyNumPyPrinter):
@@ -274,41 +330,22 @@ class NumPyPrinter(_Common, _SympyNumPyPrinter):
         super().__init__({"order": "none", "fully_qualified_modules": False})
 
 
-_TOKEN = re.compile(r"\s*(?:(?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)|(?P<name>[A-Za-z_]\w*)|(?P<op>.))")
+_COMMENT = re.compile(r"/\*.*?\*/", re.S)
+# a numeric literal (not the digits of a name): one value token, whatever signs its exponent holds
+_LITERAL = re.compile(r"(?<![A-Za-z_0-9.])(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+# a binary + or -: one that follows a value (a name, a literal, a closing bracket), spaces between
+_BINARY = re.compile(r"[\w)\]]\s*[+-]")
+# a call: a name followed by an opening parenthesis
+_CALL = re.compile(r"([A-Za-z_]\w*)\s*\(")
+_KEYWORDS = frozenset(("if", "for", "while", "return", "sizeof"))
 
 
 def count_ops(c_code: str) -> dict:
-    """Operation counts of C statements: mul, add (incl. subtractions), div, call (unary minus not counted)."""
-    code = re.sub(r"/\*.*?\*/", " ", c_code, flags=re.S)
-    counts = {"mul": 0, "add": 0, "div": 0, "call": 0}
-    prev = None  # kind of the previous token: 'value', 'open', 'op', or None
-    tokens = list(_TOKEN.finditer(code))
-    for k, m in enumerate(tokens):
-        if m.group("num"):
-            prev = "value"
-        elif m.group("name"):
-            nxt = tokens[k + 1].group("op") if k + 1 < len(tokens) else None
-            if nxt == "(" and m.group("name") not in ("if", "for", "while", "return", "sizeof"):
-                counts["call"] += 1
-            prev = "value"
-        else:
-            op = m.group("op")
-            if op.isspace():
-                continue
-            if op in ")]":
-                prev = "value"
-            elif op in "([,;=":
-                prev = "open"
-            elif op == "*":
-                counts["mul"] += 1
-                prev = "op"
-            elif op == "/":
-                counts["div"] += 1
-                prev = "op"
-            elif op in "+-":
-                if prev == "value":
-                    counts["add"] += 1
-                prev = "op"
-            else:
-                prev = "op"
-    return counts
+    """Operation counts of C statements: mul, add (incl. subtractions), div, call (unary minus not counted).
+
+    A ``+`` or ``-`` is an addition when it follows a value (a name, a number, ``)`` or ``]``), as in C's grammar;
+    numeric literals are read as one token first, so the sign of an exponent (``2.5e-3``) is not an operation.
+    Regular expressions over the whole text: linear, with no Python work per token."""
+    code = _LITERAL.sub("0", _COMMENT.sub(" ", c_code))
+    calls = sum(1 for m in _CALL.finditer(code) if m.group(1) not in _KEYWORDS)
+    return {"mul": code.count("*"), "add": len(_BINARY.findall(code)), "div": code.count("/"), "call": calls}

@@ -45,6 +45,10 @@ FUNCTIONS = {
     "atan2": (2, math.atan2), "sign": (1, lambda x: (x > 0) - (x < 0)),
 }
 _COMMUTATIVE = (ADD, MUL)
+# the operation's part of the int key of an operation on two nodes (:meth:`Program._make`)
+_CODE_INDEX = {code: k for k, code in enumerate((ADD, SUB, MUL, DIV, NEG) + tuple(FUNCTIONS))}
+_CODE_BITS = 5
+assert len(_CODE_INDEX) <= 1 << _CODE_BITS
 _NUMBERS = (int, float, Fraction)
 INLINE_DEPTH = 64  # the deepest expression a named value inlines: what printers may recurse through
 
@@ -93,33 +97,33 @@ class Node:
         self.prog = prog
         self.id = ident
 
-    # arithmetic -----------------------------------------------------------------------------------
+    # arithmetic (self is a node, so only the other operand needs folding; the rules are :meth:`Program.op`'s)
     def __add__(self, other):
-        return self.prog.op(ADD, self, other)
+        return self.prog._add(self, other if other.__class__ is Node else fold(other))
 
     def __radd__(self, other):
-        return self.prog.op(ADD, other, self)
+        return self.prog._add(other if other.__class__ is Node else fold(other), self)
 
     def __sub__(self, other):
-        return self.prog.op(SUB, self, other)
+        return self.prog._sub(self, other if other.__class__ is Node else fold(other))
 
     def __rsub__(self, other):
-        return self.prog.op(SUB, other, self)
+        return self.prog._sub(other if other.__class__ is Node else fold(other), self)
 
     def __mul__(self, other):
-        return self.prog.op(MUL, self, other)
+        return self.prog._mul(self, other if other.__class__ is Node else fold(other))
 
     def __rmul__(self, other):
-        return self.prog.op(MUL, other, self)
+        return self.prog._mul(other if other.__class__ is Node else fold(other), self)
 
     def __truediv__(self, other):
-        return self.prog.op(DIV, self, other)
+        return self.prog._div(self, other if other.__class__ is Node else fold(other))
 
     def __rtruediv__(self, other):
-        return self.prog.op(DIV, other, self)
+        return self.prog._div(other if other.__class__ is Node else fold(other), self)
 
     def __neg__(self):
-        return self.prog.op(NEG, self)
+        return self.prog._neg(self)
 
     def __pos__(self):
         return self
@@ -152,8 +156,9 @@ class Program:
         self.ops: list[tuple] = []
         self.nodes: list[Node] = []
         self._table: dict = {}
-        self._products: dict = {}  # product signature -> Node
-        self._signatures: dict = {}  # MUL node id -> (coefficient, sorted factor ids)
+        self._products: dict = {}  # product signature -> Node (the factor ids alone when the coefficient is 1)
+        self._signatures: dict = {}  # MUL node id -> sorted factor ids
+        self._coefficients: dict = {}  # MUL node id -> its constant coefficient, where that is not 1
         self.inputs: dict = {}  # (kind, index) -> Node
 
     # construction ---------------------------------------------------------------------------------
@@ -195,9 +200,37 @@ class Program:
         return node
 
     def _make(self, opcode, *args):
-        if opcode in _COMMUTATIVE and _key(args[0]) > _key(args[1]):
-            args = (args[1], args[0])
-        key = (opcode,) + tuple(_key(a) for a in args)
+        """The node ``opcode(*args)``, created unless it exists (hash-consing).  The key holds a node operand's id
+        and a constant operand's repr (a str: never equal to an id); a commutative operation's operands are put in
+        order, constants first, then nodes by id."""
+        if len(args) == 2:
+            a, b = args
+            if a.__class__ is Node:
+                if b.__class__ is Node:  # the key of an operation on two nodes: one int
+                    ka, kb = a.id, b.id
+                    if ka > kb and opcode in _COMMUTATIVE:
+                        a, b, ka, kb = b, a, kb, ka
+                    key = ((ka << 32 | kb) << _CODE_BITS) | _CODE_INDEX[opcode]
+                    node = self._table.get(key)
+                    if node is None:
+                        node = self._table[key] = self._new((opcode, a, b))
+                    return node
+                else:
+                    ka, kb = a.id, repr(b)
+                    if opcode in _COMMUTATIVE:
+                        a, b, ka, kb = b, a, kb, ka
+            else:
+                ka = repr(a)
+                if b.__class__ is Node:
+                    kb = b.id
+                else:
+                    kb = repr(b)
+                    if ka > kb and opcode in _COMMUTATIVE:
+                        a, b, ka, kb = b, a, kb, ka
+            key = (opcode, ka, kb)
+            args = (a, b)
+        else:
+            key = (opcode,) + tuple(a.id if a.__class__ is Node else repr(a) for a in args)
         node = self._table.get(key)
         if node is None:
             node = self._new((opcode,) + args)
@@ -206,7 +239,7 @@ class Program:
 
     def _neg_arg(self, x):
         """``y`` when ``x`` is the node ``-y``, else None."""
-        if isinstance(x, Node):
+        if x.__class__ is Node:
             entry = self.ops[x.id]
             if entry[0] == NEG:
                 return entry[1]
@@ -239,87 +272,109 @@ class Program:
         raise ValueError(f"unknown operation {opcode!r}")
 
     def _neg(self, a):
-        if is_const(a):
+        if a.__class__ is not Node:
             return normalize_const(-a)
-        inner = self._neg_arg(a)
-        if inner is not None:
-            return inner
         entry = self.ops[a.id]
+        if entry[0] == NEG:
+            return entry[1]
         if entry[0] == SUB:  # -(x - y) = y - x, free
             return self._sub(entry[2], entry[1])
         return self._make(NEG, a)
 
     def _add(self, a, b):
-        if is_zero(a):
+        # (the tests of is_zero, _neg_arg and is_const written out: this runs for every addition recorded)
+        if type(a) in _EXACT and a == 0:
             return b
-        if is_zero(b):
+        if type(b) in _EXACT and b == 0:
             return a
-        nb = self._neg_arg(b)
-        if nb is not None:
-            return self._sub(a, nb)
-        na = self._neg_arg(a)
-        if na is not None:
-            return self._sub(b, na)
-        if is_const(b) and b < 0:
+        ops = self.ops
+        b_node = b.__class__ is Node
+        if b_node and ops[b.id][0] == NEG:
+            return self._sub(a, ops[b.id][1])
+        a_node = a.__class__ is Node
+        if a_node and ops[a.id][0] == NEG:
+            return self._sub(b, ops[a.id][1])
+        if not b_node and b < 0:
             return self._sub(a, normalize_const(-b))
-        if is_const(a) and a < 0:
+        if not a_node and a < 0:
             return self._sub(b, normalize_const(-a))
         return self._make(ADD, a, b)
 
     def _sub(self, a, b):
-        if is_zero(b):
+        if type(b) in _EXACT and b == 0:
             return a
-        if is_zero(a):
+        if type(a) in _EXACT and a == 0:
             return self._neg(b)
-        if isinstance(a, Node) and isinstance(b, Node) and a.id == b.id:
+        ops = self.ops
+        a_node, b_node = a.__class__ is Node, b.__class__ is Node
+        if a_node and b_node and a.id == b.id:
             return 0
-        nb = self._neg_arg(b)
-        if nb is not None:
-            return self._add(a, nb)
-        na = self._neg_arg(a)
-        if na is not None:  # -x - b = -(x + b)
-            return self._neg(self._add(na, b))
-        if is_const(b) and b < 0:
+        if b_node and ops[b.id][0] == NEG:
+            return self._add(a, ops[b.id][1])
+        if a_node and ops[a.id][0] == NEG:  # -x - b = -(x + b)
+            return self._neg(self._add(ops[a.id][1], b))
+        if not b_node and b < 0:
             return self._add(a, normalize_const(-b))
         return self._make(SUB, a, b)
 
     def _mul(self, a, b):
-        if is_zero(a) or is_zero(b):
+        ta, tb = type(a), type(b)
+        if (ta in _EXACT and a == 0) or (tb in _EXACT and b == 0):
             return 0
-        if is_one(a):
+        if ta in _EXACT and a == 1:
             return b
-        if is_one(b):
+        if tb in _EXACT and b == 1:
             return a
-        if type(a) is int and a == -1:
+        if ta is int and a == -1:
             return self._neg(b)
-        if type(b) is int and b == -1:
+        if tb is int and b == -1:
             return self._neg(a)
-        na, nb = self._neg_arg(a), self._neg_arg(b)
+        ops = self.ops
+        a_node, b_node = ta is Node, tb is Node
+        ea = ops[a.id] if a_node else None
+        eb = ops[b.id] if b_node else None
+        na = ea[1] if a_node and ea[0] == NEG else None
+        nb = eb[1] if b_node and eb[0] == NEG else None
         if na is not None and nb is not None:
             return self._mul(na, nb)
         if na is not None:
             return self._neg(self._mul(na, b))
         if nb is not None:
             return self._neg(self._mul(a, nb))
-        if is_const(a) and a < 0:
+        if not a_node and a < 0:
             return self._neg(self._mul(normalize_const(-a), b))
-        if is_const(b) and b < 0:
+        if not b_node and b < 0:
             return self._neg(self._mul(a, normalize_const(-b)))
         # c1 * (c2 * x) -> (c1*c2) * x
-        if is_const(a) and isinstance(b, Node):
-            entry = self.ops[b.id]
-            if entry[0] == MUL and is_const(entry[1]):
-                return self._mul(normalize_const(a * entry[1]), entry[2])
-        if is_const(b) and isinstance(a, Node):
-            entry = self.ops[a.id]
-            if entry[0] == MUL and is_const(entry[1]):
-                return self._mul(normalize_const(b * entry[1]), entry[2])
-        coefficient, factors = self._product_signature(a, b)
-        key = (repr(coefficient), factors)
+        if not a_node and b_node:
+            if eb[0] == MUL and eb[1].__class__ is not Node:
+                return self._mul(normalize_const(a * eb[1]), eb[2])
+        if not b_node and a_node:
+            if ea[0] == MUL and ea[1].__class__ is not Node:
+                return self._mul(normalize_const(b * ea[1]), ea[2])
+        signatures, coefficients = self._signatures, self._coefficients
+        if a_node:
+            ca, fa = coefficients.get(a.id, 1), signatures.get(a.id) or (a.id,)
+        else:
+            ca, fa = a, ()
+        if b_node:
+            cb, fb = coefficients.get(b.id, 1), signatures.get(b.id) or (b.id,)
+        else:
+            cb, fb = b, ()
+        coefficient = normalize_const(ca * cb)
+        factors = fa + fb
+        if len(factors) > 1:
+            factors = tuple(sorted(factors))
+        # the product's signature: its factor ids and coefficient (by repr, so 1/2 and 0.5 stay apart); a tuple of
+        # ids alone when the coefficient is the int 1 (never equal to a (str, tuple) pair)
+        key = factors if coefficient.__class__ is int and coefficient == 1 else (repr(coefficient), factors)
         node = self._products.get(key)
         if node is None:
             node = self._make(MUL, a, b)
-            self._signatures.setdefault(node.id, (coefficient, factors))
+            if node.id not in signatures:
+                signatures[node.id] = factors
+                if key is not factors:
+                    coefficients[node.id] = coefficient
             self._products.setdefault(key, node)
         return node
 
@@ -328,7 +383,7 @@ class Program:
         if not isinstance(x, Node):
             return x, ()
         sig = self._signatures.get(x.id)
-        return sig if sig is not None else (1, (x.id,))
+        return (self._coefficients.get(x.id, 1), sig) if sig is not None else (1, (x.id,))
 
     def _product_signature(self, a, b):
         ca, fa = self._factors(a)
@@ -360,6 +415,7 @@ class Program:
 
     def reachable(self, outputs) -> list[int]:
         """Ids of the nodes the outputs depend on, in topological (creation) order."""
+        ops = self.ops
         seen = set()
         stack = [o.id for o in outputs if isinstance(o, Node)]
         while stack:
@@ -367,9 +423,11 @@ class Program:
             if i in seen:
                 continue
             seen.add(i)
-            for a in self.operands(i):
-                if isinstance(a, Node) and a.id not in seen:
-                    stack.append(a.id)
+            entry = ops[i]
+            if entry[0] != INPUT:
+                for a in entry[1:]:
+                    if a.__class__ is Node and a.id not in seen:
+                        stack.append(a.id)
         return sorted(seen)
 
     def interpret(self, outputs, leaf, apply, constant=lambda x: x):
@@ -468,26 +526,44 @@ def straight_line(program, outputs) -> StraightLine:
     soon as its value exists so that it does not stay live to the end."""
     flat = [x for out in outputs for x in out]
     ids = program.reachable(flat)
-    uses: Counter = Counter()
+    ops = program.ops
+    uses: dict = {}
+    inputs = []
     for i in ids:
-        for a in program.operands(i):
-            if isinstance(a, Node):
-                uses[a.id] += 1
+        entry = ops[i]
+        if entry[0] == INPUT:
+            inputs.append(entry[1:])
+            continue
+        for a in entry[1:]:
+            if a.__class__ is Node:
+                j = a.id
+                uses[j] = uses.get(j, 0) + 1
     for x in flat:
         if isinstance(x, Node):
-            uses[x.id] += 1
-    inputs = [program.ops[i][1:] for i in ids if program.ops[i][0] == INPUT]
-    named = {i for i in ids if program.ops[i][0] != INPUT and (uses[i] >= 2 or program.ops[i][0] in FUNCTIONS)}
+            uses[x.id] = uses.get(x.id, 0) + 1
+    named = set()
     depth: dict[int, int] = {}  # depth of the expression a node inlines (0: a name)
     for i in ids:
-        entry = program.ops[i]
-        if entry[0] == INPUT:
+        entry = ops[i]
+        code = entry[0]
+        if code == INPUT:
             depth[i] = 0
             continue
-        d = 1 + max((depth[a.id] for a in entry[1:] if isinstance(a, Node)), default=0)
+        if uses.get(i, 0) >= 2 or code in FUNCTIONS:
+            named.add(i)
+            depth[i] = 0
+            continue
+        d = 0
+        for a in entry[1:]:
+            if a.__class__ is Node:
+                da = depth[a.id]
+                if da > d:
+                    d = da
+        d += 1
         if d > INLINE_DEPTH:
             named.add(i)
-        depth[i] = 0 if i in named else d
+            d = 0
+        depth[i] = d
     temps = [i for i in ids if i in named]
     at: dict = {}
     for o, out in enumerate(outputs):
