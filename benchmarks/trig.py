@@ -3,8 +3,9 @@
 ``python -m benchmarks.trig`` (not part of ``make bench``'s run.py): renders the double aggsym_sincos of
 templates/helpers.c.j2 into a header, builds benchmarks/harness/trig_bench.c with it (cc -O2, and -O2
 -ffast-math), and times on the same 4096 arguments, uniform in [-pi, pi] (joint angles) and in [-1000, 1000]:
-libm's sin and cos called separately, GNU sincos (glibc), aggsym's quadrant switch of before, and the generated
-branch-free aggsym_sincos.  Each figure is the best of 7 passes of 200 x 4096 calls (the harness prints them).
+libm's sin and cos called separately, GNU sincos (glibc), aggsym's helper of before (a quadrant switch; libm's
+sin and cos under -ffast-math), and the generated branch-free aggsym_sincos.  Each figure is the best of 7 passes
+of 200 x 4096 calls, in CPU time (the harness prints them).
 Timings on a shared machine are noisy: :func:`run` records the load average beside them.
 """
 from __future__ import annotations
@@ -23,7 +24,8 @@ from .environment import load_average
 HARNESS = Path(__file__).resolve().parent / "harness" / "trig_bench.c"
 FLAGS = {"-O2": ["-O2"], "-O2 -ffast-math": ["-O2", "-ffast-math"]}
 RANGES = {"[-pi, pi]": "3.141592653589793", "[-1000, 1000]": "1000"}
-VARIANTS = {"libm": "libm sin + cos", "sincos": "GNU sincos", "switch": "aggsym before (quadrant switch)",
+VARIANTS = {"libm": "libm sin + cos", "sincos": "GNU sincos",
+            "switch": "aggsym before (quadrant switch; libm under -ffast-math)",
             "aggsym": "aggsym_sincos (branch-free)"}
 
 

@@ -80,13 +80,15 @@ def test_only_the_named_routines_and_what_they_need(tmp_path):
     assert list(manifest["functions"]) == ["inertia", "forward_dynamics"]
     entry = manifest["split"]
     assert sorted(entry["files"]) == written
-    assert entry["sources"] == {"inertia": "manipulator6_inertia.c", "forward_dynamics": "manipulator6_forward_dynamics.c"}
+    assert entry["sources"] == {"inertia": "manipulator6_inertia.c",
+                                "forward_dynamics": "manipulator6_forward_dynamics.c"}
     assert entry["helpers"] == "manipulator6_helpers.h" and entry["library"] == "libmanipulator6.a"
     assert entry["header"] == "manipulator6.h" and entry["makefile"] == "Makefile"
     assert sorted(p for p in written if p.endswith(".c")) == sorted(entry["sources"].values())
     assert "manipulator6.c" not in written
     header = (out / "manipulator6.h").read_text()
-    assert re.findall(r"\bvoid (manipulator6_\w+)\(", header) == ["manipulator6_inertia", "manipulator6_forward_dynamics"]
+    assert re.findall(r"\bvoid (manipulator6_\w+)\(", header) == ["manipulator6_inertia",
+                                                                   "manipulator6_forward_dynamics"]
     assert re.findall(r"#define (MANIPULATOR6_[A-Z_]+_SIZE) ", header) == ["MANIPULATOR6_INERTIA_SIZE",
                                                                          "MANIPULATOR6_FORWARD_DYNAMICS_SIZE"]
     module = (out / "manipulator6.py").read_text()

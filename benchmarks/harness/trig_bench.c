@@ -5,7 +5,7 @@
  * [-LO, LO], LO the first argument, default pi: joint angles, so that a quadrant branch mispredicts):
  *   libm        sin(x) and cos(x), two calls
  *   sincos      GNU sincos(x, &s, &c) where _GNU_SOURCE provides it (glibc), else not printed
- *   switch      the quadrant switch of aggsym before (branchy; kept here as the baseline)
+ *   switch      aggsym's helper before: a quadrant switch (branchy), libm under -ffast-math (the baseline)
  *   aggsym      the generated aggsym_sincos
  * and prints one line per variant: NAME NS_PER_CALL (the best of REPEATS passes over the arguments, in CPU time). */
 #define _GNU_SOURCE  /* sincos, clock_gettime */
@@ -22,6 +22,10 @@
 
 static void switch_sincos(double x, double *s, double *c)
 {
+#ifdef __FAST_MATH__
+    *s = sin(x);  /* as before: libm under -ffast-math (the reduction below is not safe from reassociation) */
+    *c = cos(x);
+#else
     if (!(fabs(x) < 1.0e6)) {
         *s = sin(x);
         *c = cos(x);
@@ -44,6 +48,7 @@ static void switch_sincos(double x, double *s, double *c)
     case 2: *s = -sr; *c = -cr; break;
     default: *s = -cr; *c = sr; break;
     }
+#endif
 }
 
 static void libm_sincos(double x, double *s, double *c)

@@ -2,15 +2,17 @@
 #include <math.h>
 #include "added_mass_body_in_fluid.h"
 
-/* sin(x) and cos(x) together, without a branch for |x| < 1e6.  x = k pi/2 + r, k the nearest integer to x 2/pi,
- * |r| <= pi/4 (Cody-Waite): pi/2 = P1 + P2 + P3 + P4 (+ 2^-142), P1 and P2 of at most 33 significant bits, P3 of
- * 19, P4 a double, so for |k| < 2^20 every k Pi but the last is exact, and so is every difference but the last
- * when r is small (x near k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal
- * libm's.  The Taylor series of sin r to r^17 and of cos r to r^18 (truncation below 1e-19 at r = pi/4), by
- * Estrin's scheme (short dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on
- * the doubles' bits (no branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty asm after each exact step keeps the compiler from reassociating
- * the reduction into x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.
- * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
+/* sin(x) and cos(x) together, without a branch for |x| < 1e6.  x = k pi/2 + r, k the nearest integer to x 2/pi
+ * (adding 1.5 2^52 rounds it in the floating-point unit, its low bits then those of k), |r| <= pi/4 (Cody-Waite):
+ * pi/2 = P1 + P2 + P3 + P4 (+ 2^-142), P1 and P2 of at most 33 significant bits, P3 of 19, P4 a double, so for
+ * |k| < 2^20 every k Pi but the last is exact, and so is every difference but the last when r is small (x near
+ * k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal libm's.  The Taylor series
+ * of sin r to r^17 and of cos r to r^18 (truncation below 1e-19 at r = pi/4), by Estrin's scheme (short
+ * dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on the doubles' bits (no
+ * branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty asm after each exact
+ * step keeps the compiler from folding the rounding of k away and from reassociating the reduction into
+ * x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.  Outside |x| < 1e6 (and for
+ * nan, inf) libm's sin and cos. */
 #if defined(__FAST_MATH__) && defined(__GNUC__)
 #define AGGSYM_KEEP(v) __asm__("" : "+g"(v))
 #else
@@ -27,9 +29,11 @@ static inline void aggsym_sincos(double x, double *s, double *c)
         *c = cos(x);
         return;
     }
-    const double t = x * 0.6366197723675814;
-    const long k = (long)(t + copysign(0.5, t));
-    const double kd = (double)k;
+    union { double d; unsigned long long u; } big;
+    big.d = x * 0.6366197723675814 + 6755399441055744.0;  /* + 1.5 2^52 rounds to an integer: k in the low bits */
+    AGGSYM_KEEP(big.d);
+    const double kd = big.d - 6755399441055744.0;
+    const unsigned long long k = big.u;  /* its low bits are those of k (two's complement) */
     double r = x - kd * 1.5707963267341256;
     AGGSYM_KEEP(r);
     r -= kd * 6.077100506303966e-11;
@@ -49,12 +53,12 @@ static inline void aggsym_sincos(double x, double *s, double *c)
         + r4 * (-1.1470745597729725e-11 + r2 * 4.779477332387385e-14)) + r8 * -1.5619206968586225e-16);
     const double sr = r + (r * r2) * sp;
     const double cr = 1.0 + r2 * cp;
-    const unsigned long long swap = 0ULL - (unsigned long long)(k & 1);  /* all ones for odd k */
+    const unsigned long long swap = 0ULL - (k & 1);  /* all ones for odd k */
     union { double d; unsigned long long u; } sin_r, cos_r, out_s, out_c;
     sin_r.d = sr;
     cos_r.d = cr;
-    out_s.u = ((sin_r.u & ~swap) | (cos_r.u & swap)) ^ ((unsigned long long)(k & 2) << 62);  /* k mod 4 = 2, 3 */
-    out_c.u = ((cos_r.u & ~swap) | (sin_r.u & swap)) ^ ((unsigned long long)((k + 1) & 2) << 62);  /* 1, 2 */
+    out_s.u = ((sin_r.u & ~swap) | (cos_r.u & swap)) ^ ((k & 2) << 62);  /* k mod 4 = 2, 3 */
+    out_c.u = ((cos_r.u & ~swap) | (sin_r.u & swap)) ^ (((k + 1) & 2) << 62);  /* 1, 2 */
     *s = out_s.d;
     *c = out_c.d;
 #endif
