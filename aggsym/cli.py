@@ -79,9 +79,13 @@ def _parser() -> argparse.ArgumentParser:
                             "NumPy module stays double)")
         return p
 
-    g = command("generate", "write NAME.h, NAME.c, NAME.py, NAME.tex and NAME.json")
+    g = command("generate", "write NAME.h, NAME.c, NAME.py, NAME.tex and NAME.json (--split: NAME_ROUTINE.c per "
+                            "routine, NAME_helpers.h and a Makefile instead of NAME.c)")
     g.add_argument("-o", "--output", metavar="OUTDIR", help="output folder (default: generated/NAME/)")
     g.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
+    g.add_argument("--split", action="store_true",
+                   help="one C file per routine (NAME_ROUTINE.c), the shared helpers in NAME_helpers.h, and a "
+                        "Makefile building libNAME.a (make -j2; CC, CFLAGS default -O2 -std=c99) instead of NAME.c")
     g.add_argument("--list-routines", action="store_true",
                    help="print the routines this model gets, one line each (what each computes), and write nothing")
     command("latex", "print the LaTeX document of the equations of motion")
@@ -183,12 +187,13 @@ def cmd_generate(args) -> int:
             print(f"{c_symbol(model, r).ljust(width)}  {r.doc}")
         for role, reason in omitted.items():
             print(f"{(model.name + '_' + role).ljust(width)}  (left out: {reason})")
-        for r in extra:
-            print(f"{c_symbol(model, r).ljust(width)}  (on request: --routines {r.role}) {r.doc}")
+        for r in extra:  # not emitted: on request, or (with --routines) not named
+            why = "on request" if r.on_request or model.routines is None else "not selected"
+            print(f"{c_symbol(model, r).ljust(width)}  ({why}: --routines {r.role}) {r.doc}")
         return 0
     from .codegen.generate import generate, write
 
-    gen = generate(model, progress=_progress(args.quiet, model.name), scalar=args.scalar)
+    gen = generate(model, progress=_progress(args.quiet, model.name), scalar=args.scalar, split=args.split)
     outdir = Path(args.output) if args.output else Path("generated") / model.name
     paths = write(gen, outdir)
     if not args.quiet:

@@ -885,7 +885,14 @@ def select_routines(model, names):
         chosen.extend(role for role in picked if role not in chosen)
     if not chosen:
         raise AggsymError(f"{model.source}: --routines: no routine named")
-    return dataclasses.replace(model, routines=tuple(chosen))
+    selected = dataclasses.replace(model, routines=tuple(chosen))
+    named = [name for name in names if name in ROUTINES]  # named one by one, not through 'all' or 'default'
+    if named:
+        omitted = omitted_routines(selected)
+        for name in named:
+            if name in omitted:
+                raise AggsymError(f"{model.source}: --routines: {name!r} is left out for this model: {omitted[name]}")
+    return selected
 
 
 def sample_configurations(model, rng, size=None):
@@ -1073,10 +1080,12 @@ def float_tolerance(model, routines) -> dict:
     return out
 
 
-def manifest(model, routines, ops: dict, omitted=None, scalar: str = "double") -> dict:
+def manifest(model, routines, ops: dict, omitted=None, scalar: str = "double", layout: dict | None = None) -> dict:
     """The JSON manifest of the generated code: ``routines`` those emitted, ``ops[role]`` their operation counts,
     ``omitted`` the routines left out and why, ``scalar`` the C type (with ``float``, ``float_tolerance``: per
-    routine the error bound against the double twin that ``aggsym check`` holds the C to)."""
+    routine the error bound against the double twin that ``aggsym check`` holds the C to).  ``layout``: with
+    ``aggsym generate --split``, the ``split`` entry (every file written, each routine's .c, the helpers' header,
+    the Makefile and its library); without it the manifest has no ``split`` key, the C being NAME.c."""
     out = {
         "name": model.name,
         "scalar": scalar,
@@ -1115,6 +1124,8 @@ def manifest(model, routines, ops: dict, omitted=None, scalar: str = "double") -
         out["constraints"] = constraints_entry(model)
     if any(r.role.startswith("frame_") for r in routines):
         out["frames"] = frames_entry(model)
+    if layout is not None:
+        out["split"] = layout
     return out
 
 

@@ -50,6 +50,35 @@ def compile_shared(c_file: Path, out: Path, extra=(), scalar: str = "double") ->
     return out
 
 
+def build_split(folder: Path, cflags: str = "-O2 -std=c99 -fPIC", jobs: int = 2) -> Path:
+    """``make -jJOBS CC=... CFLAGS=...`` in an ``aggsym generate --split`` folder (CC as :func:`compiler`):
+    the path of its static library (the manifest's ``split.library``).  Raises with make's message on failure."""
+    folder = Path(folder)
+    manifests = [json.loads(f.read_text(encoding="utf-8")) for f in sorted(folder.glob("*.json"))]
+    manifests = [m for m in manifests if isinstance(m, dict) and "split" in m]
+    if len(manifests) != 1:
+        raise AggsymError(f"{folder}: not the output of aggsym generate --split (one NAME.json with 'split')")
+    manifest = manifests[0]
+    make = shutil.which("make")
+    if not make:
+        raise AggsymError("no make found (install make)")
+    cmd = [make, f"-j{jobs}", f"CC={compiler()}", f"CFLAGS={cflags}"]
+    proc = subprocess.run(cmd, cwd=folder, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise AggsymError(f"make in {folder} failed:\n{proc.stderr.strip()}")
+    return folder / manifest["split"]["library"]
+
+
+def shared_from_archive(archive: Path, out: Path) -> Path:
+    """A shared library holding every object of a static one (its objects compiled with -fPIC), for ctypes."""
+    cmd = [*shlex.split(compiler()), "-shared", "-o", str(out), "-Wl,--whole-archive", str(archive),
+           "-Wl,--no-whole-archive", "-lm"]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise AggsymError(f"linking {archive.name} failed:\n{proc.stderr.strip()}")
+    return out
+
+
 class CLibrary:
     """The generated C functions of a model, callable on NumPy arrays (converted to the manifest's ``scalar``,
     double or float; the outputs are arrays of that type)."""

@@ -248,9 +248,10 @@ def check_constraints(model) -> None:
 
 
 @_collector_paused()
-def generate(model, progress=None, latex: bool = True, scalar: str = "double") -> Generated:
+def generate(model, progress=None, latex: bool = True, scalar: str = "double", split: bool = False) -> Generated:
     """Generate all files of a model in memory; ``scalar`` is the C type (``float``: single-precision C, its
-    bounds against the twin in the manifest's ``float_tolerance``; the NumPy module stays double)."""
+    bounds against the twin in the manifest's ``float_tolerance``; the NumPy module stays double).  ``split``:
+    one .c per routine instead of NAME.c, the helpers in NAME_helpers.h and a Makefile (:func:`split_files`)."""
     from .latex import latex_document
 
     check_names(model)
@@ -295,10 +296,15 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double") -
     }
     gen = Generated(model, emitted)
     gen.files[f"{model.name}.h"] = env.get_template("model.h.j2").render(ctx)
-    gen.files[f"{model.name}.c"] = env.get_template("model.c.j2").render(ctx)
+    if split:
+        gen.files.update(split_files(env, ctx, emitted))
+    else:
+        gen.files[f"{model.name}.c"] = env.get_template("model.c.j2").render(ctx)
     gen.files[f"{model.name}.py"] = env.get_template("model.py.j2").render(ctx)
+    names = list(gen.files) + [f"{model.name}.json"] + ([f"{model.name}.tex"] if latex else [])
     gen.files[f"{model.name}.json"] = json.dumps(
-        manifest(model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted}, omitted, scalar),
+        manifest(model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted}, omitted, scalar,
+                 layout=split_layout(model.name, emitted, names) if split else None),
         indent=2) + "\n"
     stages.done("templates")
     if latex:
@@ -306,6 +312,52 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double") -
         stages.done("latex")
     gen.timings = stages.timings
     return gen
+
+
+HELPERS = ("aggsym_sincos(", "aggsym_sign(")  # the calls of the helpers that helpers.c.j2 defines
+
+
+def _helpers_used(r: EmittedRoutine) -> bool:
+    return any(h in line for line in r.c_body for h in HELPERS)
+
+
+def split_names(name: str, emitted) -> dict:
+    """The files of ``--split``: {"sources": {role: NAME_role.c}, "helpers": NAME_helpers.h or None (no routine
+    calls a helper), "makefile", "library"}."""
+    return {"sources": {r.routine.role: f"{name}_{r.routine.role}.c" for r in emitted},
+            "helpers": f"{name}_helpers.h" if any(_helpers_used(r) for r in emitted) else None,
+            "makefile": "Makefile",
+            "library": f"lib{name}.a"}
+
+
+def split_layout(name: str, emitted, files) -> dict:
+    """The manifest's ``split`` entry: every file written (``files``), and which holds what."""
+    names = split_names(name, emitted)
+    return {"files": list(files), "header": f"{name}.h", **names}
+
+
+def split_files(env, ctx, emitted) -> dict:
+    """``--split``: NAME_ROLE.c per routine (including NAME_helpers.h only if it calls a helper), NAME_helpers.h
+    with aggsym_sincos and aggsym_sign as static inline (each routine's object inlines them: a separate
+    NAME_common.c would make every sin/cos a call across objects), and a Makefile building libNAME.a with
+    $(CC) $(CFLAGS) (default -O2 -std=c99), one object per routine, so that make -j builds in parallel and a
+    controller links only the routines it calls."""
+    name = ctx["name"]
+    names = split_names(name, emitted)
+    files = {}
+    helpers = names["helpers"]
+    if helpers:
+        files[helpers] = env.get_template("helpers.h.j2").render(
+            {**ctx, "guard": name.upper() + "_HELPERS_H", "sign_storage": "static inline"})
+    rules = []
+    for r in emitted:
+        source = names["sources"][r.routine.role]
+        uses = helpers if _helpers_used(r) else None
+        files[source] = env.get_template("routine.c.j2").render({**ctx, "r": r, "helpers": uses})
+        rules.append((source, source[:-2] + ".o", [f"{name}.h"] + ([uses] if uses else [])))
+    files[names["makefile"]] = env.get_template("Makefile.j2").render(
+        {**ctx, "objects": [o for _, o, _ in rules], "rules": rules})
+    return files
 
 
 def write(gen: Generated, outdir) -> list:

@@ -2,15 +2,25 @@
 #include <math.h>
 #include "gyroscope_spinning_rotor.h"
 
-/* sin(x) and cos(x) together: x = k pi/2 + r with |r| <= pi/4 (Cody-Waite: pi/2 split into three doubles whose
- * first two have 33 significant bits, so k*hi and k*mid are exact for |k| < 2^20), then the Taylor series of sin r
- * to r^17 and cos r to r^18 (truncation below 1e-19 at r = pi/4); the quadrant k mod 4 swaps and signs them.
- * Outside |x| < 1e6 (and for nan, inf) libm's sin and cos. */
-static void aggsym_sincos(double x, double *s, double *c)
+/* sin(x) and cos(x) together, without a branch for |x| < 1e6.  x = k pi/2 + r, k the nearest integer to x 2/pi
+ * (adding 1.5 2^52 rounds it in the floating-point unit, its low bits then those of k), |r| <= pi/4 (Cody-Waite):
+ * pi/2 = P1 + P2 + P3 + P4 (+ 2^-142), P1 and P2 of at most 33 significant bits, P3 of 19, P4 a double, so for
+ * |k| < 2^20 every k Pi but the last is exact, and so is every difference but the last when r is small (x near
+ * k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal libm's.  The Taylor series
+ * of sin r to r^17 and of cos r to r^18 (truncation below 1e-19 at r = pi/4), by Estrin's scheme (short
+ * dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on the doubles' bits (no
+ * branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty asm after each exact
+ * step keeps the compiler from folding the rounding of k away and from reassociating the reduction into
+ * x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.  Outside |x| < 1e6 (and for
+ * nan, inf) libm's sin and cos. */
+#if defined(__FAST_MATH__) && defined(__GNUC__)
+#define AGGSYM_KEEP(v) __asm__("" : "+g"(v))
+#else
+#define AGGSYM_KEEP(v) (void)0
+#endif
+static inline void aggsym_sincos(double x, double *s, double *c)
 {
-#ifdef __FAST_MATH__
-    /* Under -ffast-math the compiler may reassociate the reduction below ((x - k hi) - k mid) - k lo, losing the
-     * low bits of r at large |x|: libm's sin and cos, compiled without it, keep full accuracy there. */
+#if defined(__FAST_MATH__) && !defined(__GNUC__)
     *s = sin(x);
     *c = cos(x);
 #else
@@ -19,25 +29,41 @@ static void aggsym_sincos(double x, double *s, double *c)
         *c = cos(x);
         return;
     }
-    const double t = x * 0.6366197723675814;
-    const long k = (long)(t < 0.0 ? t - 0.5 : t + 0.5);
-    const double kd = (double)k;
-    const double r = ((x - kd * 1.5707963267341256) - kd * 6.077100506303966e-11) - kd * 2.0222662487959506e-21;
+    union { double d; unsigned long long u; } big;
+    big.d = x * 0.6366197723675814 + 6755399441055744.0;  /* + 1.5 2^52 rounds to an integer: k in the low bits */
+    AGGSYM_KEEP(big.d);
+    const double kd = big.d - 6755399441055744.0;
+    const unsigned long long k = big.u;  /* its low bits are those of k (two's complement) */
+    double r = x - kd * 1.5707963267341256;
+    AGGSYM_KEEP(r);
+    r -= kd * 6.077100506303966e-11;
+    AGGSYM_KEEP(r);
+    r -= kd * 2.022269189584621e-21;
+    AGGSYM_KEEP(r);
+    r -= kd * -2.940788670387328e-27;
     const double r2 = r * r;
-    const double sr = r + r * r2 * (-0.16666666666666666 + r2 * (0.008333333333333333 + r2 * (-0.0001984126984126984
-        + r2 * (2.7557319223985893e-06 + r2 * (-2.505210838544172e-08 + r2 * (1.6059043836821613e-10
-        + r2 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15)))))));
-    const double cr = 1.0 + r2 * (-0.5 + r2 * (0.041666666666666664 + r2 * (-0.001388888888888889
-        + r2 * (2.48015873015873e-05 + r2 * (-2.755731922398589e-07 + r2 * (2.08767569878681e-09
-        + r2 * (-1.1470745597729725e-11 + r2 * (4.779477332387385e-14 + r2 * -1.5619206968586225e-16))))))));
-    switch (k & 3) {
-    case 0: *s = sr; *c = cr; break;
-    case 1: *s = cr; *c = -sr; break;
-    case 2: *s = -sr; *c = -cr; break;
-    default: *s = -cr; *c = sr; break;
-    }
+    const double r4 = r2 * r2;
+    const double r8 = r4 * r4;
+    const double sp = ((-0.16666666666666666 + r2 * 0.008333333333333333)
+        + r4 * (-0.0001984126984126984 + r2 * 2.7557319223985893e-06))
+        + r8 * ((-2.505210838544172e-08 + r2 * 1.6059043836821613e-10)
+        + r4 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15));
+    const double cp = ((-0.5 + r2 * 0.041666666666666664) + r4 * (-0.001388888888888889 + r2 * 2.48015873015873e-05))
+        + r8 * (((-2.755731922398589e-07 + r2 * 2.08767569878681e-09)
+        + r4 * (-1.1470745597729725e-11 + r2 * 4.779477332387385e-14)) + r8 * -1.5619206968586225e-16);
+    const double sr = r + (r * r2) * sp;
+    const double cr = 1.0 + r2 * cp;
+    const unsigned long long swap = 0ULL - (k & 1);  /* all ones for odd k */
+    union { double d; unsigned long long u; } sin_r, cos_r, out_s, out_c;
+    sin_r.d = sr;
+    cos_r.d = cr;
+    out_s.u = ((sin_r.u & ~swap) | (cos_r.u & swap)) ^ ((k & 2) << 62);  /* k mod 4 = 2, 3 */
+    out_c.u = ((cos_r.u & ~swap) | (sin_r.u & swap)) ^ (((k + 1) & 2) << 62);  /* 1, 2 */
+    *s = out_s.d;
+    *c = out_c.d;
 #endif
 }
+#undef AGGSYM_KEEP
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
  * operations: 7 mul, 6 add, 0 div, 2 call */
