@@ -806,6 +806,20 @@ def _targets(results) -> str:
     return "\n".join(lines)
 
 
+def _extras(results) -> str:
+    """Scaling of generation, the sincos helper, and --split's compile time (each when measured)."""
+    from . import compile_split, scaling, trig
+
+    parts = []
+    for key, title, module in (("scaling", "Scaling of generation (benchmarks/scaling.py)", scaling),
+                               ("trig", "sin and cos (benchmarks/trig.py)", trig),
+                               ("split", "Compiling with --split (benchmarks/compile_split.py)", compile_split)):
+        data = results.get(key)
+        if data:
+            parts += [f"## {title}", "", module.markdown(data), ""]
+    return "\n".join(parts)
+
+
 def write_report(results, folder) -> Path:
     """Write REPORT.md and the PNG plots into ``folder``; returns the report's path."""
     folder = Path(folder)
@@ -819,7 +833,7 @@ def write_report(results, folder) -> Path:
              "1. generation time and peak memory (with KanesMethod), 2. operation counts against the book and "
              "Featherstone, 3. runtime against Pinocchio, 4. the targets and whether each is met.", "",
              _environment(results), _generation(results), _opcounts(results), _opsn(results), _runtime(results),
-             _targets(results)]
+             _extras(results), _targets(results)]
     path = folder / "REPORT.md"
     path.write_text("\n".join(parts).rstrip() + "\n")
     return path

@@ -19,7 +19,7 @@ Settings (environment variables; defaults in brackets):
                                                                                          talos,chain24,chain48]
     AGGSYM_BENCH_CPU               the CPU the harness is pinned to                      [the last allowed]
     AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane,inputs,     [all]
-                                   opsn
+                                   opsn,scaling,trig,split
                                    (a section left out is read back from its JSON of an earlier run)
 
 Sections: 1. generation time and peak memory of every models/*.yaml, the four example-robot-data robots and
@@ -93,7 +93,8 @@ def config() -> dict:
         "AGGSYM_BENCH_RUNTIME_SECONDS": float(env.get("AGGSYM_BENCH_RUNTIME_SECONDS", "0.5")),
         "AGGSYM_BENCH_STATES": int(env.get("AGGSYM_BENCH_STATES", "1000")),
         "AGGSYM_BENCH_CALLS": int(env.get("AGGSYM_BENCH_CALLS", "100")),
-        "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS", "generation,runtime,kane,inputs,opsn"),
+        "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS",
+                                         "generation,runtime,kane,inputs,opsn,scaling,trig,split"),
         "AGGSYM_BENCH_RUNTIME_ROBOTS": env.get("AGGSYM_BENCH_RUNTIME_ROBOTS", ""),
         "AGGSYM_BENCH_PEER_ROBOTS": env.get("AGGSYM_BENCH_PEER_ROBOTS", PEER_ROBOTS),
     }
@@ -365,6 +366,28 @@ def _keep_earlier_robots(runtime: dict, earlier: dict) -> dict:
     return runtime
 
 
+def section_extras(sections) -> dict:
+    """Issue 18's sections: scaling (chains of 6..192 bodies and a 200-body tree, :mod:`benchmarks.scaling`, which
+    writes scaling.json and scaling.png itself), trig (the sincos helper against libm, :mod:`benchmarks.trig`) and
+    split (Talos' compile time in one file and with --split, :mod:`benchmarks.compile_split`)."""
+    out = {}
+    if "scaling" in sections:
+        from . import scaling
+
+        out["scaling"] = scaling.run(BUILD / "scaling", progress=log)
+    else:
+        out["scaling"] = _load("scaling")
+    for name, module in (("trig", "trig"), ("split", "compile_split")):
+        if name in sections:
+            import importlib
+
+            out[name] = importlib.import_module(f".{module}", __package__).run()
+            _save(name, out[name])
+        else:
+            out[name] = _load(name)
+    return out
+
+
 def main() -> int:
     t_start = time.perf_counter()
     cfg = config()
@@ -409,11 +432,12 @@ def main() -> int:
         _save("opsn", opsn)
     else:
         opsn = _load("opsn")
+    extras = section_extras(sections)
 
     env["load_average_end"] = load_average()
     env["bench_wall_seconds"] = round(time.perf_counter() - t_start, 1)
     results = {"environment": env, "config": cfg, "generation": generation, "kane": kane, "opcounts": opcounts,
-               "runtime": runtime, "inputs": inputs, "opsn": opsn}
+               "runtime": runtime, "inputs": inputs, "opsn": opsn, **extras}
     _save("environment", {"environment": env, "config": cfg})
     path = report.write_report(results, HERE)
     log(f"wrote {path.relative_to(ROOT)} and the plots in {env['bench_wall_seconds']:.0f} s")
