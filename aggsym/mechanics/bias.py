@@ -11,8 +11,8 @@ body's own Mises matrix, without added masses (gravity acts on the body, not on 
 from __future__ import annotations
 
 from .group import phi_force, phi_motion
-from .kinematics import ZERO6, generalized, world_frame_vectors
-from .linalg import add, neg
+from .kinematics import ZERO6, generalized, world_frame_vectors, world_poses
+from .linalg import add, cross, dot, mv, neg, scale
 
 
 def bias_vector(bound, kin, qd, V=None):
@@ -64,8 +64,136 @@ def coriolis_matrix(bound, kin, qd, skew=False):
     inertial axes: D is constant along the subtree up to the frame change, ``D_k = L^T D_parent``, which saves
     the phi of (2.37) and one product with A_lk per body.
 
-    O(n) per column; n x n rows.  For models without prescribed motions: a prescribed spin's terms in b are not
-    of the form B q' (the partition and coriolis routines are not emitted for them)."""
+    Computed by :func:`coriolis_by_recursion`: the same matrix from O(n) 6-vectors and 6x6 sums, then one or two
+    dot products per entry (O(n^2) in all), or by the columns (:func:`coriolis_by_columns`, O(n) 6-vector
+    motions per column) where their straight-line program is smaller, and always with prescribed spins.  n x n rows.  For models without prescribed motions: a
+    prescribed spin's terms in b are not of the form B q' (the partition and coriolis routines are not emitted
+    for them)."""
+    if any(b.spin is not None for b in bound.bodies):
+        return coriolis_by_columns(bound, kin, qd, skew)
+    if getattr(bound.backend, "symbolic", False):
+        by_columns = _scratch_operations(bound, kin, lambda b, k, u: coriolis_by_columns(b, k, u, skew))
+        if by_columns < _scratch_operations(bound, kin, lambda b, k, u: coriolis_by_recursion(b, k, u, skew)):
+            return coriolis_by_columns(bound, kin, qd, skew)
+    return coriolis_by_recursion(bound, kin, qd, skew)
+
+
+def _scratch_operations(bound, kin, build) -> int:
+    """The arithmetic operations (negations free) of ``build(bound, kin, qd)``'s rows on a fresh straight-line
+    program of the same model, kinematics included: the two forms are counted apart and only the smaller one
+    enters the program emitted (the world-axis recursion carries a fixed cost per body that the columns, local
+    and sparse, undercut on small models: the double pendulum, the six-link arm)."""
+    from .bound import bind
+
+    backend = type(bound.backend)()
+    scratch = bind(bound.model, backend, tree=bound.tree)
+    program = backend.program
+    q = program.vector("q", len(kin.q))
+    qd = program.vector("qd", kin.tree.nv)
+    rows = build(scratch, type(kin)(scratch, q), qd)
+    outputs = [x for row in rows for x in row]
+    return sum(1 for i in program.reachable(outputs) if program.ops[i][0] not in ("in", "neg"))
+
+
+def _twist_to_world(pose, V):
+    """A quasi-velocity (v, w) of a body's origin in its axes as the motion of the world origin in world axes
+    (pose = Motion(R, o)): ``(R v + o x R w, R w)``; it pairs with ``pose.wrench`` (the inverse of ``twist``)."""
+    w = mv(pose.c, V[3:])
+    return add(mv(pose.c, V[:3]), cross(pose.o, w)) + w
+
+
+def _columns(M):
+    return [tuple(row[c] for row in M) for c in range(6)]
+
+
+def _matvec(M, v):
+    return tuple(dot(row, v) for row in M)
+
+
+def _matvec_t(M, v):
+    return tuple(dot(col, v) for col in _columns(M))
+
+
+def coriolis_by_recursion(bound, kin, qd, skew=False):
+    """B(q, q') (``skew=False``) or C(q, q') (``skew=True``) of :func:`coriolis_matrix` in O(n^2), entry by entry.
+
+    Everything moves to the world's axes once (Prop. 1.8): the column of coordinate j of S^T (1.43) is the
+    constant 6-vector ``p_j`` (psi_j seen from the world origin) on every body of its subtree, its rate is
+    ``p_j' = phi(v_{<j}) p_j`` (1.22) with ``v_{<j}`` the world velocity of the frame that carries j's axis
+    (the parent's, plus the pair's earlier coordinates; the body's own velocity for a free flyer, whose columns
+    are fixed in the body), and the Mises matrix of body k is ``I_k = L Theta_lk L^T`` (2.7) with the body's pose
+    L.  The body blocks of :func:`coriolis_matrix` moved to the world are
+
+    * ``C``: ``S (Phi(V) A + A phi(V)) S^T + S A S'^T`` becomes ``sum_k J_k^T (Phi(v_k) I_k J_k + I_k J_k')``
+      (J_k the world columns p of k's path: the world rate of a column is the body rate plus ``phi(v) p``,
+      which cancels the ``A phi(V)``);
+    * ``B``: ``S Phi(V) A S^T + S A S'^T`` becomes ``sum_k J_k^T ((Phi(v_k) I_k - I_k phi(v_k)) J_k + I_k J_k')``.
+
+    With the subtree sums ``I+_s = sum I_k`` and ``N+_s = sum Phi(v_k) I_k (- I_k phi(v_k))`` over the bodies
+    below and at s (like the composite bodies of (2.32)), an entry with i on the path of j (body s of j) is
+    ``C_ij = p_i . F_j``, ``F_j = N+_s p_j + I+_s p_j'``, and ``C_ji = G_j . p_i + H_j . p_i'`` with
+    ``G_j = N+_s^T p_j``, ``H_j = I+_s p_j``; entries of coordinates on different branches are zero.  On a
+    serial chain: 34 operations per pair of coordinates (about 17 n^2) plus O(n) 6x6 work."""
+    tree = kin.tree
+    n = tree.nv
+    poses = world_poses(kin)
+    nb = len(tree)
+    P, Pd = [None] * n, [None] * n
+    V = [None] * nb
+    for k, par in enumerate(tree.parent):
+        v = ZERO6 if par < 0 else V[par]
+        coords = tree.coords[k]
+        cols = [_twist_to_world(poses[k], psi) for psi in kin.psi[k]]
+        if kin.free[k]:
+            for j, col in zip(coords, cols):
+                v = add(v, scale(qd[j], col))
+            for j, col in zip(coords, cols):
+                P[j], Pd[j] = col, phi_motion(v, col)
+        else:
+            for j, col in zip(coords, cols):
+                P[j], Pd[j] = col, phi_motion(v, col)
+                v = add(v, scale(qd[j], col))
+        V[k] = v
+    Iplus = [None] * nb
+    Nplus = [None] * nb
+    for k in range(nb - 1, -1, -1):
+        th = bound.bodies[k].mises
+        if th is not None:
+            Iw = th.moved(poses[k])
+            cols = [Iw.apply(tuple(1 if r == c else 0 for r in range(6))) for c in range(6)]
+            ncols = [phi_force(V[k], col) for col in cols]
+            if not skew:
+                ncols = [tuple(a - b for a, b in zip(x, Iw.apply(phi_motion(V[k], tuple(1 if r == c else 0
+                                                                                       for r in range(6))))))
+                         for c, x in enumerate(ncols)]
+            N = [[ncols[c][r] for c in range(6)] for r in range(6)]
+            Iplus[k] = Iw if Iplus[k] is None else Iplus[k] + Iw
+            Nplus[k] = N if Nplus[k] is None else [[a + b for a, b in zip(x, y)] for x, y in zip(Nplus[k], N)]
+        p = tree.parent[k]
+        if p >= 0 and Iplus[k] is not None:
+            Iplus[p] = Iplus[k] if Iplus[p] is None else Iplus[p] + Iplus[k]
+            Nplus[p] = Nplus[k] if Nplus[p] is None else [[a + b for a, b in zip(x, y)]
+                                                          for x, y in zip(Nplus[p], Nplus[k])]
+    out = [[0] * n for _ in range(n)]
+    for s in range(nb):
+        if Iplus[s] is None:
+            continue
+        path = [c for a in tree.ancestors(s) if a != s for c in tree.coords[a]]
+        for j in tree.coords[s]:
+            F = add(_matvec(Nplus[s], P[j]), Iplus[s].apply(Pd[j]))
+            for i in tree.coords[s]:
+                out[i][j] = dot(P[i], F)
+            if not path:
+                continue
+            G, H = _matvec_t(Nplus[s], P[j]), Iplus[s].apply(P[j])
+            for i in path:
+                out[i][j] = dot(P[i], F)
+                out[j][i] = dot(G, P[i]) + dot(H, Pd[i])
+    return out
+
+
+def coriolis_by_columns(bound, kin, qd, skew=False):
+    """:func:`coriolis_matrix` column by column from :func:`coriolis_wrenches` (O(n) motions per column)."""
     n = kin.tree.nv
     B = [[0] * n for _ in range(n)]
     for j, Z in enumerate(coriolis_wrenches(bound, kin, qd, skew)):

@@ -66,13 +66,15 @@ from dataclasses import dataclass
 from ..core.program import is_one, is_zero
 from .aggregates import General
 from .inertia import composite_inertias
-from .linalg import dot, mul, scale, sub
+from .bound import bind
+from .kinematics import TreeKinematics, world_poses
+from .linalg import add, cross, dot, mul, mv, scale, sub
 
 __all__ = [
     "Factors", "coordinate_parents", "coordinates_above", "transvection_pairs", "articulated_factors",
     "corrected_factors", "apply_T", "apply_T_transpose", "cauchy_solve",
     "transvect_pair", "apply_T_tree", "apply_T_transpose_tree", "cauchy_solve_tree", "transvected_forces",
-    "T_columns", "inverse_from_factors", "forward_dynamics", "inertia_inverse", "factor_outputs",
+    "T_columns", "inverse_from_factors", "world_generators", "inverse_by_generators", "forward_dynamics", "inertia_inverse", "factor_outputs",
 ]
 
 
@@ -452,14 +454,178 @@ def forward_dynamics(bound, kin, tau, qd, fac=None):
     return apply_T_transpose_tree(kin, fac, [mul(r, v) for r, v in zip(fac.recip, y)])
 
 
-def inertia_inverse(bound, kin):
-    """A(q)^-1 = T^T diag(1/(beta,beta)) T (3.19), as rows, from the explicit arguments (:func:`inverse_from_factors`).
+def _twist_to_world(pose, V):
+    """A quasi-velocity (v, w) of a body's origin in its axes, as the same motion of the world origin in world
+    axes (pose = Motion(R, o), the body in the world): ``w' = R w``, ``v' = R v + o x w'``; the inverse of
+    ``pose.twist``.  It pairs with ``pose.wrench``: ``twist_to_world(V) . pose.wrench(F) = V . F``."""
+    w = mv(pose.c, V[3:])
+    return add(mv(pose.c, V[:3]), cross(pose.o, w)) + w
 
-    Chosen by the operation counts of the emitted C: the columns of A^-1 as (3.20) applied to the unit vectors
-    in O(n) each (:func:`cauchy_solve_tree`) cost more on every model (six-link arm 478 against 312, panda 1968
-    against 1370, talos 10598 against 6144, test bench 25588 against 20785), and so do the columns of T carried
-    up the tree as 6-vectors (:func:`apply_T_tree` on unit vectors) except on the deepest tree (test bench 20050)."""
-    return inverse_from_factors(articulated_factors(bound, kin), kin.tree.nv)
+
+def _symmetric_apply(M, v):
+    """M v for a symmetric 6x6 M given as rows (structural zeros skipped)."""
+    return tuple(dot(row, v) for row in M)
+
+
+def world_generators(bound, kin, fac: Factors):
+    """The generators of (3.8) in the world's axes: ``p_t`` (psi_t as a motion of the world origin) and ``b_k``
+    (betabar^k as a wrench about the world origin), so that ``<t,k> = psi_t^T L^t_k betabar^k = p_t . b_k``
+    for t above k: composing the motions L along the path is moving both to the root (Prop. 1.8)."""
+    tree = kin.tree
+    P, B = [None] * tree.nv, [None] * tree.nv
+    poses = world_poses(kin)
+    for k, coords in enumerate(tree.coords):
+        for j, psi in zip(coords, kin.psi[k]):
+            P[j] = _twist_to_world(poses[k], psi)
+            B[j] = poses[k].wrench(fac.betabar[j])
+    return P, B
+
+
+def inverse_by_generators(bound, kin, fac: Factors = None) -> list:
+    """A(q)^-1 = T^T diag(1/(beta,beta)) T (3.19) as n x n rows in O(n^2), entry by entry from 6-vectors.
+
+    With the generators ``p_t``, ``b_k`` of :func:`world_generators` the transvections' arguments are
+    ``<t,k> = p_t . b_k`` (3.8), and T = (E + sum <t,k> E_tk)^-1 has the entries ``T_tk = -p_t . Phi(t,k) b_k``
+    for t above k, ``Phi(t,k)`` the product of the projections ``E - b_m p_m^T`` over the coordinates m strictly
+    between t and k, root side first (the substitution ``x_t = z_t - p_t . S_t``, ``S = sum_{m below t} b_m x_m``,
+    unrolled along the path).  So the entry (3.19) ``(A^-1)_ij = sum_k T_ki T_kj / (beta,beta)^k``, k above or
+    equal to both, splits at a coordinate a above or equal to both into ``v_ai^T M'_a v_aj`` where
+    ``v_aj = Phi(a,j) b_j`` carries column j up to a and the symmetric 6x6
+
+    * ``M_i = sum_{k above i} r_k r_k^T / (beta,beta)^k``, ``r_k = -Phi(k,i)^T p_k``, runs from the root to the
+      buds: ``M_child = M'_i = (E - p_i b_i^T) M_i (E - b_i p_i^T) + p_i p_i^T / (beta,beta)^i``
+      ``= M_i - p_i c_i^T - g_i p_i^T`` with ``g_i = M_i b_i``, ``E_i = b_i . g_i + 1/(beta,beta)^i`` and
+      ``c_i = g_i - E_i p_i`` (O(n) 6x6 work);
+    * ``(A^-1)_ii = E_i``; for i above j, ``(A^-1)_ij = c_i . v_ij`` (the k = i term is ``-p_i . v_ij /
+      (beta,beta)^i``); for i and j on different branches below a coordinate a, ``(A^-1)_ij = v_ai . M'_a v_aj``;
+      for coordinates with nothing above both (a fixed root with several branches), 0.
+
+    Column j climbs from j to the root with ``v <- v - (p_i . v) b_i`` (the projection at i), one dot product
+    for the entry and one for the projection: 34 operations per pair i above j (a serial chain: about
+    17 n^2 in all), against the O(n^3) products of :func:`inverse_from_factors`.  Exact on both backends: the
+    only divisions are the pivots' (in the factors)."""
+    tree = kin.tree
+    n = tree.nv
+    fac = articulated_factors(bound, kin, arguments=False) if fac is None else fac
+    P, B = world_generators(bound, kin, fac)
+    parent = coordinate_parents(tree)
+    children = [[] for _ in range(n)]
+    for j, p in enumerate(parent):
+        if p >= 0:
+            children[p].append(j)
+    out = [[0] * n for _ in range(n)]
+    M = [None] * n  # M_i, None for zero
+    C = [None] * n
+    Mpast = [None] * n  # M'_i at branch points (several children)
+    for i in range(n):
+        if M[i] is None:
+            g, h = (0,) * 6, 0
+        else:
+            g = _symmetric_apply(M[i], B[i])
+            h = dot(B[i], g)
+        E = h + fac.recip[i]
+        out[i][i] = E
+        C[i] = sub(g, scale(E, P[i]))
+        if not children[i]:
+            continue
+        Mn = [[0] * 6 for _ in range(6)]
+        for a in range(6):
+            for b in range(a, 6):
+                x = 0 if M[i] is None else M[i][a][b]
+                Mn[a][b] = Mn[b][a] = x - mul(P[i][a], C[i][b]) - mul(g[a], P[i][b])
+        Mn = tuple(tuple(r) for r in Mn)
+        for ch in children[i]:
+            M[ch] = Mn
+        if len(children[i]) > 1:
+            Mpast[i] = Mn
+    # the columns climb: v_ij at every coordinate i above j
+    arrived = {}  # (branch point a, j) -> v_aj
+    for j in range(n):
+        v, i = B[j], parent[j]
+        while i >= 0:
+            out[i][j] = out[j][i] = dot(C[i], v)
+            if Mpast[i] is not None:
+                arrived[(i, j)] = v
+            if parent[i] < 0:
+                break
+            v = sub(v, scale(dot(P[i], v), B[i]))
+            i = parent[i]
+    # pairs on different branches below a branch point a: v_ai . (M'_a v_aj)
+    subtree = [[j] for j in range(n)]
+    for j in range(n - 1, -1, -1):
+        if parent[j] >= 0:
+            subtree[parent[j]] = subtree[parent[j]] + subtree[j]
+    for a in range(n):
+        if Mpast[a] is None:
+            continue
+        groups = [subtree[ch] for ch in children[a]]
+        widest = max(range(len(groups)), key=lambda g: len(groups[g]))
+        moved = {j: _symmetric_apply(Mpast[a], arrived[(a, j)])
+                 for g, grp in enumerate(groups) if g != widest for j in grp}
+        for g1 in range(len(groups)):
+            for g2 in range(g1 + 1, len(groups)):
+                for i in groups[g1]:
+                    for j in groups[g2]:
+                        if j in moved:
+                            x = dot(arrived[(a, i)], moved[j])
+                        else:
+                            x = dot(moved[i], arrived[(a, j)])
+                        out[i][j] = out[j][i] = x
+    return out
+
+
+def _factor_product_floor(tree) -> int:
+    """A floor on the multiplications of :func:`inverse_from_factors` (with :func:`T_columns`): one per term of
+    every sum, whatever folds structurally; O(n^2) to evaluate from the coordinate tree alone."""
+    above = coordinates_above(tree)
+    n = tree.nv
+    count = sum(len(a) * (len(a) + 1) // 2 for a in above)  # T_columns: T_tj <j,i> for j from t to i's parent
+    sets = [set(a) | {i} for i, a in enumerate(above)]
+    for i in range(n):
+        for j in range(i, n):
+            count += len(sets[i] & sets[j])  # (3.19): T_ki T_kj / (beta,beta)^k over k above or equal to both
+    return count
+
+
+def _operations(program, outputs) -> int:
+    """Arithmetic operations (mul, add, sub, div, calls; negations are free) of the nodes the outputs need."""
+    return sum(1 for i in program.reachable(outputs) if program.ops[i][0] not in ("in", "neg"))
+
+
+def inertia_inverse(bound, kin):
+    """A(q)^-1 = T^T diag(1/(beta,beta)) T (3.19), as rows: the O(n^2) :func:`inverse_by_generators`, or the
+    entry-by-entry product of the explicit factors (:func:`inverse_from_factors`) where that program is smaller.
+
+    The generators' program has a fixed cost per coordinate (the poses, the 6x6 recursion of M, about 360
+    operations per coordinate on the benchmark's 3-D chains) and 34 per pair i above j; the explicit factors
+    stay local and sparse (unit psi, elementary rotations), so they win on small and on shallow trees (the
+    six-link arm, the delta robot) and lose as n^3 on deep ones.  On the straight-line program both are counted
+    on scratch programs of the same model (the explicit factors only when a floor on their products does not
+    already exceed the generators' count) and the one with fewer operations is emitted; on floats the generators
+    are used (both are exact).
+    Operation counts of the emitted C on the benchmark chains (``benchmarks/chain.py``), mul + add + div + call:
+    n = 6: 1087 (factors), 12: 4205 (factors), 24: 17660, 48: 55748, 96: about 17 n^2 + 360 n (generators),
+    against 710297 for the factors at n = 96."""
+    program = getattr(bound.backend, "program", None)
+    if not getattr(bound.backend, "symbolic", False) or program is None:
+        return inverse_by_generators(bound, kin)
+    fast = _scratch_operations(bound, kin, inverse_by_generators)
+    if _factor_product_floor(kin.tree) >= fast:
+        return inverse_by_generators(bound, kin)
+    slow = _scratch_operations(bound, kin, lambda b, k: inverse_from_factors(articulated_factors(b, k), k.tree.nv))
+    if slow < fast:
+        return inverse_from_factors(articulated_factors(bound, kin), kin.tree.nv)
+    return inverse_by_generators(bound, kin)
+
+
+def _scratch_operations(bound, kin, build) -> int:
+    """The operations of ``build(bound, kin)``'s rows (kinematics and factors included) on a fresh program of
+    the same model: the candidates are counted apart, so that the program emitted holds only the one chosen."""
+    backend = type(bound.backend)()
+    scratch = bind(bound.model, backend, tree=bound.tree)
+    q = backend.program.vector("q", len(kin.q))
+    rows = build(scratch, TreeKinematics(scratch, q))
+    return _operations(backend.program, [x for row in rows for x in row])
 
 
 def factor_outputs(bound, kin):

@@ -530,10 +530,10 @@ def inertia_inverse(q, p=None):
     Ainv[..., 0, 0] = x10
     x11 = x3*x8
     x12 = x10*x11
+    Ainv[..., 2, 2] = x7 + x11*x12
     x13 = -x12
     Ainv[..., 0, 2] = x13
     Ainv[..., 2, 0] = x13
-    Ainv[..., 2, 2] = x7 + x11*x12
     return Ainv
 
 
@@ -736,6 +736,6 @@ def com_jacobian(q, p=None):
     Jc[..., 1, 0] = x6*x12
     Jc[..., 2, 1] = -(x0*x2 + x9)*x12
     Jc[..., 0, 2] = x12*(p_1*q_0*x2 - x2*x10)
-    Jc[..., 1, 2] = x12*(x2*x9 + x3*x11 - p_1*(x2*x7 + x3*x8))
+    Jc[..., 1, 2] = x12*(x2*x9 + x3*x11 - p_1*(x3*x8 + x2*x7))
     Jc[..., 2, 2] = x12*(x3*x10 - p_1*q_0*x3)
     return Jc

@@ -553,10 +553,10 @@ void double_pendulum_sliding_friction_inertia_inverse(const double *q, const dou
     Ainv[0] = x10;
     const double x11 = x3*x8;
     const double x12 = x10*x11;
+    Ainv[8] = x7 + x11*x12;
     const double x13 = -x12;
     Ainv[2] = x13;
     Ainv[6] = x13;
-    Ainv[8] = x7 + x11*x12;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
@@ -979,6 +979,6 @@ void double_pendulum_sliding_friction_com_jacobian(const double *q, const double
     Jc[3] = x6*x12;
     Jc[7] = -(x0*x2 + x9)*x12;
     Jc[2] = x12*(p_1*q_0*x2 - x2*x10);
-    Jc[5] = x12*(x2*x9 + x3*x11 - p_1*(x2*x7 + x3*x8));
+    Jc[5] = x12*(x2*x9 + x3*x11 - p_1*(x3*x8 + x2*x7));
     Jc[8] = x12*(x3*x10 - p_1*q_0*x3);
 }
