@@ -70,26 +70,35 @@ def chain_yaml(n: int) -> str:
              "gravity: [0, 0, -9.81]",
              "bodies:"]
     for k in range(1, n + 1):
-        d = link(k)
-        inertia = ", ".join(f"{key}: {value!r}" for key, value in d["inertia"].items())
-        lines += [f"  - name: link{k}",
-                  f"    parent: {'world' if k == 1 else f'link{k - 1}'}",
-                  f"    pair: {{name: joint{k}, translation: {_list(d['offset'])}, functional: {{{d['axis']}: q{k}}}}}",
-                  f"    mass: {d['mass']!r}",
-                  f"    com: {_list(d['com'])}",
-                  f"    inertia: {{{inertia}}}"]
+        lines += body_lines(k, "world" if k == 1 else f"link{k - 1}")
     return "\n".join(lines) + "\n"
+
+
+def body_lines(k: int, parent: str) -> list:
+    """The YAML lines of link k (its numbers from :func:`link`) hung from ``parent``."""
+    d = link(k)
+    inertia = ", ".join(f"{key}: {value!r}" for key, value in d["inertia"].items())
+    return [f"  - name: link{k}",
+            f"    parent: {parent}",
+            f"    pair: {{name: joint{k}, translation: {_list(d['offset'])}, functional: {{{d['axis']}: q{k}}}}}",
+            f"    mass: {d['mass']!r}",
+            f"    com: {_list(d['com'])}",
+            f"    inertia: {{{inertia}}}"]
+
+
+def write_text(folder, name: str, text: str) -> Path:
+    """Write ``text`` to ``folder/name`` (the folder created; the file left alone when it already holds it)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / name
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+    return path
 
 
 def write_chain(n: int, folder) -> Path:
     """Write ``chain{n}.yaml`` into ``folder`` (created) and return its path."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"chain{n}.yaml"
-    text = chain_yaml(n)
-    if not path.exists() or path.read_text() != text:
-        path.write_text(text)
-    return path
+    return write_text(folder, f"chain{n}.yaml", chain_yaml(n))
 
 
 def chain_model(n: int, folder):
@@ -134,10 +143,4 @@ def chain_urdf(n: int) -> str:
 
 def write_chain_urdf(n: int, folder) -> Path:
     """Write ``chain{n}.urdf`` into ``folder`` (created) and return its path."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"chain{n}.urdf"
-    text = chain_urdf(n)
-    if not path.exists() or path.read_text() != text:
-        path.write_text(text)
-    return path
+    return write_text(folder, f"chain{n}.urdf", chain_urdf(n))

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .chain import _list, link, write_chain
+from .chain import body_lines, write_chain, write_text
 from .generation import generate_measured
 
 HERE = Path(__file__).resolve().parent
@@ -64,23 +64,12 @@ def tree_yaml(n: int = TREE_BODIES, seed: int = 7) -> str:
             parent = f"link{int(rng.integers(1, k))}"
         else:
             parent = f"link{k - 1}"
-        d = link(k)
-        inertia = ", ".join(f"{key}: {value!r}" for key, value in d["inertia"].items())
-        lines += [f"  - name: link{k}",
-                  f"    parent: {parent}",
-                  f"    pair: {{name: joint{k}, translation: {_list(d['offset'])}, functional: {{{d['axis']}: q{k}}}}}",
-                  f"    mass: {d['mass']!r}",
-                  f"    com: {_list(d['com'])}",
-                  f"    inertia: {{{inertia}}}"]
+        lines += body_lines(k, parent)
     return "\n".join(lines) + "\n"
 
 
 def write_tree(n: int, folder) -> Path:
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"tree{n}.yaml"
-    path.write_text(tree_yaml(n))
-    return path
+    return write_text(folder, f"tree{n}.yaml", tree_yaml(n))
 
 
 def _arith(ops: dict) -> int:
