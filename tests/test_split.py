@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import re
-import shutil
 import subprocess
 
 import numpy as np
@@ -20,8 +19,6 @@ from aggsym.codegen.compile import CLibrary, build_split, compile_shared, random
 from aggsym.contract import select_routines
 from aggsym.twin import NumericTwin
 from conftest import model_path
-
-pytestmark = pytest.mark.skipif(shutil.which("make") is None, reason="make is not installed")
 
 FILES = {".h", ".py", ".json", ".tex"}
 
