@@ -1,7 +1,8 @@
 """The package's layers: imports only run downward, no module imports one that imports it back, and the mechanics
 never load the code generator.
 
-Layers, bottom to top (DESIGN.md's module table, grouped): ``errors``; ``model`` (readers, the immutable model)
+Layers, bottom to top (DESIGN.md's module table, grouped): ``errors`` and ``collector`` (the garbage
+collector paused); ``model`` (readers, the immutable model)
 and ``core`` (straight-line programs, backends), which do not know each other; ``mechanics`` (the book's
 recursions); ``contract`` (the routines, signatures, manifest); ``twin`` and ``symbolic`` (floats, SymPy);
 ``codegen`` (printers, templates, compiling); ``cli``.
@@ -14,7 +15,7 @@ from pathlib import Path
 import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "aggsym"
-LAYERS = {"errors": 0, "model": 1, "core": 1, "mechanics": 2, "contract": 3, "twin": 4, "symbolic": 4,
+LAYERS = {"errors": 0, "collector": 0, "model": 1, "core": 1, "mechanics": 2, "contract": 3, "twin": 4, "symbolic": 4,
           "codegen": 5, "cli": 6, "__main__": 7}
 # modules whose import must not bring the code generator (or jinja2) along
 LIGHT = ["aggsym", "aggsym.errors", "aggsym.contract", "aggsym.twin", "aggsym.symbolic"] + sorted(

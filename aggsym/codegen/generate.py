@@ -9,14 +9,12 @@ generated, through a temporary folder, so a failure leaves the output folder as 
 """
 from __future__ import annotations
 
-import gc
 import json
 import os
 import shutil
 import tempfile
 import time
 import warnings
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from importlib.resources import files
 from types import SimpleNamespace
@@ -36,6 +34,7 @@ from ..core.program import COS, SIN, Node, straight_line
 from ..mechanics.bound import bind
 from ..mechanics.kinematics import TreeKinematics
 from ..model.tree import Tree
+from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import FILTERS, check_c_identifier, check_module_name
 from .printing import SCALARS, CPrinter, Converter, LiteralError, NumPyPrinter, _number
@@ -76,20 +75,6 @@ def templates() -> jinja2.Environment:
     )
     env.filters.update(FILTERS)  # user text reaches a template only through these (aggsym.codegen.escape)
     return env
-
-
-@contextmanager
-def _collector_paused():
-    """Python's cyclic garbage collector off for a while: the program's nodes are many, long-lived and freed by
-    reference counting, and the collector's passes over them cost about a third of the recursions' time (a
-    96-body chain: millions of objects traversed again and again)."""
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
 
 
 class _Stages:
@@ -247,7 +232,7 @@ def check_constraints(model) -> None:
                                            f"'regularization: epsilon' (J A^-1 J^T + epsilon E)", c.line)
 
 
-@_collector_paused()
+@collector_paused()
 def generate(model, progress=None, latex: bool = True, scalar: str = "double", split: bool = False) -> Generated:
     """Generate all files of a model in memory; ``scalar`` is the C type (``float``: single-precision C, its
     bounds against the twin in the manifest's ``float_tolerance``; the NumPy module stays double).  ``split``:
