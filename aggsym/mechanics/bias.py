@@ -10,9 +10,10 @@ body's own Mises matrix, without added masses (gravity acts on the body, not on 
 """
 from __future__ import annotations
 
+from .bound import scratch_operations
 from .group import phi_force, phi_motion
 from .kinematics import ZERO6, generalized, world_frame_vectors, world_poses
-from .linalg import add, cross, dot, mv, neg, scale
+from .linalg import add, dot, mv, neg, scale
 
 
 def bias_vector(bound, kin, qd, V=None):
@@ -72,42 +73,14 @@ def coriolis_matrix(bound, kin, qd, skew=False):
     if any(b.spin is not None for b in bound.bodies):
         return coriolis_by_columns(bound, kin, qd, skew)
     if getattr(bound.backend, "symbolic", False):
-        by_columns = _scratch_operations(bound, kin, lambda b, k, u: coriolis_by_columns(b, k, u, skew))
-        if by_columns < _scratch_operations(bound, kin, lambda b, k, u: coriolis_by_recursion(b, k, u, skew)):
+        by_columns = scratch_operations(bound, kin, lambda b, k, u: coriolis_by_columns(b, k, u, skew))
+        if by_columns < scratch_operations(bound, kin, lambda b, k, u: coriolis_by_recursion(b, k, u, skew)):
             return coriolis_by_columns(bound, kin, qd, skew)
     return coriolis_by_recursion(bound, kin, qd, skew)
 
 
-def _scratch_operations(bound, kin, build) -> int:
-    """The arithmetic operations (negations free) of ``build(bound, kin, qd)``'s rows on a fresh straight-line
-    program of the same model, kinematics included: the two forms are counted apart and only the smaller one
-    enters the program emitted (the world-axis recursion carries a fixed cost per body that the columns, local
-    and sparse, undercut on small models: the double pendulum, the six-link arm)."""
-    from .bound import bind
-
-    backend = type(bound.backend)()
-    scratch = bind(bound.model, backend, tree=bound.tree)
-    program = backend.program
-    q = program.vector("q", len(kin.q))
-    qd = program.vector("qd", kin.tree.nv)
-    rows = build(scratch, type(kin)(scratch, q), qd)
-    outputs = [x for row in rows for x in row]
-    return sum(1 for i in program.reachable(outputs) if program.ops[i][0] not in ("in", "neg"))
-
-
-def _twist_to_world(pose, V):
-    """A quasi-velocity (v, w) of a body's origin in its axes as the motion of the world origin in world axes
-    (pose = Motion(R, o)): ``(R v + o x R w, R w)``; it pairs with ``pose.wrench`` (the inverse of ``twist``)."""
-    w = mv(pose.c, V[3:])
-    return add(mv(pose.c, V[:3]), cross(pose.o, w)) + w
-
-
 def _columns(M):
     return [tuple(row[c] for row in M) for c in range(6)]
-
-
-def _matvec(M, v):
-    return tuple(dot(row, v) for row in M)
 
 
 def _matvec_t(M, v):
@@ -143,7 +116,7 @@ def coriolis_by_recursion(bound, kin, qd, skew=False):
     for k, par in enumerate(tree.parent):
         v = ZERO6 if par < 0 else V[par]
         coords = tree.coords[k]
-        cols = [_twist_to_world(poses[k], psi) for psi in kin.psi[k]]
+        cols = [poses[k].motion(psi) for psi in kin.psi[k]]
         if kin.free[k]:
             for j, col in zip(coords, cols):
                 v = add(v, scale(qd[j], col))
@@ -180,7 +153,7 @@ def coriolis_by_recursion(bound, kin, qd, skew=False):
             continue
         path = [c for a in tree.ancestors(s) if a != s for c in tree.coords[a]]
         for j in tree.coords[s]:
-            F = add(_matvec(Nplus[s], P[j]), Iplus[s].apply(Pd[j]))
+            F = add(mv(Nplus[s], P[j]), Iplus[s].apply(Pd[j]))
             for i in tree.coords[s]:
                 out[i][j] = dot(P[i], F)
             if not path:

@@ -154,3 +154,15 @@ def constant_axes(bound, axes, steps):
         a = bound.scalar(angle)
         R = mm(EYE3 if R is None else R, rotation(axis, bound.backend.cos(a), bound.backend.sin(a)))
     return R
+
+
+def scratch_operations(bound, kin, build) -> int:
+    """The arithmetic operations (negations and inputs free) of ``build(bound, kin, qd)``'s rows on a fresh
+    straight-line program of the same model (kinematics included), so that two forms of one routine can be
+    counted apart and only the smaller enters the program emitted (the inverse inertia, the Coriolis matrix)."""
+    backend = type(bound.backend)()
+    scratch = bind(bound.model, backend, tree=bound.tree)
+    program = backend.program
+    rows = build(scratch, type(kin)(scratch, program.vector("q", len(kin.q))), program.vector("qd", kin.tree.nv))
+    outputs = [x for row in rows for x in row]
+    return sum(1 for i in program.reachable(outputs) if program.ops[i][0] not in ("in", "neg"))

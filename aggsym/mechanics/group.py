@@ -56,6 +56,13 @@ class Motion:
         v = add(V[:3], cross(w, self.o))
         return mtv(self.c, v) + mtv(self.c, w)
 
+    def motion(self, V):
+        """L V: a quasi-velocity (v, w) of the child origin in child axes, as the parent origin's in parent axes
+        (``w' = c w``, ``v' = c v + o x w'``); the inverse of :meth:`twist`, and it pairs with :meth:`wrench`:
+        ``motion(V) . wrench(F) = V . F``.  With a body's world pose, the motion of the world origin in world axes."""
+        w = mv(self.c, V[3:])
+        return add(mv(self.c, V[:3]), cross(self.o, w)) + w
+
     def rotate_free(self, x):
         """c x for a free vector (no translation part)."""
         return mv(self.c, x)

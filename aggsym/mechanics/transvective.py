@@ -66,9 +66,9 @@ from dataclasses import dataclass
 from ..core.program import is_one, is_zero
 from .aggregates import General
 from .inertia import composite_inertias
-from .bound import bind
-from .kinematics import TreeKinematics, world_poses
-from .linalg import add, cross, dot, mul, mv, scale, sub
+from .bound import scratch_operations
+from .kinematics import world_poses
+from .linalg import dot, mul, mv, scale, sub
 
 __all__ = [
     "Factors", "coordinate_parents", "coordinates_above", "transvection_pairs", "articulated_factors",
@@ -454,19 +454,6 @@ def forward_dynamics(bound, kin, tau, qd, fac=None):
     return apply_T_transpose_tree(kin, fac, [mul(r, v) for r, v in zip(fac.recip, y)])
 
 
-def _twist_to_world(pose, V):
-    """A quasi-velocity (v, w) of a body's origin in its axes, as the same motion of the world origin in world
-    axes (pose = Motion(R, o), the body in the world): ``w' = R w``, ``v' = R v + o x w'``; the inverse of
-    ``pose.twist``.  It pairs with ``pose.wrench``: ``twist_to_world(V) . pose.wrench(F) = V . F``."""
-    w = mv(pose.c, V[3:])
-    return add(mv(pose.c, V[:3]), cross(pose.o, w)) + w
-
-
-def _symmetric_apply(M, v):
-    """M v for a symmetric 6x6 M given as rows (structural zeros skipped)."""
-    return tuple(dot(row, v) for row in M)
-
-
 def world_generators(bound, kin, fac: Factors):
     """The generators of (3.8) in the world's axes: ``p_t`` (psi_t as a motion of the world origin) and ``b_k``
     (betabar^k as a wrench about the world origin), so that ``<t,k> = psi_t^T L^t_k betabar^k = p_t . b_k``
@@ -476,7 +463,7 @@ def world_generators(bound, kin, fac: Factors):
     poses = world_poses(kin)
     for k, coords in enumerate(tree.coords):
         for j, psi in zip(coords, kin.psi[k]):
-            P[j] = _twist_to_world(poses[k], psi)
+            P[j] = poses[k].motion(psi)
             B[j] = poses[k].wrench(fac.betabar[j])
     return P, B
 
@@ -521,7 +508,7 @@ def inverse_by_generators(bound, kin, fac: Factors = None) -> list:
         if M[i] is None:
             g, h = (0,) * 6, 0
         else:
-            g = _symmetric_apply(M[i], B[i])
+            g = mv(M[i], B[i])
             h = dot(B[i], g)
         E = h + fac.recip[i]
         out[i][i] = E
@@ -560,7 +547,7 @@ def inverse_by_generators(bound, kin, fac: Factors = None) -> list:
             continue
         groups = [subtree[ch] for ch in children[a]]
         widest = max(range(len(groups)), key=lambda g: len(groups[g]))
-        moved = {j: _symmetric_apply(Mpast[a], arrived[(a, j)])
+        moved = {j: mv(Mpast[a], arrived[(a, j)])
                  for g, grp in enumerate(groups) if g != widest for j in grp}
         for g1 in range(len(groups)):
             for g2 in range(g1 + 1, len(groups)):
@@ -587,11 +574,6 @@ def _factor_product_floor(tree) -> int:
     return count
 
 
-def _operations(program, outputs) -> int:
-    """Arithmetic operations (mul, add, sub, div, calls; negations are free) of the nodes the outputs need."""
-    return sum(1 for i in program.reachable(outputs) if program.ops[i][0] not in ("in", "neg"))
-
-
 def inertia_inverse(bound, kin):
     """A(q)^-1 = T^T diag(1/(beta,beta)) T (3.19), as rows: the O(n^2) :func:`inverse_by_generators`, or the
     entry-by-entry product of the explicit factors (:func:`inverse_from_factors`) where that program is smaller.
@@ -609,23 +591,13 @@ def inertia_inverse(bound, kin):
     program = getattr(bound.backend, "program", None)
     if not getattr(bound.backend, "symbolic", False) or program is None:
         return inverse_by_generators(bound, kin)
-    fast = _scratch_operations(bound, kin, inverse_by_generators)
+    fast = scratch_operations(bound, kin, lambda b, k, _: inverse_by_generators(b, k))
     if _factor_product_floor(kin.tree) >= fast:
         return inverse_by_generators(bound, kin)
-    slow = _scratch_operations(bound, kin, lambda b, k: inverse_from_factors(articulated_factors(b, k), k.tree.nv))
+    slow = scratch_operations(bound, kin, lambda b, k, _: inverse_from_factors(articulated_factors(b, k), k.tree.nv))
     if slow < fast:
         return inverse_from_factors(articulated_factors(bound, kin), kin.tree.nv)
     return inverse_by_generators(bound, kin)
-
-
-def _scratch_operations(bound, kin, build) -> int:
-    """The operations of ``build(bound, kin)``'s rows (kinematics and factors included) on a fresh program of
-    the same model: the candidates are counted apart, so that the program emitted holds only the one chosen."""
-    backend = type(bound.backend)()
-    scratch = bind(bound.model, backend, tree=bound.tree)
-    q = backend.program.vector("q", len(kin.q))
-    rows = build(scratch, TreeKinematics(scratch, q))
-    return _operations(backend.program, [x for row in rows for x in row])
 
 
 def factor_outputs(bound, kin):
