@@ -134,3 +134,35 @@ def test_emitted_chain_is_quadratic_and_exact(rng, tmp_path):
         q, v = rng.uniform(-np.pi, np.pi, n), rng.normal(size=n)
         check(np.asarray(lib.call("coriolis", q, v)).reshape(n, n), pm, q, v)
         check(np.asarray(module.coriolis(q, v)).reshape(n, n), pm, q, v)
+
+
+def test_a_budgeted_count_stops_early_and_leaves_the_choice_as_it_was(tmp_path):
+    """scratch_operations counts a form's outputs as they are built: without a budget it counts every node the
+    outputs reach once (as Program.reachable of all of them does), with a budget it stops at the first column
+    that reaches it, so that the column form of a long chain is not built to the end only to lose; the
+    emitted form is the one the whole counts choose."""
+    from aggsym.mechanics.bound import scratch_operations
+
+    model = chain_model(12, tmp_path)
+    back = Symbolic()
+    bound = bind(model, back)
+    kin = TreeKinematics(bound, back.program.vector("q", model.nq))
+    columns_form = lambda b, k, u: bias.coriolis_columns(b, k, u, True)  # noqa: E731
+    whole = scratch_operations(bound, kin, columns_form)
+    rows = bias.coriolis_by_columns(bound, kin, back.program.vector("qd", bound.tree.nv), True)
+    flat = [x for row in rows for x in row]
+    assert whole == sum(1 for i in back.program.reachable(flat) if back.program.ops[i][0] not in ("in", "neg"))
+
+    built = []
+
+    def counted(b, k, u):
+        for col in bias.coriolis_columns(b, k, u, True):
+            built.append(col)
+            yield col
+
+    budget = whole // 4
+    stopped = scratch_operations(bound, kin, counted, budget)
+    assert budget <= stopped < whole and len(built) < bound.tree.nv
+    recursion = scratch_operations(bound, kin, lambda b, k, u: bias.coriolis_by_recursion(b, k, u, True))
+    assert recursion < whole  # a 12-link chain: the recursion wins, and the budget (its count) stops the columns
+    assert scratch_operations(bound, kin, columns_form, recursion) >= recursion

@@ -415,20 +415,27 @@ class Program:
 
     def reachable(self, outputs) -> list[int]:
         """Ids of the nodes the outputs depend on, in topological (creation) order."""
+        return sorted(self.reach(outputs, set()))
+
+    def reach(self, outputs, seen: set) -> list[int]:
+        """The ids the outputs depend on that ``seen`` does not hold yet (in no order), added to ``seen``: walking
+        a program's outputs a few at a time visits each node once (:func:`~aggsym.mechanics.bound.scratch_operations`
+        stops as soon as a count passes its budget)."""
         ops = self.ops
-        seen = set()
+        new = []
         stack = [o.id for o in outputs if isinstance(o, Node)]
         while stack:
             i = stack.pop()
             if i in seen:
                 continue
             seen.add(i)
+            new.append(i)
             entry = ops[i]
             if entry[0] != INPUT:
                 for a in entry[1:]:
                     if a.__class__ is Node and a.id not in seen:
                         stack.append(a.id)
-        return sorted(seen)
+        return new
 
     def interpret(self, outputs, leaf, apply, constant=lambda x: x):
         """The one interpreter of a program: the values of ``outputs`` with ``leaf(kind, index)`` for the inputs,

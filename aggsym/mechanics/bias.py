@@ -73,8 +73,9 @@ def coriolis_matrix(bound, kin, qd, skew=False):
     if any(b.spin is not None for b in bound.bodies):
         return coriolis_by_columns(bound, kin, qd, skew)
     if getattr(bound.backend, "symbolic", False):
-        by_columns = scratch_operations(bound, kin, lambda b, k, u: coriolis_by_columns(b, k, u, skew))
-        if by_columns < scratch_operations(bound, kin, lambda b, k, u: coriolis_by_recursion(b, k, u, skew)):
+        by_recursion = scratch_operations(bound, kin, lambda b, k, u: coriolis_by_recursion(b, k, u, skew))
+        by_columns = scratch_operations(bound, kin, lambda b, k, u: coriolis_columns(b, k, u, skew), by_recursion)
+        if by_columns < by_recursion:
             return coriolis_by_columns(bound, kin, qd, skew)
     return coriolis_by_recursion(bound, kin, qd, skew)
 
@@ -169,11 +170,16 @@ def coriolis_by_columns(bound, kin, qd, skew=False):
     """:func:`coriolis_matrix` column by column from :func:`coriolis_wrenches` (O(n) motions per column)."""
     n = kin.tree.nv
     B = [[0] * n for _ in range(n)]
-    for j, Z in enumerate(coriolis_wrenches(bound, kin, qd, skew)):
-        col = generalized(kin, Z)
+    for j, col in enumerate(coriolis_columns(bound, kin, qd, skew)):
         for i in range(n):
             B[i][j] = col[i]
     return B
+
+
+def coriolis_columns(bound, kin, qd, skew=False):
+    """The columns of :func:`coriolis_by_columns` one at a time (so that a count can stop early)."""
+    for Z in coriolis_wrenches(bound, kin, qd, skew):
+        yield generalized(kin, Z)
 
 
 def coriolis_wrenches(bound, kin, qd, skew=False):

@@ -156,13 +156,22 @@ def constant_axes(bound, axes, steps):
     return R
 
 
-def scratch_operations(bound, kin, build) -> int:
-    """The arithmetic operations (negations and inputs free) of ``build(bound, kin, qd)``'s rows on a fresh
+def scratch_operations(bound, kin, build, budget: int | None = None) -> int:
+    """The arithmetic operations (negations and inputs free) of ``build(bound, kin, qd)``'s outputs on a fresh
     straight-line program of the same model (kinematics included), so that two forms of one routine can be
-    counted apart and only the smaller enters the program emitted (the inverse inertia, the Coriolis matrix)."""
+    counted apart and only the smaller enters the program emitted (the inverse inertia, the Coriolis matrix).
+
+    ``build`` gives its outputs as an iterable of rows (or columns); they are counted as they come, each node
+    once, and with a ``budget`` the building stops as soon as the count reaches it (the count returned is then
+    at least ``budget``, not the whole): a form already known to lose is not built to the end."""
     backend = type(bound.backend)()
     scratch = bind(bound.model, backend, tree=bound.tree)
     program = backend.program
-    rows = build(scratch, type(kin)(scratch, program.vector("q", len(kin.q))), program.vector("qd", kin.tree.nv))
-    outputs = [x for row in rows for x in row]
-    return sum(1 for i in program.reachable(outputs) if program.ops[i][0] not in ("in", "neg"))
+    ops = program.ops
+    seen: set = set()
+    count = 0
+    for row in build(scratch, type(kin)(scratch, program.vector("q", len(kin.q))), program.vector("qd", kin.tree.nv)):
+        count += sum(1 for i in program.reach(row, seen) if ops[i][0] not in ("in", "neg"))
+        if budget is not None and count >= budget:
+            break
+    return count

@@ -412,18 +412,27 @@ def T_columns(fac: Factors, n: int) -> list[dict]:
 def inverse_from_factors(fac: Factors, n: int) -> list:
     """A(q)^-1 = T^T diag 1/(beta,beta)^k T (3.19) as n x n rows: entry (i, j) is the sum of T_ki T_kj /
     (beta,beta)^k over the coordinates k above or equal to both i and j (symmetric: computed for i <= j)."""
-    cols = T_columns(fac, n)
     out = [[0] * n for _ in range(n)]
+    for i, row in enumerate(_factor_rows(fac, n)):
+        for j, x in enumerate(row, start=i):
+            out[i][j] = out[j][i] = x
+    return out
+
+
+def _factor_rows(fac: Factors, n: int):
+    """The entries (i, j >= i) of :func:`inverse_from_factors`, one row i at a time."""
+    cols = T_columns(fac, n)
     for i in range(n):
         scaled = {k: mul(fac.recip[k], x) for k, x in cols[i].items()}
+        row = []
         for j in range(i, n):
             acc = 0
             for k, x in scaled.items():
                 y = cols[j].get(k)
                 if y is not None:
                     acc = acc + mul(x, y)
-            out[i][j] = out[j][i] = acc
-    return out
+            row.append(acc)
+        yield row
 
 
 # --------------------------------------------------------------------------------------------------------------
@@ -594,7 +603,7 @@ def inertia_inverse(bound, kin):
     fast = scratch_operations(bound, kin, lambda b, k, _: inverse_by_generators(b, k))
     if _factor_product_floor(kin.tree) >= fast:
         return inverse_by_generators(bound, kin)
-    slow = scratch_operations(bound, kin, lambda b, k, _: inverse_from_factors(articulated_factors(b, k), k.tree.nv))
+    slow = scratch_operations(bound, kin, lambda b, k, _: _factor_rows(articulated_factors(b, k), k.tree.nv), fast)
     if slow < fast:
         return inverse_from_factors(articulated_factors(bound, kin), kin.tree.nv)
     return inverse_by_generators(bound, kin)
