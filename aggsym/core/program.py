@@ -161,6 +161,13 @@ class Program:
         self._coefficients: dict = {}  # MUL node id -> its constant coefficient, where that is not 1
         self.inputs: dict = {}  # (kind, index) -> Node
 
+    def release(self) -> None:
+        """Drop every node: a node refers to its program and the program to its nodes, a cycle that only the
+        cyclic collector would free, and :func:`~aggsym.collector.collector_paused` keeps it off while
+        generating; a scratch program that has served (a count) is released at once instead."""
+        self.ops, self.nodes, self.inputs = [], [], {}
+        self._table, self._products, self._signatures, self._coefficients = {}, {}, {}, {}
+
     # construction ---------------------------------------------------------------------------------
     def input(self, kind: str, index: int) -> Node:
         """The runtime input ``kind[index]`` (q, qd, qdd, tau, p, ...), created once."""

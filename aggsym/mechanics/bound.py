@@ -170,8 +170,12 @@ def scratch_operations(bound, kin, build, budget: int | None = None) -> int:
     ops = program.ops
     seen: set = set()
     count = 0
-    for row in build(scratch, type(kin)(scratch, program.vector("q", len(kin.q))), program.vector("qd", kin.tree.nv)):
-        count += sum(1 for i in program.reach(row, seen) if ops[i][0] not in ("in", "neg"))
-        if budget is not None and count >= budget:
-            break
+    try:
+        rows = build(scratch, type(kin)(scratch, program.vector("q", len(kin.q))), program.vector("qd", kin.tree.nv))
+        for row in rows:
+            count += sum(1 for i in program.reach(row, seen) if ops[i][0] not in ("in", "neg"))
+            if budget is not None and count >= budget:
+                break
+    finally:
+        program.release()
     return count
