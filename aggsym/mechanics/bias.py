@@ -44,6 +44,9 @@ def gravity_wrenches(bound, kin):
     return kin.backward(Y)
 
 
+COLUMNS_DEPTH = 8  # above this mean subtree size per coordinate the Coriolis columns are not even counted
+
+
 def coriolis_matrix(bound, kin, qd, skew=False):
     """A matrix B(q, q') with ``B q' = b`` (2.36), linear in q'.
 
@@ -67,11 +70,19 @@ def coriolis_matrix(bound, kin, qd, skew=False):
 
     Computed by :func:`coriolis_by_recursion`: the same matrix from O(n) 6-vectors and 6x6 sums, then one or two
     dot products per entry (O(n^2) in all), or by the columns (:func:`coriolis_by_columns`, O(n) 6-vector
-    motions per column) where their straight-line program is smaller, and always with prescribed spins.  n x n rows.  For models without prescribed motions: a
-    prescribed spin's terms in b are not of the form B q' (the partition and coriolis routines are not emitted
-    for them)."""
+    motions per column) where their straight-line program is smaller, and always with prescribed spins.
+    n x n rows.  The column form pays one 6-vector motion and one product with A_lk per body of each column's
+    subtree, the recursion one or two dot products there: it wins on shallow trees (on the suite's models and
+    robots where the subtrees average at most 3.5 bodies per coordinate, and it loses from 4.9 on: Panda,
+    Talos, the 48-coordinate test bench at 9.2, and by 1.8x on the 12-link chain at 6.5), so it is only
+    counted (on a scratch program) where they average at most :data:`COLUMNS_DEPTH` bodies.  For models without
+    prescribed motions: a prescribed spin's terms in b are not of the form B q' (the partition and coriolis
+    routines are not emitted for them)."""
     if any(b.spin is not None for b in bound.bodies):
         return coriolis_by_columns(bound, kin, qd, skew)
+    tree = kin.tree
+    if sum(len(tree.subtrees[tree.body_of[j]]) for j in range(tree.nv)) > COLUMNS_DEPTH * tree.nv:
+        return coriolis_by_recursion(bound, kin, qd, skew)
     if getattr(bound.backend, "symbolic", False):
         by_recursion = scratch_operations(bound, kin, lambda b, k, u: coriolis_by_recursion(b, k, u, skew))
         by_columns = scratch_operations(bound, kin, lambda b, k, u: coriolis_columns(b, k, u, skew), by_recursion)
