@@ -22,6 +22,7 @@ Three body features of chapter 2 live here too:
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import sympy as sp
@@ -176,9 +177,15 @@ class Inertial:
     # division by a mass that p may set to zero); com and inertia then hold their values at the defaults
 
     def mises(self):
-        """(m, h, theta_O): the Mises matrix (2.3) at the body origin, h = m r_c, theta_O = theta_c + m(r.r E - r r^T)."""
+        """(m, h, theta_O): the Mises matrix (2.3) at the body origin, h = m r_c, theta_O = theta_c + m(r.r E - r r^T).
+        Expanded by SymPy once per inertial: every binding of the model (the program's, and each scratch program
+        that counts a routine's forms) reads it."""
         if self.origin is not None:
             return self.origin
+        return self._mises_at_origin
+
+    @functools.cached_property
+    def _mises_at_origin(self):
         m = self.mass
         r = sp.Matrix(self.com)
         theta = sp.Matrix(self.inertia) + m * (r.dot(r) * sp.eye(3) - r * r.T)
