@@ -171,3 +171,44 @@ def test_float_split_builds_warning_free(tmp_path):
     proc = subprocess.run(["make", "-j2", "CC=cc", "CFLAGS=-O2 -std=c99 -Wall -Wextra -Wpedantic -Wdouble-promotion "
                            "-Wfloat-conversion -Werror"], cwd=out, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
+
+
+def test_switching_layouts_in_one_folder_leaves_no_stale_sources(tmp_path):
+    """Generating again into the same folder removes what the earlier generation wrote and this one does not:
+    NAME.c after a switch to --split, the routine files, helpers header and Makefile after a switch back or to
+    fewer routines; files aggsym did not write stay, whatever the old manifest says."""
+    out = tmp_path / "out"
+    assert _generate(tmp_path, "double_pendulum", "--routines", "inertia,gravity")[0] == 0
+    (out / "notes.txt").write_text("mine")
+    (out / "double_pendulum_mine.c").write_text("int mine;")
+    assert _generate(tmp_path, "double_pendulum", "--routines", "inertia,gravity", "--split")[0] == 0
+    names = {p.name for p in out.iterdir()}
+    assert "double_pendulum.c" not in names
+    assert {"double_pendulum_inertia.c", "double_pendulum_gravity.c", "Makefile", "notes.txt",
+            "double_pendulum_mine.c"} <= names
+    assert _generate(tmp_path, "double_pendulum", "--routines", "inertia", "--split")[0] == 0
+    names = {p.name for p in out.iterdir()}
+    assert "double_pendulum_gravity.c" not in names and "double_pendulum_inertia.c" in names
+    assert _generate(tmp_path, "double_pendulum", "--routines", "inertia")[0] == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        [f"double_pendulum{e}" for e in FILES | {".c"}] + ["notes.txt", "double_pendulum_mine.c"])
+
+
+@pytest.mark.parametrize("listed", [["../victim.c"], ["/tmp/victim.c"], ["notes.txt"], ["double_pendulum_x.txt"],
+                                    "double_pendulum.c", [["double_pendulum.c"]], [7]])
+def test_a_tampered_manifest_deletes_nothing_outside_what_aggsym_writes(listed, tmp_path):
+    """The old manifest is data in a user's folder: its file list only ever names our own output forms."""
+    out = tmp_path / "out"
+    victim = tmp_path / "victim.c"
+    victim.write_text("keep")
+    assert _generate(tmp_path, "double_pendulum", "--routines", "inertia")[0] == 0
+    (out / "notes.txt").write_text("mine")
+    (out / "double_pendulum_x.txt").write_text("mine")
+    manifest = json.loads((out / "double_pendulum.json").read_text())
+    manifest["split"] = {"files": listed}
+    (out / "double_pendulum.json").write_text(json.dumps(manifest))
+    assert _generate(tmp_path, "double_pendulum", "--routines", "inertia", "--split")[0] == 0
+    assert victim.read_text() == "keep"
+    assert (out / "notes.txt").exists() and (out / "double_pendulum_x.txt").exists()
+    # a manifest whose file list is malformed or does not name NAME.c leaves NAME.c where it is
+    assert (out / "double_pendulum.c").exists()

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import tempfile
 import time
@@ -358,6 +359,7 @@ def write(gen: Generated, outdir) -> list:
             raise AggsymError(f"{outdir}: the output folder is a file")
         if outdir.is_dir() and not os.access(outdir, os.W_OK | os.X_OK):
             raise AggsymError(f"{outdir}: the output folder is not writable")
+        stale = stale_files(outdir, gen) if outdir.is_dir() else []
         outdir.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=".aggsym-", dir=outdir.parent))
         for name, text in gen.files.items():
@@ -369,12 +371,37 @@ def write(gen: Generated, outdir) -> list:
         else:
             for name in gen.files:
                 os.replace(tmp / name, outdir / name)
+            for name in stale:
+                (outdir / name).unlink(missing_ok=True)
         return [outdir / name for name in gen.files]
     except OSError as exc:
         raise AggsymError(f"{outdir}: cannot write the output folder: {exc.strerror or exc}") from None
     finally:
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def stale_files(outdir: Path, gen: Generated) -> list:
+    """The files that an earlier generation of the same model wrote into ``outdir`` and this one does not (NAME.c
+    after a switch to ``--split``, NAME_ROUTINE.c, NAME_helpers.h and the Makefile after a switch back or to
+    fewer routines): they would be compiled beside the new ones.  Known from the earlier manifest NAME.json
+    (its ``split.files``, or the one-file layout), only when it is an aggsym manifest of this name, and only
+    names of the forms this generator writes (NAME.h/.c/.py/.json/.tex, NAME_WORD.c/.h, Makefile): a manifest
+    is a file in a user's folder, never a list of paths to delete."""
+    name = gen.model.name
+    try:
+        old = json.loads((outdir / f"{name}.json").read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError):
+        return []
+    if not isinstance(old, dict) or old.get("name") != name or not str(old.get("generator", "")).startswith("aggsym"):
+        return []
+    split = old.get("split")
+    one_file = [f"{name}.{ext}" for ext in ("h", "c", "py", "json", "tex")]
+    previous = split.get("files") if isinstance(split, dict) else one_file
+    if not isinstance(previous, list):
+        return []
+    ours = re.compile(rf"{re.escape(name)}(\.(h|c|py|json|tex)|_[A-Za-z0-9_]+\.[ch])|Makefile")
+    return sorted({f for f in previous if isinstance(f, str) and ours.fullmatch(f) and f not in gen.files})
 
 
 def _umask() -> int:
