@@ -97,6 +97,9 @@ def _parser() -> argparse.ArgumentParser:
                    choices=["-O0", "-O1", "-O2", "-O3"],
                    help="optimization level of the compile: O0, O1, O2 or O3 (or --opt=-O2; default -O2; large "
                         "models compile much faster at O0)")
+    c.add_argument("--split", action="store_true",
+                   help="check the --split layout: its Makefile builds libNAME.a (make -j2, the same warnings as "
+                        "errors and --opt), and that library is what runs")
     command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
     return parser
 
@@ -218,7 +221,7 @@ def cmd_check(args) -> int:
     from .codegen.generate import generate
 
     model = _load(args)
-    gen = generate(model, latex=False, scalar=args.scalar)
+    gen = generate(model, latex=False, scalar=args.scalar, split=args.split)
     results = check_generated(model, gen.files, trials=args.trials, seed=args.seed, opt=args.opt)
     width = max(len(r.role) for r in results)
     single = args.scalar == "float"

@@ -198,7 +198,8 @@ def _fails(call) -> bool:
 
 
 def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir=None, opt: str = "-O2"):
-    """Compile the C (with ``opt``), import the NumPy module, compare both with the numeric twin on random states.
+    """Compile the C (with ``opt``; a ``--split`` output by its Makefile, with the same flags), import the NumPy
+    module, compare both with the numeric twin on random states.
 
     Errors are relative to the largest value a routine returns, and for the constrained forward dynamics also to
     the condition number of J A^-1 J^T at the state (the solve's rounding grows with it).  Float C (the manifest's
@@ -212,8 +213,14 @@ def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir
         tmp = Path(tmp)
         for name, text in files.items():
             (tmp / name).write_text(text, encoding="utf-8")
-        lib = CLibrary(compile_shared(tmp / f"{model.name}.c", tmp / f"lib{model.name}.so", extra=(opt,),
-                                      scalar=scalar), manifest)
+        shared = tmp / f"lib{model.name}.so"
+        if "split" in manifest:  # --split: the Makefile's build of libNAME.a is what runs
+            flags = [f for f in CFLAGS if f != "-shared"] + (FLOAT_CFLAGS if scalar == "float" else []) + [opt]
+            flags += shlex.split(os.environ.get("CFLAGS", ""))
+            shared = shared_from_archive(build_split(tmp, cflags=shlex.join(flags)), shared)
+        else:
+            shared = compile_shared(tmp / f"{model.name}.c", shared, extra=(opt,), scalar=scalar)
+        lib = CLibrary(shared, manifest)
         module = import_module(tmp / f"{model.name}.py")
         twin = NumericTwin(model)
         rng = np.random.default_rng(seed)
