@@ -52,6 +52,7 @@ class EmittedRoutine:
     py_body: list  # Python statements
     ops: dict
     temps: int
+    work: int = 0  # the C's size as slicing.work measures it (operations + statements)
     sliced: Sliced | None = None  # the C as several functions (slicing.py), for a routine above the threshold
 
 
@@ -211,13 +212,13 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing) 
     # what count_ops reads from "\n".join(c_body), counted while printing (the other statements hold none);
     # the C printer prints only what is emitted, the sincos pair's discarded sin/cos trees were never printed
     ops = dict(cp.counts)
-    sliced = None
-    if slicing is not None and sum(work(st) for st in stmts) > slicing[0]:
+    sliced, size = None, sum(work(st) for st in stmts)
+    if slicing is not None and size > slicing[0]:
         arrays = {k: f"const {scalar} *{k}" for k in inputs}
         arrays.update({o.name: f"{scalar} *{o.name}" for o in routine.outputs})
         sliced = slice_routine(c_symbol(model, routine), arrays, stmts, scalar, slicing[1])
     return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine, scalar),
-                          python_parameters(model, routine), c_body, py_body, ops, len(sl.temps), sliced)
+                          python_parameters(model, routine), c_body, py_body, ops, len(sl.temps), size, sliced)
 
 
 def _trig_pairs(prog, temps) -> dict:
