@@ -39,6 +39,7 @@ from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import FILTERS, check_c_identifier, check_module_name
 from .printing import SCALARS, CPrinter, Converter, LiteralError, NumPyPrinter, _number
+from .slicing import SLICE_SIZE, SLICE_THRESHOLD, Sliced, Statement, slice_routine, work
 
 
 @dataclass
@@ -52,6 +53,8 @@ class EmittedRoutine:
     py_body: list  # Python statements
     ops: dict
     temps: int
+    work: int = 0  # the C's size as slicing.work measures it (operations + statements)
+    sliced: Sliced | None = None  # the C as several functions (slicing.py), for a routine above the threshold
 
 
 @dataclass
@@ -112,18 +115,19 @@ def _input_symbols(sl):
     return {sl.program.inputs[(kind, index)].id: f"{kind}_{index}" for kind, index in sl.inputs}
 
 
-def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double") -> EmittedRoutine:
+def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double", slicing=None) -> EmittedRoutine:
     """C and Python statements of one routine, and the operation count of the C (its arrays, temporaries and
-    literals of the C type ``scalar``, double or float)."""
+    literals of the C type ``scalar``, double or float).  ``slicing``: (threshold, size), the C of a routine of
+    more work than the threshold also as slices of about that size (:mod:`.slicing`); None: never."""
     try:
-        return _emit_routine(model, prog, routine, outputs, scalar)
+        return _emit_routine(model, prog, routine, outputs, scalar, slicing)
     except LiteralError as exc:
         raise AggsymError(f"{model.source or model.name}: routine {routine.role}: {exc}"
                           + ("; generate with --scalar double, or choose units in which the model's numbers fit"
                              if scalar == "float" else "")) from None
 
 
-def _emit_routine(model, prog, routine: Routine, outputs, scalar: str) -> EmittedRoutine:
+def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing) -> EmittedRoutine:
     sl = straight_line(prog, outputs)
     inputs = signature(routine, model)
     allowed = set(inputs)
@@ -140,35 +144,45 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str) -> Emitte
         printers differ only in function names and in float literals)."""
         c = cp._print(tree)
         return (c, c) if scalar == "double" and conv.calls == calls else (c, pp._print(tree))
-    c_body, py_body = [], []
+    py_body = []
+    stmts = []  # the C body as statements (slicing.Statement): what each defines, uses, reads or writes
+
+    def emit(lines, defines=(), arrays=(), ops=0, entry=""):
+        stmts.append(Statement(lines, tuple(defines), tuple(conv.refs), tuple(arrays), ops, entry))
+        conv.refs.clear()
+
+    def ops_so_far():
+        return sum(cp.counts.values())
     status = routine.status
     if status is not None:
-        c_body.append(f"{scalar} {status.name}[1];")
+        emit([f"{scalar} {status.name}[1];"], entry="head")
     for kind in inputs:  # every input is read before any output is written: outputs may alias inputs
         used = [i for k, i in sl.inputs if k == kind]
         if not used:
-            c_body.append(f"(void){kind};")
+            emit([f"(void){kind};"], entry="head")
         elif kind == "p":  # p == NULL means the defaults, as in the NumPy module
             defaults = ", ".join(_number(float(x.value), scalar) for x in model.parameters)
-            c_body.append(f"static const {scalar} p_defaults[{len(model.parameters)}] = {{{defaults}}};")
-            c_body.append("if (!p) p = p_defaults;")
+            emit([f"static const {scalar} p_defaults[{len(model.parameters)}] = {{{defaults}}};",
+                  "if (!p) p = p_defaults;"], arrays=("p",))
         for i in used:
-            c_body.append(f"const {scalar} {kind}_{i} = {kind}[{i}];")
+            emit([f"const {scalar} {kind}_{i} = {kind}[{i}];"], defines=(f"{kind}_{i}",), arrays=(kind,))
             py_body.append(f"{kind}_{i} = {kind}[..., {i}]")
     for out, flat in zip(routine.outputs, outputs):
         if not flat:
-            c_body.append(f"(void){out.name};")
+            emit([f"(void){out.name};"], entry="head")
+    conv.refs.clear()
     trig = _trig_pairs(prog, sl.temps)
     done = set()
     shapes = [out.shape(model) for out in routine.outputs]
     for step in sl.steps:
+        before = ops_so_far()
         if step[0] == "out":
             _, o, k = step
             x = outputs[o][k]
             name = routine.outputs[o].name
             calls = conv.calls
             rhs_c, rhs_py = both(conv(x, top=not (isinstance(x, Node) and x.id in names)), calls)
-            c_body.append(f"{name}[{k}] = {rhs_c};")
+            emit([f"{name}[{k}] = {rhs_c};"], arrays=(name,), ops=ops_so_far() - before)
             idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
             py_body.append(f"{routine.outputs[o].py}[..., {idx}] = {rhs_py}")
             continue
@@ -178,25 +192,34 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str) -> Emitte
         if i not in trig:
             rhs_c, rhs_py = both(tree, calls)
             py_body.append(f"{names[i]} = {rhs_py}")
-            c_body.append(f"const {scalar} {names[i]} = {rhs_c};")
+            emit([f"const {scalar} {names[i]} = {rhs_c};"], defines=(names[i],), ops=ops_so_far() - before)
             continue
         py_body.append(f"{names[i]} = {pp._print(tree)}")
         sin_id, cos_id, arg = trig[i]
         if (sin_id, cos_id) in done:
+            conv.refs.clear()
             continue
         done.add((sin_id, cos_id))
         s_name = names[sin_id] if sin_id is not None else names[cos_id] + "_sin"
         c_name = names[cos_id] if cos_id is not None else names[sin_id] + "_cos"
-        c_body.append(f"{scalar} {s_name}, {c_name};")
-        c_body.append(f"aggsym_sincos({cp._print(conv(arg, top=False))}, &{s_name}, &{c_name});")
+        conv.refs.clear()  # (the sin or cos tree above was built for NumPy; the argument's names again below)
+        argument = cp._print(conv(arg, top=False))
         cp.counts["call"] += 1
+        emit([f"{scalar} {s_name}, {c_name};", f"aggsym_sincos({argument}, &{s_name}, &{c_name});"],
+             defines=(s_name, c_name), ops=ops_so_far() - before)
     if status is not None:
-        c_body.append(f"return {status.name}[0] != {_number(0.0, scalar)};")
+        emit([f"return {status.name}[0] != {_number(0.0, scalar)};"], entry="tail")
+    c_body = [line for st in stmts for line in st.lines]
     # what count_ops reads from "\n".join(c_body), counted while printing (the other statements hold none);
     # the C printer prints only what is emitted, the sincos pair's discarded sin/cos trees were never printed
     ops = dict(cp.counts)
+    sliced, size = None, sum(work(st) for st in stmts)
+    if slicing is not None and size > slicing[0]:
+        arrays = {k: f"const {scalar} *{k}" for k in inputs}
+        arrays.update({o.name: f"{scalar} *{o.name}" for o in routine.outputs})
+        sliced = slice_routine(c_symbol(model, routine), arrays, stmts, scalar, slicing[1])
     return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine, scalar),
-                          python_parameters(model, routine), c_body, py_body, ops, len(sl.temps))
+                          python_parameters(model, routine), c_body, py_body, ops, len(sl.temps), size, sliced)
 
 
 def _trig_pairs(prog, temps) -> dict:
@@ -234,10 +257,14 @@ def check_constraints(model) -> None:
 
 
 @collector_paused()
-def generate(model, progress=None, latex: bool = True, scalar: str = "double", split: bool = False) -> Generated:
+def generate(model, progress=None, latex: bool = True, scalar: str = "double", split: bool = False,
+             slicing=(SLICE_THRESHOLD, SLICE_SIZE)) -> Generated:
     """Generate all files of a model in memory; ``scalar`` is the C type (``float``: single-precision C, its
     bounds against the twin in the manifest's ``float_tolerance``; the NumPy module stays double).  ``split``:
-    one .c per routine instead of NAME.c, the helpers in NAME_helpers.h and a Makefile (:func:`split_files`)."""
+    one .c per routine instead of NAME.c, the helpers in NAME_helpers.h and a Makefile (:func:`split_files`).
+    ``slicing``: (threshold, size): the C of a routine of more work (operations plus statements) than the
+    threshold is emitted as static functions of about that size each behind the public one (:mod:`.slicing`: one
+    huge function takes GCC minutes); None: every routine as one function."""
     from .latex import latex_document
 
     check_names(model)
@@ -253,7 +280,7 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
     stages.done("recursions")
     if scalar not in SCALARS:
         raise AggsymError(f"--scalar: {scalar!r} is not one of {', '.join(SCALARS)}")
-    emitted = [emit_routine(model, prog, ROUTINES[role], outs, scalar) for role, outs in outputs.items()]
+    emitted = [emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing) for role, outs in outputs.items()]
     stages.done("printing")
     env = templates()
     ctx = {
@@ -277,6 +304,7 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         "frames": model.frames if any(e.routine.role.startswith("frame_") for e in emitted) else (),
         "sincos": any("aggsym_sincos(" in line for r in emitted for line in r.c_body),
         "sign": any("aggsym_sign(" in line for r in emitted for line in r.c_body),
+        "sliced": any(r.sliced for r in emitted),
         "time": model.time_dependent,
         "elastic": any(b.pair.elastic for b in model.bodies),
     }

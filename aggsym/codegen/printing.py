@@ -89,17 +89,18 @@ class Converter:
         self.program = program
         self.names = names  # node id -> name (a str; inputs and named temps)
         self.calls = 0  # the Call nodes built so far (a tree without one prints alike in C and NumPy)
+        self.refs = []  # the names of the Ref nodes built so far (what a statement uses; the caller clears it)
 
     def __call__(self, x, top: bool = True):
         if x.__class__ is not Node:
             return Num(x)
         ident = x.id
         if not top and ident in self.names:
-            return Ref(self.names[ident])
+            return self._ref(self.names[ident])
         entry = self.program.ops[ident]
         code = entry[0]
         if code == INPUT:
-            return Ref(self.names[ident])
+            return self._ref(self.names[ident])
         if code == ADD or code == SUB:
             terms = []
             self._terms(x, True, 1, terms)
@@ -137,7 +138,7 @@ class Converter:
             return
         name = self.names.get(x.id)
         if name is not None:  # (inputs are always named)
-            out.append((sign, Ref(name)))
+            out.append((sign, self._ref(name)))
             return
         term = self(x, False)
         if term.__class__ is Prod and term.sign < 0:
@@ -159,8 +160,12 @@ class Converter:
             out.append(Num(x))
         else:
             name = self.names.get(x.id)
-            out.append(Ref(name) if name is not None else self(x, False))
+            out.append(self._ref(name) if name is not None else self(x, False))
         return sign
+
+    def _ref(self, name):
+        self.refs.append(name)
+        return Ref(name)
 
 
 def _merge_constants(terms: list) -> list:
