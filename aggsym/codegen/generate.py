@@ -34,6 +34,7 @@ from ..core.backend import Symbolic
 from ..core.program import COS, SIN, Node, straight_line
 from ..mechanics.bound import bind
 from ..mechanics.kinematics import TreeKinematics
+from ..model.reframe import reframe
 from ..model.tree import Tree
 from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
@@ -92,6 +93,36 @@ class _Stages:
         self._t = now
 
 
+def _dynamics_operations(model) -> int:
+    """The arithmetic operations (negations and inputs free) of the model's inverse and forward dynamics on a fresh
+    straight-line program (sharing its kinematics, as the emitted routines do)."""
+    backend = Symbolic()
+    program = backend.program
+    bound = bind(model, backend)
+    kin = TreeKinematics(bound, program.vector("q", model.nq))
+    outputs = []
+    for role in ("inverse_dynamics", "forward_dynamics"):
+        routine = ROUTINES[role]
+        x = {k: program.vector(k, input_length(model, k)) for k in signature(routine, model) if k not in ("p", "t")}
+        x["q"] = kin.q
+        try:
+            outputs += [v for o in run(routine, bound, x, kin) for v in o]
+        except ZeroDivisionError:  # A(q) singular: the forward dynamics is omitted (contract.omitted_routines)
+            continue
+    return sum(1 for i in program.reachable(outputs) if program.ops[i][0] not in ("in", "neg"))
+
+
+def internal_model(model):
+    """The model the routines of the coordinates alone (``Routine.frame_free``) are built from: of the model as read
+    and its internal models (:func:`aggsym.model.reframe.reframe`, x axes along the common normals or the URDF's),
+    the one whose inverse plus forward dynamics take the fewest operations (the first of equals)."""
+    candidates = [reframe(model, normals, fewest) for normals in (True, False) for fewest in (False, True)]
+    if candidates[0] is model:
+        return model
+    costs = [_dynamics_operations(m) for m in candidates]
+    return candidates[costs.index(min(costs))]
+
+
 def symbolic_routines(model, tree=None, roles=None, omitted=()):
     """Run the model's routines (all, or those named, less the omitted) on the symbolic backend: (program,
     {role: list of flat output lists})."""
@@ -101,9 +132,17 @@ def symbolic_routines(model, tree=None, roles=None, omitted=()):
     bound = bind(model, backend, tree=tree)
     vectors = {k: prog.vector(k, input_length(model, k)) for k in INPUT_KINDS}
     kin = None if model.couplings else TreeKinematics(bound, vectors["q"])  # coupled: run() expands q first
+    internal = internal_model(model)  # the routines of the coordinates alone run in internal frames
+    inner = inner_kin = None
     outputs = {}
     for routine in routines_for(model, roles, omitted):
         x = {k: vectors[k] for k in signature(routine, model) if k not in ("p", "t")}
+        if routine.frame_free and internal is not model:
+            if inner is None:
+                inner = bind(internal, backend, tree=Tree(internal))
+                inner_kin = TreeKinematics(inner, vectors["q"])
+            outputs[routine.role] = [list(o) for o in run(routine, inner, x, inner_kin)]
+            continue
         outputs[routine.role] = [list(o) for o in run(routine, bound, x, kin)]
     return prog, outputs
 
