@@ -93,23 +93,34 @@ class _Stages:
         self._t = now
 
 
-def _dynamics_operations(model) -> int:
+def _dynamics_operations(model, budget: int | None = None) -> int:
     """The arithmetic operations (negations and inputs free) of the model's inverse and forward dynamics on a fresh
-    straight-line program (sharing its kinematics, as the emitted routines do)."""
+    straight-line program (sharing its kinematics, as the emitted routines do), counted as
+    :func:`~aggsym.mechanics.bound.scratch_operations` counts: stopping once the count reaches ``budget``, the
+    program released after."""
     backend = Symbolic()
     program = backend.program
-    bound = bind(model, backend)
-    kin = TreeKinematics(bound, program.vector("q", model.nq))
-    outputs = []
-    for role in ("inverse_dynamics", "forward_dynamics"):
-        routine = ROUTINES[role]
-        x = {k: program.vector(k, input_length(model, k)) for k in signature(routine, model) if k not in ("p", "t")}
-        x["q"] = kin.q
-        try:
-            outputs += [v for o in run(routine, bound, x, kin) for v in o]
-        except ZeroDivisionError:  # A(q) singular: the forward dynamics is omitted (contract.omitted_routines)
-            continue
-    return sum(1 for i in program.reachable(outputs) if program.ops[i][0] not in ("in", "neg"))
+    ops = program.ops
+    seen: set = set()
+    count = 0
+    try:
+        bound = bind(model, backend)
+        kin = TreeKinematics(bound, program.vector("q", model.nq))
+        for role in ("inverse_dynamics", "forward_dynamics"):
+            routine = ROUTINES[role]
+            x = {k: program.vector(k, input_length(model, k)) for k in signature(routine, model)
+                 if k not in ("p", "t")}
+            x["q"] = kin.q
+            try:
+                outputs = [v for o in run(routine, bound, x, kin) for v in o]
+            except ZeroDivisionError:  # A(q) singular: the forward dynamics is omitted (contract.omitted_routines)
+                continue
+            count += sum(1 for i in program.reach(outputs, seen) if ops[i][0] not in ("in", "neg"))
+            if budget is not None and count >= budget:
+                break
+    finally:
+        program.release()
+    return count
 
 
 def internal_model(model):
@@ -121,8 +132,12 @@ def internal_model(model):
     candidates = [reframe(model, fewest=fewest) for fewest in (False, True)]
     if candidates[0] is model:
         return model
-    costs = [_dynamics_operations(m) for m in candidates]
-    return candidates[costs.index(min(costs))]
+    best, cost = candidates[0], _dynamics_operations(candidates[0])
+    for other in candidates[1:]:
+        count = _dynamics_operations(other, budget=cost)
+        if count < cost:
+            best, cost = other, count
+    return best
 
 
 def symbolic_routines(model, tree=None, roles=None, omitted=()):
