@@ -73,6 +73,9 @@ class Routine:
     coupled: str | None = "force"
     input_lengths: Callable | None = None  # model -> {input: length} where it is not q's (the support routines)
     on_request: bool = False  # emitted only when named (--routines): large outputs that few users need
+    frame_free: bool = False  # its outputs depend on the coordinates alone, not on the body frames nor on how the
+    # inertia is shared between bodies: generated from the internal model (aggsym.model.reframe).  Not the Coriolis
+    # matrix: of the many C with C qd = b and A' - 2C skew, the one built from the bodies' B (2.17) depends on them
 
     @property
     def written(self) -> tuple:
@@ -341,28 +344,28 @@ def _joint_wrenches(bound, kin, x):
 register(Routine("inertia", ("q", "p"), (Output("A", nq_square),),
                  lambda bound, kin, x: (_flat(inertia_matrix(bound, kin)),),
                  "A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)",
-                 coupled="matrix"))
+                 coupled="matrix", frame_free=True))
 register(Routine("bias", ("q", "qd", "p"), (Output("b", nq_vector),),
                  lambda bound, kin, x: (sweeps.d_vector(bound, kin, x["qd"], gravity=False),),
                  "b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) "
-                 "(with prescribed spins: every term of their rates and accelerations too)"))
+                 "(with prescribed spins: every term of their rates and accelerations too)", frame_free=True))
 register(Routine("coriolis", ("q", "qd", "p"), (Output("C", nq_square),),
                  lambda bound, kin, x: (_flat(coriolis_matrix(bound, kin, x["qd"], skew=True)),),
                  "C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew "
                  "(S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based "
                  "control", applies=lambda model: not model.has_prescribed_spins, coupled="matrix"))
 register(Routine("gravity", ("q", "p"), (Output("g", nq_vector),), _gravity,
-                 "g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"))
+                 "g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)", frame_free=True))
 register(Routine("nonlinear_effects", ("q", "qd", "p"), (Output("d", nq_vector),),
                  lambda bound, kin, x: (_plus(sweeps.d_vector(bound, kin, x["qd"]),
                                               elastic.elastic_forces(bound, kin.q)),),
                  "d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic "
-                 "force C (q - q0) of (2.27)"))
+                 "force C (q - q0) of (2.27)", frame_free=True))
 register(Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), (Output("tau", nq_vector),),
                  lambda bound, kin, x: (_plus(sweeps.inverse_dynamics(bound, kin, x["qd"], x["qdd"]),
                                               elastic.elastic_forces(bound, kin.q)),),
                  "tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals "
-                 "A(q) qdd + b(q, qd) + g(q) + c(q)"))
+                 "A(q) qdd + b(q, qd) + g(q) + c(q)", frame_free=True))
 register(Routine("elastic", ("q", "p"), (Output("c", nq_vector),),
                  lambda bound, kin, x: (elastic.elastic_forces(bound, kin.q),),
                  "c(q) = C (q - q0), the generalized force of the Hooke-elastic pairs on the left side of (2.27)",
@@ -370,11 +373,11 @@ register(Routine("elastic", ("q", "p"), (Output("c", nq_vector),),
 register(Routine("kinetic_energy", ("q", "qd", "p"), (Output("T", scalar),),
                  lambda bound, kin, x: ([kinetic_energy(bound, kin, x["qd"])],),
                  "T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, "
-                 "Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins", coupled="tree"))
+                 "Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins", coupled="tree", frame_free=True))
 register(Routine("potential_energy", ("q", "p"), (Output("U", scalar),),
                  lambda bound, kin, x: ([potential_energy(bound, kin) + elastic.elastic_energy(bound, kin.q)],),
                  "U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs",
-                 coupled="tree"))
+                 coupled="tree", frame_free=True))
 register(Routine("momentum", ("q", "qd", "p"), (Output("h", momentum_shape),),
                  lambda bound, kin, x: (momentum(bound, kin, x["qd"]),),
                  "h: the total linear momentum and angular momentum about the world origin, world axes: each "
@@ -391,15 +394,15 @@ register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_
                  lambda bound, kin, x: (transvective.forward_dynamics(
                      bound, kin, _minus(x["tau"], elastic.elastic_forces(bound, kin.q)), x["qd"]),),
                  "qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), "
-                 "evaluated in O(n)", coupled="forward", regular=True))
+                 "evaluated in O(n)", coupled="forward", regular=True, frame_free=True))
 register(Routine("inertia_inverse", ("q", "p"), (Output("Ainv", nq_square),),
                  lambda bound, kin, x: (_flat(transvective.inertia_inverse(bound, kin)),),
-                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)", coupled="inverse", regular=True))
+                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)", coupled="inverse", regular=True, frame_free=True))
 register(Routine("transvective_factors", ("q", "p"),
                  (Output("targs", transvection_count), Output("diag", nq_vector)),
                  lambda bound, kin, x: transvective.factor_outputs(bound, kin),
                  "the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k "
-                 "of T A(q) T^T = diag (3.11)", layout=transvective_layout, coupled=None, regular=True))
+                 "of T A(q) T^T = diag (3.11)", layout=transvective_layout, coupled=None, regular=True, frame_free=True))
 register(Routine("elastic_partition", ("q", "qd", "p"),
                  tuple(Output(name, partition_block_shape(name)) for name, _, _, _ in elastic.BLOCKS),
                  lambda bound, kin, x: elastic.partition(bound, kin, x["qd"]),
@@ -606,12 +609,12 @@ register(Routine("inverse_dynamics_derivatives", ("q", "qd", "qdd", "p"),
                  (Output("dtau_dq", nq_square), Output("dtau_dqd", nq_square)), _inverse_dynamics_derivatives,
                  "d tau / d q and d tau / d qd, n*n row-major (entry (i, j): d tau_i / d x_j; d tau / d qdd is A): "
                  "the sweeps (2.39)-(2.46) differentiated in forward mode, reusing their intermediates",
-                 coupled="matrix", on_request=True))
+                 coupled="matrix", on_request=True, frame_free=True))
 register(Routine("forward_dynamics_derivatives", ("q", "qd", "tau", "p"),
                  (Output("dqdd_dq", nq_square), Output("dqdd_dqd", nq_square)), _forward_dynamics_derivatives,
                  "d qdd / d q and d qdd / d qd, n*n row-major (d qdd / d tau is A^-1): -A^-1 d tau_ID / d x at the "
                  "forward dynamics' qdd, A^-1 applied column by column by the transvective factors (3.19)-(3.20)",
-                 coupled=None, regular=True, on_request=True))
+                 coupled=None, regular=True, on_request=True, frame_free=True))
 
 
 def frame_count(model) -> int:

@@ -34,6 +34,7 @@ from ..core.backend import Symbolic
 from ..core.program import COS, SIN, Node, straight_line
 from ..mechanics.bound import bind
 from ..mechanics.kinematics import TreeKinematics
+from ..model.reframe import reframe
 from ..model.tree import Tree
 from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
@@ -95,6 +96,53 @@ class _Stages:
         self._t = now
 
 
+def _dynamics_operations(model, budget: int | None = None) -> int:
+    """The arithmetic operations (negations and inputs free) of the model's inverse and forward dynamics on a fresh
+    straight-line program (sharing its kinematics, as the emitted routines do), counted as
+    :func:`~aggsym.mechanics.bound.scratch_operations` counts: stopping once the count reaches ``budget``, the
+    program released after."""
+    backend = Symbolic()
+    program = backend.program
+    ops = program.ops
+    seen: set = set()
+    count = 0
+    try:
+        bound = bind(model, backend)
+        kin = TreeKinematics(bound, program.vector("q", model.nq))
+        for role in ("inverse_dynamics", "forward_dynamics"):
+            routine = ROUTINES[role]
+            x = {k: program.vector(k, input_length(model, k)) for k in signature(routine, model)
+                 if k not in ("p", "t")}
+            x["q"] = kin.q
+            try:
+                outputs = [v for o in run(routine, bound, x, kin) for v in o]
+            except ZeroDivisionError:  # A(q) singular: the forward dynamics is omitted (contract.omitted_routines)
+                continue
+            count += sum(1 for i in program.reach(outputs, seen) if ops[i][0] not in ("in", "neg"))
+            if budget is not None and count >= budget:
+                break
+    finally:
+        program.release()
+    return count
+
+
+def internal_model(model):
+    """The model the routines of the coordinates alone (``Routine.frame_free``) are built from: the model as read
+    when it is not :func:`~aggsym.model.reframe.eligible`, else of its two internal models (origins at the feet of
+    the common normals, or chosen for the fewest translation components) the one whose inverse plus forward
+    dynamics take the fewest operations (the first of equals; x axes along the common normals: on the arms of
+    the benchmark the URDF's own x axes were never better)."""
+    candidates = [reframe(model, fewest=fewest) for fewest in (False, True)]
+    if candidates[0] is model:
+        return model
+    best, cost = candidates[0], _dynamics_operations(candidates[0])
+    for other in candidates[1:]:
+        count = _dynamics_operations(other, budget=cost)
+        if count < cost:
+            best, cost = other, count
+    return best
+
+
 def symbolic_routines(model, tree=None, roles=None, omitted=()):
     """Run the model's routines (all, or those named, less the omitted) on the symbolic backend: (program,
     {role: list of flat output lists})."""
@@ -104,9 +152,17 @@ def symbolic_routines(model, tree=None, roles=None, omitted=()):
     bound = bind(model, backend, tree=tree)
     vectors = {k: prog.vector(k, input_length(model, k)) for k in INPUT_KINDS}
     kin = None if model.couplings else TreeKinematics(bound, vectors["q"])  # coupled: run() expands q first
+    internal = internal_model(model)  # the routines of the coordinates alone run in internal frames
+    inner = inner_kin = None
     outputs = {}
     for routine in routines_for(model, roles, omitted):
         x = {k: vectors[k] for k in signature(routine, model) if k not in ("p", "t")}
+        if routine.frame_free and internal is not model:
+            if inner is None:
+                inner = bind(internal, backend, tree=Tree(internal))
+                inner_kin = TreeKinematics(inner, vectors["q"])
+            outputs[routine.role] = [list(o) for o in run(routine, inner, x, inner_kin)]
+            continue
         outputs[routine.role] = [list(o) for o in run(routine, bound, x, kin)]
     return prog, outputs
 

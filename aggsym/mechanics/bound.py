@@ -37,6 +37,9 @@ class BoundBody:
     # pair at time t (child frame): f theta', f theta'' (2.13); None for pairs with coordinates
     stiffness: tuple | None = None  # k x k scalars: Hooke stiffness C of the pair (2.27)
     rest: tuple | None = None  # k scalars: q0 of C (q - q0)
+    offset: tuple | None = None  # k scalars added to the coordinates in the functional motion (Pair.offset)
+    steps: tuple | None = None  # the constructive rotation as elementary rotations (axis, cos, sin), in order,
+    # where one of them turns by an angle that is not a multiple of pi/2 (numeric angles only); None otherwise
 
 
 @dataclass
@@ -121,10 +124,23 @@ def bind(model: Model, backend, p=None, tree: Tree | None = None, t=None) -> Bou
         if pair.stiffness is not None:
             stiffness = tuple(tuple(s(x) for x in row) for row in pair.stiffness)
             rest = tuple(s(x) for x in pair.rest) if pair.rest is not None else (0,) * len(pair.coordinates)
-        bodies.append(BoundBody(L0, pair.codes, mises, rigid, spin, stiffness, rest))
+        offset = tuple(s(x) for x in pair.offset) if pair.offset else None
+        bodies.append(BoundBody(L0, pair.codes, mises, rigid, spin, stiffness, rest, offset,
+                                _steps(pair.rotation, s) if not pair.prescribed else None))
     gravity = tuple(s(x) for x in model.gravity)
     armature = fold(model.armature) if backend.symbolic else float(model.armature)
     return Bound(model, tree, backend, bodies, gravity, params, t, armature)
+
+
+def _steps(rotation, s):
+    """The constructive rotation's elementary rotations as (axis, cos, sin) scalars when some angle is a number that
+    is not a multiple of pi/2 (then turning a 6x6 block by them one plane at a time is cheaper than the congruence
+    with their product), else None."""
+    if not rotation or any(getattr(a, "free_symbols", None) for _, a in rotation):
+        return None
+    if all(sp.simplify(a / (sp.pi / 2)).is_integer for _, a in rotation):
+        return None
+    return tuple((axis, s(sp.cos(a)), s(sp.sin(a))) for axis, a in rotation)
 
 
 def _prescribed(pair, L0, s, backend):

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from ..model.types import code_index
 from .aggregates import Rigid
+from ..core.program import is_zero
 from .group import Motion, phi_motion, rotation
 from .linalg import EYE3, ZERO3, add, cross, dot, mm, mtv, mv, scale, sub
 
@@ -155,6 +156,8 @@ class TreeKinematics:
         self.free = [b.pair.quaternion for b in bound.model.bodies]  # free-flyer pairs: constant M F
         for k, body in enumerate(bound.bodies):
             qv = [q[i] for i in self.tree.positions[k]]
+            if body.offset is not None:  # internal frames (aggsym.model.reframe): c(q + offset)
+                qv = [x + d for x, d in zip(qv, body.offset)]
             if self.free[k]:
                 functional, psi, rots = free_flyer(qv)
             else:
@@ -178,7 +181,15 @@ class TreeKinematics:
             c, s = rot[i][i], rot[(i + 1) % 3][i]
             X = X.rotated(axis, c, s, s * s, s * c)
         X = X.moved(Motion(EYE3, self.functional[k].o))
-        return X.moved(self.bound.bodies[k].L0)
+        body = self.bound.bodies[k]
+        if body.steps is None:
+            return X.moved(body.L0)
+        for axis, c, s in reversed(body.steps):  # the constructive rotation plane by plane, then its translation
+            if is_zero(c) or is_zero(s):
+                X = X.moved(Motion(rotation(axis, c, s), ZERO3))
+            else:
+                X = X.rotated(axis, c, s, s * s, s * c)
+        return X.moved(Motion(EYE3, body.L0.o))
 
     def pair_rates(self, k, qd):
         return [qd[i] for i in self.tree.coords[k]]

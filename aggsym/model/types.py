@@ -144,6 +144,8 @@ class Pair:
     # x y z (the origin in the parent's axes) then the unit quaternion qx qy qz qw of its rotation; its six
     # coordinates o1..theta6 are then the body's own quasi-velocity (v, w) in body axes (Def. 1.9), not rates of
     # q.  Empty for every other pair: its entries of q are its coordinates.
+    offset: tuple = ()  # per coordinate, a constant added to it in the functional configuration: the pair moves by
+    # c(q + offset) (internal frames of aggsym.model.reframe); empty: none
 
     @property
     def quaternion(self) -> bool:

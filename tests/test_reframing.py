@@ -1,0 +1,156 @@
+"""Internal body frames and grouped inertia (issue 18, item 7; :mod:`aggsym.model.reframe`).
+
+The routines of the coordinates alone (``Routine.frame_free``) are generated from an internal model whose body
+frames put each joint axis on e3 (modified-DH-like constant motions, offsets on the coordinates) and whose Mises
+matrices hand the parts a joint does not move to the parent.  A, b, g, inverse and forward dynamics must still be
+Pinocchio's for the URDF as written (1e-9 relative), on the four arms of the operation-count benchmark and on
+random trees with general axes and origins; the outputs in body or link frames (joint wrenches, frames) are built
+from the model as read (their Pinocchio comparisons live in test_robots_generated and test_frames).  The
+operation counts per coordinate of the four arms are a property of the generated program (deterministic).
+"""
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import aggsym
+from aggsym.codegen.generate import internal_model
+from aggsym.contract import ROUTINES, run
+from aggsym.core.backend import Numeric
+from aggsym.mechanics.bound import bind
+from aggsym.model.inertials import with_inertial_parameters
+from aggsym.model.reframe import eligible, reframe
+from helpers import TOLERANCE, generated_code, pinocchio_model, pinocchio_q, relative_error, robots_directory
+from random_trees import random_urdf
+
+pytestmark = pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")
+
+ARMS = {  # example-robot-data files (benchmarks/run.py OPSN_ROBOTS)
+    "ur5": "ur_description/urdf/ur5_robot.urdf",
+    "panda": "panda_description/urdf/panda.urdf",
+    "so100": "so_arm_description/urdf/so100.urdf",
+    "xarm7": "xarm_description/urdf/xarm7.urdf",
+}
+
+# operations per coordinate (mul + add + div + call of the emitted C, as the manifest counts them) reached by the
+# internal frames; before them: ID 57.5 / 95.1 / 120.2 / 129.7, FD 110.2 / 181.8 / 279.5 / 276.7
+OPS_PER_N = {  # role -> robot -> bound
+    "inverse_dynamics": {"ur5": 46, "panda": 76, "so100": 91, "xarm7": 116},
+    "forward_dynamics": {"ur5": 83, "panda": 150, "so100": 172, "xarm7": 254},
+}
+
+
+def against_pinocchio(module, path, rng, nq, states=3):
+    """The NumPy module's A, b + g, g, inverse and forward dynamics against Pinocchio on the URDF at ``path``."""
+    pm = pinocchio_model(path)
+    data = pm.createData()
+    for _ in range(states):
+        q = rng.uniform(-np.pi, np.pi, nq)
+        qd, qdd, tau = rng.normal(size=nq), rng.normal(size=nq), rng.normal(size=nq)
+        Q = pinocchio_q(pm, q)
+        M = pin.crba(pm, data, Q)
+        M = np.triu(M) + np.triu(M, 1).T
+        nle = pin.nonLinearEffects(pm, data, Q, qd)
+        assert relative_error(module.inertia(q), M) <= TOLERANCE
+        assert relative_error(module.bias(q, qd) + module.gravity(q), nle) <= TOLERANCE
+        assert relative_error(module.gravity(q), pin.computeGeneralizedGravity(pm, data, Q)) <= TOLERANCE
+        assert relative_error(module.inverse_dynamics(q, qd, qdd), pin.rnea(pm, data, Q, qd, qdd)) <= TOLERANCE
+        if hasattr(module, "forward_dynamics"):  # (left out where a coordinate moves no mass: A(q) singular)
+            assert relative_error(module.forward_dynamics(q, qd, tau), pin.aba(pm, data, Q, qd, tau)) <= TOLERANCE
+        assert relative_error(module.kinetic_energy(q, qd), pin.computeKineticEnergy(pm, data, Q, qd)) <= TOLERANCE
+        assert relative_error(module.potential_energy(q), pin.computePotentialEnergy(pm, data, Q)) <= TOLERANCE
+
+
+@pytest.fixture(scope="module", params=sorted(ARMS))
+def arm(request, tmp_path_factory):
+    name = request.param
+    path = robots_directory() / ARMS[name]
+    model = aggsym.load(path)
+    _, module, manifest = generated_code(model, tmp_path_factory.mktemp(name), c=False)
+    return name, path, model, module, manifest
+
+
+def test_arms_equal_pinocchio(arm, rng):
+    name, path, model, module, _ = arm
+    assert internal_model(model) is not model
+    against_pinocchio(module, path, rng, model.nq)
+
+
+@pytest.mark.parametrize("role", sorted(OPS_PER_N))
+def test_arms_operations_per_coordinate(arm, role):
+    name, _, model, _, manifest = arm
+    ops = manifest["ops"][role]
+    per_n = (ops["mul"] + ops["add"] + ops["div"] + ops["call"]) / model.nv
+    assert per_n <= OPS_PER_N[role][name], (name, role, per_n)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_random_trees_equal_pinocchio(seed, tmp_path):
+    """Random branching trees: general axes, rotated joint origins and inertial frames, prismatic, continuous and
+    fixed joints."""
+    rng = np.random.default_rng(100 + seed)
+    path = tmp_path / "tree.urdf"
+    path.write_text(random_urdf(seed))
+    model = aggsym.load(path)
+    assert eligible(model)
+    _, module, _ = generated_code(model, tmp_path / "out", c=False)
+    against_pinocchio(module, path, rng, model.nq, states=2)
+
+
+def outputs(model, role, x, p=None):
+    routine = ROUTINES[role]
+    return np.array(run(routine, bind(model, Numeric(), p=p), {k: x[k] for k in routine.inputs if k != "p"})[0])
+
+
+FREE_ROLES = ("inertia", "bias", "gravity", "inverse_dynamics", "forward_dynamics", "kinetic_energy",
+              "potential_energy", "inertia_inverse")
+
+
+@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("floating", [False, True])
+def test_internal_models_equal_the_model_as_read(seed, floating, tmp_path):
+    """Every variant of the internal model gives the model's own A, b, g, dynamics, energies and A^-1 (floats)."""
+    rng = np.random.default_rng(seed)
+    path = tmp_path / "tree.urdf"
+    path.write_text(random_urdf(seed))
+    model = aggsym.load(path, floating_base=floating)
+    n = model.nv
+    x = {"q": rng.uniform(-np.pi, np.pi, n), "qd": rng.normal(size=n), "qdd": rng.normal(size=n),
+         "tau": rng.normal(size=n)}
+    for normals in (True, False):
+        for fewest in (True, False):
+            inner = reframe(model, normals, fewest)
+            assert inner is not model
+            assert [c.name for c in inner.coordinates] == [c.name for c in model.coordinates]
+            for role in FREE_ROLES:
+                try:
+                    ref = outputs(model, role, x)
+                except ZeroDivisionError:  # a coordinate that moves no mass (A singular): so must the internal model
+                    with pytest.raises(ZeroDivisionError):
+                        outputs(inner, role, x)
+                    continue
+                assert relative_error(outputs(inner, role, x), ref) <= 1e-11, (normals, fewest, role)
+
+
+def test_symbolic_inertial_parameters_are_regrouped_at_run_time(tmp_path, rng):
+    """Inertial parameters in p: the internal model moves them symbolically; a change through p still gives the
+    model's dynamics."""
+    model = with_inertial_parameters(aggsym.load(robots_directory() / ARMS["ur5"]), ["all"])
+    inner = reframe(model)
+    assert inner is not model
+    p = np.array(model.parameter_values) * rng.uniform(0.5, 1.5, len(model.parameters))
+    n = model.nv
+    x = {"q": rng.uniform(-np.pi, np.pi, n), "qd": rng.normal(size=n), "qdd": rng.normal(size=n),
+         "tau": rng.normal(size=n)}
+    for role in ("inertia", "bias", "gravity", "inverse_dynamics", "forward_dynamics"):
+        assert relative_error(outputs(inner, role, x, p), outputs(model, role, x, p)) <= 1e-11, role
+    _, module, _ = generated_code(model, tmp_path, c=False)
+    ref = outputs(model, "inverse_dynamics", x, p)
+    assert relative_error(module.inverse_dynamics(x["q"], x["qd"], x["qdd"], p), ref) <= 1e-11
+
+
+def test_models_that_are_not_urdf_arms_keep_their_frames():
+    """YAML models (multi-coordinate pairs, parameters in the geometry, constraints) are not re-framed."""
+    from pathlib import Path
+    for path in sorted(Path(__file__).resolve().parent.parent.glob("models/*.yaml"))[:5]:
+        model = aggsym.load(path)
+        assert reframe(model) is model
