@@ -32,7 +32,7 @@ from ..contract import (
 )
 from ..core.backend import Symbolic
 from ..core.program import COS, SIN, Node, straight_line
-from ..mechanics.bound import bind
+from ..mechanics.bound import bind, program_operations
 from ..mechanics.kinematics import TreeKinematics
 from ..model.reframe import reframe
 from ..model.tree import Tree
@@ -98,15 +98,13 @@ class _Stages:
 
 def _dynamics_operations(model, budget: int | None = None) -> int:
     """The arithmetic operations (negations and inputs free) of the model's inverse and forward dynamics on a fresh
-    straight-line program (sharing its kinematics, as the emitted routines do), counted as
-    :func:`~aggsym.mechanics.bound.scratch_operations` counts: stopping once the count reaches ``budget``, the
-    program released after."""
+    straight-line program (sharing its kinematics, as the emitted routines do), counted by
+    :func:`~aggsym.mechanics.bound.program_operations`: stopping once the count reaches ``budget``, the program
+    released after."""
     backend = Symbolic()
     program = backend.program
-    ops = program.ops
-    seen: set = set()
-    count = 0
-    try:
+
+    def rows():
         bound = bind(model, backend)
         kin = TreeKinematics(bound, program.vector("q", model.nq))
         for role in ("inverse_dynamics", "forward_dynamics"):
@@ -118,12 +116,9 @@ def _dynamics_operations(model, budget: int | None = None) -> int:
                 outputs = [v for o in run(routine, bound, x, kin) for v in o]
             except ZeroDivisionError:  # A(q) singular: the forward dynamics is omitted (contract.omitted_routines)
                 continue
-            count += sum(1 for i in program.reach(outputs, seen) if ops[i][0] not in ("in", "neg"))
-            if budget is not None and count >= budget:
-                break
-    finally:
-        program.release()
-    return count
+            yield outputs
+
+    return program_operations(program, rows, budget)
 
 
 def internal_model(model):

@@ -183,12 +183,20 @@ def scratch_operations(bound, kin, build, budget: int | None = None) -> int:
     backend = type(bound.backend)()
     scratch = bind(bound.model, backend, tree=bound.tree)
     program = backend.program
+    return program_operations(program, lambda: build(scratch, type(kin)(scratch, program.vector("q", len(kin.q))),
+                                                      program.vector("qd", kin.tree.nv)), budget)
+
+
+def program_operations(program, rows, budget: int | None = None) -> int:
+    """The arithmetic operations (negations and inputs free) that the outputs of ``rows()`` (an iterable of lists
+    of outputs) reach on a scratch ``program``, each node counted once, stopping as soon as the count reaches
+    ``budget``; the program is released after (:meth:`~aggsym.core.program.Program.release`: the cyclic collector
+    is paused while generating)."""
     ops = program.ops
     seen: set = set()
     count = 0
     try:
-        rows = build(scratch, type(kin)(scratch, program.vector("q", len(kin.q))), program.vector("qd", kin.tree.nv))
-        for row in rows:
+        for row in rows():
             count += sum(1 for i in program.reach(row, seen) if ops[i][0] not in ("in", "neg"))
             if budget is not None and count >= budget:
                 break
