@@ -139,3 +139,40 @@ def test_coupled_derivatives_equal_pinocchio(tmp_path, rng):
         ours_q, ours_v = twin.inverse_dynamics_derivatives(q, v, a)
         assert relative_error(ours_q, K.T @ dq @ K, floor=1.0) < TOLERANCE
         assert relative_error(ours_v, K.T @ dv @ K, floor=1.0) < TOLERANCE
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda", "talos"])
+def test_both_ways_of_applying_the_factors_equal_pinocchio(name, rng):
+    """dq''/dx = -A^-1 dtau/dx with A^-1 applied by the arguments <t,k> (cauchy_solve, the form emitted on the
+    suite's robots) and on the tree without them (cauchy_solve_tree, emitted where its program is smaller): each
+    against Pinocchio's computeABADerivatives on the floats, and the straight-line program's choice is the smaller
+    count."""
+    from aggsym.core.backend import Numeric, Symbolic
+    from aggsym.mechanics import derivatives
+    from aggsym.mechanics.bound import bind, scratch_operations
+    from aggsym.mechanics.kinematics import TreeKinematics
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ModelWarning)
+        model = aggsym.load(robot_path(name))
+    pm = pinocchio_model(robot_path(name))
+    bound = bind(model, Numeric())
+    n = bound.tree.nv
+    for _ in range(2):
+        q, v, tau = rng.uniform(-1.5, 1.5, model.nq), rng.normal(size=n), rng.normal(size=n)
+        _, (fq, fv) = pinocchio_derivatives(pm, pinocchio_q(pm, q), v, np.zeros(n), tau)
+        kin = TreeKinematics(bound, list(q))
+        for solve in (derivatives._with_arguments, derivatives._on_the_tree):
+            got = derivatives._forward_dynamics_derivatives(bound, kin, list(v), list(tau), solve)
+            for g, want in zip(got, (fq, fv)):
+                assert relative_error(np.array(g, float), want, floor=1.0) < TOLERANCE
+    back = Symbolic()
+    sym = bind(model, back)
+    kin = TreeKinematics(sym, back.program.vector("q", model.nq))
+
+    def count(solve):
+        return scratch_operations(sym, kin, lambda b, k, u: [
+            [x for row in m for x in row]
+            for m in derivatives._forward_dynamics_derivatives(b, k, u, b.backend.program.vector("tau", n), solve)])
+
+    assert count(derivatives._with_arguments) < count(derivatives._on_the_tree)
