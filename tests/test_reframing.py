@@ -154,3 +154,36 @@ def test_models_that_are_not_urdf_arms_keep_their_frames():
     for path in sorted(Path(__file__).resolve().parent.parent.glob("models/*.yaml"))[:5]:
         model = aggsym.load(path)
         assert reframe(model) is model
+
+
+def test_a_long_chain_of_parallel_axes_keeps_the_origin_search_small(tmp_path, rng, monkeypatch):
+    """Parallel axes pass each candidate origin of the parent on as a projection: uncapped, a chain of n parallel
+    axes had n candidates per body and the search O(n^3) (a 200-link planar chain took 16 s).  With at most
+    MAX_CANDIDATES per body the search's cost evaluations stay within n K^2 + n K, and the internal model of such a
+    chain still gives Pinocchio's dynamics."""
+    from aggsym.model import reframe as module
+
+    n = 60
+    links = ['<robot name="planar">', '<link name="l0"/>']
+    for k in range(1, n + 1):
+        links.append(f'<link name="l{k}"><inertial><origin xyz="0.1 0 0.01"/><mass value="1"/>'
+                     f'<inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial></link>')
+        links.append(f'<joint name="j{k}" type="revolute"><parent link="l{k - 1}"/><child link="l{k}"/>'
+                     f'<origin xyz="0.2 0.0{k % 7} {0.01 * (k % 5):.2f}"/><axis xyz="0 0 1"/>'
+                     '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>')
+    path = tmp_path / "planar.urdf"
+    path.write_text("\n".join(links + ["</robot>"]))
+    model = aggsym.load(path)
+    calls = []
+    counted = module._nonzeros
+    monkeypatch.setattr(module, "_nonzeros", lambda *a: calls.append(1) or counted(*a))
+    internal = module.reframe(model)
+    K = module.MAX_CANDIDATES
+    assert internal is not model and 0 < len(calls) <= n * K * K + n * K
+    bound = bind(internal, Numeric())
+    pm = pinocchio_model(path)
+    data = pm.createData()
+    for _ in range(2):
+        q, qd, qdd = rng.uniform(-np.pi, np.pi, n), rng.normal(size=n), rng.normal(size=n)
+        tau = run(ROUTINES["inverse_dynamics"], bound, {"q": list(q), "qd": list(qd), "qdd": list(qdd)})[0]
+        assert relative_error(np.array(tau, float), pin.rnea(pm, data, pinocchio_q(pm, q), qd, qdd)) <= TOLERANCE

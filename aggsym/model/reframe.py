@@ -48,6 +48,9 @@ from .tree import Tree
 from .types import Inertial, Model, code_index
 
 EPS = 1e-12
+MAX_CANDIDATES = 8  # origins tried per body by _origins (the first ones): parallel axes pass every candidate of the
+# parent on as a projection, so without a bound a chain of n parallel axes had n candidates per body and the choice
+# took O(n^3) (a 200-link planar chain: 16 s); the arms of the benchmark have at most 4
 
 __all__ = ["reframe", "eligible"]
 
@@ -205,6 +208,8 @@ def _origins(tree, t0, c0, axis, main, R, fewest=True) -> list:
         for x in cand[k]:
             if all(np.linalg.norm(x - y) > 1e-12 * (1 + np.linalg.norm(y)) for y in unique):
                 unique.append(x)
+                if len(unique) == MAX_CANDIDATES:
+                    break
         cand[k] = unique
 
     def cost(k, op, ok):
