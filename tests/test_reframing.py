@@ -187,3 +187,22 @@ def test_a_long_chain_of_parallel_axes_keeps_the_origin_search_small(tmp_path, r
         q, qd, qdd = rng.uniform(-np.pi, np.pi, n), rng.normal(size=n), rng.normal(size=n)
         tau = run(ROUTINES["inverse_dynamics"], bound, {"q": list(q), "qd": list(qd), "qdd": list(qdd)})[0]
         assert relative_error(np.array(tau, float), pin.rnea(pm, data, pinocchio_q(pm, q), qd, qdd)) <= TOLERANCE
+
+
+def test_internal_frames_are_chosen_only_when_used_and_counted_only_on_small_trees(monkeypatch):
+    """Choosing the internal frames counts two scratch programs of the dynamics: not done at all when no routine of
+    the coordinates alone is emitted, and above COUNTED_UP_TO coordinates the first internal model is taken
+    without counting."""
+    from aggsym.codegen import generate as gen
+
+    model = aggsym.load(robots_directory() / ARMS["panda"])
+    calls = []
+    real = gen.reframe
+    monkeypatch.setattr(gen, "reframe", lambda m, **kw: calls.append(kw) or real(m, **kw))
+    gen.symbolic_routines(model, roles=["frame_poses", "joint_wrenches"])
+    assert calls == []
+    gen.symbolic_routines(model, roles=["gravity"])
+    assert len(calls) == 2
+    calls.clear()
+    monkeypatch.setattr(gen, "COUNTED_UP_TO", model.nv - 1)
+    assert gen.internal_model(model) is not model and calls == [{"fewest": False}]
