@@ -39,11 +39,20 @@ def _origin_form(mass, com, J) -> tuple:
     return mass, sp.Matrix(mass * c), theta
 
 
-def _moved(m, h_link, I_link, R, t) -> tuple:
-    """A part given about the link frame's origin in link axes, about the body origin in body axes."""
-    h = R * h_link
-    theta = R * I_link * R.T + m * (t.dot(t) * sp.eye(3) - t * t.T) + 2 * t.dot(h) * sp.eye(3) - t * h.T - h * t.T
-    return m, h + m * t, theta
+def moved_mises(m, h, theta, C, p) -> tuple:
+    """L Theta L^T (2.7) for L = T(p) C(C): a Mises matrix (m, h, Theta_O) given about a frame's origin in its axes
+    (a link frame, a child's frame), about the origin of the frame in which the first has axes C and origin p (the
+    body's, the parent's)."""
+    hr = C * h
+    shift = C * theta * C.T + (2 * p.dot(hr) + m * p.dot(p)) * sp.eye(3) - hr * p.T - p * hr.T - m * p * p.T
+    return m, hr + m * p, shift
+
+
+def mises_in_frame(m, h, theta, R, o) -> tuple:
+    """The inverse of :func:`moved_mises`: (m, h, Theta_O) about the origin o of a frame with axes R (x = R x' + o),
+    in its axes: h' = R^T (h - m o), Theta' = R^T (Theta_O + (m o.o - 2 o.h) E + h o^T + o h^T - m o o^T) R."""
+    shift = theta + (m * o.dot(o) - 2 * o.dot(h)) * sp.eye(3) + h * o.T + o * h.T - m * o * o.T
+    return m, R.T * (h - m * o), R.T * shift * R
 
 
 def _values(model: Model, link: str) -> list:
@@ -53,12 +62,7 @@ def _values(model: Model, link: str) -> list:
         return [0.0] * 10
     _, R, t = model.meta["link_frames"][link]
     R, t = sp.Matrix(R), sp.Matrix(t)
-    m, h, theta = _origin_form(*part)  # about the body origin, body axes
-    # back to the link frame: the inverse of _moved
-    h_link = R.T * (h - m * t)
-    hb = R * h_link
-    I_body_at_link = theta - (m * (t.dot(t) * sp.eye(3) - t * t.T) + 2 * t.dot(hb) * sp.eye(3) - t * hb.T - hb * t.T)
-    I_link = R.T * I_body_at_link * R
+    m, h_link, I_link = mises_in_frame(*_origin_form(*part), R, t)  # from the body origin back to the link frame
     return [float(m)] + [float(h_link[i]) for i in range(3)] + [float(I_link[i, j]) for i, j in _ENTRIES]
 
 
@@ -115,7 +119,7 @@ def with_inertial_parameters(model: Model, links=(), payload: str | None = None)
         I = sp.zeros(3, 3)
         for (i, j), x in zip(_ENTRIES, syms[4:]):
             I[i, j] = I[j, i] = x
-        return index[body], _moved(m, h, I, sp.Matrix(R), sp.Matrix(t))
+        return index[body], moved_mises(m, h, I, sp.Matrix(R), sp.Matrix(t))
 
     for link in links:
         k, part = parametrized(link, symbols(lambda n, link=link: f"{n}_{_identifier(link)}", _values(model, link)))

@@ -44,6 +44,7 @@ import math
 import numpy as np
 import sympy as sp
 
+from .inertials import mises_in_frame, moved_mises
 from .tree import Tree
 from .types import Inertial, Model, code_index
 
@@ -305,7 +306,7 @@ def reframe(model: Model, normals: bool = True, fewest: bool = True) -> Model:
         m, h, th = b.inertial.mises()
         Rk = sp.Matrix(3, 3, lambda i, j: _unit(float(R[k][i, j])))
         ok = sp.Matrix([_length(float(x), 1 + float(np.linalg.norm(o[k]))) for x in o[k]])
-        mises.append(_shifted(m, sp.Matrix(h), sp.Matrix(th), Rk, ok))
+        mises.append(mises_in_frame(m, sp.Matrix(h), sp.Matrix(th), Rk, ok))
     moving = tree.moving
     for k in range(N - 1, 0, -1):
         p = tree.parent[k]
@@ -319,7 +320,7 @@ def reframe(model: Model, normals: bool = True, fewest: bool = True) -> Model:
         else:
             part = (sp.Integer(0), sp.zeros(3, 1), th)
             mises[k] = (m, h, sp.zeros(3, 3))
-        moved = _moved(*part, *motions[k])
+        moved = moved_mises(*part, *motions[k])
         mises[p] = moved if mises[p] is None else tuple(a + b for a, b in zip(mises[p], moved))
     new = []
     for k, b in enumerate(bodies):
@@ -355,17 +356,3 @@ def _constant_motion(Rp, c0, Rk, t0, ok, op):
     gamma_x, alpha_x = _exact_angle(gamma), _exact_angle(alpha)
     rest = _rx(-float(alpha_x)) @ _rz(-float(gamma_x)) @ C
     return C, tr, gamma_x, alpha_x, math.atan2(rest[1, 0], rest[0, 0])
-
-
-def _shifted(m, h, th, R, o):
-    """The Mises matrix (m, h, theta_O) (2.3) given at the origin of frame B, in the frame x_B = R x' + o:
-    h' = R^T (h - m o), theta' = R^T (theta_O + (m o.o - 2 o.h) E + h o^T + o h^T - m o o^T) R."""
-    shift = th + (m * o.dot(o) - 2 * o.dot(h)) * sp.eye(3) + h * o.T + o * h.T - m * o * o.T
-    return m, R.T * (h - m * o), R.T * shift * R
-
-
-def _moved(m, h, th, C, p):
-    """L Theta L^T (2.7) for L = T(p) C(C): the Mises matrix in the parent frame."""
-    hr = C * h
-    shift = C * th * C.T + (2 * p.dot(hr) + m * p.dot(p)) * sp.eye(3) - hr * p.T - p * hr.T - m * p * p.T
-    return m, hr + m * p, shift
