@@ -4,8 +4,9 @@
 templates/helpers.c.j2 into a header, builds benchmarks/harness/trig_bench.c with it (cc -O2, and -O2
 -ffast-math), and times on the same 4096 arguments, uniform in [-pi, pi] (joint angles) and in [-1000, 1000]:
 libm's sin and cos called separately, GNU sincos (glibc), aggsym's helper of before (a quadrant switch; libm's
-sin and cos under -ffast-math), and the generated branch-free aggsym_sincos.  Each figure is the best of 7 passes
-of 200 x 4096 calls, in CPU time (the harness prints them).
+sin and cos under -ffast-math), the generated branch-free aggsym_sincos, aggsym_sincos2 (two angles in the lanes of
+one vector) and aggsym_sincos's latency (each argument computed from the last result).  Each figure is the best of 7
+passes of 200 x 4096 angles, in CPU time (the harness prints them).
 Timings on a shared machine are noisy: :func:`run` records the load average beside them.
 """
 from __future__ import annotations
@@ -26,12 +27,15 @@ FLAGS = {"-O2": ["-O2"], "-O2 -ffast-math": ["-O2", "-ffast-math"]}
 RANGES = {"[-pi, pi]": "3.141592653589793", "[-1000, 1000]": "1000"}
 VARIANTS = {"libm": "libm sin + cos", "sincos": "GNU sincos",
             "switch": "aggsym before (quadrant switch; libm under -ffast-math)",
-            "aggsym": "aggsym_sincos (branch-free)"}
+            "aggsym": "aggsym_sincos (branch-free)",
+            "aggsym2": "aggsym_sincos2 (two angles a call; per angle)",
+            "latency": "aggsym_sincos latency (argument after the last result)"}
 
 
 def sincos_source() -> str:
-    """The double aggsym_sincos exactly as the generated C defines it."""
-    return templates().get_template("helpers.c.j2").render(sign=False, sincos=True, scalar="double", zero="0.0")
+    """The double aggsym_sincos and aggsym_sincos2 exactly as the generated C defines them."""
+    return templates().get_template("helpers.c.j2").render(sign=False, sincos=True, sincos2=True, scalar="double",
+                                                            zero="0.0")
 
 
 def run() -> dict:

@@ -37,6 +37,7 @@ def test_ops_counted_while_printing_equal_the_c_texts(name, scalar):
     ("y = f (a, b)/g(c) + sizeof(x);", (0, 1, 1, 2)),
     ("/* a*b + c/d */ x = 1.5f + .5;", (0, 1, 0, 0)),
     ("aggsym_sincos(q_0, &s, &c);", (0, 0, 0, 1)),
+    ("aggsym_sincos2(q_0, q_1, &s, &c, &t, &d);", (0, 0, 0, 2)),  # two angles: two calls, as the manifest counts
 ])
 def test_count_ops_reads_c(code, expected):
     got = count_ops(code)

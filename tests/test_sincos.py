@@ -1,6 +1,7 @@
 """The generated C's aggsym_sincos (templates/helpers.c.j2; issue 18, item 4): one branch-free sin-and-cos per
 angle, within 2 ulp of libm's sin and cos over [-1e6, 1e6], equal to libm's at the double nearest every k pi/2,
-libm's own values outside |x| < 1e6 and for nan and inf, and all of this also when compiled with -ffast-math.
+libm's own values outside |x| < 1e6 and for nan and inf, and all of this also when compiled with -ffast-math;
+and the same of aggsym_sincos2, two angles at once in the lanes of one vector (each test runs on both).
 
 The function under test is the one in a generated model's C (double_pendulum.c, #included by a small driver so
 that its static function is reachable); the reference is libm (Python's math.sin and math.cos call the C
@@ -8,6 +9,7 @@ library's sin and cos), and the doubles nearest k pi/2 come from mpmath at 200 b
 from __future__ import annotations
 
 import ctypes
+import json
 import math
 import re
 import subprocess
@@ -32,31 +34,54 @@ void sincos_many(const double *x, double *s, double *c, long n)
     for (long i = 0; i < n; i++)
         aggsym_sincos(x[i], s + i, c + i);
 }
+void sincos2_many(const double *x, double *s, double *c, long n)
+{
+    long i = 0;
+    for (; i + 1 < n; i += 2)
+        aggsym_sincos2(x[i], x[i + 1], s + i, c + i, s + i + 1, c + i + 1);
+    if (i < n) {  /* the last of an odd count beside pi/3 */
+        double s1, c1;
+        aggsym_sincos2(x[i], 1.0471975511965976, s + i, c + i, &s1, &c1);
+    }
+}
 """
 
 
-@pytest.fixture(scope="module", params=sorted(FLAGS))
-def sincos(request, tmp_path_factory):
-    """The generated aggsym_sincos compiled with the flags (-Werror: warning-free), as f(x) -> (sin, cos)."""
-    folder = tmp_path_factory.mktemp(request.param)
+def compiled_driver(folder, flags):
+    """The generated double_pendulum.c (which calls both aggsym_sincos and aggsym_sincos2) with DRIVER, compiled
+    with the flags and -Werror (warning-free), loaded."""
     gen = generate(aggsym.load(model_path("double_pendulum")), latex=False)
     for name, text in gen.files.items():
         (folder / name).write_text(text)
-    assert "aggsym_sincos(" in gen.files["double_pendulum.c"]
+    assert "aggsym_sincos(" in gen.files["double_pendulum.c"] and "aggsym_sincos2(" in gen.files["double_pendulum.c"]
     (folder / "driver.c").write_text(DRIVER)
     lib = folder / "libdriver.so"
-    subprocess.run([compiler(), "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", *FLAGS[request.param],
+    subprocess.run([compiler(), "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", *flags,
                     "-fPIC", "-shared", "-o", str(lib), str(folder / "driver.c"), "-lm"], check=True, cwd=folder)
-    dll = ctypes.CDLL(str(lib))
+    return ctypes.CDLL(str(lib))
+
+
+def as_function(dll, symbol):
     ptr = ctypes.POINTER(ctypes.c_double)
 
     def f(x):
         x = np.ascontiguousarray(x, dtype=np.float64)
         s, c = np.empty_like(x), np.empty_like(x)
-        dll.sincos_many(x.ctypes.data_as(ptr), s.ctypes.data_as(ptr), c.ctypes.data_as(ptr), ctypes.c_long(x.size))
+        getattr(dll, symbol)(x.ctypes.data_as(ptr), s.ctypes.data_as(ptr), c.ctypes.data_as(ptr),
+                             ctypes.c_long(x.size))
         return s, c
-
     return f
+
+
+@pytest.fixture(scope="module", params=sorted(FLAGS))
+def driver(request, tmp_path_factory):
+    return compiled_driver(tmp_path_factory.mktemp(request.param), FLAGS[request.param])
+
+
+@pytest.fixture(scope="module", params=["sincos_many", "sincos2_many"])
+def sincos(request, driver):
+    """The generated aggsym_sincos (one angle a call) or aggsym_sincos2 (two), as f(x) -> (sin, cos)."""
+    return as_function(driver, request.param)
 
 
 def libm(x):
@@ -142,3 +167,26 @@ def test_the_helper_is_static_inline_and_has_no_quadrant_branch():
     assert "if" not in re.sub(r"#if|#endif", "", fast) and "?" not in fast
     assert "static inline void aggsym_sincos(float x" in generate(
         aggsym.load(model_path("double_pendulum")), latex=False, scalar="float").files["double_pendulum.c"]
+
+
+def test_the_pair_gives_the_single_angle_results_bit_for_bit(tmp_path, rng):
+    """Without -ffast-math the two lanes of aggsym_sincos2 do aggsym_sincos's arithmetic: identical doubles, also
+    where one of the pair is outside the fast range (both then go through aggsym_sincos)."""
+    dll = compiled_driver(tmp_path, ["-O2"])
+    x = np.concatenate([rng.uniform(-10, 10, 10 ** 5), rng.uniform(-1e6, 1e6, 10 ** 5), [3e6, 0.5, -0.25, np.inf]])
+    one, two = as_function(dll, "sincos_many")(x), as_function(dll, "sincos2_many")(x)
+    for a, b in zip(one, two):
+        assert np.array_equal(a.view(np.int64), b.view(np.int64))
+
+
+def test_angles_of_one_routine_are_paired_when_both_are_ready():
+    """The emitter joins two sincos calls into one aggsym_sincos2 when the second angle's argument is already
+    computable (here the coordinates), and an odd one out stays a single call; the operation count still counts
+    one call per angle."""
+    gen = generate(aggsym.load(model_path("manipulator6")), latex=False)
+    c = gen.files["manipulator6.c"]
+    body = c[c.index("void manipulator6_inertia("):]
+    body = body[:body.index("\n}\n")]
+    pairs, singles = body.count("aggsym_sincos2("), body.count("aggsym_sincos(")
+    calls = json.loads(gen.files["manipulator6.json"])["ops"]["inertia"]["call"]
+    assert pairs >= 1 and 2 * pairs + singles == calls

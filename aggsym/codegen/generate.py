@@ -16,7 +16,9 @@ import shutil
 import tempfile
 import time
 import warnings
+from collections import deque
 from dataclasses import dataclass, field
+from itertools import islice
 from importlib.resources import files
 from types import SimpleNamespace
 from pathlib import Path
@@ -230,6 +232,8 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing) 
     conv.refs.clear()
     trig = _trig_pairs(prog, sl.temps)
     done = set()
+    defined = set(names) - set(temp_names)  # node ids with a C name already defined: the inputs, then temps
+    pending = _pending_pairs(sl.steps, trig)
     shapes = [out.shape(model) for out in routine.outputs]
     for step in sl.steps:
         before = ops_so_far()
@@ -250,20 +254,28 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing) 
             rhs_c, rhs_py = both(tree, calls)
             py_body.append(f"{names[i]} = {rhs_py}")
             emit([f"const {scalar} {names[i]} = {rhs_c};"], defines=(names[i],), ops=ops_so_far() - before)
+            defined.add(i)
             continue
         py_body.append(f"{names[i]} = {pp._print(tree)}")
-        sin_id, cos_id, arg = trig[i]
-        if (sin_id, cos_id) in done:
+        pair = trig[i]
+        if pair[:2] in done:
             conv.refs.clear()
             continue
-        done.add((sin_id, cos_id))
-        s_name = names[sin_id] if sin_id is not None else names[cos_id] + "_sin"
-        c_name = names[cos_id] if cos_id is not None else names[sin_id] + "_cos"
-        conv.refs.clear()  # (the sin or cos tree above was built for NumPy; the argument's names again below)
-        argument = cp._print(conv(arg, top=False))
-        cp.counts["call"] += 1
-        emit([f"{scalar} {s_name}, {c_name};", f"aggsym_sincos({argument}, &{s_name}, &{c_name});"],
-             defines=(s_name, c_name), ops=ops_so_far() - before)
+        conv.refs.clear()  # (the sin or cos tree above was built for NumPy; the arguments' names again below)
+        # a second angle whose argument is already computable shares the call (aggsym_sincos2: two in one vector)
+        partner = _ready_partner(prog, names, pending, done, defined, pair)
+        c_names, arguments = [], []
+        for sin_id, cos_id, arg in (pair,) if partner is None else (pair, partner):
+            done.add((sin_id, cos_id))
+            defined.update(j for j in (sin_id, cos_id) if j is not None)
+            c_names += [names[sin_id] if sin_id is not None else names[cos_id] + "_sin",
+                        names[cos_id] if cos_id is not None else names[sin_id] + "_cos"]
+            arguments.append(cp._print(conv(arg, top=False)))
+            cp.counts["call"] += 1
+        pointers = ", ".join(f"&{n}" for n in c_names)
+        emit([f"{scalar} {', '.join(c_names)};",
+              f"aggsym_sincos{'' if partner is None else '2'}({', '.join(arguments)}, {pointers});"],
+             defines=c_names, ops=ops_so_far() - before)
     if status is not None:
         emit([f"return {status.name}[0] != {_number(0.0, scalar)};"], entry="tail")
     c_body = [line for st in stmts for line in st.lines]
@@ -289,6 +301,44 @@ def _trig_pairs(prog, temps) -> dict:
             pair = by_arg.setdefault(("n", arg.id) if isinstance(arg, Node) else ("c", repr(arg)), [None, None, arg])
             pair[0 if entry[0] == SIN else 1] = i
     return {i: tuple(pair) for pair in by_arg.values() for i in pair[:2] if i is not None}
+
+
+def _pending_pairs(steps, trig) -> deque:
+    """The sin-and-cos pairs in the order of their first step (the order aggsym_sincos is called in)."""
+    order = {}
+    for step in steps:
+        if step[0] != "out" and step[1] in trig:
+            order.setdefault(trig[step[1]][:2], trig[step[1]])
+    return deque(order.values())
+
+
+PARTNER_LOOKAHEAD = 8  # the pairs not yet emitted that are tried as the partner of a sincos call
+
+
+def _ready_partner(prog, names, pending, done, defined, pair):
+    """The first pair other than ``pair`` among the next :data:`PARTNER_LOOKAHEAD` not yet emitted whose argument
+    is computable now (:func:`_computable`), or None.  ``pending`` (in order) loses its emitted pairs from the
+    front, so that a call costs O(1)."""
+    while pending and pending[0][:2] in done:
+        pending.popleft()
+    for candidate in islice(pending, PARTNER_LOOKAHEAD):
+        if candidate[:2] != pair[:2] and candidate[:2] not in done and _computable(prog, names, candidate[2], defined):
+            return candidate
+    return None
+
+
+def _computable(prog, names, arg, defined) -> bool:
+    """Whether an expression needs only constants and the ``defined`` nodes (inputs and temps already emitted),
+    following the unnamed nodes that the printer inlines."""
+    stack = [arg]
+    while stack:
+        x = stack.pop()
+        if not isinstance(x, Node) or x.id in defined:
+            continue
+        if x.id in names:  # a named node not emitted yet
+            return False
+        stack.extend(prog.operands(x.id))
+    return True
 
 
 def _unravel(k, shape):
@@ -359,7 +409,8 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         "velocities": model.coordinates if model.nq != model.nv else None,
         "nv": model.nv,
         "frames": model.frames if any(e.routine.role.startswith("frame_") for e in emitted) else (),
-        "sincos": any("aggsym_sincos(" in line for r in emitted for line in r.c_body),
+        "sincos": any("aggsym_sincos" in line for r in emitted for line in r.c_body),
+        "sincos2": any("aggsym_sincos2(" in line for r in emitted for line in r.c_body),
         "sign": any("aggsym_sign(" in line for r in emitted for line in r.c_body),
         "sliced": any(r.sliced for r in emitted),
         "time": model.time_dependent,
@@ -385,7 +436,7 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
     return gen
 
 
-HELPERS = ("aggsym_sincos(", "aggsym_sign(")  # the calls of the helpers that helpers.c.j2 defines
+HELPERS = ("aggsym_sincos(", "aggsym_sincos2(", "aggsym_sign(")  # the calls of the helpers that helpers.c.j2 defines
 
 
 def _helpers_used(r: EmittedRoutine) -> bool:

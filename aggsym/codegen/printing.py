@@ -343,14 +343,16 @@ _BINARY = re.compile(r"[\w)\]]\s*[+-]")
 # a call: a name followed by an opening parenthesis
 _CALL = re.compile(r"([A-Za-z_]\w*)\s*\(")
 _KEYWORDS = frozenset(("if", "for", "while", "return", "sizeof"))
+_ANGLES = {"aggsym_sincos2": 2}  # sin and cos of two angles in one call: counted as two calls, one per angle
 
 
 def count_ops(c_code: str) -> dict:
-    """Operation counts of C statements: mul, add (incl. subtractions), div, call (unary minus not counted).
+    """Operation counts of C statements: mul, add (incl. subtractions), div, call (unary minus not counted; one
+    call per angle of aggsym_sincos2).
 
     A ``+`` or ``-`` is an addition when it follows a value (a name, a number, ``)`` or ``]``), as in C's grammar;
     numeric literals are read as one token first, so the sign of an exponent (``2.5e-3``) is not an operation.
     Regular expressions over the whole text: linear, with no Python work per token."""
     code = _LITERAL.sub("0", _COMMENT.sub(" ", c_code))
-    calls = sum(1 for m in _CALL.finditer(code) if m.group(1) not in _KEYWORDS)
+    calls = sum(_ANGLES.get(m.group(1), 1) for m in _CALL.finditer(code) if m.group(1) not in _KEYWORDS)
     return {"mul": code.count("*"), "add": len(_BINARY.findall(code)), "div": code.count("/"), "call": calls}

@@ -7,7 +7,11 @@
  *   sincos      GNU sincos(x, &s, &c) where _GNU_SOURCE provides it (glibc), else not printed
  *   switch      aggsym's helper before: a quadrant switch (branchy), libm under -ffast-math (the baseline)
  *   aggsym      the generated aggsym_sincos
- * and prints one line per variant: NAME NS_PER_CALL (the best of REPEATS passes over the arguments, in CPU time). */
+ *   aggsym2     the generated aggsym_sincos2, two consecutive arguments a call (time per angle)
+ *   latency     aggsym_sincos when each argument depends on the previous result (x_i + 1e-3 s_{i-1}): the time
+ *               from an argument to its sin and cos, what one call of a routine waits for
+ * and prints one line per variant: NAME NS_PER_ANGLE (the best of REPEATS passes over the arguments, in CPU
+ * time). */
 #define _GNU_SOURCE  /* sincos, clock_gettime */
 #include <math.h>
 #include <stdio.h>
@@ -96,6 +100,42 @@ static volatile double sink;
         printf("%s %.3f\n", NAME, 1e9 * best / ((double)PASSES * N));          \
     } while (0)
 
+static double pair_pass(double acc)  /* aggsym_sincos2 on consecutive arguments */
+{
+    for (int i = 0; i < N; i += 2) {
+        double s0, c0, s1, c1;
+        aggsym_sincos2(xs[i], xs[i + 1], &s0, &c0, &s1, &c1);
+        acc += s0 + c0 + s1 + c1;
+    }
+    return acc;
+}
+
+static double latency_pass(double acc)  /* each argument waits for the last result */
+{
+    for (int i = 0; i < N; i++) {
+        double s, c;
+        aggsym_sincos(xs[i] + 1e-3 * acc, &s, &c);
+        acc = s;
+    }
+    return acc;
+}
+
+#define TIME_PASS(NAME, PASS)                                                   \
+    do {                                                                        \
+        double best = 1e300;                                                    \
+        for (int rep = 0; rep < REPEATS; rep++) {                               \
+            double acc = 0.0;                                                   \
+            const double t0 = now();                                            \
+            for (int pass = 0; pass < PASSES; pass++)                           \
+                acc = PASS(acc);                                                \
+            const double t = now() - t0;                                        \
+            sink = acc;                                                         \
+            if (t < best)                                                       \
+                best = t;                                                       \
+        }                                                                       \
+        printf("%s %.3f\n", NAME, 1e9 * best / ((double)PASSES * N));          \
+    } while (0)
+
 int main(int argc, char **argv)
 {
     const double lo = argc > 1 ? atof(argv[1]) : 3.141592653589793;
@@ -108,5 +148,7 @@ int main(int argc, char **argv)
 #endif
     TIME("switch", switch_sincos);
     TIME("aggsym", aggsym_sincos);
+    TIME_PASS("aggsym2", pair_pass);
+    TIME_PASS("latency", latency_pass);
     return 0;
 }

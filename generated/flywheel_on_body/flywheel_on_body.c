@@ -6,17 +6,22 @@
  * (adding 1.5 2^52 rounds it in the floating-point unit, its low bits then those of k), |r| <= pi/4 (Cody-Waite):
  * pi/2 = P1 + P2 + P3 + P4 (+ 2^-142), P1 and P2 of at most 33 significant bits, P3 of 19, P4 a double, so for
  * |k| < 2^20 every k Pi but the last is exact, and so is every difference but the last when r is small (x near
- * k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal libm's.  The Taylor series
- * of sin r to r^17 and of cos r to r^18 (truncation below 1e-19 at r = pi/4), by Estrin's scheme (short
- * dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on the doubles' bits (no
- * branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty asm after each exact
- * step keeps the compiler from folding the rounding of k away and from reassociating the reduction into
- * x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.  Outside |x| < 1e6 (and for
- * nan, inf) libm's sin and cos. */
-#if defined(__FAST_MATH__) && defined(__GNUC__)
-#define AGGSYM_KEEP(v) __asm__("" : "+g"(v))
-#else
+ * k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal libm's.  sin r = r + r^3
+ * S(r^2), S of degree 5, and cos r = 1 + r^2 C(r^2), C of degree 6: minimax polynomials (Remez, weighted for
+ * the relative error of sin and cos on |r| <= pi/4: 3.6e-18 and 3.9e-20 before rounding the coefficients), by
+ * Estrin's scheme (short dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on
+ * the doubles' bits (no branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty
+ * asm after each exact step keeps the compiler from folding the rounding of k away and from reassociating the
+ * reduction into x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.  Outside
+ * |x| < 1e6 (and for nan, inf) libm's sin and cos. */
+#if !defined(__FAST_MATH__) || !defined(__GNUC__)
 #define AGGSYM_KEEP(v) (void)0
+#elif defined(__SSE2__)
+#define AGGSYM_KEEP(v) __asm__("" : "+x"(v))  /* in its SSE register */
+#elif defined(__aarch64__)
+#define AGGSYM_KEEP(v) __asm__("" : "+w"(v))  /* in its SIMD register */
+#else
+#define AGGSYM_KEEP(v) __asm__("" : "+g"(v))
 #endif
 static inline void aggsym_sincos(double x, double *s, double *c)
 {
@@ -44,13 +49,11 @@ static inline void aggsym_sincos(double x, double *s, double *c)
     const double r2 = r * r;
     const double r4 = r2 * r2;
     const double r8 = r4 * r4;
-    const double sp = ((-0.16666666666666666 + r2 * 0.008333333333333333)
-        + r4 * (-0.0001984126984126984 + r2 * 2.7557319223985893e-06))
-        + r8 * ((-2.505210838544172e-08 + r2 * 1.6059043836821613e-10)
-        + r4 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15));
-    const double cp = ((-0.5 + r2 * 0.041666666666666664) + r4 * (-0.001388888888888889 + r2 * 2.48015873015873e-05))
-        + r8 * (((-2.755731922398589e-07 + r2 * 2.08767569878681e-09)
-        + r4 * (-1.1470745597729725e-11 + r2 * 4.779477332387385e-14)) + r8 * -1.5619206968586225e-16);
+    const double sp = (-0.1666666666666663 + r2 * 0.008333333333322118)
+        + r4 * (-0.00019841269829589542 + r2 * 2.75573136213867e-06)
+        + r8 * (-2.5050747762987452e-08 + r2 * 1.589623016401917e-10);
+    const double cp = (-0.5 + r2 * 0.04166666666666647) + r4 * (-0.0013888888888862 + r2 * 2.480158728409462e-05)
+        + r8 * ((-2.755731311729104e-07 + r2 * 2.0875582127062193e-09) + r4 * -1.1353281254359034e-11);
     const double sr = r + (r * r2) * sp;
     const double cr = 1.0 + r2 * cp;
     const unsigned long long swap = 0ULL - (k & 1);  /* all ones for odd k */
@@ -63,6 +66,60 @@ static inline void aggsym_sincos(double x, double *s, double *c)
     *c = out_c.d;
 #endif
 }
+
+/* sin and cos of two angles at once: aggsym_sincos's arithmetic on both in the lanes of one 2-double vector
+ * (GCC's vector extension, also Clang's: SSE2 on x86-64, NEON on AArch64), the same results as two calls of
+ * aggsym_sincos; elsewhere, or when either angle is outside |x| < 1e6, the two calls. */
+#if defined(__GNUC__) && (defined(__SSE2__) || defined(__aarch64__))
+typedef double aggsym_v2d __attribute__((vector_size(16)));
+typedef unsigned long long aggsym_v2u __attribute__((vector_size(16)));
+static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, double *s1, double *c1)
+{
+    if (!(fabs(x0) < 1.0e6 && fabs(x1) < 1.0e6)) {
+        aggsym_sincos(x0, s0, c0);
+        aggsym_sincos(x1, s1, c1);
+        return;
+    }
+    const aggsym_v2d x = {x0, x1};
+    const aggsym_v2d shift = {6755399441055744.0, 6755399441055744.0};
+    aggsym_v2d big = x * 0.6366197723675814 + shift;
+    AGGSYM_KEEP(big);
+    const aggsym_v2d kd = big - shift;
+    const aggsym_v2u k = (aggsym_v2u)big;
+    aggsym_v2d r = x - kd * 1.5707963267341256;
+    AGGSYM_KEEP(r);
+    r -= kd * 6.077100506303966e-11;
+    AGGSYM_KEEP(r);
+    r -= kd * 2.022269189584621e-21;
+    AGGSYM_KEEP(r);
+    r -= kd * -2.940788670387328e-27;
+    const aggsym_v2d r2 = r * r;
+    const aggsym_v2d r4 = r2 * r2;
+    const aggsym_v2d r8 = r4 * r4;
+    const aggsym_v2d sp = (-0.1666666666666663 + r2 * 0.008333333333322118)
+        + r4 * (-0.00019841269829589542 + r2 * 2.75573136213867e-06)
+        + r8 * (-2.5050747762987452e-08 + r2 * 1.589623016401917e-10);
+    const aggsym_v2d cp = (-0.5 + r2 * 0.04166666666666647) + r4 * (-0.0013888888888862 + r2 * 2.480158728409462e-05)
+        + r8 * ((-2.755731311729104e-07 + r2 * 2.0875582127062193e-09) + r4 * -1.1353281254359034e-11);
+    const aggsym_v2d sr = r + (r * r2) * sp;
+    const aggsym_v2d cr = 1.0 + r2 * cp;
+    const aggsym_v2u one = {1, 1}, two = {2, 2};
+    const aggsym_v2u swap = -(k & one);
+    const aggsym_v2u sin_r = (aggsym_v2u)sr, cos_r = (aggsym_v2u)cr;
+    const aggsym_v2d out_s = (aggsym_v2d)(((sin_r & ~swap) | (cos_r & swap)) ^ ((k & two) << 62));
+    const aggsym_v2d out_c = (aggsym_v2d)(((cos_r & ~swap) | (sin_r & swap)) ^ (((k + one) & two) << 62));
+    *s0 = out_s[0];
+    *c0 = out_c[0];
+    *s1 = out_s[1];
+    *c1 = out_c[1];
+}
+#else
+static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, double *s1, double *c1)
+{
+    aggsym_sincos(x0, s0, c0);
+    aggsym_sincos(x1, s1, c1);
+}
+#endif
 #undef AGGSYM_KEEP
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -77,14 +134,12 @@ void flywheel_on_body_inertia(const double *q, const double *t, const double *p,
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
-    double x2, x1;
-    aggsym_sincos(x0, &x2, &x1);
+    double x2, x1, x8, x7;
+    aggsym_sincos2(x0, q_1, &x2, &x1, &x8, &x7);
     const double x3 = 0.9659258262890682*x2 - 0.04494345552754777*x1;
     const double x4 = 0.04494345552754777*x2 + 0.9659258262890682*x1;
     const double x5 = 0.1677312594965206*x1 + 0.2588190451025207*x2;
     const double x6 = 0.2588190451025207*x1 - 0.1677312594965206*x2;
-    double x8, x7;
-    aggsym_sincos(q_1, &x8, &x7);
     double x10, x9;
     aggsym_sincos(q_2, &x10, &x9);
     const double x11 = x7*x9;
@@ -140,16 +195,14 @@ void flywheel_on_body_bias(const double *q, const double *qd, const double *t, c
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
     const double x1 = p_0 + p_1*t_0;
-    double x3, x2;
-    aggsym_sincos(x0, &x3, &x2);
+    double x3, x2, x11, x10;
+    aggsym_sincos2(x0, q_1, &x3, &x2, &x11, &x10);
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.984807753012208*x3;
     const double x6 = 0.9659258262890682*x3 - 0.04494345552754777*x2;
     const double x7 = 0.04494345552754777*x3 + 0.9659258262890682*x2;
     const double x8 = 0.1677312594965206*x2 + 0.2588190451025207*x3;
     const double x9 = 0.2588190451025207*x2 - 0.1677312594965206*x3;
-    double x11, x10;
-    aggsym_sincos(q_1, &x11, &x10);
     double x13, x12;
     aggsym_sincos(q_2, &x13, &x12);
     const double x14 = x10*x12;
@@ -229,20 +282,16 @@ void flywheel_on_body_gravity(const double *q, const double *t, const double *p,
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
-    double x2, x1;
-    aggsym_sincos(x0, &x2, &x1);
+    double x2, x1, x10, x9;
+    aggsym_sincos2(x0, q_0, &x2, &x1, &x10, &x9);
     const double x3 = 0.984807753012208*x1;
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.9659258262890682*x2 - 0.04494345552754777*x1;
     const double x6 = 0.04494345552754777*x2 + 0.9659258262890682*x1;
     const double x7 = 0.1677312594965206*x1 + 0.2588190451025207*x2;
     const double x8 = 0.2588190451025207*x1 - 0.1677312594965206*x2;
-    double x10, x9;
-    aggsym_sincos(q_0, &x10, &x9);
-    double x12, x11;
-    aggsym_sincos(q_1, &x12, &x11);
-    double x14, x13;
-    aggsym_sincos(q_2, &x14, &x13);
+    double x12, x11, x14, x13;
+    aggsym_sincos2(q_1, q_2, &x12, &x11, &x14, &x13);
     const double x15 = x9*x12;
     const double x16 = x9*x11;
     const double x17 = x10*x14 - x13*x15;
@@ -286,20 +335,16 @@ void flywheel_on_body_nonlinear_effects(const double *q, const double *qd, const
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
     const double x1 = p_0 + p_1*t_0;
-    double x3, x2;
-    aggsym_sincos(x0, &x3, &x2);
+    double x3, x2, x11, x10;
+    aggsym_sincos2(x0, q_0, &x3, &x2, &x11, &x10);
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.984807753012208*x3;
     const double x6 = 0.9659258262890682*x3 - 0.04494345552754777*x2;
     const double x7 = 0.04494345552754777*x3 + 0.9659258262890682*x2;
     const double x8 = 0.1677312594965206*x2 + 0.2588190451025207*x3;
     const double x9 = 0.2588190451025207*x2 - 0.1677312594965206*x3;
-    double x11, x10;
-    aggsym_sincos(q_0, &x11, &x10);
-    double x13, x12;
-    aggsym_sincos(q_1, &x13, &x12);
-    double x15, x14;
-    aggsym_sincos(q_2, &x15, &x14);
+    double x13, x12, x15, x14;
+    aggsym_sincos2(q_1, q_2, &x13, &x12, &x15, &x14);
     const double x16 = x10*x13;
     const double x17 = x10*x12;
     const double x18 = x12*x14;
@@ -388,20 +433,16 @@ void flywheel_on_body_inverse_dynamics(const double *q, const double *qd, const 
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
     const double x1 = p_0 + p_1*t_0;
-    double x3, x2;
-    aggsym_sincos(x0, &x3, &x2);
+    double x3, x2, x11, x10;
+    aggsym_sincos2(x0, q_0, &x3, &x2, &x11, &x10);
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.984807753012208*x3;
     const double x6 = 0.9659258262890682*x3 - 0.04494345552754777*x2;
     const double x7 = 0.04494345552754777*x3 + 0.9659258262890682*x2;
     const double x8 = 0.1677312594965206*x2 + 0.2588190451025207*x3;
     const double x9 = 0.2588190451025207*x2 - 0.1677312594965206*x3;
-    double x11, x10;
-    aggsym_sincos(q_0, &x11, &x10);
-    double x13, x12;
-    aggsym_sincos(q_1, &x13, &x12);
-    double x15, x14;
-    aggsym_sincos(q_2, &x15, &x14);
+    double x13, x12, x15, x14;
+    aggsym_sincos2(q_1, q_2, &x13, &x12, &x15, &x14);
     const double x16 = x10*x13;
     const double x17 = x10*x12;
     const double x18 = x12*x14;
@@ -482,16 +523,14 @@ void flywheel_on_body_kinetic_energy(const double *q, const double *qd, const do
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
-    double x2, x1;
-    aggsym_sincos(x0, &x2, &x1);
+    double x2, x1, x10, x9;
+    aggsym_sincos2(x0, q_1, &x2, &x1, &x10, &x9);
     const double x3 = 0.984807753012208*x1;
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.9659258262890682*x2 - 0.04494345552754777*x1;
     const double x6 = 0.04494345552754777*x2 + 0.9659258262890682*x1;
     const double x7 = 0.1677312594965206*x1 + 0.2588190451025207*x2;
     const double x8 = 0.2588190451025207*x1 - 0.1677312594965206*x2;
-    double x10, x9;
-    aggsym_sincos(q_1, &x10, &x9);
     double x12, x11;
     aggsym_sincos(q_2, &x12, &x11);
     const double x13 = qd_0*x9*x11 + qd_1*x12;
@@ -522,14 +561,10 @@ void flywheel_on_body_potential_energy(const double *q, const double *t, const d
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
-    double x2, x1;
-    aggsym_sincos(x0, &x2, &x1);
-    double x4, x3;
-    aggsym_sincos(q_0, &x4, &x3);
-    double x6, x5;
-    aggsym_sincos(q_1, &x6, &x5);
-    double x8, x7;
-    aggsym_sincos(q_2, &x8, &x7);
+    double x2, x1, x4, x3;
+    aggsym_sincos2(x0, q_0, &x2, &x1, &x4, &x3);
+    double x6, x5, x8, x7;
+    aggsym_sincos2(q_1, q_2, &x6, &x5, &x8, &x7);
     const double x9 = x3*x6;
     const double x10 = x3*x5;
     const double x11 = x4*x8 - x7*x9;
@@ -557,20 +592,16 @@ void flywheel_on_body_momentum(const double *q, const double *qd, const double *
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
-    double x2, x1;
-    aggsym_sincos(x0, &x2, &x1);
+    double x2, x1, x10, x9;
+    aggsym_sincos2(x0, q_0, &x2, &x1, &x10, &x9);
     const double x3 = 0.984807753012208*x1;
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.9659258262890682*x2 - 0.04494345552754777*x1;
     const double x6 = 0.04494345552754777*x2 + 0.9659258262890682*x1;
     const double x7 = 0.1677312594965206*x1 + 0.2588190451025207*x2;
     const double x8 = 0.2588190451025207*x1 - 0.1677312594965206*x2;
-    double x10, x9;
-    aggsym_sincos(q_0, &x10, &x9);
-    double x12, x11;
-    aggsym_sincos(q_1, &x12, &x11);
-    double x14, x13;
-    aggsym_sincos(q_2, &x14, &x13);
+    double x12, x11, x14, x13;
+    aggsym_sincos2(q_1, q_2, &x12, &x11, &x14, &x13);
     const double x15 = x10*x12;
     const double x16 = x10*x11;
     const double x17 = x9*x12;
@@ -649,20 +680,16 @@ void flywheel_on_body_joint_wrenches(const double *q, const double *qd, const do
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
     const double x1 = p_0 + p_1*t_0;
-    double x3, x2;
-    aggsym_sincos(x0, &x3, &x2);
+    double x3, x2, x11, x10;
+    aggsym_sincos2(x0, q_0, &x3, &x2, &x11, &x10);
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.984807753012208*x3;
     const double x6 = 0.9659258262890682*x3 - 0.04494345552754777*x2;
     const double x7 = 0.04494345552754777*x3 + 0.9659258262890682*x2;
     const double x8 = 0.1677312594965206*x2 + 0.2588190451025207*x3;
     const double x9 = 0.2588190451025207*x2 - 0.1677312594965206*x3;
-    double x11, x10;
-    aggsym_sincos(q_0, &x11, &x10);
-    double x13, x12;
-    aggsym_sincos(q_1, &x13, &x12);
-    double x15, x14;
-    aggsym_sincos(q_2, &x15, &x14);
+    double x13, x12, x15, x14;
+    aggsym_sincos2(q_1, q_2, &x13, &x12, &x15, &x14);
     const double x16 = x10*x13;
     const double x17 = x10*x12;
     const double x18 = x12*x14;
@@ -755,20 +782,16 @@ void flywheel_on_body_forward_dynamics(const double *q, const double *qd, const 
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
     const double x1 = p_0 + p_1*t_0;
-    double x3, x2;
-    aggsym_sincos(x0, &x3, &x2);
+    double x3, x2, x11, x10;
+    aggsym_sincos2(x0, q_0, &x3, &x2, &x11, &x10);
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.984807753012208*x3;
     const double x6 = 0.9659258262890682*x3 - 0.04494345552754777*x2;
     const double x7 = 0.04494345552754777*x3 + 0.9659258262890682*x2;
     const double x8 = 0.1677312594965206*x2 + 0.2588190451025207*x3;
     const double x9 = 0.2588190451025207*x2 - 0.1677312594965206*x3;
-    double x11, x10;
-    aggsym_sincos(q_0, &x11, &x10);
-    double x13, x12;
-    aggsym_sincos(q_1, &x13, &x12);
-    double x15, x14;
-    aggsym_sincos(q_2, &x15, &x14);
+    double x13, x12, x15, x14;
+    aggsym_sincos2(q_1, q_2, &x13, &x12, &x15, &x14);
     const double x16 = x10*x13;
     const double x17 = x10*x12;
     const double x18 = x12*x14;
@@ -884,14 +907,12 @@ void flywheel_on_body_inertia_inverse(const double *q, const double *t, const do
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
-    double x2, x1;
-    aggsym_sincos(x0, &x2, &x1);
+    double x2, x1, x8, x7;
+    aggsym_sincos2(x0, q_1, &x2, &x1, &x8, &x7);
     const double x3 = 0.9659258262890682*x2 - 0.04494345552754777*x1;
     const double x4 = 0.04494345552754777*x2 + 0.9659258262890682*x1;
     const double x5 = 0.1677312594965206*x1 + 0.2588190451025207*x2;
     const double x6 = 0.2588190451025207*x1 - 0.1677312594965206*x2;
-    double x8, x7;
-    aggsym_sincos(q_1, &x8, &x7);
     double x10, x9;
     aggsym_sincos(q_2, &x10, &x9);
     const double x11 = x7*x9;
@@ -955,14 +976,12 @@ void flywheel_on_body_transvective_factors(const double *q, const double *t, con
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
-    double x2, x1;
-    aggsym_sincos(x0, &x2, &x1);
+    double x2, x1, x8, x7;
+    aggsym_sincos2(x0, q_1, &x2, &x1, &x8, &x7);
     const double x3 = 0.9659258262890682*x2 - 0.04494345552754777*x1;
     const double x4 = 0.04494345552754777*x2 + 0.9659258262890682*x1;
     const double x5 = 0.1677312594965206*x1 + 0.2588190451025207*x2;
     const double x6 = 0.2588190451025207*x1 - 0.1677312594965206*x2;
-    double x8, x7;
-    aggsym_sincos(q_1, &x8, &x7);
     double x10, x9;
     aggsym_sincos(q_2, &x10, &x9);
     const double x11 = x7*x9;
@@ -1017,20 +1036,16 @@ void flywheel_on_body_frame_poses(const double *q, const double *t, const double
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
-    double x2, x1;
-    aggsym_sincos(x0, &x2, &x1);
+    double x2, x1, x10, x9;
+    aggsym_sincos2(x0, q_0, &x2, &x1, &x10, &x9);
     const double x3 = 0.984807753012208*x1;
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.9659258262890682*x2 - 0.04494345552754777*x1;
     const double x6 = 0.04494345552754777*x2 + 0.9659258262890682*x1;
     const double x7 = 0.1677312594965206*x1 + 0.2588190451025207*x2;
     const double x8 = 0.2588190451025207*x1 - 0.1677312594965206*x2;
-    double x10, x9;
-    aggsym_sincos(q_0, &x10, &x9);
-    double x12, x11;
-    aggsym_sincos(q_1, &x12, &x11);
-    double x14, x13;
-    aggsym_sincos(q_2, &x14, &x13);
+    double x12, x11, x14, x13;
+    aggsym_sincos2(q_1, q_2, &x12, &x11, &x14, &x13);
     const double x15 = x10*x12;
     const double x16 = x10*x11;
     const double x17 = x9*x12;
@@ -1065,10 +1080,8 @@ void flywheel_on_body_frame_jacobians(const double *q, const double *t, const do
     (void)t;
     (void)p;
     J[10] = 0;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
     J[11] = x3;
     double x5, x4;
     aggsym_sincos(q_2, &x5, &x4);
@@ -1128,20 +1141,16 @@ void flywheel_on_body_frame_accelerations(const double *q, const double *qd, con
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
     const double x1 = p_0 + p_1*t_0;
-    double x3, x2;
-    aggsym_sincos(x0, &x3, &x2);
+    double x3, x2, x11, x10;
+    aggsym_sincos2(x0, q_0, &x3, &x2, &x11, &x10);
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.984807753012208*x3;
     const double x6 = 0.9659258262890682*x3 - 0.04494345552754777*x2;
     const double x7 = 0.04494345552754777*x3 + 0.9659258262890682*x2;
     const double x8 = 0.1677312594965206*x2 + 0.2588190451025207*x3;
     const double x9 = 0.2588190451025207*x2 - 0.1677312594965206*x3;
-    double x11, x10;
-    aggsym_sincos(q_0, &x11, &x10);
-    double x13, x12;
-    aggsym_sincos(q_1, &x13, &x12);
-    double x15, x14;
-    aggsym_sincos(q_2, &x15, &x14);
+    double x13, x12, x15, x14;
+    aggsym_sincos2(q_1, q_2, &x13, &x12, &x15, &x14);
     const double x16 = x11*x13;
     const double x17 = x11*x12;
     const double x18 = x10*x13;
@@ -1208,20 +1217,16 @@ void flywheel_on_body_center_of_mass(const double *q, const double *t, const dou
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
-    double x2, x1;
-    aggsym_sincos(x0, &x2, &x1);
+    double x2, x1, x10, x9;
+    aggsym_sincos2(x0, q_0, &x2, &x1, &x10, &x9);
     const double x3 = 0.984807753012208*x1;
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.9659258262890682*x2 - 0.04494345552754777*x1;
     const double x6 = 0.04494345552754777*x2 + 0.9659258262890682*x1;
     const double x7 = 0.1677312594965206*x1 + 0.2588190451025207*x2;
     const double x8 = 0.2588190451025207*x1 - 0.1677312594965206*x2;
-    double x10, x9;
-    aggsym_sincos(q_0, &x10, &x9);
-    double x12, x11;
-    aggsym_sincos(q_1, &x12, &x11);
-    double x14, x13;
-    aggsym_sincos(q_2, &x14, &x13);
+    double x12, x11, x14, x13;
+    aggsym_sincos2(q_1, q_2, &x12, &x11, &x14, &x13);
     const double x15 = x10*x12;
     const double x16 = x10*x11;
     const double x17 = x9*x12;
@@ -1253,20 +1258,16 @@ void flywheel_on_body_com_jacobian(const double *q, const double *t, const doubl
     const double p_0 = p[0];
     const double p_1 = p[1];
     const double x0 = p_0*t_0 + t_0*t_0*0.5*p_1;
-    double x2, x1;
-    aggsym_sincos(x0, &x2, &x1);
+    double x2, x1, x10, x9;
+    aggsym_sincos2(x0, q_0, &x2, &x1, &x10, &x9);
     const double x3 = 0.984807753012208*x1;
     const double x4 = 0.984807753012208*x2;
     const double x5 = 0.9659258262890682*x2 - 0.04494345552754777*x1;
     const double x6 = 0.04494345552754777*x2 + 0.9659258262890682*x1;
     const double x7 = 0.1677312594965206*x1 + 0.2588190451025207*x2;
     const double x8 = 0.2588190451025207*x1 - 0.1677312594965206*x2;
-    double x10, x9;
-    aggsym_sincos(q_0, &x10, &x9);
-    double x12, x11;
-    aggsym_sincos(q_1, &x12, &x11);
-    double x14, x13;
-    aggsym_sincos(q_2, &x14, &x13);
+    double x12, x11, x14, x13;
+    aggsym_sincos2(q_1, q_2, &x12, &x11, &x14, &x13);
     const double x15 = x10*x12;
     const double x16 = x10*x11;
     const double x17 = x9*x12;

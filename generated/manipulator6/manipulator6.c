@@ -6,17 +6,22 @@
  * (adding 1.5 2^52 rounds it in the floating-point unit, its low bits then those of k), |r| <= pi/4 (Cody-Waite):
  * pi/2 = P1 + P2 + P3 + P4 (+ 2^-142), P1 and P2 of at most 33 significant bits, P3 of 19, P4 a double, so for
  * |k| < 2^20 every k Pi but the last is exact, and so is every difference but the last when r is small (x near
- * k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal libm's.  The Taylor series
- * of sin r to r^17 and of cos r to r^18 (truncation below 1e-19 at r = pi/4), by Estrin's scheme (short
- * dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on the doubles' bits (no
- * branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty asm after each exact
- * step keeps the compiler from folding the rounding of k away and from reassociating the reduction into
- * x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.  Outside |x| < 1e6 (and for
- * nan, inf) libm's sin and cos. */
-#if defined(__FAST_MATH__) && defined(__GNUC__)
-#define AGGSYM_KEEP(v) __asm__("" : "+g"(v))
-#else
+ * k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal libm's.  sin r = r + r^3
+ * S(r^2), S of degree 5, and cos r = 1 + r^2 C(r^2), C of degree 6: minimax polynomials (Remez, weighted for
+ * the relative error of sin and cos on |r| <= pi/4: 3.6e-18 and 3.9e-20 before rounding the coefficients), by
+ * Estrin's scheme (short dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on
+ * the doubles' bits (no branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty
+ * asm after each exact step keeps the compiler from folding the rounding of k away and from reassociating the
+ * reduction into x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.  Outside
+ * |x| < 1e6 (and for nan, inf) libm's sin and cos. */
+#if !defined(__FAST_MATH__) || !defined(__GNUC__)
 #define AGGSYM_KEEP(v) (void)0
+#elif defined(__SSE2__)
+#define AGGSYM_KEEP(v) __asm__("" : "+x"(v))  /* in its SSE register */
+#elif defined(__aarch64__)
+#define AGGSYM_KEEP(v) __asm__("" : "+w"(v))  /* in its SIMD register */
+#else
+#define AGGSYM_KEEP(v) __asm__("" : "+g"(v))
 #endif
 static inline void aggsym_sincos(double x, double *s, double *c)
 {
@@ -44,13 +49,11 @@ static inline void aggsym_sincos(double x, double *s, double *c)
     const double r2 = r * r;
     const double r4 = r2 * r2;
     const double r8 = r4 * r4;
-    const double sp = ((-0.16666666666666666 + r2 * 0.008333333333333333)
-        + r4 * (-0.0001984126984126984 + r2 * 2.7557319223985893e-06))
-        + r8 * ((-2.505210838544172e-08 + r2 * 1.6059043836821613e-10)
-        + r4 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15));
-    const double cp = ((-0.5 + r2 * 0.041666666666666664) + r4 * (-0.001388888888888889 + r2 * 2.48015873015873e-05))
-        + r8 * (((-2.755731922398589e-07 + r2 * 2.08767569878681e-09)
-        + r4 * (-1.1470745597729725e-11 + r2 * 4.779477332387385e-14)) + r8 * -1.5619206968586225e-16);
+    const double sp = (-0.1666666666666663 + r2 * 0.008333333333322118)
+        + r4 * (-0.00019841269829589542 + r2 * 2.75573136213867e-06)
+        + r8 * (-2.5050747762987452e-08 + r2 * 1.589623016401917e-10);
+    const double cp = (-0.5 + r2 * 0.04166666666666647) + r4 * (-0.0013888888888862 + r2 * 2.480158728409462e-05)
+        + r8 * ((-2.755731311729104e-07 + r2 * 2.0875582127062193e-09) + r4 * -1.1353281254359034e-11);
     const double sr = r + (r * r2) * sp;
     const double cr = 1.0 + r2 * cp;
     const unsigned long long swap = 0ULL - (k & 1);  /* all ones for odd k */
@@ -63,6 +66,60 @@ static inline void aggsym_sincos(double x, double *s, double *c)
     *c = out_c.d;
 #endif
 }
+
+/* sin and cos of two angles at once: aggsym_sincos's arithmetic on both in the lanes of one 2-double vector
+ * (GCC's vector extension, also Clang's: SSE2 on x86-64, NEON on AArch64), the same results as two calls of
+ * aggsym_sincos; elsewhere, or when either angle is outside |x| < 1e6, the two calls. */
+#if defined(__GNUC__) && (defined(__SSE2__) || defined(__aarch64__))
+typedef double aggsym_v2d __attribute__((vector_size(16)));
+typedef unsigned long long aggsym_v2u __attribute__((vector_size(16)));
+static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, double *s1, double *c1)
+{
+    if (!(fabs(x0) < 1.0e6 && fabs(x1) < 1.0e6)) {
+        aggsym_sincos(x0, s0, c0);
+        aggsym_sincos(x1, s1, c1);
+        return;
+    }
+    const aggsym_v2d x = {x0, x1};
+    const aggsym_v2d shift = {6755399441055744.0, 6755399441055744.0};
+    aggsym_v2d big = x * 0.6366197723675814 + shift;
+    AGGSYM_KEEP(big);
+    const aggsym_v2d kd = big - shift;
+    const aggsym_v2u k = (aggsym_v2u)big;
+    aggsym_v2d r = x - kd * 1.5707963267341256;
+    AGGSYM_KEEP(r);
+    r -= kd * 6.077100506303966e-11;
+    AGGSYM_KEEP(r);
+    r -= kd * 2.022269189584621e-21;
+    AGGSYM_KEEP(r);
+    r -= kd * -2.940788670387328e-27;
+    const aggsym_v2d r2 = r * r;
+    const aggsym_v2d r4 = r2 * r2;
+    const aggsym_v2d r8 = r4 * r4;
+    const aggsym_v2d sp = (-0.1666666666666663 + r2 * 0.008333333333322118)
+        + r4 * (-0.00019841269829589542 + r2 * 2.75573136213867e-06)
+        + r8 * (-2.5050747762987452e-08 + r2 * 1.589623016401917e-10);
+    const aggsym_v2d cp = (-0.5 + r2 * 0.04166666666666647) + r4 * (-0.0013888888888862 + r2 * 2.480158728409462e-05)
+        + r8 * ((-2.755731311729104e-07 + r2 * 2.0875582127062193e-09) + r4 * -1.1353281254359034e-11);
+    const aggsym_v2d sr = r + (r * r2) * sp;
+    const aggsym_v2d cr = 1.0 + r2 * cp;
+    const aggsym_v2u one = {1, 1}, two = {2, 2};
+    const aggsym_v2u swap = -(k & one);
+    const aggsym_v2u sin_r = (aggsym_v2u)sr, cos_r = (aggsym_v2u)cr;
+    const aggsym_v2d out_s = (aggsym_v2d)(((sin_r & ~swap) | (cos_r & swap)) ^ ((k & two) << 62));
+    const aggsym_v2d out_c = (aggsym_v2d)(((cos_r & ~swap) | (sin_r & swap)) ^ (((k + one) & two) << 62));
+    *s0 = out_s[0];
+    *c0 = out_c[0];
+    *s1 = out_s[1];
+    *c1 = out_c[1];
+}
+#else
+static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, double *s1, double *c1)
+{
+    aggsym_sincos(x0, s0, c0);
+    aggsym_sincos(x1, s1, c1);
+}
+#endif
 #undef AGGSYM_KEEP
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -80,14 +137,10 @@ void manipulator6_inertia(const double *q, const double *p, double *A)
     A[29] = 0;
     A[34] = 0;
     A[35] = 0.0002;
-    double x1, x0;
-    aggsym_sincos(q_1, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_2, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_3, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_4, &x7, &x6);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_1, q_2, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_3, q_4, &x5, &x4, &x7, &x6);
     const double x8 = 0.012*x6;
     const double x9 = 0.012*x7;
     const double x10 = 0.0005799999999999998*x7*x7;
@@ -182,14 +235,10 @@ void manipulator6_bias(const double *q, const double *qd, const double *p, doubl
     const double qd_4 = qd[4];
     const double qd_5 = qd[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_1, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_2, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_3, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_4, &x7, &x6);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_1, q_2, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_3, q_4, &x5, &x4, &x7, &x6);
     double x9, x8;
     aggsym_sincos(q_5, &x9, &x8);
     const double x10 = 0.012*x6;
@@ -284,14 +333,10 @@ void manipulator6_coriolis(const double *q, const double *qd, const double *p, d
     const double qd_5 = qd[5];
     (void)p;
     C[35] = 0;
-    double x1, x0;
-    aggsym_sincos(q_1, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_2, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_3, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_4, &x7, &x6);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_1, q_2, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_3, q_4, &x5, &x4, &x7, &x6);
     double x9, x8;
     aggsym_sincos(q_5, &x9, &x8);
     const double x10 = 0.0002*x7;
@@ -576,14 +621,10 @@ void manipulator6_gravity(const double *q, const double *p, double *g)
     const double q_4 = q[4];
     (void)p;
     g[5] = 0;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
     double x9, x8;
     aggsym_sincos(q_4, &x9, &x8);
     const double x10 = 0.012*x8;
@@ -629,18 +670,12 @@ void manipulator6_nonlinear_effects(const double *q, const double *qd, const dou
     const double qd_4 = qd[4];
     const double qd_5 = qd[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
-    double x9, x8;
-    aggsym_sincos(q_4, &x9, &x8);
-    double x11, x10;
-    aggsym_sincos(q_5, &x11, &x10);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
+    double x9, x8, x11, x10;
+    aggsym_sincos2(q_4, q_5, &x9, &x8, &x11, &x10);
     const double x12 = 0.012*x8;
     const double x13 = 0.012*x9;
     const double x14 = qd_0*qd_0;
@@ -746,18 +781,12 @@ void manipulator6_inverse_dynamics(const double *q, const double *qd, const doub
     const double qdd_4 = qdd[4];
     const double qdd_5 = qdd[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
-    double x9, x8;
-    aggsym_sincos(q_4, &x9, &x8);
-    double x11, x10;
-    aggsym_sincos(q_5, &x11, &x10);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
+    double x9, x8, x11, x10;
+    aggsym_sincos2(q_4, q_5, &x9, &x8, &x11, &x10);
     const double x12 = 0.012*x8;
     const double x13 = 0.012*x9;
     const double x14 = qd_0*qd_0;
@@ -863,14 +892,10 @@ void manipulator6_kinetic_energy(const double *q, const double *qd, const double
     const double qd_4 = qd[4];
     const double qd_5 = qd[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_1, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_2, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_3, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_4, &x7, &x6);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_1, q_2, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_3, q_4, &x5, &x4, &x7, &x6);
     double x9, x8;
     aggsym_sincos(q_5, &x9, &x8);
     const double x10 = qd_0*x0;
@@ -912,14 +937,10 @@ void manipulator6_potential_energy(const double *q, const double *p, double *U)
     const double q_3 = q[3];
     const double q_4 = q[4];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
     double x9, x8;
     aggsym_sincos(q_4, &x9, &x8);
     const double x10 = 9.81*x1;
@@ -949,18 +970,12 @@ void manipulator6_momentum(const double *q, const double *qd, const double *p, d
     const double qd_4 = qd[4];
     const double qd_5 = qd[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
-    double x9, x8;
-    aggsym_sincos(q_4, &x9, &x8);
-    double x11, x10;
-    aggsym_sincos(q_5, &x11, &x10);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
+    double x9, x8, x11, x10;
+    aggsym_sincos2(q_4, q_5, &x9, &x8, &x11, &x10);
     const double x12 = qd_0*x2;
     const double x13 = qd_0*x3;
     const double x14 = x4*x12 - x5*x13;
@@ -1092,18 +1107,12 @@ void manipulator6_joint_wrenches(const double *q, const double *qd, const double
     const double qdd_4 = qdd[4];
     const double qdd_5 = qdd[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
-    double x9, x8;
-    aggsym_sincos(q_4, &x9, &x8);
-    double x11, x10;
-    aggsym_sincos(q_5, &x11, &x10);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
+    double x9, x8, x11, x10;
+    aggsym_sincos2(q_4, q_5, &x9, &x8, &x11, &x10);
     const double x12 = qd_0*qd_0;
     const double x13 = qd_0*x2;
     const double x14 = qd_0*x3;
@@ -1272,18 +1281,12 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
     const double tau_4 = tau[4];
     const double tau_5 = tau[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
-    double x9, x8;
-    aggsym_sincos(q_4, &x9, &x8);
-    double x11, x10;
-    aggsym_sincos(q_5, &x11, &x10);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
+    double x9, x8, x11, x10;
+    aggsym_sincos2(q_4, q_5, &x9, &x8, &x11, &x10);
     const double x12 = x9*x9;
     const double x13 = x8*x9;
     const double x14 = 0.012*x8;
@@ -1455,14 +1458,10 @@ void manipulator6_inertia_inverse(const double *q, const double *p, double *Ainv
     const double q_3 = q[3];
     const double q_4 = q[4];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_1, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_2, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_3, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_4, &x7, &x6);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_1, q_2, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_3, q_4, &x5, &x4, &x7, &x6);
     const double x8 = x7*x7;
     const double x9 = x6*x7;
     const double x10 = 0.012*x6;
@@ -1613,16 +1612,12 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     diag[1] = 0.02;
     diag[4] = 0.00158;
     diag[5] = 0.0002;
-    double x1, x0;
-    aggsym_sincos(q_1, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_2, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_3, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_1, q_2, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_3, q_4, &x5, &x4, &x7, &x6);
     targs[7] = x4;
     targs[8] = x4;
-    double x7, x6;
-    aggsym_sincos(q_4, &x7, &x6);
     targs[13] = x7;
     const double x8 = x7*x7;
     const double x9 = x6*x7;
@@ -1722,18 +1717,12 @@ void manipulator6_frame_poses(const double *q, const double *p, double *X)
     const double q_5 = q[5];
     (void)p;
     X[0] = 0.1;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
-    double x9, x8;
-    aggsym_sincos(q_4, &x9, &x8);
-    double x11, x10;
-    aggsym_sincos(q_5, &x11, &x10);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
+    double x9, x8, x11, x10;
+    aggsym_sincos2(q_4, q_5, &x9, &x8, &x11, &x10);
     const double x12 = x2*x4 - x3*x5;
     const double x13 = x2*x5 + x3*x4;
     const double x14 = x7*x13;
@@ -1827,8 +1816,8 @@ void manipulator6_frame_jacobians(const double *q, const double *p, double *J)
     J[56] = 0;
     J[60] = 0;
     J[66] = 0;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
     J[25] = x0;
     J[26] = x0;
     J[61] = x0;
@@ -1837,16 +1826,10 @@ void manipulator6_frame_jacobians(const double *q, const double *p, double *J)
     J[32] = x1;
     J[67] = x1;
     J[68] = x1;
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
-    double x9, x8;
-    aggsym_sincos(q_4, &x9, &x8);
-    double x11, x10;
-    aggsym_sincos(q_5, &x11, &x10);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
+    double x9, x8, x11, x10;
+    aggsym_sincos2(q_4, q_5, &x9, &x8, &x11, &x10);
     const double x12 = x2*x4 - x3*x5;
     J[21] = x12;
     J[57] = x12;
@@ -1942,18 +1925,12 @@ void manipulator6_frame_accelerations(const double *q, const double *qd, const d
     const double qdd_4 = qdd[4];
     const double qdd_5 = qdd[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
-    double x9, x8;
-    aggsym_sincos(q_4, &x9, &x8);
-    double x11, x10;
-    aggsym_sincos(q_5, &x11, &x10);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
+    double x9, x8, x11, x10;
+    aggsym_sincos2(q_4, q_5, &x9, &x8, &x11, &x10);
     const double x12 = qd_0*x2;
     const double x13 = qd_0*x3;
     const double x14 = x4*x12 - x5*x13;
@@ -2066,14 +2043,10 @@ void manipulator6_center_of_mass(const double *q, const double *p, double *c)
     const double q_3 = q[3];
     const double q_4 = q[4];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
     double x9, x8;
     aggsym_sincos(q_4, &x9, &x8);
     const double x10 = x2*x5 + x3*x4;
@@ -2104,14 +2077,10 @@ void manipulator6_com_jacobian(const double *q, const double *p, double *Jc)
     const double q_4 = q[4];
     (void)p;
     Jc[0] = 0;
-    double x1, x0;
-    aggsym_sincos(q_0, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_1, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_2, &x5, &x4);
-    double x7, x6;
-    aggsym_sincos(q_3, &x7, &x6);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4, x7, x6;
+    aggsym_sincos2(q_2, q_3, &x5, &x4, &x7, &x6);
     double x9, x8;
     aggsym_sincos(q_4, &x9, &x8);
     const double x10 = x2*x4 - x3*x5;

@@ -12,17 +12,22 @@ static double aggsym_sign(double x)
  * (adding 1.5 2^52 rounds it in the floating-point unit, its low bits then those of k), |r| <= pi/4 (Cody-Waite):
  * pi/2 = P1 + P2 + P3 + P4 (+ 2^-142), P1 and P2 of at most 33 significant bits, P3 of 19, P4 a double, so for
  * |k| < 2^20 every k Pi but the last is exact, and so is every difference but the last when r is small (x near
- * k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal libm's.  The Taylor series
- * of sin r to r^17 and of cos r to r^18 (truncation below 1e-19 at r = pi/4), by Estrin's scheme (short
- * dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on the doubles' bits (no
- * branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty asm after each exact
- * step keeps the compiler from folding the rounding of k away and from reassociating the reduction into
- * x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.  Outside |x| < 1e6 (and for
- * nan, inf) libm's sin and cos. */
-#if defined(__FAST_MATH__) && defined(__GNUC__)
-#define AGGSYM_KEEP(v) __asm__("" : "+g"(v))
-#else
+ * k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal libm's.  sin r = r + r^3
+ * S(r^2), S of degree 5, and cos r = 1 + r^2 C(r^2), C of degree 6: minimax polynomials (Remez, weighted for
+ * the relative error of sin and cos on |r| <= pi/4: 3.6e-18 and 3.9e-20 before rounding the coefficients), by
+ * Estrin's scheme (short dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on
+ * the doubles' bits (no branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty
+ * asm after each exact step keeps the compiler from folding the rounding of k away and from reassociating the
+ * reduction into x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.  Outside
+ * |x| < 1e6 (and for nan, inf) libm's sin and cos. */
+#if !defined(__FAST_MATH__) || !defined(__GNUC__)
 #define AGGSYM_KEEP(v) (void)0
+#elif defined(__SSE2__)
+#define AGGSYM_KEEP(v) __asm__("" : "+x"(v))  /* in its SSE register */
+#elif defined(__aarch64__)
+#define AGGSYM_KEEP(v) __asm__("" : "+w"(v))  /* in its SIMD register */
+#else
+#define AGGSYM_KEEP(v) __asm__("" : "+g"(v))
 #endif
 static inline void aggsym_sincos(double x, double *s, double *c)
 {
@@ -50,13 +55,11 @@ static inline void aggsym_sincos(double x, double *s, double *c)
     const double r2 = r * r;
     const double r4 = r2 * r2;
     const double r8 = r4 * r4;
-    const double sp = ((-0.16666666666666666 + r2 * 0.008333333333333333)
-        + r4 * (-0.0001984126984126984 + r2 * 2.7557319223985893e-06))
-        + r8 * ((-2.505210838544172e-08 + r2 * 1.6059043836821613e-10)
-        + r4 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15));
-    const double cp = ((-0.5 + r2 * 0.041666666666666664) + r4 * (-0.001388888888888889 + r2 * 2.48015873015873e-05))
-        + r8 * (((-2.755731922398589e-07 + r2 * 2.08767569878681e-09)
-        + r4 * (-1.1470745597729725e-11 + r2 * 4.779477332387385e-14)) + r8 * -1.5619206968586225e-16);
+    const double sp = (-0.1666666666666663 + r2 * 0.008333333333322118)
+        + r4 * (-0.00019841269829589542 + r2 * 2.75573136213867e-06)
+        + r8 * (-2.5050747762987452e-08 + r2 * 1.589623016401917e-10);
+    const double cp = (-0.5 + r2 * 0.04166666666666647) + r4 * (-0.0013888888888862 + r2 * 2.480158728409462e-05)
+        + r8 * ((-2.755731311729104e-07 + r2 * 2.0875582127062193e-09) + r4 * -1.1353281254359034e-11);
     const double sr = r + (r * r2) * sp;
     const double cr = 1.0 + r2 * cp;
     const unsigned long long swap = 0ULL - (k & 1);  /* all ones for odd k */
@@ -69,6 +72,60 @@ static inline void aggsym_sincos(double x, double *s, double *c)
     *c = out_c.d;
 #endif
 }
+
+/* sin and cos of two angles at once: aggsym_sincos's arithmetic on both in the lanes of one 2-double vector
+ * (GCC's vector extension, also Clang's: SSE2 on x86-64, NEON on AArch64), the same results as two calls of
+ * aggsym_sincos; elsewhere, or when either angle is outside |x| < 1e6, the two calls. */
+#if defined(__GNUC__) && (defined(__SSE2__) || defined(__aarch64__))
+typedef double aggsym_v2d __attribute__((vector_size(16)));
+typedef unsigned long long aggsym_v2u __attribute__((vector_size(16)));
+static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, double *s1, double *c1)
+{
+    if (!(fabs(x0) < 1.0e6 && fabs(x1) < 1.0e6)) {
+        aggsym_sincos(x0, s0, c0);
+        aggsym_sincos(x1, s1, c1);
+        return;
+    }
+    const aggsym_v2d x = {x0, x1};
+    const aggsym_v2d shift = {6755399441055744.0, 6755399441055744.0};
+    aggsym_v2d big = x * 0.6366197723675814 + shift;
+    AGGSYM_KEEP(big);
+    const aggsym_v2d kd = big - shift;
+    const aggsym_v2u k = (aggsym_v2u)big;
+    aggsym_v2d r = x - kd * 1.5707963267341256;
+    AGGSYM_KEEP(r);
+    r -= kd * 6.077100506303966e-11;
+    AGGSYM_KEEP(r);
+    r -= kd * 2.022269189584621e-21;
+    AGGSYM_KEEP(r);
+    r -= kd * -2.940788670387328e-27;
+    const aggsym_v2d r2 = r * r;
+    const aggsym_v2d r4 = r2 * r2;
+    const aggsym_v2d r8 = r4 * r4;
+    const aggsym_v2d sp = (-0.1666666666666663 + r2 * 0.008333333333322118)
+        + r4 * (-0.00019841269829589542 + r2 * 2.75573136213867e-06)
+        + r8 * (-2.5050747762987452e-08 + r2 * 1.589623016401917e-10);
+    const aggsym_v2d cp = (-0.5 + r2 * 0.04166666666666647) + r4 * (-0.0013888888888862 + r2 * 2.480158728409462e-05)
+        + r8 * ((-2.755731311729104e-07 + r2 * 2.0875582127062193e-09) + r4 * -1.1353281254359034e-11);
+    const aggsym_v2d sr = r + (r * r2) * sp;
+    const aggsym_v2d cr = 1.0 + r2 * cp;
+    const aggsym_v2u one = {1, 1}, two = {2, 2};
+    const aggsym_v2u swap = -(k & one);
+    const aggsym_v2u sin_r = (aggsym_v2u)sr, cos_r = (aggsym_v2u)cr;
+    const aggsym_v2d out_s = (aggsym_v2d)(((sin_r & ~swap) | (cos_r & swap)) ^ ((k & two) << 62));
+    const aggsym_v2d out_c = (aggsym_v2d)(((cos_r & ~swap) | (sin_r & swap)) ^ (((k + one) & two) << 62));
+    *s0 = out_s[0];
+    *c0 = out_c[0];
+    *s1 = out_s[1];
+    *c1 = out_c[1];
+}
+#else
+static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, double *s1, double *c1)
+{
+    aggsym_sincos(x0, s0, c0);
+    aggsym_sincos(x1, s1, c1);
+}
+#endif
 #undef AGGSYM_KEEP
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -115,10 +172,8 @@ void rolling_disc_inertia(const double *q, const double *p, double *A)
     A[28] = x1;
     const double x2 = x0*0.5*p_0;
     A[35] = x2;
-    double x4, x3;
-    aggsym_sincos(q_3, &x4, &x3);
-    double x5, x5_cos;
-    aggsym_sincos(q_4, &x5, &x5_cos);
+    double x4, x3, x5, x5_cos;
+    aggsym_sincos2(q_3, q_4, &x4, &x3, &x5, &x5_cos);
     A[21] = x1 + x5*x5*(x2 - x1);
     const double x6 = x3*p_0*x3 + x4*p_0*x4;
     A[0] = x6;
@@ -147,10 +202,8 @@ void rolling_disc_bias(const double *q, const double *qd, const double *p, doubl
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
     const double x2 = x0*0.5*p_0;
-    double x4, x3;
-    aggsym_sincos(q_4, &x4, &x3);
-    double x6, x5;
-    aggsym_sincos(q_5, &x6, &x5);
+    double x4, x3, x6, x5;
+    aggsym_sincos2(q_4, q_5, &x4, &x3, &x6, &x5);
     const double x7 = qd_3*x4;
     const double x8 = qd_3*x3;
     const double x9 = qd_4*x7;
@@ -186,10 +239,8 @@ void rolling_disc_coriolis(const double *q, const double *qd, const double *p, d
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
     const double x2 = x0*0.5*p_0;
-    double x4, x3;
-    aggsym_sincos(q_3, &x4, &x3);
-    double x6, x5;
-    aggsym_sincos(q_4, &x6, &x5);
+    double x4, x3, x6, x5;
+    aggsym_sincos2(q_3, q_4, &x4, &x3, &x6, &x5);
     double x8, x7;
     aggsym_sincos(q_5, &x8, &x7);
     const double x9 = x2*x6;
@@ -344,10 +395,8 @@ void rolling_disc_nonlinear_effects(const double *q, const double *qd, const dou
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
     const double x2 = x0*0.5*p_0;
-    double x4, x3;
-    aggsym_sincos(q_4, &x4, &x3);
-    double x6, x5;
-    aggsym_sincos(q_5, &x6, &x5);
+    double x4, x3, x6, x5;
+    aggsym_sincos2(q_4, q_5, &x4, &x3, &x6, &x5);
     const double x7 = qd_3*x4;
     const double x8 = qd_3*x3;
     const double x9 = qd_4*x7;
@@ -387,10 +436,8 @@ void rolling_disc_inverse_dynamics(const double *q, const double *qd, const doub
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
     const double x2 = x0*0.5*p_0;
-    double x4, x3;
-    aggsym_sincos(q_3, &x4, &x3);
-    double x6, x5;
-    aggsym_sincos(q_4, &x6, &x5);
+    double x4, x3, x6, x5;
+    aggsym_sincos2(q_3, q_4, &x4, &x3, &x6, &x5);
     double x8, x7;
     aggsym_sincos(q_5, &x8, &x7);
     const double x9 = qd_3*x6;
@@ -431,10 +478,8 @@ void rolling_disc_kinetic_energy(const double *q, const double *qd, const double
     const double p_1 = p[1];
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
-    double x3, x2;
-    aggsym_sincos(q_3, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_4, &x5, &x4);
+    double x3, x2, x5, x4;
+    aggsym_sincos2(q_3, q_4, &x3, &x2, &x5, &x4);
     double x7, x6;
     aggsym_sincos(q_5, &x7, &x6);
     const double x8 = qd_0*x2 + qd_1*x3;
@@ -485,11 +530,9 @@ void rolling_disc_momentum(const double *q, const double *qd, const double *p, d
     const double p_1 = p[1];
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
-    double x3, x2;
-    aggsym_sincos(q_3, &x3, &x2);
+    double x3, x2, x6, x5;
+    aggsym_sincos2(q_3, q_4, &x3, &x2, &x6, &x5);
     const double x4 = p_1 + q_2;
-    double x6, x5;
-    aggsym_sincos(q_4, &x6, &x5);
     double x8, x7;
     aggsym_sincos(q_5, &x8, &x7);
     const double x9 = qd_0*x2 + qd_1*x3;
@@ -547,10 +590,8 @@ void rolling_disc_joint_wrenches(const double *q, const double *qd, const double
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
     const double x2 = x0*0.5*p_0;
-    double x4, x3;
-    aggsym_sincos(q_3, &x4, &x3);
-    double x6, x5;
-    aggsym_sincos(q_4, &x6, &x5);
+    double x4, x3, x6, x5;
+    aggsym_sincos2(q_3, q_4, &x4, &x3, &x6, &x5);
     double x8, x7;
     aggsym_sincos(q_5, &x8, &x7);
     const double x9 = qd_3*x6;
@@ -617,10 +658,8 @@ void rolling_disc_forward_dynamics(const double *q, const double *qd, const doub
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
     const double x2 = x0*0.5*p_0;
-    double x4, x3;
-    aggsym_sincos(q_3, &x4, &x3);
-    double x6, x5;
-    aggsym_sincos(q_4, &x6, &x5);
+    double x4, x3, x6, x5;
+    aggsym_sincos2(q_3, q_4, &x4, &x3, &x6, &x5);
     double x8, x7;
     aggsym_sincos(q_5, &x8, &x7);
     const double x9 = p_0*x3;
@@ -687,10 +726,8 @@ void rolling_disc_inertia_inverse(const double *q, const double *p, double *Ainv
     Ainv[34] = 0;
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
-    double x3, x2;
-    aggsym_sincos(q_3, &x3, &x2);
-    double x4, x4_cos;
-    aggsym_sincos(q_4, &x4, &x4_cos);
+    double x3, x2, x4, x4_cos;
+    aggsym_sincos2(q_3, q_4, &x3, &x2, &x4, &x4_cos);
     const double x5 = p_0*x2;
     const double x6 = p_0*x3;
     Ainv[28] = 1/x1;
@@ -738,10 +775,8 @@ void rolling_disc_transvective_factors(const double *q, const double *p, double 
     const double x1 = x0*0.25*p_0;
     diag[4] = x1;
     diag[5] = x0*0.5*p_0;
-    double x3, x2;
-    aggsym_sincos(q_3, &x3, &x2);
-    double x4, x4_cos;
-    aggsym_sincos(q_4, &x4, &x4_cos);
+    double x3, x2, x4, x4_cos;
+    aggsym_sincos2(q_3, q_4, &x3, &x2, &x4, &x4_cos);
     targs[13] = x4;
     const double x5 = p_0*x2;
     const double x6 = p_0*x3;
@@ -766,10 +801,8 @@ void rolling_disc_constraint_residual(const double *q, const double *p, double *
     const double p_1 = p[1];
     phi[0] = 0;
     phi[1] = 0;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x2_sin, x2;
-    aggsym_sincos(q_4, &x2_sin, &x2);
+    double x1, x0, x2_sin, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x2_sin, &x2);
     const double x3 = x1*x2;
     const double x4 = x0*x2;
     const double x5 = sqrt(x4*x4 + x3*x3);
@@ -797,11 +830,9 @@ void rolling_disc_constraint_jacobian(const double *q, const double *p, double *
     J[13] = 0;
     J[14] = 1;
     J[15] = 0;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
+    double x1, x0, x4, x3;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x4, &x3);
     const double x2 = p_1 + q_2;
-    double x4, x3;
-    aggsym_sincos(q_4, &x4, &x3);
     const double x5 = x1*x3;
     const double x6 = x0*x3;
     const double x7 = x0*x0 + x1*x1;
@@ -841,10 +872,8 @@ void rolling_disc_constraint_bias(const double *q, const double *qd, const doubl
     static const double p_defaults[3] = {0.5, 0.1, 9.81};
     if (!p) p = p_defaults;
     const double p_1 = p[1];
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
     double x5, x4;
     aggsym_sincos(q_5, &x5, &x4);
     const double x6 = qd_0*x0 + qd_1*x1;
@@ -923,11 +952,9 @@ void rolling_disc_delassus(const double *q, const double *p, double *G)
     const double p_1 = p[1];
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
-    double x3, x2;
-    aggsym_sincos(q_3, &x3, &x2);
+    double x3, x2, x6, x5;
+    aggsym_sincos2(q_3, q_4, &x3, &x2, &x6, &x5);
     const double x4 = p_1 + q_2;
-    double x6, x5;
-    aggsym_sincos(q_4, &x6, &x5);
     const double x7 = p_0*x2;
     const double x8 = p_0*x3;
     const double x9 = x3*x5;
@@ -1007,11 +1034,9 @@ int rolling_disc_constrained_forward_dynamics(const double *q, const double *qd,
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
     const double x2 = x0*0.5*p_0;
-    double x4, x3;
-    aggsym_sincos(q_3, &x4, &x3);
+    double x4, x3, x7, x6;
+    aggsym_sincos2(q_3, q_4, &x4, &x3, &x7, &x6);
     const double x5 = p_1 + q_2;
-    double x7, x6;
-    aggsym_sincos(q_4, &x7, &x6);
     double x9, x8;
     aggsym_sincos(q_5, &x9, &x8);
     const double x10 = p_0*x3;
@@ -1159,11 +1184,9 @@ void rolling_disc_frame_poses(const double *q, const double *p, double *X)
     const double p_1 = p[1];
     X[0] = q_0;
     X[1] = q_1;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
     X[2] = p_1 + q_2;
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
     X[10] = x3;
     double x5, x4;
     aggsym_sincos(q_5, &x5, &x4);
@@ -1215,12 +1238,10 @@ void rolling_disc_frame_jacobians(const double *q, const double *p, double *J)
     J[32] = 0;
     J[33] = 1;
     J[34] = 0;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
     J[22] = x0;
     J[28] = x1;
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
     J[35] = x3;
     J[23] = -x1*x2;
     J[29] = x0*x2;
@@ -1249,10 +1270,8 @@ void rolling_disc_frame_accelerations(const double *q, const double *qd, const d
     const double qdd_4 = qdd[4];
     const double qdd_5 = qdd[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
     double x5, x4;
     aggsym_sincos(q_5, &x5, &x4);
     const double x6 = qd_0*x0 + qd_1*x1;
@@ -1335,11 +1354,9 @@ void rolling_disc_com_jacobian(const double *q, const double *p, double *Jc)
     Jc[12] = 0;
     Jc[13] = 0;
     Jc[15] = 0;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
+    double x1, x0, x4, x3;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x4, &x3);
     const double x2 = p_1 + q_2;
-    double x4, x3;
-    aggsym_sincos(q_4, &x4, &x3);
     const double x5 = x1*x3;
     const double x6 = x0*x3;
     const double x7 = 1/p_0;

@@ -12,17 +12,22 @@ static double aggsym_sign(double x)
  * (adding 1.5 2^52 rounds it in the floating-point unit, its low bits then those of k), |r| <= pi/4 (Cody-Waite):
  * pi/2 = P1 + P2 + P3 + P4 (+ 2^-142), P1 and P2 of at most 33 significant bits, P3 of 19, P4 a double, so for
  * |k| < 2^20 every k Pi but the last is exact, and so is every difference but the last when r is small (x near
- * k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal libm's.  The Taylor series
- * of sin r to r^17 and of cos r to r^18 (truncation below 1e-19 at r = pi/4), by Estrin's scheme (short
- * dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on the doubles' bits (no
- * branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty asm after each exact
- * step keeps the compiler from folding the rounding of k away and from reassociating the reduction into
- * x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.  Outside |x| < 1e6 (and for
- * nan, inf) libm's sin and cos. */
-#if defined(__FAST_MATH__) && defined(__GNUC__)
-#define AGGSYM_KEEP(v) __asm__("" : "+g"(v))
-#else
+ * k pi/2): r is then rounded once, and sin and cos at the double nearest k pi/2 equal libm's.  sin r = r + r^3
+ * S(r^2), S of degree 5, and cos r = 1 + r^2 C(r^2), C of degree 6: minimax polynomials (Remez, weighted for
+ * the relative error of sin and cos on |r| <= pi/4: 3.6e-18 and 3.9e-20 before rounding the coefficients), by
+ * Estrin's scheme (short dependency chains); bit 0 of k swaps them and bits 0 and 1 give the signs, by masks on
+ * the doubles' bits (no branch to mispredict): within 2 ulp of libm.  Under -ffast-math (GCC, Clang) an empty
+ * asm after each exact step keeps the compiler from folding the rounding of k away and from reassociating the
+ * reduction into x - k (P1 + P2 + ...); other compilers with __FAST_MATH__ take libm's sin and cos.  Outside
+ * |x| < 1e6 (and for nan, inf) libm's sin and cos. */
+#if !defined(__FAST_MATH__) || !defined(__GNUC__)
 #define AGGSYM_KEEP(v) (void)0
+#elif defined(__SSE2__)
+#define AGGSYM_KEEP(v) __asm__("" : "+x"(v))  /* in its SSE register */
+#elif defined(__aarch64__)
+#define AGGSYM_KEEP(v) __asm__("" : "+w"(v))  /* in its SIMD register */
+#else
+#define AGGSYM_KEEP(v) __asm__("" : "+g"(v))
 #endif
 static inline void aggsym_sincos(double x, double *s, double *c)
 {
@@ -50,13 +55,11 @@ static inline void aggsym_sincos(double x, double *s, double *c)
     const double r2 = r * r;
     const double r4 = r2 * r2;
     const double r8 = r4 * r4;
-    const double sp = ((-0.16666666666666666 + r2 * 0.008333333333333333)
-        + r4 * (-0.0001984126984126984 + r2 * 2.7557319223985893e-06))
-        + r8 * ((-2.505210838544172e-08 + r2 * 1.6059043836821613e-10)
-        + r4 * (-7.647163731819816e-13 + r2 * 2.8114572543455206e-15));
-    const double cp = ((-0.5 + r2 * 0.041666666666666664) + r4 * (-0.001388888888888889 + r2 * 2.48015873015873e-05))
-        + r8 * (((-2.755731922398589e-07 + r2 * 2.08767569878681e-09)
-        + r4 * (-1.1470745597729725e-11 + r2 * 4.779477332387385e-14)) + r8 * -1.5619206968586225e-16);
+    const double sp = (-0.1666666666666663 + r2 * 0.008333333333322118)
+        + r4 * (-0.00019841269829589542 + r2 * 2.75573136213867e-06)
+        + r8 * (-2.5050747762987452e-08 + r2 * 1.589623016401917e-10);
+    const double cp = (-0.5 + r2 * 0.04166666666666647) + r4 * (-0.0013888888888862 + r2 * 2.480158728409462e-05)
+        + r8 * ((-2.755731311729104e-07 + r2 * 2.0875582127062193e-09) + r4 * -1.1353281254359034e-11);
     const double sr = r + (r * r2) * sp;
     const double cr = 1.0 + r2 * cp;
     const unsigned long long swap = 0ULL - (k & 1);  /* all ones for odd k */
@@ -69,6 +72,60 @@ static inline void aggsym_sincos(double x, double *s, double *c)
     *c = out_c.d;
 #endif
 }
+
+/* sin and cos of two angles at once: aggsym_sincos's arithmetic on both in the lanes of one 2-double vector
+ * (GCC's vector extension, also Clang's: SSE2 on x86-64, NEON on AArch64), the same results as two calls of
+ * aggsym_sincos; elsewhere, or when either angle is outside |x| < 1e6, the two calls. */
+#if defined(__GNUC__) && (defined(__SSE2__) || defined(__aarch64__))
+typedef double aggsym_v2d __attribute__((vector_size(16)));
+typedef unsigned long long aggsym_v2u __attribute__((vector_size(16)));
+static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, double *s1, double *c1)
+{
+    if (!(fabs(x0) < 1.0e6 && fabs(x1) < 1.0e6)) {
+        aggsym_sincos(x0, s0, c0);
+        aggsym_sincos(x1, s1, c1);
+        return;
+    }
+    const aggsym_v2d x = {x0, x1};
+    const aggsym_v2d shift = {6755399441055744.0, 6755399441055744.0};
+    aggsym_v2d big = x * 0.6366197723675814 + shift;
+    AGGSYM_KEEP(big);
+    const aggsym_v2d kd = big - shift;
+    const aggsym_v2u k = (aggsym_v2u)big;
+    aggsym_v2d r = x - kd * 1.5707963267341256;
+    AGGSYM_KEEP(r);
+    r -= kd * 6.077100506303966e-11;
+    AGGSYM_KEEP(r);
+    r -= kd * 2.022269189584621e-21;
+    AGGSYM_KEEP(r);
+    r -= kd * -2.940788670387328e-27;
+    const aggsym_v2d r2 = r * r;
+    const aggsym_v2d r4 = r2 * r2;
+    const aggsym_v2d r8 = r4 * r4;
+    const aggsym_v2d sp = (-0.1666666666666663 + r2 * 0.008333333333322118)
+        + r4 * (-0.00019841269829589542 + r2 * 2.75573136213867e-06)
+        + r8 * (-2.5050747762987452e-08 + r2 * 1.589623016401917e-10);
+    const aggsym_v2d cp = (-0.5 + r2 * 0.04166666666666647) + r4 * (-0.0013888888888862 + r2 * 2.480158728409462e-05)
+        + r8 * ((-2.755731311729104e-07 + r2 * 2.0875582127062193e-09) + r4 * -1.1353281254359034e-11);
+    const aggsym_v2d sr = r + (r * r2) * sp;
+    const aggsym_v2d cr = 1.0 + r2 * cp;
+    const aggsym_v2u one = {1, 1}, two = {2, 2};
+    const aggsym_v2u swap = -(k & one);
+    const aggsym_v2u sin_r = (aggsym_v2u)sr, cos_r = (aggsym_v2u)cr;
+    const aggsym_v2d out_s = (aggsym_v2d)(((sin_r & ~swap) | (cos_r & swap)) ^ ((k & two) << 62));
+    const aggsym_v2d out_c = (aggsym_v2d)(((cos_r & ~swap) | (sin_r & swap)) ^ (((k + one) & two) << 62));
+    *s0 = out_s[0];
+    *c0 = out_c[0];
+    *s1 = out_s[1];
+    *c1 = out_c[1];
+}
+#else
+static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, double *s1, double *c1)
+{
+    aggsym_sincos(x0, s0, c0);
+    aggsym_sincos(x1, s1, c1);
+}
+#endif
 #undef AGGSYM_KEEP
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -117,12 +174,10 @@ void spacecraft_inertia(const double *q, const double *p, double *A)
     A[140] = 0;
     A[142] = 0;
     A[143] = 0.48;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -133,12 +188,8 @@ void spacecraft_inertia(const double *q, const double *p, double *A)
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -149,10 +200,8 @@ void spacecraft_inertia(const double *q, const double *p, double *A)
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     const double x38 = 1.2*x36;
@@ -447,22 +496,16 @@ void spacecraft_bias(const double *q, const double *qd, const double *p, double 
     const double qd_10 = qd[10];
     const double qd_11 = qd[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x11, x10;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x11, &x10);
     const double x6 = x1*x3;
     const double x7 = x0*x3;
     const double x8 = x2*x4;
     const double x9 = x2*x5;
-    double x11, x10;
-    aggsym_sincos(q_6, &x11, &x10);
-    double x13, x12;
-    aggsym_sincos(q_7, &x13, &x12);
-    double x15, x14;
-    aggsym_sincos(q_8, &x15, &x14);
+    double x13, x12, x15, x14;
+    aggsym_sincos2(q_7, q_8, &x13, &x12, &x15, &x14);
     const double x16 = x11*x13;
     const double x17 = x11*x12;
     const double x18 = x10*x13;
@@ -473,10 +516,8 @@ void spacecraft_bias(const double *q, const double *qd, const double *p, double 
     const double x23 = x10*x14 - x15*x16;
     const double x24 = x11*x15 - x14*x18;
     const double x25 = x15*x18 + x11*x14;
-    double x27, x26;
-    aggsym_sincos(q_9, &x27, &x26);
-    double x29, x28;
-    aggsym_sincos(q_10, &x29, &x28);
+    double x27, x26, x29, x28;
+    aggsym_sincos2(q_9, q_10, &x27, &x26, &x29, &x28);
     double x31, x30;
     aggsym_sincos(q_11, &x31, &x30);
     const double x32 = qd_3*x3;
@@ -662,12 +703,10 @@ void spacecraft_coriolis(const double *q, const double *qd, const double *p, dou
     C[139] = 0;
     C[140] = 0;
     C[143] = 0;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -678,12 +717,8 @@ void spacecraft_coriolis(const double *q, const double *qd, const double *p, dou
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -694,10 +729,8 @@ void spacecraft_coriolis(const double *q, const double *qd, const double *p, dou
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     const double x38 = 15*x27;
@@ -1647,22 +1680,16 @@ void spacecraft_nonlinear_effects(const double *q, const double *qd, const doubl
     const double qd_10 = qd[10];
     const double qd_11 = qd[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x11, x10;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x11, &x10);
     const double x6 = x1*x3;
     const double x7 = x0*x3;
     const double x8 = x2*x4;
     const double x9 = x2*x5;
-    double x11, x10;
-    aggsym_sincos(q_6, &x11, &x10);
-    double x13, x12;
-    aggsym_sincos(q_7, &x13, &x12);
-    double x15, x14;
-    aggsym_sincos(q_8, &x15, &x14);
+    double x13, x12, x15, x14;
+    aggsym_sincos2(q_7, q_8, &x13, &x12, &x15, &x14);
     const double x16 = x11*x13;
     const double x17 = x11*x12;
     const double x18 = x10*x13;
@@ -1673,10 +1700,8 @@ void spacecraft_nonlinear_effects(const double *q, const double *qd, const doubl
     const double x23 = x10*x14 - x15*x16;
     const double x24 = x11*x15 - x14*x18;
     const double x25 = x15*x18 + x11*x14;
-    double x27, x26;
-    aggsym_sincos(q_9, &x27, &x26);
-    double x29, x28;
-    aggsym_sincos(q_10, &x29, &x28);
+    double x27, x26, x29, x28;
+    aggsym_sincos2(q_9, q_10, &x27, &x26, &x29, &x28);
     double x31, x30;
     aggsym_sincos(q_11, &x31, &x30);
     const double x32 = qd_3*x3;
@@ -1851,12 +1876,10 @@ void spacecraft_inverse_dynamics(const double *q, const double *qd, const double
     const double qdd_10 = qdd[10];
     const double qdd_11 = qdd[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -1867,12 +1890,8 @@ void spacecraft_inverse_dynamics(const double *q, const double *qd, const double
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -1883,10 +1902,8 @@ void spacecraft_inverse_dynamics(const double *q, const double *qd, const double
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     const double x38 = qd_3*x3;
@@ -2054,22 +2071,16 @@ void spacecraft_kinetic_energy(const double *q, const double *qd, const double *
     const double qd_10 = qd[10];
     const double qd_11 = qd[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x11, x10;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x11, &x10);
     const double x6 = x1*x3;
     const double x7 = x0*x3;
     const double x8 = x2*x4;
     const double x9 = x2*x5;
-    double x11, x10;
-    aggsym_sincos(q_6, &x11, &x10);
-    double x13, x12;
-    aggsym_sincos(q_7, &x13, &x12);
-    double x15, x14;
-    aggsym_sincos(q_8, &x15, &x14);
+    double x13, x12, x15, x14;
+    aggsym_sincos2(q_7, q_8, &x13, &x12, &x15, &x14);
     const double x16 = x11*x13;
     const double x17 = x11*x12;
     const double x18 = x10*x13;
@@ -2080,10 +2091,8 @@ void spacecraft_kinetic_energy(const double *q, const double *qd, const double *
     const double x23 = x10*x14 - x15*x16;
     const double x24 = x11*x15 - x14*x18;
     const double x25 = x15*x18 + x11*x14;
-    double x27, x26;
-    aggsym_sincos(q_9, &x27, &x26);
-    double x29, x28;
-    aggsym_sincos(q_10, &x29, &x28);
+    double x27, x26, x29, x28;
+    aggsym_sincos2(q_9, q_10, &x27, &x26, &x29, &x28);
     double x31, x30;
     aggsym_sincos(q_11, &x31, &x30);
     const double x32 = qd_0*x8 + qd_1*(x4*x6 + x0*x5) + qd_2*(x1*x5 - x4*x7);
@@ -2167,12 +2176,10 @@ void spacecraft_momentum(const double *q, const double *qd, const double *p, dou
     const double qd_10 = qd[10];
     const double qd_11 = qd[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -2183,12 +2190,8 @@ void spacecraft_momentum(const double *q, const double *qd, const double *p, dou
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -2199,10 +2202,8 @@ void spacecraft_momentum(const double *q, const double *qd, const double *p, dou
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     const double x38 = qd_0*x10 + qd_1*x12 + qd_2*x14;
@@ -2366,22 +2367,16 @@ void spacecraft_joint_wrenches(const double *q, const double *qd, const double *
     const double qdd_10 = qdd[10];
     const double qdd_11 = qdd[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x11, x10;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x11, &x10);
     const double x6 = x1*x3;
     const double x7 = x0*x3;
     const double x8 = x2*x4;
     const double x9 = x2*x5;
-    double x11, x10;
-    aggsym_sincos(q_6, &x11, &x10);
-    double x13, x12;
-    aggsym_sincos(q_7, &x13, &x12);
-    double x15, x14;
-    aggsym_sincos(q_8, &x15, &x14);
+    double x13, x12, x15, x14;
+    aggsym_sincos2(q_7, q_8, &x13, &x12, &x15, &x14);
     const double x16 = x11*x13;
     const double x17 = x11*x12;
     const double x18 = x10*x13;
@@ -2392,10 +2387,8 @@ void spacecraft_joint_wrenches(const double *q, const double *qd, const double *
     const double x23 = x10*x14 - x15*x16;
     const double x24 = x11*x15 - x14*x18;
     const double x25 = x15*x18 + x11*x14;
-    double x27, x26;
-    aggsym_sincos(q_9, &x27, &x26);
-    double x29, x28;
-    aggsym_sincos(q_10, &x29, &x28);
+    double x27, x26, x29, x28;
+    aggsym_sincos2(q_9, q_10, &x27, &x26, &x29, &x28);
     double x31, x30;
     aggsym_sincos(q_11, &x31, &x30);
     const double x32 = qd_3*x3;
@@ -2585,12 +2578,10 @@ void spacecraft_forward_dynamics(const double *q, const double *qd, const double
     const double tau_10 = tau[10];
     const double tau_11 = tau[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -2601,12 +2592,8 @@ void spacecraft_forward_dynamics(const double *q, const double *qd, const double
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -2617,10 +2604,8 @@ void spacecraft_forward_dynamics(const double *q, const double *qd, const double
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     const double x38 = x37*x37;
@@ -3094,12 +3079,10 @@ void spacecraft_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double q_10 = q[10];
     const double q_11 = q[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -3110,12 +3093,8 @@ void spacecraft_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -3126,10 +3105,8 @@ void spacecraft_inertia_inverse(const double *q, const double *p, double *Ainv)
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     const double x38 = x37*x37;
@@ -3810,12 +3787,10 @@ void spacecraft_transvective_factors(const double *q, const double *p, double *t
     targs[56] = 0;
     diag[8] = 4;
     diag[11] = 0.48;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -3826,13 +3801,9 @@ void spacecraft_transvective_factors(const double *q, const double *p, double *t
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     targs[34] = x19;
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -3844,10 +3815,8 @@ void spacecraft_transvective_factors(const double *q, const double *p, double *t
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     const double x38 = x37*x37;
@@ -4270,14 +4239,12 @@ void spacecraft_support_coefficients(const double *q, const double *qd, const do
     support_g[3] = 0;
     support_g[4] = 0;
     support_g[5] = 0;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
     support_L[12] = x3;
     support_L[33] = x3;
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x5, x4, x101, x100;
+    aggsym_sincos2(q_5, gamma_0, &x5, &x4, &x101, &x100);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = -x7;
@@ -4397,12 +4364,8 @@ void spacecraft_support_coefficients(const double *q, const double *qd, const do
     const double x97 = 1.9*x4 - 2.8*x5;
     const double x98 = 3.5999999999999996*x4;
     const double x99 = 0.1*x5;
-    double x101, x100;
-    aggsym_sincos(gamma_0, &x101, &x100);
-    double x103, x102;
-    aggsym_sincos(gamma_1, &x103, &x102);
-    double x105, x104;
-    aggsym_sincos(gamma_2, &x105, &x104);
+    double x103, x102, x105, x104;
+    aggsym_sincos2(gamma_1, gamma_2, &x103, &x102, &x105, &x104);
     const double x106 = x101*x103;
     const double x107 = x101*x102;
     const double x108 = x100*x103;
@@ -4413,10 +4376,8 @@ void spacecraft_support_coefficients(const double *q, const double *qd, const do
     const double x113 = x100*x104 - x105*x106;
     const double x114 = x101*x105 - x104*x108;
     const double x115 = x105*x108 + x101*x104;
-    double x117, x116;
-    aggsym_sincos(gamma_3, &x117, &x116);
-    double x119, x118;
-    aggsym_sincos(gamma_4, &x119, &x118);
+    double x117, x116, x119, x118;
+    aggsym_sincos2(gamma_3, gamma_4, &x117, &x116, &x119, &x118);
     double x121, x120;
     aggsym_sincos(gamma_5, &x121, &x120);
     const double x122 = 1.2*x120;
@@ -5257,12 +5218,10 @@ int spacecraft_support_direct(const double *q, const double *qd, const double *g
     const double T_4 = T[4];
     const double T_5 = T[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x108, x107;
+    aggsym_sincos2(q_5, gamma_0, &x5, &x4, &x108, &x107);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -5364,12 +5323,8 @@ int spacecraft_support_direct(const double *q, const double *qd, const double *g
     const double x104 = 1.9*x4 - 2.8*x5;
     const double x105 = 3.5999999999999996*x4;
     const double x106 = 0.1*x5;
-    double x108, x107;
-    aggsym_sincos(gamma_0, &x108, &x107);
-    double x110, x109;
-    aggsym_sincos(gamma_1, &x110, &x109);
-    double x112, x111;
-    aggsym_sincos(gamma_2, &x112, &x111);
+    double x110, x109, x112, x111;
+    aggsym_sincos2(gamma_1, gamma_2, &x110, &x109, &x112, &x111);
     const double x113 = x108*x110;
     const double x114 = x108*x109;
     const double x115 = x107*x110;
@@ -5380,10 +5335,8 @@ int spacecraft_support_direct(const double *q, const double *qd, const double *g
     const double x120 = x107*x111 - x112*x113;
     const double x121 = x108*x112 - x111*x115;
     const double x122 = x112*x115 + x108*x111;
-    double x124, x123;
-    aggsym_sincos(gamma_3, &x124, &x123);
-    double x126, x125;
-    aggsym_sincos(gamma_4, &x126, &x125);
+    double x124, x123, x126, x125;
+    aggsym_sincos2(gamma_3, gamma_4, &x124, &x123, &x126, &x125);
     double x128, x127;
     aggsym_sincos(gamma_5, &x128, &x127);
     const double x129 = 1.2*x127;
@@ -6462,12 +6415,10 @@ int spacecraft_support_inverse(const double *q, const double *qd, const double *
     const double T_4 = T[4];
     const double T_5 = T[5];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x99, x98;
+    aggsym_sincos2(q_5, gamma_0, &x5, &x4, &x99, &x98);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -6560,12 +6511,8 @@ int spacecraft_support_inverse(const double *q, const double *qd, const double *
     const double x95 = 1.9*x4 - 2.8*x5;
     const double x96 = 3.5999999999999996*x4;
     const double x97 = 0.1*x5;
-    double x99, x98;
-    aggsym_sincos(gamma_0, &x99, &x98);
-    double x101, x100;
-    aggsym_sincos(gamma_1, &x101, &x100);
-    double x103, x102;
-    aggsym_sincos(gamma_2, &x103, &x102);
+    double x101, x100, x103, x102;
+    aggsym_sincos2(gamma_1, gamma_2, &x101, &x100, &x103, &x102);
     const double x104 = x99*x101;
     const double x105 = x99*x100;
     const double x106 = x98*x101;
@@ -6576,10 +6523,8 @@ int spacecraft_support_inverse(const double *q, const double *qd, const double *
     const double x111 = x98*x102 - x103*x104;
     const double x112 = x99*x103 - x102*x106;
     const double x113 = x103*x106 + x99*x102;
-    double x115, x114;
-    aggsym_sincos(gamma_3, &x115, &x114);
-    double x117, x116;
-    aggsym_sincos(gamma_4, &x117, &x116);
+    double x115, x114, x117, x116;
+    aggsym_sincos2(gamma_3, gamma_4, &x115, &x114, &x117, &x116);
     double x119, x118;
     aggsym_sincos(gamma_5, &x119, &x118);
     const double x120 = 1.2*x118;
@@ -7350,12 +7295,10 @@ void spacecraft_frame_poses(const double *q, const double *p, double *X)
     const double q_10 = q[10];
     const double q_11 = q[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -7366,12 +7309,8 @@ void spacecraft_frame_poses(const double *q, const double *p, double *X)
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -7382,10 +7321,8 @@ void spacecraft_frame_poses(const double *q, const double *p, double *X)
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     X[3] = x10*x26 - x11*x28 + x3*x30;
@@ -7507,14 +7444,12 @@ void spacecraft_frame_jacobians(const double *q, const double *p, double *J)
     J[138] = 0;
     J[139] = 0;
     J[140] = 0;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
     J[41] = x3;
     J[113] = x3;
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x5, x4, x18, x17;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x18, &x17);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = -x7;
@@ -7533,12 +7468,8 @@ void spacecraft_frame_jacobians(const double *q, const double *p, double *J)
     const double x15 = x1*x5 - x4*x9;
     J[141] = x15;
     const double x16 = x5*x9 + x1*x4;
-    double x18, x17;
-    aggsym_sincos(q_6, &x18, &x17);
-    double x20, x19;
-    aggsym_sincos(q_7, &x20, &x19);
-    double x22, x21;
-    aggsym_sincos(q_8, &x22, &x21);
+    double x20, x19, x22, x21;
+    aggsym_sincos2(q_7, q_8, &x20, &x19, &x22, &x21);
     const double x23 = x18*x20;
     const double x24 = x18*x19;
     const double x25 = x17*x20;
@@ -7549,10 +7480,8 @@ void spacecraft_frame_jacobians(const double *q, const double *p, double *J)
     const double x30 = x17*x21 - x22*x23;
     const double x31 = x18*x22 - x21*x25;
     const double x32 = x22*x25 + x18*x21;
-    double x34, x33;
-    aggsym_sincos(q_9, &x34, &x33);
-    double x36, x35;
-    aggsym_sincos(q_10, &x36, &x35);
+    double x34, x33, x36, x35;
+    aggsym_sincos2(q_9, q_10, &x34, &x33, &x36, &x35);
     const double x37 = x11*x27 - x12*x29 + x3*x31;
     const double x38 = x3*x32 - x11*x28 - x12*x30;
     const double x39 = x11*x20 + x12*x24 + x3*x26;
@@ -7704,12 +7633,10 @@ void spacecraft_frame_accelerations(const double *q, const double *qd, const dou
     const double qdd_10 = qdd[10];
     const double qdd_11 = qdd[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -7720,12 +7647,8 @@ void spacecraft_frame_accelerations(const double *q, const double *qd, const dou
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -7736,10 +7659,8 @@ void spacecraft_frame_accelerations(const double *q, const double *qd, const dou
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     const double x38 = qd_0*x3;
@@ -7885,12 +7806,10 @@ void spacecraft_center_of_mass(const double *q, const double *p, double *c)
     const double q_10 = q[10];
     const double q_11 = q[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -7901,18 +7820,12 @@ void spacecraft_center_of_mass(const double *q, const double *p, double *c)
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
+    double x19, x18, x23, x22;
+    aggsym_sincos2(q_7, q_9, &x19, &x18, &x23, &x22);
     const double x20 = x17*x18;
     const double x21 = x16*x18;
-    double x23, x22;
-    aggsym_sincos(q_9, &x23, &x22);
-    double x25, x24;
-    aggsym_sincos(q_10, &x25, &x24);
-    double x27, x26;
-    aggsym_sincos(q_11, &x27, &x26);
+    double x25, x24, x27, x26;
+    aggsym_sincos2(q_10, q_11, &x25, &x24, &x27, &x26);
     const double x28 = x10*x24 - x25*(x11*x23 + x3*x22);
     const double x29 = x12*x24 + x25*(x13*x23 + x7*x22);
     const double x30 = x14*x24 - x25*(x9*x22 - x15*x23);
@@ -7944,12 +7857,10 @@ void spacecraft_com_jacobian(const double *q, const double *p, double *Jc)
     const double q_10 = q[10];
     const double q_11 = q[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -7960,12 +7871,8 @@ void spacecraft_com_jacobian(const double *q, const double *p, double *Jc)
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -7976,10 +7883,8 @@ void spacecraft_com_jacobian(const double *q, const double *p, double *Jc)
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     const double x38 = x10*x26 - x11*x28 + x3*x30;
@@ -8099,12 +8004,10 @@ void spacecraft_centroidal_map(const double *q, const double *p, double *Ag)
     const double q_10 = q[10];
     const double q_11 = q[11];
     (void)p;
-    double x1, x0;
-    aggsym_sincos(q_3, &x1, &x0);
-    double x3, x2;
-    aggsym_sincos(q_4, &x3, &x2);
-    double x5, x4;
-    aggsym_sincos(q_5, &x5, &x4);
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_3, q_4, &x1, &x0, &x3, &x2);
+    double x5, x4, x17, x16;
+    aggsym_sincos2(q_5, q_6, &x5, &x4, &x17, &x16);
     const double x6 = x1*x3;
     const double x7 = x1*x2;
     const double x8 = x0*x3;
@@ -8115,12 +8018,8 @@ void spacecraft_centroidal_map(const double *q, const double *p, double *Ag)
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    double x17, x16;
-    aggsym_sincos(q_6, &x17, &x16);
-    double x19, x18;
-    aggsym_sincos(q_7, &x19, &x18);
-    double x21, x20;
-    aggsym_sincos(q_8, &x21, &x20);
+    double x19, x18, x21, x20;
+    aggsym_sincos2(q_7, q_8, &x19, &x18, &x21, &x20);
     const double x22 = x17*x19;
     const double x23 = x17*x18;
     const double x24 = x16*x19;
@@ -8131,10 +8030,8 @@ void spacecraft_centroidal_map(const double *q, const double *p, double *Ag)
     const double x29 = x16*x20 - x21*x22;
     const double x30 = x17*x21 - x20*x24;
     const double x31 = x21*x24 + x17*x20;
-    double x33, x32;
-    aggsym_sincos(q_9, &x33, &x32);
-    double x35, x34;
-    aggsym_sincos(q_10, &x35, &x34);
+    double x33, x32, x35, x34;
+    aggsym_sincos2(q_9, q_10, &x33, &x32, &x35, &x34);
     double x37, x36;
     aggsym_sincos(q_11, &x37, &x36);
     const double x38 = x10*x26 - x11*x28 + x3*x30;
