@@ -539,11 +539,25 @@ def straight_line(program, outputs) -> StraightLine:
     Steps follow creation order (the recursions' own, which keeps a body's work together), each output stored as
     soon as its value exists so that it does not stay live to the end."""
     flat = [x for out in outputs for x in out]
-    ids = program.reachable(flat)
     ops = program.ops
+    # one walk: the reachable ids, and the uses of every node (once per operand of each reachable node, once per
+    # output entry)
     uses: dict = {}
+    get = uses.get
+    stack = []
+    for x in flat:
+        if x.__class__ is Node:
+            j = x.id
+            uses[j] = get(j, 0) + 1
+            stack.append(j)
+    seen = set()
+    add = seen.add
     inputs = []
-    for i in ids:
+    while stack:
+        i = stack.pop()
+        if i in seen:
+            continue
+        add(i)
         entry = ops[i]
         if entry[0] == INPUT:
             inputs.append(entry[1:])
@@ -551,20 +565,18 @@ def straight_line(program, outputs) -> StraightLine:
         for a in entry[1:]:
             if a.__class__ is Node:
                 j = a.id
-                uses[j] = uses.get(j, 0) + 1
-    for x in flat:
-        if isinstance(x, Node):
-            uses[x.id] = uses.get(x.id, 0) + 1
+                uses[j] = get(j, 0) + 1
+                if j not in seen:
+                    stack.append(j)
+    ids = sorted(seen)
     named = set()
     depth: dict[int, int] = {}  # depth of the expression a node inlines (0: a name)
     for i in ids:
         entry = ops[i]
         code = entry[0]
-        if code == INPUT:
-            depth[i] = 0
-            continue
-        if uses.get(i, 0) >= 2 or code in FUNCTIONS:
-            named.add(i)
+        if code == INPUT or code in FUNCTIONS or uses[i] >= 2:
+            if code != INPUT:
+                named.add(i)
             depth[i] = 0
             continue
         d = 0
@@ -578,14 +590,16 @@ def straight_line(program, outputs) -> StraightLine:
             named.add(i)
             d = 0
         depth[i] = d
-    temps = [i for i in ids if i in named]
     at: dict = {}
     for o, out in enumerate(outputs):
         for k, x in enumerate(out):
-            at.setdefault(x.id if isinstance(x, Node) else -1, []).append(("out", o, k))
+            at.setdefault(x.id if x.__class__ is Node else -1, []).append(("out", o, k))
     steps = list(at.get(-1, []))
+    temps = []
     for i in ids:
         if i in named:
+            temps.append(i)
             steps.append(("temp", i))
-        steps.extend(at.get(i, []))
+        if i in at:
+            steps.extend(at[i])
     return StraightLine(program, temps, outputs, sorted(inputs), steps)
