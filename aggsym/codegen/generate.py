@@ -39,7 +39,7 @@ from ..model.tree import Tree
 from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import FILTERS, check_c_identifier, check_module_name
-from .printing import SCALARS, CPrinter, Converter, LiteralError, NumPyPrinter, _number
+from .printing import SCALARS, CPrinter, Converter, CText, LiteralError, NumPyPrinter, _number
 from .slicing import SLICE_SIZE, SLICE_THRESHOLD, Sliced, Statement, slice_routine, work
 
 
@@ -194,13 +194,20 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing) 
     cp, pp = CPrinter(scalar), NumPyPrinter()
     temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
     names = {**_input_symbols(sl), **temp_names}
-    conv = Converter(prog, names)  # one expression tree per statement, printed as C and as NumPy
+    conv = Converter(prog, names)  # the expression trees of the statements printed as NumPy apart from the C
+    py_conv = Converter(prog, names)  # (its own list of names used: the C's are conv.refs)
+    ctext = CText(prog, names, cp.counts, conv.refs, scalar)  # the C text without a tree
 
-    def both(tree, calls):
-        """(C, NumPy) text of a tree; one text for both when it holds no function call and the C is double (the
-        printers differ only in function names and in float literals)."""
-        c = cp._print(tree)
-        return (c, c) if scalar == "double" and conv.calls == calls else (c, pp._print(tree))
+    def both(x, top=True):
+        """(C, NumPy) text of a right-hand side; one text for both when it holds no function call and the C is
+        double (the printers differ only in function names and in float literals)."""
+        calls = ctext.calls
+        c = ctext(x, top)
+        if scalar == "double" and ctext.calls == calls:
+            return c, c
+        py = pp._print(py_conv(x, top))
+        py_conv.refs.clear()
+        return c, py
     py_body = []
     stmts = []  # the C body as statements (slicing.Statement): what each defines, uses, reads or writes
 
@@ -237,20 +244,18 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing) 
             _, o, k = step
             x = outputs[o][k]
             name = routine.outputs[o].name
-            calls = conv.calls
-            rhs_c, rhs_py = both(conv(x, top=not (isinstance(x, Node) and x.id in names)), calls)
+            rhs_c, rhs_py = both(x, top=not (isinstance(x, Node) and x.id in names))
             emit([f"{name}[{k}] = {rhs_c};"], arrays=(name,), ops=ops_so_far() - before)
             idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
             py_body.append(f"{routine.outputs[o].py}[..., {idx}] = {rhs_py}")
             continue
         i = step[1]
-        calls = conv.calls
-        tree = conv(prog.nodes[i])
         if i not in trig:
-            rhs_c, rhs_py = both(tree, calls)
+            rhs_c, rhs_py = both(prog.nodes[i])
             py_body.append(f"{names[i]} = {rhs_py}")
             emit([f"const {scalar} {names[i]} = {rhs_c};"], defines=(names[i],), ops=ops_so_far() - before)
             continue
+        tree = conv(prog.nodes[i])
         py_body.append(f"{names[i]} = {pp._print(tree)}")
         sin_id, cos_id, arg = trig[i]
         if (sin_id, cos_id) in done:
