@@ -55,8 +55,11 @@ INLINE_DEPTH = 64  # the deepest expression a named value inlines: what printers
 
 def normalize_const(x):
     """An exact ``int`` for integral floats (so 0.0 and 1.0 fold), the float otherwise."""
-    if type(x) is int:
+    cls = x.__class__
+    if cls is int:
         return x
+    if cls is float:  # (before the isinstance test below, which goes through the numbers ABCs)
+        return int(x) if x.is_integer() and abs(x) < 2.0 ** 53 else x
     if isinstance(x, Fraction):
         return int(x) if x.denominator == 1 else x
     x = float(x)
@@ -211,36 +214,45 @@ class Program:
         and a constant operand's repr (a str: never equal to an id); a commutative operation's operands are put in
         order, constants first, then nodes by id."""
         if len(args) == 2:
-            a, b = args
-            if a.__class__ is Node:
-                if b.__class__ is Node:  # the key of an operation on two nodes: one int
-                    ka, kb = a.id, b.id
-                    if ka > kb and opcode in _COMMUTATIVE:
-                        a, b, ka, kb = b, a, kb, ka
-                    key = ((ka << 32 | kb) << _CODE_BITS) | _CODE_INDEX[opcode]
-                    node = self._table.get(key)
-                    if node is None:
-                        node = self._table[key] = self._new((opcode, a, b))
-                    return node
-                else:
-                    ka, kb = a.id, repr(b)
-                    if opcode in _COMMUTATIVE:
-                        a, b, ka, kb = b, a, kb, ka
-            else:
-                ka = repr(a)
-                if b.__class__ is Node:
-                    kb = b.id
-                else:
-                    kb = repr(b)
-                    if ka > kb and opcode in _COMMUTATIVE:
-                        a, b, ka, kb = b, a, kb, ka
-            key = (opcode, ka, kb)
-            args = (a, b)
-        else:
-            key = (opcode,) + tuple(a.id if a.__class__ is Node else repr(a) for a in args)
+            return self._make2(opcode, args[0], args[1])
+        key = (opcode,) + tuple(a.id if a.__class__ is Node else repr(a) for a in args)
         node = self._table.get(key)
         if node is None:
             node = self._new((opcode,) + args)
+            self._table[key] = node
+        return node
+
+    def _make2(self, opcode, a, b):
+        """:meth:`_make` of a binary operation (the commonest: every arithmetic operation), written out."""
+        if a.__class__ is Node:
+            if b.__class__ is Node:  # the key of an operation on two nodes: one int
+                ka, kb = a.id, b.id
+                if ka > kb and (opcode == ADD or opcode == MUL):
+                    a, b, ka, kb = b, a, kb, ka
+                key = ((ka << 32 | kb) << _CODE_BITS) | _CODE_INDEX[opcode]
+                table = self._table
+                node = table.get(key)
+                if node is None:
+                    ops = self.ops
+                    node = table[key] = Node(self, len(ops))
+                    ops.append((opcode, a, b))
+                    self.nodes.append(node)
+                return node
+            ka, kb = a.id, repr(b)
+            if opcode == ADD or opcode == MUL:
+                a, b, ka, kb = b, a, kb, ka
+        else:
+            ka = repr(a)
+            if b.__class__ is Node:
+                kb = b.id
+            else:
+                kb = repr(b)
+                if ka > kb and (opcode == ADD or opcode == MUL):
+                    a, b, ka, kb = b, a, kb, ka
+        key = (opcode, ka, kb)
+        node = self._table.get(key)
+        if node is None:
+            node = self._new((opcode, a, b))
             self._table[key] = node
         return node
 
@@ -305,7 +317,7 @@ class Program:
             return self._sub(a, normalize_const(-b))
         if not a_node and a < 0:
             return self._sub(b, normalize_const(-a))
-        return self._make(ADD, a, b)
+        return self._make2(ADD, a, b)
 
     def _sub(self, a, b):
         if type(b) in _EXACT and b == 0:
@@ -322,9 +334,51 @@ class Program:
             return self._neg(self._add(ops[a.id][1], b))
         if not b_node and b < 0:
             return self._add(a, normalize_const(-b))
-        return self._make(SUB, a, b)
+        return self._make2(SUB, a, b)
 
     def _mul(self, a, b):
+        if a.__class__ is Node and b.__class__ is Node:  # the commonest product, the rules below written out for it
+            ops = self.ops
+            ai, bi = a.id, b.id
+            ea, eb = ops[ai], ops[bi]
+            if ea[0] == NEG:
+                if eb[0] == NEG:
+                    return self._mul(ea[1], eb[1])
+                return self._neg(self._mul(ea[1], b))
+            if eb[0] == NEG:
+                return self._neg(self._mul(a, eb[1]))
+            signatures, coefficients = self._signatures, self._coefficients
+            fa, fb = signatures.get(ai), signatures.get(bi)
+            if fa is None:  # (a node without a signature has no coefficient either)
+                if fb is None:
+                    factors = (ai, bi) if ai < bi else (bi, ai)
+                    node = self._products.get(factors)
+                    if node is None:
+                        node = self._make2(MUL, a, b)
+                        if node.id not in signatures:
+                            signatures[node.id] = factors
+                        self._products.setdefault(factors, node)
+                    return node
+                ca, fa = 1, (ai,)
+                cb = coefficients.get(bi, 1)
+            else:
+                ca = coefficients.get(ai, 1)
+                if fb is None:
+                    cb, fb = 1, (bi,)
+                else:
+                    cb = coefficients.get(bi, 1)
+            coefficient = normalize_const(ca * cb)
+            factors = tuple(sorted(fa + fb))
+            key = factors if coefficient.__class__ is int and coefficient == 1 else (repr(coefficient), factors)
+            node = self._products.get(key)
+            if node is None:
+                node = self._make2(MUL, a, b)
+                if node.id not in signatures:
+                    signatures[node.id] = factors
+                    if key is not factors:
+                        coefficients[node.id] = coefficient
+                self._products.setdefault(key, node)
+            return node
         ta, tb = type(a), type(b)
         if (ta in _EXACT and a == 0) or (tb in _EXACT and b == 0):
             return 0
@@ -377,7 +431,7 @@ class Program:
         key = factors if coefficient.__class__ is int and coefficient == 1 else (repr(coefficient), factors)
         node = self._products.get(key)
         if node is None:
-            node = self._make(MUL, a, b)
+            node = self._make2(MUL, a, b)
             if node.id not in signatures:
                 signatures[node.id] = factors
                 if key is not factors:
@@ -413,7 +467,7 @@ class Program:
             return self._neg(self._div(na, b))
         if nb is not None:
             return self._neg(self._div(a, nb))
-        return self._make(DIV, a, b)
+        return self._make2(DIV, a, b)
 
     # inspection -----------------------------------------------------------------------------------
     def operands(self, ident: int) -> tuple:
