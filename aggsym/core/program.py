@@ -298,10 +298,23 @@ class Program:
             return entry[1]
         if entry[0] == SUB:  # -(x - y) = y - x, free
             return self._sub(entry[2], entry[1])
-        return self._make(NEG, a)
+        key = (NEG, a.id)  # (_make's key of a unary operation)
+        node = self._table.get(key)
+        if node is None:
+            node = self._table[key] = self._new((NEG, a))
+        return node
 
     def _add(self, a, b):
         # (the tests of is_zero, _neg_arg and is_const written out: this runs for every addition recorded)
+        if a.__class__ is Node and b.__class__ is Node:  # the commonest sum: the rules below that apply to it
+            ops = self.ops
+            eb = ops[b.id]
+            if eb[0] == NEG:
+                return self._sub(a, eb[1])
+            ea = ops[a.id]
+            if ea[0] == NEG:
+                return self._sub(b, ea[1])
+            return self._make2(ADD, a, b)
         if type(a) in _EXACT and a == 0:
             return b
         if type(b) in _EXACT and b == 0:
@@ -320,6 +333,17 @@ class Program:
         return self._make2(ADD, a, b)
 
     def _sub(self, a, b):
+        if a.__class__ is Node and b.__class__ is Node:  # the commonest difference: the rules below that apply
+            if a.id == b.id:
+                return 0
+            ops = self.ops
+            eb = ops[b.id]
+            if eb[0] == NEG:
+                return self._add(a, eb[1])
+            ea = ops[a.id]
+            if ea[0] == NEG:  # -x - b = -(x + b)
+                return self._neg(self._add(ea[1], b))
+            return self._make2(SUB, a, b)
         if type(b) in _EXACT and b == 0:
             return a
         if type(a) in _EXACT and a == 0:
