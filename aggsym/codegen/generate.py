@@ -172,20 +172,22 @@ def _input_symbols(sl):
     return {sl.program.inputs[(kind, index)].id: f"{kind}_{index}" for kind, index in sl.inputs}
 
 
-def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double", slicing=None) -> EmittedRoutine:
+def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double", slicing=None,
+                 sl=None) -> EmittedRoutine:
     """C and Python statements of one routine, and the operation count of the C (its arrays, temporaries and
     literals of the C type ``scalar``, double or float).  ``slicing``: (threshold, size), the C of a routine of
-    more work than the threshold also as slices of about that size (:mod:`.slicing`); None: never."""
+    more work than the threshold also as slices of about that size (:mod:`.slicing`); None: never.  ``sl``: the
+    outputs' :func:`~aggsym.core.program.straight_line` when already formed."""
     try:
-        return _emit_routine(model, prog, routine, outputs, scalar, slicing)
+        return _emit_routine(model, prog, routine, outputs, scalar, slicing, sl)
     except LiteralError as exc:
         raise AggsymError(f"{model.source or model.name}: routine {routine.role}: {exc}"
                           + ("; generate with --scalar double, or choose units in which the model's numbers fit"
                              if scalar == "float" else "")) from None
 
 
-def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing) -> EmittedRoutine:
-    sl = straight_line(prog, outputs)
+def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, sl=None) -> EmittedRoutine:
+    sl = sl or straight_line(prog, outputs)
     inputs = signature(routine, model)
     allowed = set(inputs)
     for kind, _ in sl.inputs:
@@ -342,7 +344,14 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
     stages.done("recursions")
     if scalar not in SCALARS:
         raise AggsymError(f"--scalar: {scalar!r} is not one of {', '.join(SCALARS)}")
-    emitted = [emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing) for role, outs in outputs.items()]
+    lines = {}  # the straight lines of A, b and g, which the LaTeX prints too (latex.intermediate_form)
+    emitted = []
+    for role, outs in outputs.items():
+        sl = straight_line(prog, outs)
+        if latex and role in LATEX_ROLES:
+            lines[role] = sl
+        emitted.append(emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing, sl))
+        del sl
     stages.done("printing")
     env = templates()
     ctx = {
@@ -384,11 +393,13 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         indent=2) + "\n"
     stages.done("templates")
     if latex:
-        gen.files[f"{model.name}.tex"] = latex_document(model, env, prog, outputs)
+        gen.files[f"{model.name}.tex"] = latex_document(model, env, prog, outputs, lines)
         stages.done("latex")
     gen.timings = stages.timings
     return gen
 
+
+LATEX_ROLES = ("inertia", "bias", "gravity")  # the routines whose programs the LaTeX document prints
 
 HELPERS = ("aggsym_sincos(", "aggsym_sign(")  # the calls of the helpers that helpers.c.j2 defines
 
