@@ -159,3 +159,61 @@ def test_deep_programs_print_and_evaluate_without_deep_recursion():
     (total,) = prog.evaluate([acc], values)
     assert total == sum((1.0 + (i % 7)) ** 2 for i in range(200_000))
     assert sys.getrecursionlimit() == limit
+
+
+def test_c_text_prints_what_the_c_printer_prints_of_the_tree():
+    """CText (the C of a statement straight from the program) is CPrinter's text of Converter's tree, with the same
+    operation counts and the same names used, in order: on the statements of a robot-like model's routines and on a
+    program of divisions, calls, negative and fractional constants and several constants in one sum."""
+    from fractions import Fraction
+
+    from aggsym.codegen.generate import symbolic_routines
+    from aggsym.codegen.printing import CPrinter, CText, Converter
+    from aggsym.core.program import straight_line
+    from aggsym.model import load
+
+    def compare(prog, outputs, scalar):
+        sl = straight_line(prog, outputs)
+        names = {prog.inputs[key].id: f"{key[0]}_{key[1]}" for key in sl.inputs}
+        names.update({i: f"x{k}" for k, i in enumerate(sl.temps)})
+        conv, printer = Converter(prog, names), CPrinter(scalar)
+        counts = {"mul": 0, "add": 0, "div": 0, "call": 0}
+        refs = []
+        text = CText(prog, names, counts, refs, scalar)
+        rhs = [(prog.nodes[i], True) for i in sl.temps]
+        rhs += [(x, not (isinstance(x, Node) and x.id in names)) for out in outputs for x in out]
+        for x, top in rhs:
+            expected = printer._print(conv(x, top))
+            assert text(x, top) == expected
+            assert refs == conv.refs
+            refs.clear()
+            conv.refs.clear()
+        assert counts == printer.counts
+        return len(rhs)
+
+    prog = Program()
+    p = prog.vector("p", 4)
+    q = prog.vector("q", 3)
+    s, c = prog.sin(q[0]), prog.cos(q[0])
+    outs = [
+        p[0] * q[1] + 2.5 - p[1] * q[2] + Fraction(1, 3) - 0.75,  # three constants merged into one
+        -(p[0] + q[1]) * (q[2] - p[2]) / (p[3] * s + c),
+        prog.call("atan2", q[1] * -1.5, q[2] + 1) / (2 * p[0]) - prog.sqrt(p[1] * p[1] + 1e-3),
+        -(q[0] * q[1]) - (-(p[0] * s)) * c,
+        (q[0] - 1) * (1 - q[0]) * Fraction(2, 7) - prog.call("sign", q[2] - p[3]),
+        -(q[1] / (q[2] + 2)),
+        prog.call("abs", q[0] * q[1] + 3) * prog.call("abs", q[0] * q[1] + 3),
+        q[2] * 1e30 + 0.1 * q[1] - 0.1 * q[1],
+        -3 / q[0] + q[1] / -2.5 - prog.call("atan2", -1.5, q[2]) * (Fraction(-1, 2) / q[1]),
+    ]
+    for scalar in ("double", "float"):
+        assert compare(prog, [outs], scalar) > len(outs)
+    model = load(_models_dir() / "double_pendulum.yaml")
+    prog, outputs = symbolic_routines(model)
+    assert sum(compare(prog, outs, "double") for outs in outputs.values()) > 100
+
+
+def _models_dir():
+    from pathlib import Path
+
+    return Path(__file__).resolve().parent.parent / "models"

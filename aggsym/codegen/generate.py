@@ -41,7 +41,7 @@ from ..model.tree import Tree
 from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import FILTERS, check_c_identifier, check_module_name
-from .printing import SCALARS, CPrinter, Converter, LiteralError, NumPyPrinter, _number
+from .printing import SCALARS, CPrinter, Converter, CText, LiteralError, NumPyPrinter, _number
 from .slicing import SLICE_SIZE, SLICE_THRESHOLD, Sliced, Statement, slice_routine, work
 
 
@@ -174,20 +174,22 @@ def _input_symbols(sl):
     return {sl.program.inputs[(kind, index)].id: f"{kind}_{index}" for kind, index in sl.inputs}
 
 
-def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double", slicing=None) -> EmittedRoutine:
+def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double", slicing=None,
+                 sl=None) -> EmittedRoutine:
     """C and Python statements of one routine, and the operation count of the C (its arrays, temporaries and
     literals of the C type ``scalar``, double or float).  ``slicing``: (threshold, size), the C of a routine of
-    more work than the threshold also as slices of about that size (:mod:`.slicing`); None: never."""
+    more work than the threshold also as slices of about that size (:mod:`.slicing`); None: never.  ``sl``: the
+    outputs' :func:`~aggsym.core.program.straight_line` when already formed."""
     try:
-        return _emit_routine(model, prog, routine, outputs, scalar, slicing)
+        return _emit_routine(model, prog, routine, outputs, scalar, slicing, sl)
     except LiteralError as exc:
         raise AggsymError(f"{model.source or model.name}: routine {routine.role}: {exc}"
                           + ("; generate with --scalar double, or choose units in which the model's numbers fit"
                              if scalar == "float" else "")) from None
 
 
-def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing) -> EmittedRoutine:
-    sl = straight_line(prog, outputs)
+def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, sl=None) -> EmittedRoutine:
+    sl = sl or straight_line(prog, outputs)
     inputs = signature(routine, model)
     allowed = set(inputs)
     for kind, _ in sl.inputs:
@@ -196,13 +198,20 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing) 
     cp, pp = CPrinter(scalar), NumPyPrinter()
     temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
     names = {**_input_symbols(sl), **temp_names}
-    conv = Converter(prog, names)  # one expression tree per statement, printed as C and as NumPy
+    conv = Converter(prog, names)  # the expression trees of the statements printed as NumPy apart from the C
+    py_conv = Converter(prog, names)  # (its own list of names used: the C's are conv.refs)
+    ctext = CText(prog, names, cp.counts, conv.refs, scalar)  # the C text without a tree
 
-    def both(tree, calls):
-        """(C, NumPy) text of a tree; one text for both when it holds no function call and the C is double (the
-        printers differ only in function names and in float literals)."""
-        c = cp._print(tree)
-        return (c, c) if scalar == "double" and conv.calls == calls else (c, pp._print(tree))
+    def both(x, top=True):
+        """(C, NumPy) text of a right-hand side; one text for both when it holds no function call and the C is
+        double (the printers differ only in function names and in float literals)."""
+        calls = ctext.calls
+        c = ctext(x, top)
+        if scalar == "double" and ctext.calls == calls:
+            return c, c
+        py = pp._print(py_conv(x, top))
+        py_conv.refs.clear()
+        return c, py
     py_body = []
     stmts = []  # the C body as statements (slicing.Statement): what each defines, uses, reads or writes
 
@@ -241,21 +250,19 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing) 
             _, o, k = step
             x = outputs[o][k]
             name = routine.outputs[o].name
-            calls = conv.calls
-            rhs_c, rhs_py = both(conv(x, top=not (isinstance(x, Node) and x.id in names)), calls)
+            rhs_c, rhs_py = both(x, top=not (isinstance(x, Node) and x.id in names))
             emit([f"{name}[{k}] = {rhs_c};"], arrays=(name,), ops=ops_so_far() - before)
             idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
             py_body.append(f"{routine.outputs[o].py}[..., {idx}] = {rhs_py}")
             continue
         i = step[1]
-        calls = conv.calls
-        tree = conv(prog.nodes[i])
         if i not in trig:
-            rhs_c, rhs_py = both(tree, calls)
+            rhs_c, rhs_py = both(prog.nodes[i])
             py_body.append(f"{names[i]} = {rhs_py}")
             emit([f"const {scalar} {names[i]} = {rhs_c};"], defines=(names[i],), ops=ops_so_far() - before)
             defined.add(i)
             continue
+        tree = conv(prog.nodes[i])
         py_body.append(f"{names[i]} = {pp._print(tree)}")
         pair = trig[i]
         if pair[:2] in done:
@@ -387,7 +394,14 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
     stages.done("recursions")
     if scalar not in SCALARS:
         raise AggsymError(f"--scalar: {scalar!r} is not one of {', '.join(SCALARS)}")
-    emitted = [emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing) for role, outs in outputs.items()]
+    lines = {}  # the straight lines of A, b and g, which the LaTeX prints too (latex.intermediate_form)
+    emitted = []
+    for role, outs in outputs.items():
+        sl = straight_line(prog, outs)
+        if latex and role in LATEX_ROLES:
+            lines[role] = sl
+        emitted.append(emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing, sl))
+        del sl
     stages.done("printing")
     env = templates()
     ctx = {
@@ -430,11 +444,13 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         indent=2) + "\n"
     stages.done("templates")
     if latex:
-        gen.files[f"{model.name}.tex"] = latex_document(model, env, prog, outputs)
+        gen.files[f"{model.name}.tex"] = latex_document(model, env, prog, outputs, lines)
         stages.done("latex")
     gen.timings = stages.timings
     return gen
 
+
+LATEX_ROLES = ("inertia", "bias", "gravity")  # the routines whose programs the LaTeX document prints
 
 HELPERS = ("aggsym_sincos(", "aggsym_sincos2(", "aggsym_sign(")  # the calls of the helpers that helpers.c.j2 defines
 

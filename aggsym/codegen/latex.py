@@ -204,15 +204,16 @@ class IntermediatePrinter(_Common, LatexPrinter):
         return f"\\frac{{{self._print(e.num)}}}{{{self._print(e.den)}}}"
 
 
-def intermediate_form(model, prog, outputs, roles=("inertia", "bias", "gravity")):
-    """The straight-line programs of A, b, g as LaTeX assignments (x_k = ...)."""
+def intermediate_form(model, prog, outputs, roles=("inertia", "bias", "gravity"), straight=None):
+    """The straight-line programs of A, b, g as LaTeX assignments (x_k = ...); ``straight``: {role: its
+    :func:`straight_line`} where already formed (the C's)."""
     q, qd, _ = coordinate_symbols(model)
     names = symbol_names(model)
     blocks = []
     for role in roles:
         if role not in outputs:
             continue
-        sl = straight_line(prog, outputs[role])
+        sl = (straight or {}).get(role) or straight_line(prog, outputs[role])
         sym = {}
         for kind, i in sl.inputs:
             node = prog.inputs[(kind, i)]
@@ -280,8 +281,9 @@ def constraint_section(model, prog, outputs, small: bool):
             "stabilization": [sp.latex(x) for x in model.stabilization]}
 
 
-def latex_document(model, env, prog, outputs) -> str:
-    """The standalone LaTeX document (rendered through templates/model.tex.j2)."""
+def latex_document(model, env, prog, outputs, straight=None) -> str:
+    """The standalone LaTeX document (rendered through templates/model.tex.j2); ``straight``: {role: straight line}
+    of routines already emitted, not formed again."""
     # the closed forms are sized by the programs of A, b and g: without all three emitted there is no measure of
     # what SymPy would be asked to simplify (a 4-link chain's derivatives alone once ran it for many minutes)
     sized = all(role in outputs for role in ("inertia", "bias", "gravity"))
@@ -299,7 +301,7 @@ def latex_document(model, env, prog, outputs) -> str:
         "gravity": ", ".join(sp.latex(g) for g in model.gravity),
         "closed": closed_form(model) if small else None,
         "cauchy": cauchy_form(model) if small and "forward_dynamics" in outputs else None,
-        "blocks": None if small else intermediate_form(model, prog, outputs),
+        "blocks": None if small else intermediate_form(model, prog, outputs, straight=straight),
         "constraints": constraint_section(model, prog, outputs, small),
         "nq": model.nq,
         "qdd": [names[s] for s in qdd],

@@ -356,3 +356,169 @@ def count_ops(c_code: str) -> dict:
     code = _LITERAL.sub("0", _COMMENT.sub(" ", c_code))
     calls = sum(_ANGLES.get(m.group(1), 1) for m in _CALL.finditer(code) if m.group(1) not in _KEYWORDS)
     return {"mul": code.count("*"), "add": len(_BINARY.findall(code)), "div": code.count("/"), "call": calls}
+
+
+# the operand kinds of :class:`CText` (what the tree printers decide parentheses by)
+_K_REF, _K_NUM, _K_NEGNUM, _K_LIN, _K_PROD, _K_NEGPROD, _K_RATIO, _K_CALL = range(8)
+
+
+class CText:
+    """The C text of an assignment's right-hand side straight from the program: exactly what :class:`CPrinter`
+    prints of :class:`Converter`'s tree (same flattening, merged constants, parentheses and operation counts,
+    the names used appended to ``refs`` in the same order), without building the tree.  The common statement of
+    a large routine is printed this way; one holding a function call also needs its NumPy text, which differs
+    (``np.sin``): :attr:`calls` tells the caller to print that one from the tree.
+
+    ``counts`` is the C printer's own dict of counts (the routine's operations), ``refs`` the converter's list."""
+
+    def __init__(self, program, names: dict, counts: dict, refs: list, scalar: str = "double"):
+        self.ops = program.ops
+        self.names = names
+        self.counts = counts
+        self.refs = refs
+        self.scalar = scalar
+        self.functions = _Common.functions if scalar == "double" else \
+            {name: c_name + "f" for name, c_name in _Common.functions.items()}
+        self.calls = 0  # the function calls printed so far
+
+    def __call__(self, x, top: bool = True) -> str:
+        return self._expr(x, top)[0]
+
+    def _number(self, value):
+        return (_number(value, self.scalar),
+                _K_NEGNUM if not isinstance(value, Fraction) and value < 0 else _K_NUM)
+
+    def _expr(self, x, top):
+        """(text, kind) of ``Converter(x, top)`` printed."""
+        if x.__class__ is not Node:
+            return self._number(x)
+        ident = x.id
+        names = self.names
+        if not top and ident in names:
+            name = names[ident]
+            self.refs.append(name)
+            return name, _K_REF
+        entry = self.ops[ident]
+        code = entry[0]
+        if code == INPUT:
+            name = names[ident]
+            self.refs.append(name)
+            return name, _K_REF
+        if code == ADD or code == SUB:
+            terms = []
+            self._terms(x, True, 1, terms)
+            return self._lincomb(terms)
+        if code == MUL:
+            factors = []
+            sign = self._factors(x, True, 1, factors)
+            return self._prod(sign, factors)
+        if code == NEG:
+            text, kind = self._expr(entry[1], False)
+            if kind == _K_PROD:
+                return "-" + text, _K_NEGPROD
+            if kind == _K_NEGPROD:
+                return text[1:], _K_PROD
+            if kind == _K_LIN:
+                text = f"({text})"
+            return "-" + text, _K_LIN  # a LinComb of one negated term
+        if code == DIV:
+            num, num_kind = self._expr(entry[1], False)
+            den, den_kind = self._expr(entry[2], False)
+            self.counts["div"] += 1
+            if num_kind == _K_LIN or num_kind == _K_NEGPROD or num_kind == _K_NEGNUM:
+                num = f"({num})"
+            if den_kind not in (_K_REF, _K_NUM, _K_NEGNUM, _K_CALL):
+                den = f"({den})"
+            return f"{num}/{den}", _K_RATIO
+        if code in FUNCTIONS:
+            self.calls += 1
+            args = [self._expr(a, False)[0] for a in entry[1:]]
+            self.counts["call"] += 1
+            if code == "sign":
+                return f"aggsym_sign({args[0]})", _K_CALL
+            return f"{self.functions[code]}({', '.join(args)})", _K_CALL
+        raise ValueError(code)
+
+    def _terms(self, x, top, sign, out):
+        """:meth:`Converter._terms`: (sign, text, kind, constant) per term, the constant for a Num term."""
+        if x.__class__ is not Node:
+            out.append((sign, None, _K_NUM, x))
+            return
+        names = self.names
+        if top or x.id not in names:
+            entry = self.ops[x.id]
+            code = entry[0]
+            if code == ADD or code == SUB:
+                self._terms(entry[1], False, sign, out)
+                self._terms(entry[2], False, sign if code == ADD else -sign, out)
+                return
+            if code == NEG:
+                self._terms(entry[1], False, -sign, out)
+                return
+        name = names.get(x.id)
+        if name is not None:
+            self.refs.append(name)
+            out.append((sign, name, _K_REF, None))
+            return
+        text, kind = self._expr(x, False)
+        if kind == _K_NEGPROD:
+            out.append((-sign, text[1:], _K_PROD, None))
+        else:
+            out.append((sign, text, kind, None))
+
+    def _factors(self, x, top, sign, out):
+        """:meth:`Converter._factors`: the factors' operand texts appended to ``out``; returns the sign."""
+        if x.__class__ is not Node:
+            text, kind = self._number(x)
+            out.append(f"({text})" if kind == _K_NEGNUM else text)
+            return sign
+        names = self.names
+        if top or x.id not in names:
+            entry = self.ops[x.id]
+            code = entry[0]
+            if code == MUL:
+                sign = self._factors(entry[1], False, sign, out)
+                return self._factors(entry[2], False, sign, out)
+            if code == NEG:
+                return self._factors(entry[1], False, -sign, out)
+        name = names.get(x.id)
+        if name is not None:
+            self.refs.append(name)
+            out.append(name)
+            return sign
+        text, kind = self._expr(x, False)
+        out.append(f"({text})" if kind == _K_LIN or kind == _K_NEGPROD or kind == _K_NEGNUM else text)
+        return sign
+
+    def _prod(self, sign, factors):
+        self.counts["mul"] += len(factors) - 1
+        body = "*".join(factors)
+        return ("-" + body, _K_NEGPROD) if sign < 0 else (body, _K_PROD)
+
+    def _lincomb(self, terms):
+        constants = [k for k, term in enumerate(terms) if term[3] is not None]
+        if len(constants) >= 2:  # _merge_constants
+            total = normalize_const(sum(terms[k][0] * terms[k][3] for k in constants))
+            merged = []
+            for k, term in enumerate(terms):
+                if k == constants[0] and not is_zero(total):
+                    merged.append((1, None, _K_NUM, total) if total > 0
+                                  else (-1, None, _K_NUM, normalize_const(-total)))
+                elif k not in constants:
+                    merged.append(term)
+            terms = merged or [(1, None, _K_NUM, 0)]
+        self.counts["add"] += len(terms) - 1
+        parts = []
+        first = True
+        for sign, text, kind, value in terms:
+            if text is None:
+                text = _number(value, self.scalar)
+            elif kind == _K_LIN:
+                text = f"({text})"  # (a LinComb term is always parenthesized where the tree printer would:
+                # it is the one negated term of a negation, so it comes first with a minus)
+            if first:
+                parts.append("-" + text if sign < 0 else text)
+                first = False
+            else:
+                parts.append(" - " + text if sign < 0 else " + " + text)
+        return "".join(parts), _K_LIN

@@ -55,8 +55,11 @@ INLINE_DEPTH = 64  # the deepest expression a named value inlines: what printers
 
 def normalize_const(x):
     """An exact ``int`` for integral floats (so 0.0 and 1.0 fold), the float otherwise."""
-    if type(x) is int:
+    cls = x.__class__
+    if cls is int:
         return x
+    if cls is float:  # (before the isinstance test below, which goes through the numbers ABCs)
+        return int(x) if x.is_integer() and abs(x) < 2.0 ** 53 else x
     if isinstance(x, Fraction):
         return int(x) if x.denominator == 1 else x
     x = float(x)
@@ -211,36 +214,45 @@ class Program:
         and a constant operand's repr (a str: never equal to an id); a commutative operation's operands are put in
         order, constants first, then nodes by id."""
         if len(args) == 2:
-            a, b = args
-            if a.__class__ is Node:
-                if b.__class__ is Node:  # the key of an operation on two nodes: one int
-                    ka, kb = a.id, b.id
-                    if ka > kb and opcode in _COMMUTATIVE:
-                        a, b, ka, kb = b, a, kb, ka
-                    key = ((ka << 32 | kb) << _CODE_BITS) | _CODE_INDEX[opcode]
-                    node = self._table.get(key)
-                    if node is None:
-                        node = self._table[key] = self._new((opcode, a, b))
-                    return node
-                else:
-                    ka, kb = a.id, repr(b)
-                    if opcode in _COMMUTATIVE:
-                        a, b, ka, kb = b, a, kb, ka
-            else:
-                ka = repr(a)
-                if b.__class__ is Node:
-                    kb = b.id
-                else:
-                    kb = repr(b)
-                    if ka > kb and opcode in _COMMUTATIVE:
-                        a, b, ka, kb = b, a, kb, ka
-            key = (opcode, ka, kb)
-            args = (a, b)
-        else:
-            key = (opcode,) + tuple(a.id if a.__class__ is Node else repr(a) for a in args)
+            return self._make2(opcode, args[0], args[1])
+        key = (opcode,) + tuple(a.id if a.__class__ is Node else repr(a) for a in args)
         node = self._table.get(key)
         if node is None:
             node = self._new((opcode,) + args)
+            self._table[key] = node
+        return node
+
+    def _make2(self, opcode, a, b):
+        """:meth:`_make` of a binary operation (the commonest: every arithmetic operation), written out."""
+        if a.__class__ is Node:
+            if b.__class__ is Node:  # the key of an operation on two nodes: one int
+                ka, kb = a.id, b.id
+                if ka > kb and (opcode == ADD or opcode == MUL):
+                    a, b, ka, kb = b, a, kb, ka
+                key = ((ka << 32 | kb) << _CODE_BITS) | _CODE_INDEX[opcode]
+                table = self._table
+                node = table.get(key)
+                if node is None:
+                    ops = self.ops
+                    node = table[key] = Node(self, len(ops))
+                    ops.append((opcode, a, b))
+                    self.nodes.append(node)
+                return node
+            ka, kb = a.id, repr(b)
+            if opcode == ADD or opcode == MUL:
+                a, b, ka, kb = b, a, kb, ka
+        else:
+            ka = repr(a)
+            if b.__class__ is Node:
+                kb = b.id
+            else:
+                kb = repr(b)
+                if ka > kb and (opcode == ADD or opcode == MUL):
+                    a, b, ka, kb = b, a, kb, ka
+        key = (opcode, ka, kb)
+        node = self._table.get(key)
+        if node is None:
+            node = self._new((opcode, a, b))
             self._table[key] = node
         return node
 
@@ -286,10 +298,23 @@ class Program:
             return entry[1]
         if entry[0] == SUB:  # -(x - y) = y - x, free
             return self._sub(entry[2], entry[1])
-        return self._make(NEG, a)
+        key = (NEG, a.id)  # (_make's key of a unary operation)
+        node = self._table.get(key)
+        if node is None:
+            node = self._table[key] = self._new((NEG, a))
+        return node
 
     def _add(self, a, b):
         # (the tests of is_zero, _neg_arg and is_const written out: this runs for every addition recorded)
+        if a.__class__ is Node and b.__class__ is Node:  # the commonest sum: the rules below that apply to it
+            ops = self.ops
+            eb = ops[b.id]
+            if eb[0] == NEG:
+                return self._sub(a, eb[1])
+            ea = ops[a.id]
+            if ea[0] == NEG:
+                return self._sub(b, ea[1])
+            return self._make2(ADD, a, b)
         if type(a) in _EXACT and a == 0:
             return b
         if type(b) in _EXACT and b == 0:
@@ -305,9 +330,20 @@ class Program:
             return self._sub(a, normalize_const(-b))
         if not a_node and a < 0:
             return self._sub(b, normalize_const(-a))
-        return self._make(ADD, a, b)
+        return self._make2(ADD, a, b)
 
     def _sub(self, a, b):
+        if a.__class__ is Node and b.__class__ is Node:  # the commonest difference: the rules below that apply
+            if a.id == b.id:
+                return 0
+            ops = self.ops
+            eb = ops[b.id]
+            if eb[0] == NEG:
+                return self._add(a, eb[1])
+            ea = ops[a.id]
+            if ea[0] == NEG:  # -x - b = -(x + b)
+                return self._neg(self._add(ea[1], b))
+            return self._make2(SUB, a, b)
         if type(b) in _EXACT and b == 0:
             return a
         if type(a) in _EXACT and a == 0:
@@ -322,9 +358,51 @@ class Program:
             return self._neg(self._add(ops[a.id][1], b))
         if not b_node and b < 0:
             return self._add(a, normalize_const(-b))
-        return self._make(SUB, a, b)
+        return self._make2(SUB, a, b)
 
     def _mul(self, a, b):
+        if a.__class__ is Node and b.__class__ is Node:  # the commonest product, the rules below written out for it
+            ops = self.ops
+            ai, bi = a.id, b.id
+            ea, eb = ops[ai], ops[bi]
+            if ea[0] == NEG:
+                if eb[0] == NEG:
+                    return self._mul(ea[1], eb[1])
+                return self._neg(self._mul(ea[1], b))
+            if eb[0] == NEG:
+                return self._neg(self._mul(a, eb[1]))
+            signatures, coefficients = self._signatures, self._coefficients
+            fa, fb = signatures.get(ai), signatures.get(bi)
+            if fa is None:  # (a node without a signature has no coefficient either)
+                if fb is None:
+                    factors = (ai, bi) if ai < bi else (bi, ai)
+                    node = self._products.get(factors)
+                    if node is None:
+                        node = self._make2(MUL, a, b)
+                        if node.id not in signatures:
+                            signatures[node.id] = factors
+                        self._products.setdefault(factors, node)
+                    return node
+                ca, fa = 1, (ai,)
+                cb = coefficients.get(bi, 1)
+            else:
+                ca = coefficients.get(ai, 1)
+                if fb is None:
+                    cb, fb = 1, (bi,)
+                else:
+                    cb = coefficients.get(bi, 1)
+            coefficient = normalize_const(ca * cb)
+            factors = tuple(sorted(fa + fb))
+            key = factors if coefficient.__class__ is int and coefficient == 1 else (repr(coefficient), factors)
+            node = self._products.get(key)
+            if node is None:
+                node = self._make2(MUL, a, b)
+                if node.id not in signatures:
+                    signatures[node.id] = factors
+                    if key is not factors:
+                        coefficients[node.id] = coefficient
+                self._products.setdefault(key, node)
+            return node
         ta, tb = type(a), type(b)
         if (ta in _EXACT and a == 0) or (tb in _EXACT and b == 0):
             return 0
@@ -377,7 +455,7 @@ class Program:
         key = factors if coefficient.__class__ is int and coefficient == 1 else (repr(coefficient), factors)
         node = self._products.get(key)
         if node is None:
-            node = self._make(MUL, a, b)
+            node = self._make2(MUL, a, b)
             if node.id not in signatures:
                 signatures[node.id] = factors
                 if key is not factors:
@@ -413,7 +491,7 @@ class Program:
             return self._neg(self._div(na, b))
         if nb is not None:
             return self._neg(self._div(a, nb))
-        return self._make(DIV, a, b)
+        return self._make2(DIV, a, b)
 
     # inspection -----------------------------------------------------------------------------------
     def operands(self, ident: int) -> tuple:
@@ -539,11 +617,25 @@ def straight_line(program, outputs) -> StraightLine:
     Steps follow creation order (the recursions' own, which keeps a body's work together), each output stored as
     soon as its value exists so that it does not stay live to the end."""
     flat = [x for out in outputs for x in out]
-    ids = program.reachable(flat)
     ops = program.ops
+    # one walk: the reachable ids, and the uses of every node (once per operand of each reachable node, once per
+    # output entry)
     uses: dict = {}
+    get = uses.get
+    stack = []
+    for x in flat:
+        if x.__class__ is Node:
+            j = x.id
+            uses[j] = get(j, 0) + 1
+            stack.append(j)
+    seen = set()
+    add = seen.add
     inputs = []
-    for i in ids:
+    while stack:
+        i = stack.pop()
+        if i in seen:
+            continue
+        add(i)
         entry = ops[i]
         if entry[0] == INPUT:
             inputs.append(entry[1:])
@@ -551,20 +643,18 @@ def straight_line(program, outputs) -> StraightLine:
         for a in entry[1:]:
             if a.__class__ is Node:
                 j = a.id
-                uses[j] = uses.get(j, 0) + 1
-    for x in flat:
-        if isinstance(x, Node):
-            uses[x.id] = uses.get(x.id, 0) + 1
+                uses[j] = get(j, 0) + 1
+                if j not in seen:
+                    stack.append(j)
+    ids = sorted(seen)
     named = set()
     depth: dict[int, int] = {}  # depth of the expression a node inlines (0: a name)
     for i in ids:
         entry = ops[i]
         code = entry[0]
-        if code == INPUT:
-            depth[i] = 0
-            continue
-        if uses.get(i, 0) >= 2 or code in FUNCTIONS:
-            named.add(i)
+        if code == INPUT or code in FUNCTIONS or uses[i] >= 2:
+            if code != INPUT:
+                named.add(i)
             depth[i] = 0
             continue
         d = 0
@@ -578,14 +668,16 @@ def straight_line(program, outputs) -> StraightLine:
             named.add(i)
             d = 0
         depth[i] = d
-    temps = [i for i in ids if i in named]
     at: dict = {}
     for o, out in enumerate(outputs):
         for k, x in enumerate(out):
-            at.setdefault(x.id if isinstance(x, Node) else -1, []).append(("out", o, k))
+            at.setdefault(x.id if x.__class__ is Node else -1, []).append(("out", o, k))
     steps = list(at.get(-1, []))
+    temps = []
     for i in ids:
         if i in named:
+            temps.append(i)
             steps.append(("temp", i))
-        steps.extend(at.get(i, []))
+        if i in at:
+            steps.extend(at[i])
     return StraightLine(program, temps, outputs, sorted(inputs), steps)

@@ -8,7 +8,11 @@ elementary rotation touches two rows, a translation along one axis one column.
 """
 from __future__ import annotations
 
+from fractions import Fraction
+
 from ..core.program import is_one, is_zero
+
+_EXACT = (int, float, Fraction)  # Python constants (aggsym.core.program.is_zero's)
 
 ZERO3 = (0, 0, 0)
 EYE3 = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
@@ -16,14 +20,17 @@ EYE3 = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
 
 def mul(a, b):
     """a b, or the structural zero when either factor is one."""
-    return 0 if is_zero(a) or is_zero(b) else a * b
+    # (is_zero written out: this runs for every product of the recursions)
+    if (a.__class__ in _EXACT and a == 0) or (b.__class__ in _EXACT and b == 0):
+        return 0
+    return a * b
 
 
 def dot(a, b):
     """Sum of products over two equal-length sequences, skipping structural zeros."""
     acc = 0
     for x, y in zip(a, b):
-        if is_zero(x) or is_zero(y):
+        if (x.__class__ in _EXACT and x == 0) or (y.__class__ in _EXACT and y == 0):
             continue
         acc = acc + x * y
     return acc

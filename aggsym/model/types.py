@@ -161,11 +161,16 @@ class Pair:
         return self.stiffness is not None
 
     def constructive_rotation(self) -> sp.Matrix:
-        """c^{mu,k-1}_{lkk} = c_alpha c_beta c_gamma (Prop. 1.17), exact where the angles are."""
+        """c^{mu,k-1}_{lkk} = c_alpha c_beta c_gamma (Prop. 1.17), exact where the angles are (a fresh matrix; the
+        product is formed once per pair: every binding of the model reads it)."""
+        return sp.Matrix(self._constructive_rotation)
+
+    @functools.cached_property
+    def _constructive_rotation(self) -> sp.ImmutableMatrix:
         c = sp.eye(3)
         for axis, angle in self.rotation:
             c = c * elementary_rotation(axis, angle)
-        return c.applyfunc(_snap)
+        return sp.ImmutableMatrix(c.applyfunc(_snap))
 
 
 @dataclass(frozen=True)
@@ -329,28 +334,28 @@ class Model:
     def has_friction(self) -> bool:
         return any(c.friction is not None for c in self.constraints)
 
-    @property
+    @functools.cached_property
     def pair_coordinates(self) -> tuple:
         """Every coordinate of every pair, in tree order (the coordinates the recursions move)."""
         return tuple(c for b in self.bodies for c in b.pair.coordinates)
 
-    @property
+    @functools.cached_property
     def coordinates(self) -> tuple:
         """The coordinates of q: the pairs' coordinates less those coupled to others."""
         coupled = {c.coordinate for c in self.couplings}
         return tuple(c for c in self.pair_coordinates if c.name not in coupled)
 
-    @property
+    @functools.cached_property
     def nv(self) -> int:
         """The number of coordinates: the length of qd, qdd and tau (Pinocchio's nv)."""
         return len(self.coordinates)
 
-    @property
+    @functools.cached_property
     def nq(self) -> int:
         """The length of q: nv, plus one for a free-flyer root (seven positions for its six velocities)."""
         return self.nv + sum(1 for b in self.bodies if b.pair.quaternion)
 
-    @property
+    @functools.cached_property
     def positions(self) -> tuple:
         """The entries of q as (name, joint, kind): a free-flyer pair's seven positions, every other coordinate
         itself (in tree order)."""
@@ -408,7 +413,7 @@ class Model:
         sliding contact (chapter 4) dissipates it."""
         return not self.time_dependent and not self.has_friction
 
-    @property
+    @functools.cached_property
     def parameter_symbols(self) -> tuple:
         return tuple(p.symbol for p in self.parameters)
 
