@@ -393,16 +393,7 @@ class Program:
                     cb = coefficients.get(bi, 1)
             coefficient = normalize_const(ca * cb)
             factors = tuple(sorted(fa + fb))
-            key = factors if coefficient.__class__ is int and coefficient == 1 else (repr(coefficient), factors)
-            node = self._products.get(key)
-            if node is None:
-                node = self._make2(MUL, a, b)
-                if node.id not in signatures:
-                    signatures[node.id] = factors
-                    if key is not factors:
-                        coefficients[node.id] = coefficient
-                self._products.setdefault(key, node)
-            return node
+            return self._product(a, b, coefficient, factors)
         ta, tb = type(a), type(b)
         if (ta in _EXACT and a == 0) or (tb in _EXACT and b == 0):
             return 0
@@ -450,12 +441,18 @@ class Program:
         factors = fa + fb
         if len(factors) > 1:
             factors = tuple(sorted(factors))
-        # the product's signature: its factor ids and coefficient (by repr, so 1/2 and 0.5 stay apart); a tuple of
-        # ids alone when the coefficient is the int 1 (never equal to a (str, tuple) pair)
+        return self._product(a, b, coefficient, factors)
+
+    def _product(self, a, b, coefficient, factors):
+        """The node of a * b, whose signature is its factor ids (sorted) and coefficient: the one made before with
+        that signature, else a new MUL node recorded under it."""
+        # the key: the factor ids and the coefficient (by repr, so 1/2 and 0.5 stay apart); a tuple of ids alone
+        # when the coefficient is the int 1 (never equal to a (str, tuple) pair)
         key = factors if coefficient.__class__ is int and coefficient == 1 else (repr(coefficient), factors)
         node = self._products.get(key)
         if node is None:
             node = self._make2(MUL, a, b)
+            signatures, coefficients = self._signatures, self._coefficients
             if node.id not in signatures:
                 signatures[node.id] = factors
                 if key is not factors:

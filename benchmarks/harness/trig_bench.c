@@ -78,27 +78,25 @@ static double now(void)
 static double xs[N];
 static volatile double sink;
 
-/* each variant in its own loop, the call inlined where the compiler chooses (as in generated code) */
-#define TIME(NAME, FN)                                                          \
-    do {                                                                        \
-        double best = 1e300;                                                    \
-        for (int rep = 0; rep < REPEATS; rep++) {                               \
-            double acc = 0.0;                                                   \
-            const double t0 = now();                                            \
-            for (int pass = 0; pass < PASSES; pass++) {                         \
-                for (int i = 0; i < N; i++) {                                   \
-                    double s, c;                                                \
-                    FN(xs[i], &s, &c);                                          \
-                    acc += s + c;                                               \
-                }                                                               \
-            }                                                                   \
-            const double t = now() - t0;                                        \
-            sink = acc;                                                         \
-            if (t < best)                                                       \
-                best = t;                                                       \
+/* a pass over the arguments, one call per angle, the call inlined where the compiler chooses (as in generated
+ * code): pass_FN(acc) */
+#define ONE_ANGLE_PASS(FN)                                                      \
+    static double pass_##FN(double acc)                                         \
+    {                                                                           \
+        for (int i = 0; i < N; i++) {                                           \
+            double s, c;                                                        \
+            FN(xs[i], &s, &c);                                                  \
+            acc += s + c;                                                       \
         }                                                                       \
-        printf("%s %.3f\n", NAME, 1e9 * best / ((double)PASSES * N));          \
-    } while (0)
+        return acc;                                                             \
+    }
+
+ONE_ANGLE_PASS(libm_sincos)
+#if defined(__GLIBC__)
+ONE_ANGLE_PASS(gnu_sincos)
+#endif
+ONE_ANGLE_PASS(switch_sincos)
+ONE_ANGLE_PASS(aggsym_sincos)
 
 static double pair_pass(double acc)  /* aggsym_sincos2 on consecutive arguments */
 {
@@ -142,12 +140,12 @@ int main(int argc, char **argv)
     srand(12345);
     for (int i = 0; i < N; i++)
         xs[i] = lo * (2.0 * ((double)rand() / RAND_MAX) - 1.0);
-    TIME("libm", libm_sincos);
+    TIME_PASS("libm", pass_libm_sincos);
 #if defined(__GLIBC__)
-    TIME("sincos", gnu_sincos);
+    TIME_PASS("sincos", pass_gnu_sincos);
 #endif
-    TIME("switch", switch_sincos);
-    TIME("aggsym", aggsym_sincos);
+    TIME_PASS("switch", pass_switch_sincos);
+    TIME_PASS("aggsym", pass_aggsym_sincos);
     TIME_PASS("aggsym2", pair_pass);
     TIME_PASS("latency", latency_pass);
     return 0;
