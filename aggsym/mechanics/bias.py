@@ -44,7 +44,7 @@ def gravity_wrenches(bound, kin):
     return kin.backward(Y)
 
 
-COLUMNS_DEPTH = 8  # above this mean subtree size per coordinate the Coriolis columns are not even counted
+COLUMNS_DEPTH = 4.5  # above this mean subtree size per coordinate the Coriolis columns are not even counted
 
 
 def coriolis_matrix(bound, kin, qd, skew=False):
@@ -74,7 +74,7 @@ def coriolis_matrix(bound, kin, qd, skew=False):
     n x n rows.  The column form pays one 6-vector motion and one product with A_lk per body of each column's
     subtree, the recursion one or two dot products there: it wins on shallow trees (on the suite's models and
     robots where the subtrees average at most 3.5 bodies per coordinate, and it loses from 4.9 on: Panda,
-    Talos, the 48-coordinate test bench at 9.2, and by 1.8x on the 12-link chain at 6.5), so it is only
+    Talos at 4.9, the 48-coordinate test bench at 9.2, and by 1.8x on the 12-link chain at 6.5), so it is only
     counted (on a scratch program) where they average at most :data:`COLUMNS_DEPTH` bodies.  For models without
     prescribed motions: a prescribed spin's terms in b are not of the form B q' (the partition and coriolis
     routines are not emitted for them)."""
