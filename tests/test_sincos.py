@@ -13,6 +13,7 @@ import json
 import math
 import re
 import subprocess
+import warnings
 
 import mpmath
 import numpy as np
@@ -190,3 +191,32 @@ def test_angles_of_one_routine_are_paired_when_both_are_ready():
     pairs, singles = body.count("aggsym_sincos2("), body.count("aggsym_sincos(")
     calls = json.loads(gen.files["manipulator6.json"])["ops"]["inertia"]["call"]
     assert pairs >= 1 and 2 * pairs + singles == calls
+
+
+def test_an_offset_angle_is_emitted_early_to_share_a_call():
+    """Panda's internal frames move a joint's zero (q_6 + 3 pi/4): that sum, a named temp, is emitted just before
+    the call it joins (not at its own place, after the call), the NumPy module keeps its order, each routine has
+    at most one single call, and the operation counts are still those of the text."""
+    from helpers import robot_path
+    from aggsym.codegen.printing import count_ops
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the finger's <mimic>
+        gen = generate(aggsym.load(robot_path("panda")), latex=False)
+    c = gen.files["panda.c"]
+    body = c[c.index("void panda_inverse_dynamics("):]
+    body = body[:body.index("\n}\n")]
+    lines = body.splitlines()
+    early = []
+    for k, line in enumerate(lines):
+        m = re.search(r"aggsym_sincos2\((\w+), (\w+),", line)
+        for t in m.groups() if m else ():
+            if t.startswith("x"):
+                early.append(t)
+                assert lines[k - 2].strip().startswith(f"const double {t} = "), lines[k - 2:k + 1]  # (declaration between)
+    assert early
+    assert body.count("aggsym_sincos(") <= 1
+    for r in gen.routines:
+        assert r.ops == count_ops("\n".join(r.c_body)), r.routine.role
+    module = gen.files["panda.py"]
+    assert all(module.index(f"    {t} = ") > module.index("    q_6 = ") for t in early)

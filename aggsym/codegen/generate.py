@@ -243,6 +243,7 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     done = set()
     defined = set(names) - set(temp_names)  # node ids with a C name already defined: the inputs, then temps
     pending = _pending_pairs(sl.steps, trig)
+    hoisted = {}  # temps emitted early for a sincos pair: their NumPy right-hand side, appended at their step
     shapes = [out.shape(model) for out in routine.outputs]
     for step in sl.steps:
         before = ops_so_far()
@@ -256,6 +257,9 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
             py_body.append(f"{routine.outputs[o].py}[..., {idx}] = {rhs_py}")
             continue
         i = step[1]
+        if i in hoisted:  # its C was emitted before a sincos pair that needed it
+            py_body.append(f"{names[i]} = {hoisted.pop(i)}")
+            continue
         if i not in trig:
             rhs_c, rhs_py = both(prog.nodes[i])
             py_body.append(f"{names[i]} = {rhs_py}")
@@ -270,7 +274,12 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
             continue
         conv.refs.clear()  # (the sin or cos tree above was built for NumPy; the arguments' names again below)
         # a second angle whose argument is already computable shares the call (aggsym_sincos2: two in one vector)
-        partner = _ready_partner(prog, names, pending, done, defined, pair)
+        partner, early = _ready_partner(prog, names, trig, pending, done, defined, pair)
+        for h in early:  # a temp the partner's angle is made of (q + offset), emitted now; NumPy keeps its place
+            rhs_c, hoisted[h] = both(prog.nodes[h])
+            emit([f"const {scalar} {names[h]} = {rhs_c};"], defines=(names[h],), ops=ops_so_far() - before)
+            before = ops_so_far()
+            defined.add(h)
         c_names, arguments = [], []
         for sin_id, cos_id, arg in (pair,) if partner is None else (pair, partner):
             done.add((sin_id, cos_id))
@@ -322,30 +331,39 @@ def _pending_pairs(steps, trig) -> deque:
 PARTNER_LOOKAHEAD = 8  # the pairs not yet emitted that are tried as the partner of a sincos call
 
 
-def _ready_partner(prog, names, pending, done, defined, pair):
-    """The first pair other than ``pair`` among the next :data:`PARTNER_LOOKAHEAD` not yet emitted whose argument
-    is computable now (:func:`_computable`), or None.  ``pending`` (in order) loses its emitted pairs from the
-    front, so that a call costs O(1)."""
+def _ready_partner(prog, names, trig, pending, done, defined, pair):
+    """(partner, temps): the first pair other than ``pair`` among the next :data:`PARTNER_LOOKAHEAD` not yet emitted
+    whose argument is computable now, and the named temps to emit first for it (:func:`_computable`); (None, ())
+    if there is none.  ``pending`` (in order) loses its emitted pairs from the front, so that a call costs O(1)."""
     while pending and pending[0][:2] in done:
         pending.popleft()
     for candidate in islice(pending, PARTNER_LOOKAHEAD):
-        if candidate[:2] != pair[:2] and candidate[:2] not in done and _computable(prog, names, candidate[2], defined):
-            return candidate
-    return None
+        if candidate[:2] != pair[:2] and candidate[:2] not in done:
+            early = _computable(prog, names, trig, candidate[2], defined)
+            if early is not None:
+                return candidate, early
+    return None, ()
 
 
-def _computable(prog, names, arg, defined) -> bool:
-    """Whether an expression needs only constants and the ``defined`` nodes (inputs and temps already emitted),
-    following the unnamed nodes that the printer inlines."""
-    stack = [arg]
+def _computable(prog, names, trig, arg, defined):
+    """The named temps (in order) to emit before an expression can be, or None if it cannot be yet: it may need
+    constants, the ``defined`` nodes (inputs and temps already emitted), the unnamed nodes that the printer
+    inlines, and named temps (not sin or cos) whose own operands are all of those (one level: the angle
+    ``q + offset`` of a joint whose zero the internal frames moved)."""
+    early = []
+    stack = [(arg, True)]
     while stack:
-        x = stack.pop()
-        if not isinstance(x, Node) or x.id in defined:
+        x, may_hoist = stack.pop()
+        if not isinstance(x, Node) or x.id in defined or x.id in early:
             continue
         if x.id in names:  # a named node not emitted yet
-            return False
-        stack.extend(prog.operands(x.id))
-    return True
+            if not may_hoist or x.id in trig or not prog.operands(x.id):
+                return None
+            early.append(x.id)
+            stack.extend((a, False) for a in prog.operands(x.id))
+            continue
+        stack.extend((a, may_hoist) for a in prog.operands(x.id))
+    return early[::-1]
 
 
 def _unravel(k, shape):
