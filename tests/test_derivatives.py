@@ -176,3 +176,34 @@ def test_both_ways_of_applying_the_factors_equal_pinocchio(name, rng):
             for m in derivatives._forward_dynamics_derivatives(b, k, u, b.backend.program.vector("tau", n), solve)])
 
     assert count(derivatives._with_arguments) < count(derivatives._on_the_tree)
+
+
+@pytest.mark.parametrize("robot,base", [("ur5", False), ("solo12", "quaternion")])
+def test_one_sweep_per_direction_makes_the_same_operations(robot, base):
+    """The straight-line program of dtau/d(q, qd) is built one dual sweep per direction (so that the C keeps few
+    tangents live at a time): its outputs reach exactly as many operations as one sweep of all directions, and
+    its entries are those of that sweep at a random state."""
+    from aggsym.core.backend import Symbolic
+    from aggsym.mechanics.bound import bind
+    from aggsym.mechanics.derivatives import inverse_dynamics_derivatives
+    from aggsym.mechanics.kinematics import TreeKinematics
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ModelWarning)
+        model = aggsym.load(robot_path(robot), floating_base=base)
+    rng = np.random.default_rng(3)
+    values = {("q", i): x for i, x in enumerate(rng.normal(size=model.nq))}
+    values.update({(k, i): x for k in ("qd", "qdd") for i, x in enumerate(rng.normal(size=model.nv))})
+    counts, numbers = [], []
+    for by_direction in (False, True):
+        backend = Symbolic()
+        prog = backend.program
+        bound = bind(model, backend)
+        kin = TreeKinematics(bound, prog.vector("q", model.nq))
+        dq, dqd = inverse_dynamics_derivatives(bound, kin, prog.vector("qd", model.nv), prog.vector("qdd", model.nv),
+                                               by_direction=by_direction)
+        flat = [x for m in (dq, dqd) for row in m for x in row]
+        counts.append(sum(1 for i in prog.reachable(flat) if prog.ops[i][0] not in ("in", "neg")))
+        numbers.append(np.array([float(x) for x in prog.evaluate(flat, values)]))
+    assert counts[0] == counts[1] > 0
+    assert np.allclose(numbers[0], numbers[1], rtol=1e-12, atol=1e-12)

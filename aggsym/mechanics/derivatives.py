@@ -27,12 +27,16 @@ from .sweeps import inverse_dynamics
 from .transvective import articulated_factors, cauchy_solve, cauchy_solve_tree, forward_dynamics
 
 
-def _dual_inverse_dynamics(bound, kin, qd, qdd) -> tuple:
-    """tau (duals) at (kin.q, qd, qdd) with tangents along q (0..n-1) and qd (n..2n-1)."""
+def _dual_inverse_dynamics(bound, kin, qd, qdd, directions=None) -> tuple:
+    """tau (duals) at (kin.q, qd, qdd) with tangents along q (0..n-1) and qd (n..2n-1), or only along the
+    ``directions`` given."""
     n = kin.tree.nv
     dual = dataclasses.replace(bound, backend=DualBackend(bound.backend))
     q = tangent_seeds(kin)
     rates = [Dual(x, {n + i: 1}) for i, x in enumerate(qd)]
+    if directions is not None:
+        q = [lift(x.v, {k: t for k, t in x.d.items() if k in directions}) if isinstance(x, Dual) else x for x in q]
+        rates = [lift(x.v, {k: t for k, t in x.d.items() if k in directions}) for x in rates]
     dkin = TreeKinematics(dual, q)
     tau = inverse_dynamics(dual, dkin, rates, qdd)
     return [a + b for a, b in zip(tau, elastic_forces(dual, q))]
@@ -61,11 +65,29 @@ def tangent_seeds(kin) -> list:
     return q
 
 
-def inverse_dynamics_derivatives(bound, kin, qd, qdd) -> tuple:
-    """(dtau/dq, dtau/dqd) as n x n rows (entry (i, j): d tau_i / d q_j)."""
+def inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction=None) -> tuple:
+    """(dtau/dq, dtau/dqd) as n x n rows (entry (i, j): d tau_i / d q_j).
+
+    ``by_direction`` (the default on a straight-line program, not on numbers): one dual sweep per direction, q_j
+    then qd_j for each coordinate j.  The sweeps share the primal values (value numbering) and each direction's
+    tangents are the nodes that one sweep of all directions makes, so the operations are the same; but the nodes
+    are made, and the C is emitted, direction by direction, so that only one direction's tangents are live at a
+    time instead of every tangent of the forward sweep waiting for the backward one (Talos: 3852 values kept
+    across the slices of the C against 909; dtau 6 % and dqdd 5 % faster, 12 % and 10 % with slices of 80)."""
     n = kin.tree.nv
-    tau = _dual_inverse_dynamics(bound, kin, qd, qdd)
-    return ([[tangent(t, j) for j in range(n)] for t in tau], [[tangent(t, n + j) for j in range(n)] for t in tau])
+    if by_direction is None:
+        by_direction = getattr(bound.backend, "symbolic", False)
+    if not by_direction:
+        tau = _dual_inverse_dynamics(bound, kin, qd, qdd)
+        return ([[tangent(t, j) for j in range(n)] for t in tau],
+                [[tangent(t, n + j) for j in range(n)] for t in tau])
+    dq = [[0] * n for _ in range(n)]
+    dqd = [[0] * n for _ in range(n)]
+    for j in range(n):
+        for d, rows in ((j, dq), (n + j, dqd)):
+            for i, t in enumerate(_dual_inverse_dynamics(bound, kin, qd, qdd, (d,))):
+                rows[i][j] = tangent(t, d)
+    return dq, dqd
 
 
 def forward_dynamics_derivatives(bound, kin, qd, tau) -> tuple:
@@ -83,9 +105,10 @@ def forward_dynamics_derivatives(bound, kin, qd, tau) -> tuple:
         n = kin.tree.nv
 
         def form(solver):
-            def build(b, k, u):
+            def build(b, k, u):  # (counted: one sweep of all directions makes the same operations, faster)
                 return [[x for row in m for x in row]
-                        for m in _forward_dynamics_derivatives(b, k, u, b.backend.program.vector("tau", n), solver)]
+                        for m in _forward_dynamics_derivatives(b, k, u, b.backend.program.vector("tau", n), solver,
+                                                               by_direction=False)]
             return build
 
         with_arguments = scratch_operations(bound, kin, form(_with_arguments))
@@ -102,11 +125,11 @@ def _on_the_tree(kin, fac, columns):
     return [cauchy_solve_tree(kin, fac, c) for c in columns]
 
 
-def _forward_dynamics_derivatives(bound, kin, qd, tau, solve) -> tuple:
+def _forward_dynamics_derivatives(bound, kin, qd, tau, solve, by_direction=None) -> tuple:
     n = kin.tree.nv
     fac = articulated_factors(bound, kin, arguments=solve is _with_arguments)
     qdd = forward_dynamics(bound, kin, tau, qd, fac)
-    dq, dqd = inverse_dynamics_derivatives(bound, kin, qd, qdd)
+    dq, dqd = inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction)
     out = []
     for rows in (dq, dqd):
         cols = solve(kin, fac, [[-rows[i][j] for i in range(n)] for j in range(n)])
