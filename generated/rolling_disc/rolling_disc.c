@@ -75,7 +75,8 @@ static inline void aggsym_sincos(double x, double *s, double *c)
 
 /* sin and cos of two angles at once: aggsym_sincos's arithmetic on both in the lanes of one 2-double vector
  * (GCC's vector extension, also Clang's: SSE2 on x86-64, NEON on AArch64), the same results as two calls of
- * aggsym_sincos; elsewhere, or when either angle is outside |x| < 1e6, the two calls. */
+ * aggsym_sincos (bit for bit without -ffast-math); elsewhere, or when either angle is outside |x| < 1e6, the two
+ * calls. */
 #if defined(__GNUC__) && (defined(__SSE2__) || defined(__aarch64__))
 typedef double aggsym_v2d __attribute__((vector_size(16)));
 typedef unsigned long long aggsym_v2u __attribute__((vector_size(16)));
