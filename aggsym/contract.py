@@ -76,6 +76,7 @@ class Routine:
     frame_free: bool = False  # its outputs depend on the coordinates alone, not on the body frames nor on how the
     # inertia is shared between bodies: generated from the internal model (aggsym.model.reframe).  Not the Coriolis
     # matrix: of the many C with C qd = b and A' - 2C skew, the one built from the bodies' B (2.17) depends on them
+    slice_size: int | None = None  # the C's slices (aggsym.codegen.slicing) where smaller than the default's run faster
 
     @property
     def written(self) -> tuple:
@@ -609,12 +610,12 @@ register(Routine("inverse_dynamics_derivatives", ("q", "qd", "qdd", "p"),
                  (Output("dtau_dq", nq_square), Output("dtau_dqd", nq_square)), _inverse_dynamics_derivatives,
                  "d tau / d q and d tau / d qd, n*n row-major (entry (i, j): d tau_i / d x_j; d tau / d qdd is A): "
                  "the sweeps (2.39)-(2.46) differentiated in forward mode, reusing their intermediates",
-                 coupled="matrix", on_request=True, frame_free=True))
+                 coupled="matrix", on_request=True, frame_free=True, slice_size=80))
 register(Routine("forward_dynamics_derivatives", ("q", "qd", "tau", "p"),
                  (Output("dqdd_dq", nq_square), Output("dqdd_dqd", nq_square)), _forward_dynamics_derivatives,
                  "d qdd / d q and d qdd / d qd, n*n row-major (d qdd / d tau is A^-1): -A^-1 d tau_ID / d x at the "
                  "forward dynamics' qdd, A^-1 applied column by column by the transvective factors (3.19)-(3.20)",
-                 coupled=None, regular=True, on_request=True, frame_free=True))
+                 coupled=None, regular=True, on_request=True, frame_free=True, slice_size=80))
 
 
 def frame_count(model) -> int:

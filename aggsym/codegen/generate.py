@@ -42,7 +42,7 @@ from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import FILTERS, check_c_identifier, check_module_name
 from .printing import SCALARS, CPrinter, Converter, CText, LiteralError, NumPyPrinter, _number
-from .slicing import SLICE_SIZE, SLICE_THRESHOLD, Sliced, Statement, slice_routine, slice_size, work
+from .slicing import SLICE_SIZE, SLICE_THRESHOLD, Sliced, Statement, slice_routine, work
 
 
 @dataclass
@@ -302,7 +302,8 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     if slicing is not None and size > slicing[0]:
         arrays = {k: f"const {scalar} *{k}" for k in inputs}
         arrays.update({o.name: f"{scalar} *{o.name}" for o in routine.outputs})
-        sliced = slice_routine(c_symbol(model, routine), arrays, stmts, scalar, slice_size(routine.role, slicing[1]))
+        pieces = min(slicing[1], routine.slice_size or slicing[1])
+        sliced = slice_routine(c_symbol(model, routine), arrays, stmts, scalar, pieces)
     return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine, scalar),
                           python_parameters(model, routine), c_body, py_body, ops, len(sl.temps), size, sliced)
 

@@ -31,17 +31,12 @@ from dataclasses import dataclass, field
 # Slices of 200 against 400 (Talos, median of 5 rounds, the same host): derivatives of inverse dynamics 7 %, of
 # forward dynamics 4 %, forward dynamics 6 %, C 4 % faster, A^-1 alike; slices of 120 much the same; --split
 # make -j2 of Talos' default routines 6.7..6.8 s with either.
-# The derivative routines (one dual sweep per direction, aggsym/mechanics/derivatives.py) run fastest in slices of
-# 50..80 (Talos, median of 7 rounds: dtau 6680 ns with slices of 200, 6291 with 80, 6277 with 50; dqdd 10492 and
-# 9848 with 200 and 80), the other large routines not (Talos' A^-1 and forward dynamics are slower with 120).
+# A routine may ask for smaller slices (contract.Routine.slice_size): the derivative routines (one dual sweep per
+# direction, aggsym/mechanics/derivatives.py) run fastest in slices of 50..80 (Talos, median of 7 rounds: dtau 6680
+# ns with slices of 200, 6291 with 80, 6277 with 50; dqdd 10492 and 9848 with 200 and 80), the other large routines
+# not (Talos' A^-1 and forward dynamics are slower with 120).
 SLICE_THRESHOLD = 6000
 SLICE_SIZE = 200
-ROLE_SLICE_SIZES = {"inverse_dynamics_derivatives": 80, "forward_dynamics_derivatives": 80}
-
-
-def slice_size(role: str, size: int) -> int:
-    """The slice size of a routine: ``size``, or the role's own where that is smaller."""
-    return min(size, ROLE_SLICE_SIZES.get(role, size))
 
 
 @dataclass

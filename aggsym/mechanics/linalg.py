@@ -8,11 +8,7 @@ elementary rotation touches two rows, a translation along one axis one column.
 """
 from __future__ import annotations
 
-from fractions import Fraction
-
-from ..core.program import is_one, is_zero
-
-_EXACT = (int, float, Fraction)  # Python constants (aggsym.core.program.is_zero's)
+from ..core.program import _EXACT, is_one, is_zero  # (_EXACT: the Python constants is_zero tests)
 
 ZERO3 = (0, 0, 0)
 EYE3 = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
