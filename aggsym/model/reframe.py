@@ -49,6 +49,8 @@ from .tree import Tree
 from .types import Inertial, Model, code_index
 
 EPS = 1e-12
+ROUND_OFF = 1e-14  # an entry of a body's grouped Mises matrix below this times its largest entry is round-off: 0 (the
+# exact arithmetic of SymPy gave 0 there, where products of lengths and masses cancel)
 MAX_CANDIDATES = 8  # origins tried per body by _origins (the first ones): parallel axes pass every candidate of the
 # parent on as a projection, so without a bound a chain of n parallel axes had n candidates per body and the choice
 # took O(n^3) (a 200-link planar chain: 16 s); the arms of the benchmark have at most 4
@@ -298,41 +300,124 @@ def reframe(model: Model, normals: bool = True, fewest: bool = True) -> Model:
                                        offset=(offset,) if offset != 0 else ())
         Cx = pairs[k].constructive_rotation()
         motions[k] = (Cx, sp.Matrix(translation))
-    mises = []
-    for k, b in enumerate(bodies):
-        if b.inertial is None:
-            mises.append(None)
-            continue
-        m, h, th = b.inertial.mises()
-        Rk = sp.Matrix(3, 3, lambda i, j: _unit(float(R[k][i, j])))
-        ok = sp.Matrix([_length(float(x), 1 + float(np.linalg.norm(o[k]))) for x in o[k]])
-        mises.append(mises_in_frame(m, sp.Matrix(h), sp.Matrix(th), Rk, ok))
-    moving = tree.moving
-    for k in range(N - 1, 0, -1):
-        p = tree.parent[k]
-        if p < 0 or mises[k] is None or motions[k] is None or not moving[p]:
-            continue  # (a body welded to the world takes nothing: its energy is left out of U)
-        m, h, th = mises[k]
-        if revolute[k]:
-            yy = th[1, 1]
-            part = (m, sp.Matrix([0, 0, h[2]]), sp.diag(yy, yy, 0))
-            mises[k] = (sp.Integer(0), sp.Matrix([h[0], h[1], 0]), th - sp.diag(yy, yy, 0))
-        else:
-            part = (sp.Integer(0), sp.zeros(3, 1), th)
-            mises[k] = (m, h, sp.zeros(3, 3))
-        moved = moved_mises(*part, *motions[k])
-        mises[p] = moved if mises[p] is None else tuple(a + b for a, b in zip(mises[p], moved))
+    axes = [sp.Matrix(3, 3, lambda i, j: _unit(float(R[k][i, j]))) for k in range(N)]
+    places = [sp.Matrix([_length(float(x), 1 + float(np.linalg.norm(o[k]))) for x in o[k]]) for k in range(N)]
+    forms = [None if b.inertial is None else b.inertial.mises() for b in bodies]
+    grouped = _grouped_numbers if all(f is None or _numeric(f) for f in forms) else _grouped_symbols
+    mises = grouped(tree, forms, axes, places, motions, revolute)
     new = []
     for k, b in enumerate(bodies):
         inertial = None
         if mises[k] is not None:
-            m, h, th = (sp.expand(x) for x in mises[k])
-            h = tuple(sp.expand(x) for x in h)
-            th = tuple(tuple(sp.expand(th[i, j]) for j in range(3)) for i in range(3))
+            m, h, th = mises[k]
             zero = (sp.Integer(0),) * 3
-            inertial = Inertial(m, zero, (zero,) * 3, origin=(sp.expand(m), h, th))
+            inertial = Inertial(m, zero, (zero,) * 3, origin=(m, h, th))
         new.append(dataclasses.replace(b, pair=pairs[k], inertial=inertial, link_rotation=None))
     return dataclasses.replace(model, bodies=tuple(new), frames=(), meta={**model.meta, "reframed": True})
+
+
+def _numeric(form) -> bool:
+    """Whether a Mises matrix (m, h, theta) holds numbers only (no parameter of p)."""
+    m, h, th = form
+    return all(getattr(x, "is_Number", False) for x in (m, *h, *(x for row in th for x in row)))
+
+
+def _group_part(m, h, th, revolute):
+    """The part of a body's Mises matrix (internal frame) moved to its parent, and the part it keeps: for a
+    revolute joint about e3, (m, (0, 0, h3), diag(yy, yy, 0)) goes and (0, (h1, h2, 0), theta - diag(yy, yy, 0))
+    stays; for a prismatic one the rotational part theta goes and (m, h, 0) stays (see the module's text)."""
+    if revolute:
+        yy = th[1][1]
+        zero = 0 * yy
+        part = (m, (zero, zero, h[2]), ((yy, zero, zero), (zero, yy, zero), (zero, zero, zero)))
+        kept = (0 * m, (h[0], h[1], zero),
+                tuple(tuple(th[i][j] - (yy if i == j and i < 2 else zero) for j in range(3)) for i in range(3)))
+        return part, kept
+    zero = 0 * m
+    zeros = ((zero,) * 3,) * 3
+    return (zero, (zero,) * 3, th), (m, h, zeros)
+
+
+def _grouped_symbols(tree, forms, axes, places, motions, revolute) -> list:
+    """The bodies' Mises matrices in their internal frames (axes, places: x = R x' + o in the original body frame)
+    and grouped along the joint axes, with SymPy (inertias that hold parameters of p); entries expanded."""
+    mises = []
+    for k, f in enumerate(forms):
+        if f is None:
+            mises.append(None)
+            continue
+        m, h, th = f
+        mises.append(mises_in_frame(m, sp.Matrix(h), sp.Matrix(th), axes[k], places[k]))
+    moving = tree.moving
+    for k in range(len(tree) - 1, 0, -1):
+        p = tree.parent[k]
+        if p < 0 or mises[k] is None or motions[k] is None or not moving[p]:
+            continue  # (a body welded to the world takes nothing: its energy is left out of U)
+        m, h, th = mises[k]
+        part, kept = _group_part(m, tuple(h), th.tolist(), revolute[k])
+        mises[k] = (kept[0], sp.Matrix(kept[1]), sp.Matrix(kept[2]))
+        moved = moved_mises(part[0], sp.Matrix(part[1]), sp.Matrix(part[2]), *motions[k])
+        mises[p] = moved if mises[p] is None else tuple(a + b for a, b in zip(mises[p], moved))
+    out = []
+    for f in mises:
+        if f is None:
+            out.append(None)
+            continue
+        m, h, th = f
+        out.append((sp.expand(m), tuple(sp.expand(x) for x in h),
+                    tuple(tuple(sp.expand(th[i, j]) for j in range(3)) for i in range(3))))
+    return out
+
+
+def _grouped_numbers(tree, forms, axes, places, motions, revolute) -> list:
+    """:func:`_grouped_symbols` in double precision, for numeric inertias (the common case: SymPy's matrices cost
+    most of the choice of frames); entries back as SymPy numbers, exact where integers (0, the right angles' 1)."""
+    def f3(v):
+        return np.array([float(x) for x in v])
+
+    def f33(M):
+        return np.array([[float(M[i, j]) for j in range(3)] for i in range(3)])
+
+    mises = []
+    for k, f in enumerate(forms):
+        if f is None:
+            mises.append(None)
+            continue
+        m, h, th = float(f[0]), f3(f[1]), np.array([[float(x) for x in row] for row in f[2]])
+        Rk, ok = f33(axes[k]), f3(places[k])
+        shift = th + (m * (ok @ ok) - 2 * (ok @ h)) * np.eye(3) + np.outer(h, ok) + np.outer(ok, h) \
+            - m * np.outer(ok, ok)
+        mises.append((m, Rk.T @ (h - m * ok), Rk.T @ shift @ Rk))
+    moving = tree.moving
+    for k in range(len(tree) - 1, 0, -1):
+        p = tree.parent[k]
+        if p < 0 or mises[k] is None or motions[k] is None or not moving[p]:
+            continue
+        m, h, th = mises[k]
+        part, kept = _group_part(m, tuple(h), th.tolist(), revolute[k])
+        mises[k] = (kept[0], np.array(kept[1]), np.array(kept[2]))
+        pm, ph, pth = part[0], np.array(part[1]), np.array(part[2])
+        C, t = f33(motions[k][0]), f3(motions[k][1])
+        hr = C @ ph
+        moved = (pm, hr + pm * t, C @ pth @ C.T + (2 * (t @ hr) + pm * (t @ t)) * np.eye(3) - np.outer(hr, t)
+                 - np.outer(t, hr) - pm * np.outer(t, t))
+        mises[p] = moved if mises[p] is None else tuple(a + b for a, b in zip(mises[p], moved))
+    out = []
+    for f in mises:
+        if f is None:
+            out.append(None)
+            continue
+        m, h, th = f
+        tiny = ROUND_OFF * max(abs(float(x)) for x in (m, *h, *th.flat))
+
+        def number(x):
+            x = float(x)
+            if abs(x) <= tiny:
+                return sp.Integer(0)
+            return sp.Integer(int(x)) if x.is_integer() else sp.Float(x)
+        out.append((number(m), tuple(number(x) for x in h),
+                    tuple(tuple(number(th[i][j]) for j in range(3)) for i in range(3))))
+    return out
 
 
 def _quarter(k: int) -> np.ndarray:
