@@ -4,6 +4,7 @@ Rung 1 (identities) on every model, symbolically on the double pendulum and the 
 (the book's examples after (3.17) and (3.20)); the Delta form (3.7) against the delta form (3.15); Pinocchio's
 ``aba`` and ``computeMinverse`` on models built directly through its API (no URDF involved).
 """
+import dataclasses
 import json
 from pathlib import Path
 
@@ -388,3 +389,36 @@ def test_forward_dynamics_operation_count():
     """Issue 5: q'' for the six-link arm in at most a third of Table 3.2's 2,579 operations at n = 6."""
     model = aggsym.load(model_path("manipulator6"))
     assert program_operations(model, "forward_dynamics") <= 2579 // 3
+
+
+def test_pairs_spanning_body_axes_are_solved_in_those_axes(rng):
+    """unit_bases finds the pairs whose columns Psi span body axes: the free pairs of the spacecraft, the walking
+    machine and the body in a fluid (translations: an orthogonal block, rotations: a 3x3 one), the spherical pairs of
+    the spacecraft's second body and the flywheel's carrier, the rolling disc's translations (its yaw already has a
+    unit column); not the delta robot's universal pairs (two rotations span three axes), not a pair whose columns are
+    unit already, none with an armature.  Forward dynamics in those axes (one division by det M per rotation block
+    instead of six q-dependent pivots) equals the elimination in the pair's own coordinates and, through the sweeps,
+    inverts inverse dynamics."""
+    from aggsym.mechanics.transvective import articulated_factors, forward_dynamics, unit_bases
+
+    expected = {"spacecraft": {0: (0, 1, 2, 3, 4, 5), 1: (3, 4, 5)}, "walking_machine": {0: (0, 1, 2, 3, 4, 5)},
+                "added_mass_body_in_fluid": {0: (0, 1, 2, 3, 4, 5)}, "flywheel_on_body": {0: (3, 4, 5)},
+                "rolling_disc": {0: (0, 1, 2, 5)}, "delta_robot": {}, "double_pendulum_elastic_stand": {}}
+    for name, axes in expected.items():
+        model = aggsym.load(model_path(name))
+        symbolic = bind(model, Symbolic(), tree=Tree(model))
+        kin = TreeKinematics(symbolic, symbolic.backend.program.vector("q", symbolic.tree.nq))
+        assert {k: b.axes for k, b in unit_bases(symbolic, kin).items()} == axes, name
+        numeric = bind(model, Numeric(), tree=Tree(model))
+        twin = aggsym.NumericTwin(model)
+        for q, qd, qdd in states(model, rng, 2):
+            kin = TreeKinematics(numeric, q)
+            tau = twin.inverse_dynamics(q, qd, qdd) - twin.elastic(q)
+            in_axes = np.array(forward_dynamics(numeric, kin, list(tau), list(qd)), dtype=float)
+            own = forward_dynamics(numeric, kin, list(tau), list(qd), articulated_factors(numeric, kin, arguments=False))
+            eps = tol(twin.inertia(q))
+            assert rel(in_axes, np.array(own, dtype=float)) <= eps, name
+            assert rel(in_axes, qdd) <= eps, name
+    model = dataclasses.replace(aggsym.load(model_path("spacecraft")), armature=0.01)
+    symbolic = bind(model, Symbolic(), tree=Tree(model))
+    assert unit_bases(symbolic, TreeKinematics(symbolic, symbolic.backend.program.vector("q", model.nq))) == {}

@@ -764,7 +764,7 @@ void flywheel_on_body_joint_wrenches(const double *q, const double *qd, const do
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 261 mul, 224 add, 3 div, 4 call */
+ * operations: 258 mul, 217 add, 4 div, 4 call */
 void flywheel_on_body_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd)
 {
     const double q_0 = q[0];
@@ -871,29 +871,26 @@ void flywheel_on_body_forward_dynamics(const double *q, const double *qd, const 
     const double x91 = 14.715*x21 + 0.6499999999999999*x45 + 0.01*(x46 - x49) + 0.015*x57 - 0.55*x51 + 0.02*x90 + 0.25*x89 + x4*x85 - x5*x86 - 0.17364817766693033*x87;
     const double x92 = 0.01*x58 + 0.7005*x46 + 0.4994999999999999*x49 + 0.015*(x52 - x47) + x6*x85 + x7*x86 - 0.2548870022441787*x87 - 0.25*x88 - 0.05*x90 - 14.715*x20 - 0.49050000000000005*x17;
     const double x93 = 0.49050000000000005*x21 + 0.015*x56 + 0.15050000000000002*x42 + 0.01*(x47 - x50) + 0.0505000000000001*x48 + 0.05*x89 - 0.02*x88 + x8*x85 + x9*x86 + 0.9512512425641976*x87;
-    const double x94 = 1/(0.05675000000000002 + x34 + x33 + x8*(0.0100075*x8 + 0.000509*x9 - 4.280630591538889e-06) + x9*(2.8537537276925926e-06 + 0.000509*x8 + 0.012015*x9) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x9 - 4.5e-06*x8) + x33);
-    const double x95 = x36*x94;
-    const double x96 = x35*x94;
-    const double x97 = 0.6462499999999999 + x34 + x4*x25 - x5*x26 - 0.17364817766693033*x27 - x31 - x31 - x36*x95;
-    const double x98 = 0.0085 + x6*x25 + x7*x26 - 0.2548870022441787*x27 - 0.02*x22 - 0.05*x23 - x36*x96;
-    const double x99 = 0.6999 + x34 + x6*x28 + x7*x29 - 0.2548870022441787*x30 - x32 - x32 - x35*x96;
-    const double x100 = x15*x97 + x14*x98;
-    const double x101 = x15*x98 + x14*x99;
-    const double x102 = 1/(x15*x100 + x14*x101);
-    const double x103 = x100*x102;
-    const double x104 = x101*x102;
-    const double x105 = x98 - x100*x104;
+    const double x94 = x13*x14;
+    const double x95 = x13*x15;
+    const double x96 = x14*x18 + x15*x19;
+    const double x97 = 1/x96;
+    const double x98 = 1/(0.05675000000000002 + x34 + x33 + x8*(0.0100075*x8 + 0.000509*x9 - 4.280630591538889e-06) + x9*(2.8537537276925926e-06 + 0.000509*x8 + 0.012015*x9) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x9 - 4.5e-06*x8) + x33);
+    const double x99 = x36*x98;
+    const double x100 = x35*x98;
+    const double x101 = 0.0085 + x6*x25 + x7*x26 - 0.2548870022441787*x27 - 0.02*x22 - 0.05*x23 - x36*x100;
+    const double x102 = 1/(0.6999 + x34 + x6*x28 + x7*x29 - 0.2548870022441787*x30 - x32 - x32 - x35*x100);
+    const double x103 = x101*x102;
+    const double x104 = tau_0 - x18*x91 + x19*x92 - x13*x93;
+    const double x105 = tau_1 - x15*x91 - x14*x92;
     const double x106 = tau_2 - x93;
-    const double x107 = x95*x106;
-    const double x108 = x96*x106;
-    const double x109 = tau_1 - x15*x91 - x14*x92 - x15*x107 - x14*x108;
-    const double x110 = 1/(x18*(x18*(x97 - x100*x103) - x19*x105) - x19*(x18*x105 - x19*(x99 - x101*x104)))*(tau_0 - x18*x91 + x19*x92 - x13*x93 - x18*(x107 + x103*x109) + x19*(x108 + x104*x109) - x13*x106);
-    qdd[0] = x110;
-    const double x111 = x18*x110;
-    const double x112 = x19*x110;
-    const double x113 = x102*x109 - x103*x111 + x104*x112;
-    qdd[1] = x113;
-    qdd[2] = x94*x106 - x13*x110 - x95*(x111 + x15*x113) - x96*(x14*x113 - x112);
+    const double x107 = x97*x96*x106;
+    const double x108 = x97*(x18*x105 - x15*x104 + x95*x106) - x100*x107;
+    const double x109 = 1/(0.6462499999999999 + x34 + x4*x25 - x5*x26 - 0.17364817766693033*x27 - x31 - x31 - x36*x99 - x101*x103)*(x97*(x14*x104 + x19*x105 - x94*x106) - x99*x107 - x103*x108);
+    const double x110 = x102*x108 - x103*x109;
+    qdd[0] = x97*(x14*x109 - x15*x110);
+    qdd[1] = x97*(x19*x109 + x18*x110);
+    qdd[2] = x97*(x95*x110 - x94*x109 + x96*(x98*x107 - x99*x109 - x100*x110));
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
@@ -939,30 +936,30 @@ void flywheel_on_body_inertia_inverse(const double *q, const double *t, const do
     const double x31 = 0.6462499999999999 + x25 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 - x22 - x22 - x27*x29;
     const double x32 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14 - x27*x30;
     const double x33 = 0.6999 + x25 + x3*x19 + x4*x20 - 0.2548870022441787*x21 - x23 - x23 - x26*x30;
-    const double x34 = x10*x31 + x9*x32;
-    const double x35 = x10*x32 + x9*x33;
-    const double x36 = 1/(x10*x34 + x9*x35);
-    const double x37 = x34*x36;
-    const double x38 = x35*x36;
-    const double x39 = x32 - x34*x38;
-    const double x40 = 1/(x11*(x11*(x31 - x34*x37) - x12*x39) - x12*(x11*x39 - x12*(x33 - x35*x38)));
-    Ainv[0] = x40;
-    const double x41 = x10*x29 + x9*x30;
-    const double x42 = x12*x38 - x11*x37;
-    const double x43 = x8 + x11*x29 - x12*x30 + x41*x42;
-    const double x44 = x40*x42;
+    const double x34 = x10*x29 + x9*x30;
+    const double x35 = x10*x31 + x9*x32;
+    const double x36 = x10*x32 + x9*x33;
+    const double x37 = 1/(x10*x35 + x9*x36);
+    const double x38 = x35*x37;
+    const double x39 = x36*x37;
+    const double x40 = x32 - x35*x39;
+    const double x41 = 1/(x11*(x11*(x31 - x35*x38) - x12*x40) - x12*(x11*x40 - x12*(x33 - x36*x39)));
+    Ainv[0] = x41;
+    const double x42 = x12*x39 - x11*x38;
+    const double x43 = x8 + x11*x29 - x12*x30 + x34*x42;
+    const double x44 = x41*x42;
     Ainv[1] = x44;
     Ainv[3] = x44;
-    const double x45 = x40*x43;
+    const double x45 = x41*x43;
     const double x46 = -x45;
     Ainv[2] = x46;
     Ainv[6] = x46;
-    Ainv[4] = x36 + x42*x44;
-    const double x47 = x36*x41;
+    Ainv[4] = x37 + x42*x44;
+    const double x47 = x34*x37;
     const double x48 = -(x47 + x43*x44);
     Ainv[5] = x48;
     Ainv[7] = x48;
-    Ainv[8] = x28 + x43*x45 + x41*x47;
+    Ainv[8] = x28 + x43*x45 + x34*x47;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
@@ -1010,6 +1007,8 @@ void flywheel_on_body_transvective_factors(const double *q, const double *t, con
     const double x32 = 0.6462499999999999 + x25 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 - x22 - x22 - x27*x30;
     const double x33 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14 - x27*x31;
     const double x34 = 0.6999 + x25 + x3*x19 + x4*x20 - 0.2548870022441787*x21 - x23 - x23 - x26*x31;
+    targs[1] = x8 + x11*x30 - x12*x31;
+    targs[2] = x10*x30 + x9*x31;
     const double x35 = x10*x32 + x9*x33;
     const double x36 = x10*x33 + x9*x34;
     const double x37 = x10*x35 + x9*x36;
@@ -1018,10 +1017,8 @@ void flywheel_on_body_transvective_factors(const double *q, const double *t, con
     const double x39 = x35*x38;
     const double x40 = x36*x38;
     const double x41 = x33 - x35*x40;
-    diag[0] = x11*(x11*(x32 - x35*x39) - x12*x41) - x12*(x11*x41 - x12*(x34 - x36*x40));
-    targs[1] = x8 + x11*x30 - x12*x31;
-    targs[2] = x10*x30 + x9*x31;
     targs[0] = x11*x39 - x12*x40;
+    diag[0] = x11*(x11*(x32 - x35*x39) - x12*x41) - x12*(x11*x41 - x12*(x34 - x36*x40));
 }
 
 /* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)

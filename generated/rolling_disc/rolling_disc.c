@@ -636,7 +636,7 @@ void rolling_disc_joint_wrenches(const double *q, const double *qd, const double
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 55 mul, 25 add, 6 div, 3 call */
+ * operations: 48 mul, 23 add, 4 div, 3 call */
 void rolling_disc_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_3 = q[3];
@@ -663,28 +663,26 @@ void rolling_disc_forward_dynamics(const double *q, const double *qd, const doub
     aggsym_sincos2(q_3, q_4, &x4, &x3, &x6, &x5);
     double x8, x7;
     aggsym_sincos(q_5, &x8, &x7);
-    const double x9 = p_0*x3;
-    const double x10 = p_0*x4;
-    const double x11 = qd_3*x6;
-    const double x12 = qd_3*x5;
-    const double x13 = qd_4*x11;
-    const double x14 = qd_4*x7 - x8*x12;
-    const double x15 = qd_4*x8 + x7*x12;
-    const double x16 = qd_5 + x11;
-    const double x17 = x1*(x8*x13 - qd_5*x15) - (x2 - x1)*x15*x16;
-    const double x18 = x2*qd_4*x12;
-    const double x19 = x1*(qd_5*x14 - x7*x13) - x14*x16*(x1 - x2);
-    const double x20 = 1/(x3*x9 + x4*x10);
-    const double x21 = x9*x20;
-    const double x22 = x10*x21;
-    const double x23 = tau_5 - x18;
-    qdd[0] = tau_0*1/(x3*(x3*(p_0 - x10*x10*x20) + x4*x22) + x4*(x3*x22 + x4*(p_0 - x9*x21)));
-    qdd[1] = tau_1*x20;
-    qdd[2] = 1/p_0*(tau_2 - p_0*p_2);
-    const double x24 = 1/(x1 - x1*x6*x6)*(tau_3 - x5*(x7*x19 - x8*x17) - x6*(x18 + x23));
-    qdd[3] = x24;
-    qdd[4] = 1/x1*(tau_4 - x7*x17 - x8*x19);
-    qdd[5] = 1/x2*x23 - x6*x24;
+    const double x9 = qd_3*x6;
+    const double x10 = qd_3*x5;
+    const double x11 = qd_4*x9;
+    const double x12 = qd_4*x7 - x8*x10;
+    const double x13 = qd_4*x8 + x7*x10;
+    const double x14 = qd_5 + x9;
+    const double x15 = x1*(x8*x11 - qd_5*x13) - (x2 - x1)*x13*x14;
+    const double x16 = x2*qd_4*x10;
+    const double x17 = x1*(qd_5*x12 - x7*x11) - x12*x14*(x1 - x2);
+    const double x18 = 1/p_0;
+    const double x19 = tau_5 - x16;
+    const double x20 = x18*(tau_0*x3 + tau_1*x4);
+    const double x21 = x18*(tau_1*x3 - tau_0*x4);
+    qdd[2] = x18*(tau_2 - p_0*p_2);
+    const double x22 = 1/(x1 - x1*x6*x6)*(tau_3 - x5*(x7*x17 - x8*x15) - x6*(x16 + x19));
+    qdd[3] = x22;
+    qdd[4] = 1/x1*(tau_4 - x7*x15 - x8*x17);
+    qdd[5] = 1/x2*x19 - x6*x22;
+    qdd[0] = x3*x20 - x4*x21;
+    qdd[1] = x4*x20 + x3*x21;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
@@ -1076,17 +1074,17 @@ int rolling_disc_constrained_forward_dynamics(const double *q, const double *qd,
     const double x43 = 1/x1;
     const double x44 = 1/(x1 - x1*x7*x7);
     const double x45 = 1/p_0;
-    const double x46 = 1/(x3*x10 + x4*x11);
-    const double x47 = x10*x46;
-    const double x48 = x11*x47;
-    const double x49 = 1/(x3*(x3*(p_0 - x11*x11*x46) + x4*x48) + x4*(x3*x48 + x4*(p_0 - x10*x47)));
-    const double x50 = tau_5 - x26;
-    const double x51 = tau_4 - x8*x25 - x9*x27;
-    const double x52 = tau_2 - p_0*p_2;
-    const double x53 = tau_3 - x6*(x8*x27 - x9*x25) - x7*(x26 + x50);
-    const double x54 = x44*x53;
-    const double x55 = x43*x51;
-    const double x56 = x42*x50;
+    const double x46 = tau_5 - x26;
+    const double x47 = tau_4 - x8*x25 - x9*x27;
+    const double x48 = tau_2 - p_0*p_2;
+    const double x49 = tau_3 - x6*(x8*x27 - x9*x25) - x7*(x26 + x46);
+    const double x50 = x44*x49;
+    const double x51 = x43*x47;
+    const double x52 = x42*x46;
+    const double x53 = 1/(x3*x10 + x4*x11);
+    const double x54 = x10*x53;
+    const double x55 = x11*x54;
+    const double x56 = 1/(x3*(x3*(p_0 - x11*x11*x53) + x4*x55) + x4*(x3*x55 + x4*(p_0 - x10*x54)));
     const double x57 = x3*x3 + x4*x4;
     const double x58 = sqrt(x36*x36 + x32*x32);
     const double x59 = 1/x58;
@@ -1135,21 +1133,21 @@ int rolling_disc_constrained_forward_dynamics(const double *q, const double *qd,
     const double x102 = x44*x99;
     const double x103 = x43*x71;
     const double x104 = x42*x74;
-    const double x105 = x57*x49*x57 + x99*x102 + x71*x103 + x74*x104;
+    const double x105 = x57*x56*x57 + x99*x102 + x71*x103 + x74*x104;
     const double x106 = x44*x100;
     const double x107 = x43*x72;
     const double x108 = x42*x75;
-    const double x109 = x57*x46*x57 + x100*x106 + x72*x107 + x75*x108;
+    const double x109 = x57*x53*x57 + x100*x106 + x72*x107 + x75*x108;
     const double x110 = x45 + x101*x44*x101 + x73*x43*x73 + x76*x42*x76;
-    const double x111 = x34*x78 - x32*x79 + x35*x80 - x64*x85 - x63*x86 + x82*x98 - x83*x97 + tau_0*x49*x57 + x54*x99 + x55*x71 + x56*x74 + 20*(qd_0*x57 + qd_3*x70 + qd_4*x71 + qd_5*x74);
+    const double x111 = x34*x78 - x32*x79 + x35*x80 - x64*x85 - x63*x86 + x82*x98 - x83*x97 + x57*tau_0*x56 + x50*x99 + x51*x71 + x52*x74 + 20*(qd_0*x57 + qd_3*x70 + qd_4*x71 + qd_5*x74);
     const double x112 = 1/x105;
     const double x113 = (x100*x102 - x72*x103 + x75*x104)*x112;
     const double x114 = (x101*x102 + x73*x103 - x76*x104)*x112;
     const double x115 = x109 - x105*x113*x113;
     const double x116 = 1/x115*(x101*x106 - x73*x107 - x76*x108 - x105*x113*x114);
     const double x117 = x110 - x105*x114*x114 - x115*x116*x116;
-    const double x118 = x83*x96 + x81*x98 - x38*x78 - x36*x79 - x39*x80 - x64*x84 + x62*x86 - tau_1*x46*x57 - x54*x100 + x55*x72 - x56*x75 - 20*(qd_1*x57 + qd_3*x67 - qd_4*x72 + qd_5*x75) + x111*x113;
-    const double x119 = (x111*x114 - x7*x79 + x40*x78 - x41*x80 - x63*x84 - x62*x85 - x81*x97 - x82*x96 - x45*x52 - x54*x101 - x55*x73 + x56*x76 - 20*(qd_2 + qd_4*x73 - qd_5*x76) - 100*x66 - x116*x118)/x117;
+    const double x118 = x83*x96 + x81*x98 - x38*x78 - x36*x79 - x39*x80 - x64*x84 + x62*x86 - x57*tau_1*x53 - x50*x100 + x51*x72 - x52*x75 - 20*(qd_1*x57 + qd_3*x67 - qd_4*x72 + qd_5*x75) + x111*x113;
+    const double x119 = (x111*x114 - x7*x79 + x40*x78 - x41*x80 - x63*x84 - x62*x85 - x81*x97 - x82*x96 - x45*x48 - x50*x101 - x51*x73 + x52*x76 - 20*(qd_2 + qd_4*x73 - qd_5*x76) - 100*x66 - x116*x118)/x117;
     lambda[2] = x119;
     const double x120 = x118/x115 - x116*x119;
     lambda[1] = x120;
@@ -1160,13 +1158,13 @@ int rolling_disc_constrained_forward_dynamics(const double *q, const double *qd,
     const double x124 = aggsym_sign(x122 - x115);
     const double x125 = aggsym_sign(x122 - x117);
     status[0] = 3 + x123 + x124 + x125;
-    qdd[0] = x49*(tau_0 - x57*x121);
-    qdd[1] = x46*(tau_1 + x57*x120);
-    qdd[2] = x45*(x52 + x119);
-    const double x126 = x44*(x53 - x99*x121 + x100*x120 + x101*x119);
+    qdd[0] = x56*(tau_0 - x57*x121);
+    qdd[1] = x53*(tau_1 + x57*x120);
+    qdd[2] = x45*(x48 + x119);
+    const double x126 = x44*(x49 - x99*x121 + x100*x120 + x101*x119);
     qdd[3] = x126;
-    qdd[4] = x43*(x51 - x71*x121 - x72*x120 + x73*x119);
-    qdd[5] = x42*(x50 - x74*x121 + x75*x120 - x76*x119) - x7*x126;
+    qdd[4] = x43*(x47 - x71*x121 - x72*x120 + x73*x119);
+    qdd[5] = x42*(x46 - x74*x121 + x75*x120 - x76*x119) - x7*x126;
     return status[0] != 0.0;
 }
 
