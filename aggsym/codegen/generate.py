@@ -410,6 +410,7 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         warnings.warn(ModelWarning(f"{model.source or model.name}: {next(iter(singular.values()))}: "
                                    f"{', '.join(singular)} left out (see the manifest's 'omitted')"))
     prog, outputs = symbolic_routines(model, tree, omitted=omitted)
+    prog.seal()  # (the largest models' peak memory is the program while printing)
     stages.done("recursions")
     if scalar not in SCALARS:
         raise AggsymError(f"--scalar: {scalar!r} is not one of {', '.join(SCALARS)}")
