@@ -338,16 +338,13 @@ def _group_part(m, h, th, revolute):
     return (zero, (zero,) * 3, th), (m, h, zeros)
 
 
-def _grouped_symbols(tree, forms, axes, places, motions, revolute) -> list:
-    """The bodies' Mises matrices in their internal frames (axes, places: x = R x' + o in the original body frame)
-    and grouped along the joint axes, with SymPy (inertias that hold parameters of p); entries expanded."""
-    mises = []
-    for k, f in enumerate(forms):
-        if f is None:
-            mises.append(None)
-            continue
-        m, h, th = f
-        mises.append(mises_in_frame(m, sp.Matrix(h), sp.Matrix(th), axes[k], places[k]))
+def _grouped(tree, forms, motions, revolute, in_frame, moved, kept_form, finish) -> list:
+    """The bodies' Mises matrices in their internal frames, grouped along the joint axes: ``in_frame(k, form)``
+    re-expresses body k's (m, h, theta) in its internal frame, then from the buds to the root each body hands its
+    parent the part of :func:`_group_part`, moved by ``moved(part, motion)`` (2.7), and keeps ``kept_form(kept)``;
+    each result goes out as ``finish(m, h, theta)`` (None for a body without inertia).  The arithmetic is the
+    callables' (SymPy or NumPy)."""
+    mises = [None if f is None else in_frame(k, f) for k, f in enumerate(forms)]
     moving = tree.moving
     for k in range(len(tree) - 1, 0, -1):
         p = tree.parent[k]
@@ -355,59 +352,57 @@ def _grouped_symbols(tree, forms, axes, places, motions, revolute) -> list:
             continue  # (a body welded to the world takes nothing: its energy is left out of U)
         m, h, th = mises[k]
         part, kept = _group_part(m, tuple(h), th.tolist(), revolute[k])
-        mises[k] = (kept[0], sp.Matrix(kept[1]), sp.Matrix(kept[2]))
-        moved = moved_mises(part[0], sp.Matrix(part[1]), sp.Matrix(part[2]), *motions[k])
-        mises[p] = moved if mises[p] is None else tuple(a + b for a, b in zip(mises[p], moved))
-    out = []
-    for f in mises:
-        if f is None:
-            out.append(None)
-            continue
-        m, h, th = f
-        out.append((sp.expand(m), tuple(sp.expand(x) for x in h),
-                    tuple(tuple(sp.expand(th[i, j]) for j in range(3)) for i in range(3))))
-    return out
+        mises[k] = kept_form(kept)
+        here = moved(part, motions[k])
+        mises[p] = here if mises[p] is None else tuple(a + b for a, b in zip(mises[p], here))
+    return [None if f is None else finish(*f) for f in mises]
+
+
+def _grouped_symbols(tree, forms, axes, places, motions, revolute) -> list:
+    """:func:`_grouped` with SymPy (inertias that hold parameters of p; axes, places: x = R x' + o in the original
+    body frame); entries expanded."""
+    def in_frame(k, f):
+        return mises_in_frame(f[0], sp.Matrix(f[1]), sp.Matrix(f[2]), axes[k], places[k])
+
+    def moved(part, motion):
+        return moved_mises(part[0], sp.Matrix(part[1]), sp.Matrix(part[2]), *motion)
+
+    def kept_form(kept):
+        return kept[0], sp.Matrix(kept[1]), sp.Matrix(kept[2])
+
+    def finish(m, h, th):
+        return (sp.expand(m), tuple(sp.expand(x) for x in h),
+                tuple(tuple(sp.expand(th[i, j]) for j in range(3)) for i in range(3)))
+    return _grouped(tree, forms, motions, revolute, in_frame, moved, kept_form, finish)
 
 
 def _grouped_numbers(tree, forms, axes, places, motions, revolute) -> list:
-    """:func:`_grouped_symbols` in double precision, for numeric inertias (the common case: SymPy's matrices cost
-    most of the choice of frames); entries back as SymPy numbers, exact where integers (0, the right angles' 1)."""
+    """:func:`_grouped` in double precision, for numeric inertias (the common case: SymPy's matrices cost most of
+    the choice of frames): :func:`mises_in_frame` and :func:`moved_mises` written with NumPy; entries back as SymPy
+    numbers, exact where integers (0, the right angles' 1), and 0 below :data:`ROUND_OFF` of the body's largest."""
     def f3(v):
         return np.array([float(x) for x in v])
 
     def f33(M):
-        return np.array([[float(M[i, j]) for j in range(3)] for i in range(3)])
+        return np.array([[float(x) for x in row] for row in (M.tolist() if hasattr(M, "tolist") else M)])
 
-    mises = []
-    for k, f in enumerate(forms):
-        if f is None:
-            mises.append(None)
-            continue
-        m, h, th = float(f[0]), f3(f[1]), np.array([[float(x) for x in row] for row in f[2]])
-        Rk, ok = f33(axes[k]), f3(places[k])
-        shift = th + (m * (ok @ ok) - 2 * (ok @ h)) * np.eye(3) + np.outer(h, ok) + np.outer(ok, h) \
-            - m * np.outer(ok, ok)
-        mises.append((m, Rk.T @ (h - m * ok), Rk.T @ shift @ Rk))
-    moving = tree.moving
-    for k in range(len(tree) - 1, 0, -1):
-        p = tree.parent[k]
-        if p < 0 or mises[k] is None or motions[k] is None or not moving[p]:
-            continue
-        m, h, th = mises[k]
-        part, kept = _group_part(m, tuple(h), th.tolist(), revolute[k])
-        mises[k] = (kept[0], np.array(kept[1]), np.array(kept[2]))
-        pm, ph, pth = part[0], np.array(part[1]), np.array(part[2])
-        C, t = f33(motions[k][0]), f3(motions[k][1])
-        hr = C @ ph
-        moved = (pm, hr + pm * t, C @ pth @ C.T + (2 * (t @ hr) + pm * (t @ t)) * np.eye(3) - np.outer(hr, t)
-                 - np.outer(t, hr) - pm * np.outer(t, t))
-        mises[p] = moved if mises[p] is None else tuple(a + b for a, b in zip(mises[p], moved))
-    out = []
-    for f in mises:
-        if f is None:
-            out.append(None)
-            continue
-        m, h, th = f
+    def in_frame(k, f):
+        m, h, th = float(f[0]), f3(f[1]), f33(f[2])
+        R, o = f33(axes[k]), f3(places[k])
+        shift = th + (m * (o @ o) - 2 * (o @ h)) * np.eye(3) + np.outer(h, o) + np.outer(o, h) - m * np.outer(o, o)
+        return m, R.T @ (h - m * o), R.T @ shift @ R
+
+    def moved(part, motion):
+        m, h, th = part[0], np.array(part[1]), np.array(part[2])
+        C, t = f33(motion[0]), f3(motion[1])
+        hr = C @ h
+        return (m, hr + m * t, C @ th @ C.T + (2 * (t @ hr) + m * (t @ t)) * np.eye(3) - np.outer(hr, t)
+                - np.outer(t, hr) - m * np.outer(t, t))
+
+    def kept_form(kept):
+        return kept[0], np.array(kept[1]), np.array(kept[2])
+
+    def finish(m, h, th):
         tiny = ROUND_OFF * max(abs(float(x)) for x in (m, *h, *th.flat))
 
         def number(x):
@@ -415,9 +410,9 @@ def _grouped_numbers(tree, forms, axes, places, motions, revolute) -> list:
             if abs(x) <= tiny:
                 return sp.Integer(0)
             return sp.Integer(int(x)) if x.is_integer() else sp.Float(x)
-        out.append((number(m), tuple(number(x) for x in h),
-                    tuple(tuple(number(th[i][j]) for j in range(3)) for i in range(3))))
-    return out
+        return (number(m), tuple(number(x) for x in h),
+                tuple(tuple(number(th[i][j]) for j in range(3)) for i in range(3)))
+    return _grouped(tree, forms, motions, revolute, in_frame, moved, kept_form, finish)
 
 
 def _quarter(k: int) -> np.ndarray:
