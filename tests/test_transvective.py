@@ -396,9 +396,9 @@ def test_pairs_spanning_body_axes_are_solved_in_those_axes(rng):
     machine and the body in a fluid (translations: an orthogonal block, rotations: a 3x3 one), the spherical pairs of
     the spacecraft's second body and the flywheel's carrier, the rolling disc's translations (its yaw already has a
     unit column); not the delta robot's universal pairs (two rotations span three axes), not a pair whose columns are
-    unit already, none with an armature.  Forward dynamics in those axes (one division by det M per rotation block
-    instead of six q-dependent pivots) equals the elimination in the pair's own coordinates and, through the sweeps,
-    inverts inverse dynamics."""
+    unit already, none with an armature.  Forward dynamics in those axes (the pair eliminated along unit columns, as
+    a free-flyer's, and one division by det M per rotation block) equals the elimination in the pair's own
+    coordinates and, through the sweeps, inverts inverse dynamics."""
     from aggsym.mechanics.transvective import articulated_factors, forward_dynamics, unit_bases
 
     expected = {"spacecraft": {0: (0, 1, 2, 3, 4, 5), 1: (3, 4, 5)}, "walking_machine": {0: (0, 1, 2, 3, 4, 5)},
