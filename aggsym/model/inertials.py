@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import re
 
+import numpy as np
 import sympy as sp
 
 from ..errors import AggsymError
@@ -39,20 +40,44 @@ def _origin_form(mass, com, J) -> tuple:
     return mass, sp.Matrix(mass * c), theta
 
 
+class _Symbols:
+    """The products :func:`moved_mises` and :func:`mises_in_frame` need, on SymPy column matrices."""
+
+    eye = staticmethod(lambda: sp.eye(3))
+    dot = staticmethod(lambda a, b: a.dot(b))
+    outer = staticmethod(lambda a, b: a * b.T)
+
+
+class _Numbers:
+    """The same on NumPy vectors (double precision: the internal frames of numeric inertias, model.reframe)."""
+
+    eye = staticmethod(lambda: np.eye(3))
+    dot = staticmethod(np.dot)
+    outer = staticmethod(np.outer)
+
+
+def _algebra(h):
+    return _Numbers if isinstance(h, np.ndarray) else _Symbols
+
+
 def moved_mises(m, h, theta, C, p) -> tuple:
     """L Theta L^T (2.7) for L = T(p) C(C): a Mises matrix (m, h, Theta_O) given about a frame's origin in its axes
     (a link frame, a child's frame), about the origin of the frame in which the first has axes C and origin p (the
-    body's, the parent's)."""
-    hr = C * h
-    shift = C * theta * C.T + (2 * p.dot(hr) + m * p.dot(p)) * sp.eye(3) - hr * p.T - p * hr.T - m * p * p.T
+    body's, the parent's).  SymPy column matrices, or NumPy arrays throughout."""
+    la = _algebra(h)
+    hr = C @ h
+    shift = C @ theta @ C.T + (2 * la.dot(p, hr) + m * la.dot(p, p)) * la.eye() - la.outer(hr, p) - la.outer(p, hr) \
+        - m * la.outer(p, p)
     return m, hr + m * p, shift
 
 
 def mises_in_frame(m, h, theta, R, o) -> tuple:
     """The inverse of :func:`moved_mises`: (m, h, Theta_O) about the origin o of a frame with axes R (x = R x' + o),
     in its axes: h' = R^T (h - m o), Theta' = R^T (Theta_O + (m o.o - 2 o.h) E + h o^T + o h^T - m o o^T) R."""
-    shift = theta + (m * o.dot(o) - 2 * o.dot(h)) * sp.eye(3) + h * o.T + o * h.T - m * o * o.T
-    return m, R.T * (h - m * o), R.T * shift * R
+    la = _algebra(h)
+    shift = theta + (m * la.dot(o, o) - 2 * la.dot(o, h)) * la.eye() + la.outer(h, o) + la.outer(o, h) \
+        - m * la.outer(o, o)
+    return m, R.T @ (h - m * o), R.T @ shift @ R
 
 
 def _values(model: Model, link: str) -> list:

@@ -378,7 +378,7 @@ def _grouped_symbols(tree, forms, axes, places, motions, revolute) -> list:
 
 def _grouped_numbers(tree, forms, axes, places, motions, revolute) -> list:
     """:func:`_grouped` in double precision, for numeric inertias (the common case: SymPy's matrices cost most of
-    the choice of frames): :func:`mises_in_frame` and :func:`moved_mises` written with NumPy; entries back as SymPy
+    the choice of frames): :func:`mises_in_frame` and :func:`moved_mises` on NumPy arrays; entries back as SymPy
     numbers, exact where integers (0, the right angles' 1), and 0 below :data:`ROUND_OFF` of the body's largest."""
     def f3(v):
         return np.array([float(x) for x in v])
@@ -387,17 +387,10 @@ def _grouped_numbers(tree, forms, axes, places, motions, revolute) -> list:
         return np.array([[float(x) for x in row] for row in (M.tolist() if hasattr(M, "tolist") else M)])
 
     def in_frame(k, f):
-        m, h, th = float(f[0]), f3(f[1]), f33(f[2])
-        R, o = f33(axes[k]), f3(places[k])
-        shift = th + (m * (o @ o) - 2 * (o @ h)) * np.eye(3) + np.outer(h, o) + np.outer(o, h) - m * np.outer(o, o)
-        return m, R.T @ (h - m * o), R.T @ shift @ R
+        return mises_in_frame(float(f[0]), f3(f[1]), f33(f[2]), f33(axes[k]), f3(places[k]))
 
     def moved(part, motion):
-        m, h, th = part[0], np.array(part[1]), np.array(part[2])
-        C, t = f33(motion[0]), f3(motion[1])
-        hr = C @ h
-        return (m, hr + m * t, C @ th @ C.T + (2 * (t @ hr) + m * (t @ t)) * np.eye(3) - np.outer(hr, t)
-                - np.outer(t, hr) - m * np.outer(t, t))
+        return moved_mises(part[0], np.array(part[1]), np.array(part[2]), f33(motion[0]), f3(motion[1]))
 
     def kept_form(kept):
         return kept[0], np.array(kept[1]), np.array(kept[2])
