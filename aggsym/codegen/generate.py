@@ -398,7 +398,7 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
     ``slicing``: (threshold, size): the C of a routine of more work (operations plus statements) than the
     threshold is emitted as static functions of about that size each behind the public one (:mod:`.slicing`: one
     huge function takes GCC minutes); None: every routine as one function."""
-    from .latex import latex_document
+    from .latex import LATEX_ROLES, latex_document
 
     check_names(model)
     stages = _Stages(progress)
@@ -469,8 +469,6 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
     gen.timings = stages.timings
     return gen
 
-
-LATEX_ROLES = ("inertia", "bias", "gravity")  # the routines whose programs the LaTeX document prints
 
 HELPERS = ("aggsym_sincos(", "aggsym_sincos2(", "aggsym_sign(")  # the calls of the helpers that helpers.c.j2 defines
 

@@ -204,7 +204,10 @@ class IntermediatePrinter(_Common, LatexPrinter):
         return f"\\frac{{{self._print(e.num)}}}{{{self._print(e.den)}}}"
 
 
-def intermediate_form(model, prog, outputs, roles=("inertia", "bias", "gravity"), straight=None):
+LATEX_ROLES = ("inertia", "bias", "gravity")  # the routines whose programs the document prints (and sizes by)
+
+
+def intermediate_form(model, prog, outputs, roles=LATEX_ROLES, straight=None):
     """The straight-line programs of A, b, g as LaTeX assignments (x_k = ...); ``straight``: {role: its
     :func:`straight_line`} where already formed (the C's)."""
     q, qd, _ = coordinate_symbols(model)
@@ -286,8 +289,8 @@ def latex_document(model, env, prog, outputs, straight=None) -> str:
     of routines already emitted, not formed again."""
     # the closed forms are sized by the programs of A, b and g: without all three emitted there is no measure of
     # what SymPy would be asked to simplify (a 4-link chain's derivatives alone once ran it for many minutes)
-    sized = all(role in outputs for role in ("inertia", "bias", "gravity"))
-    flat = [x for role in ("inertia", "bias", "gravity") if role in outputs for o in outputs[role] for x in o]
+    sized = all(role in outputs for role in LATEX_ROLES)
+    flat = [x for role in LATEX_ROLES if role in outputs for o in outputs[role] for x in o]
     small = (sized and not model.couplings and model.nv <= CLOSED_FORM_MAX_NQ
              and len(prog.reachable(flat)) <= CLOSED_FORM_MAX_NODES
              and expanded_terms(prog, flat) <= CLOSED_FORM_MAX_TERMS)
