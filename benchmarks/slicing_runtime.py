@@ -2,7 +2,9 @@
 
 ``python -m benchmarks.slicing_runtime [OUT.json]``: Talos (the five benchmark routines, C, b and g) and the
 chains of 24 and 48 links of :mod:`benchmarks.chain` (the five), each generated twice as one NAME.c, with
-``slicing=None`` and with the default slicing, compiled ``cc -O2 -std=c99`` beside a small timer generated here
+``slicing=None`` and with the default slicing, the sliced one compiled twice, as generated (GCC on x86 compiles the
+slices for size) and with ``-DAGGSYM_SLICES_AS_COMPILED`` (the slices at -O2 too), all ``cc -O2 -std=c99`` beside a
+small timer generated here
 (64 random states, fixed seed, the same for both; ``p`` NULL, the defaults), then run in turn ROUNDS times, pinned to
 one CPU when ``taskset`` exists.  Each run reports per routine the best of REPS batches of ITERS calls (ns per call);
 the table gives the median over the rounds of each variant and the change.  Routines under the threshold are the
@@ -30,7 +32,9 @@ from .environment import load_average
 from .run import FIVE, ROBOT_FILES, robots_directory
 
 ROBOTS = {"talos": FIVE + ",coriolis,bias,gravity", "chain24": FIVE, "chain48": FIVE}
-VARIANTS = (("one function", None), ("sliced", (SLICE_THRESHOLD, SLICE_SIZE)))
+# label, slicing, extra flags: the unsliced file, the sliced file with its slices at -O2, the sliced file as generated
+VARIANTS = (("one function", None, ()), ("sliced -O2", (SLICE_THRESHOLD, SLICE_SIZE), ("-DAGGSYM_SLICES_AS_COMPILED",)),
+            ("sliced", (SLICE_THRESHOLD, SLICE_SIZE), ()))
 STATES = 64
 
 
@@ -79,12 +83,12 @@ def _model(robot: str, folder: Path):
         return select_routines(load(path), ROBOTS[robot].split(","))
 
 
-def _build(model, slicing, folder: Path) -> Path:
+def _build(model, slicing, flags, folder: Path) -> Path:
     write(generate(model, latex=False, slicing=slicing), folder)
     manifest = json.loads((folder / f"{model.name}.json").read_text())
     (folder / "timer.c").write_text(timer_source(manifest, list(manifest["functions"])))
     cc = compiler()
-    for cmd in ([cc, "-O2", "-std=c99", "-c", f"{model.name}.c", "-o", "model.o"],
+    for cmd in ([cc, "-O2", "-std=c99", *flags, "-c", f"{model.name}.c", "-o", "model.o"],
                 [cc, "-O2", "-std=gnu99", "-I.", "timer.c", "model.o", "-lm", "-o", "timer"]):
         subprocess.run(cmd, cwd=folder, check=True, capture_output=True)
     return folder / "timer"
@@ -98,8 +102,8 @@ def run(rounds: int = 5, reps: int = 9, iters: int = 1000, cpu: int = 1) -> dict
         timers = {}
         for robot in ROBOTS:
             model = _model(robot, Path(tmp) / "models")
-            timers[robot] = {label: _build(model, slicing, Path(tmp) / f"{robot}{k}")
-                             for k, (label, slicing) in enumerate(VARIANTS)}
+            timers[robot] = {label: _build(model, slicing, flags, Path(tmp) / f"{robot}{k}")
+                             for k, (label, slicing, flags) in enumerate(VARIANTS)}
         for _ in range(rounds):
             for robot, variants in timers.items():
                 for label, exe in variants.items():
@@ -113,15 +117,21 @@ def run(rounds: int = 5, reps: int = 9, iters: int = 1000, cpu: int = 1) -> dict
 
 
 def markdown(results: dict) -> str:
-    before, after = (label for label, _ in VARIANTS)
+    labels = [label for label, _, _ in VARIANTS]
+    base = labels[0]
     lines = [f"ns per call, median of {results['rounds']} rounds (load average {results['load_before']} before, "
              f"{results['load_after']} after); *sliced*: routines of more than {results['slicing'][0]} work in "
-             f"slices of about {results['slicing'][1]}, the others the same text as unsliced.", "",
-             f"| robot | routine | {before} | {after} | change |", "|---|---|---:|---:|---:|"]
+             f"slices of about {results['slicing'][1]}, the others the same text as unsliced, the slices as "
+             "generated (compiled for size by GCC on x86); *sliced -O2*: the same file with "
+             "-DAGGSYM_SLICES_AS_COMPILED; the changes against one function.", "",
+             "| robot | routine | " + " | ".join(labels) + " | " + " | ".join(f"{x} change" for x in labels[1:]) + " |",
+             "|---|---|" + "---:|" * (2 * len(labels) - 1)]
     for robot, roles in results["robots"].items():
         for role, times in roles.items():
-            a, b = statistics.median(times[before]), statistics.median(times[after])
-            lines.append(f"| {robot} | {role} | {a:.0f} | {b:.0f} | {100 * (b - a) / a:+.1f} % |")
+            t = [statistics.median(times[label]) for label in labels]
+            changes = [f"{100 * (x - t[0]) / t[0]:+.1f} %" for x in t[1:]]
+            lines.append(f"| {robot} | {role} | " + " | ".join(f"{x:.0f}" for x in t) + " | " + " | ".join(changes)
+                         + " |")
     return "\n".join(lines + [""])
 
 

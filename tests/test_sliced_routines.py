@@ -5,7 +5,8 @@ models' routines are cut into many slices, which compiles in a second:
 
 * the sliced C against the unsliced straight-line program evaluated on floats and against Pinocchio (UR5), against
   the same routines compiled unsliced and the numeric twin (a returned status, a time input, single precision),
-  under -ffast-math, and with an output that aliases an input;
+  under -ffast-math, compiled for size or at the command line's level (the same bits), and with an output that
+  aliases an input;
 * the workspace: every load reads the value last stored in its entry (entries are reused);
 * slices only above the threshold, the routines below it printed exactly as unsliced; the default threshold slices
   Talos' C but not its A, b + g, inverse dynamics (which run slower sliced);
@@ -16,7 +17,9 @@ from __future__ import annotations
 import ctypes
 import json
 import os
+import platform
 import re
+import shlex
 import subprocess
 import sys
 import warnings
@@ -26,7 +29,7 @@ import pinocchio as pin
 import pytest
 
 import aggsym
-from aggsym.codegen.compile import CLibrary, build_split, compile_shared, random_inputs, shared_from_archive
+from aggsym.codegen.compile import CLibrary, build_split, compile_shared, compiler, random_inputs, shared_from_archive
 from aggsym.codegen.generate import generate, symbolic_routines, write
 from aggsym.codegen.slicing import SLICE_THRESHOLD
 from aggsym.contract import ROUTINES, select_routines, signature
@@ -122,6 +125,30 @@ def test_ur5_sliced_under_fast_math(ur5, tmp_path, rng):
                 assert relative_error(a, b, floor=1e-300) <= 1e-9, r.routine.role
 
 
+def _gcc_on_x86() -> bool:
+    version = subprocess.run([*shlex.split(compiler()), "-v"], capture_output=True, text=True).stderr
+    return "gcc version" in version and "clang" not in version.lower() and platform.machine() in ("x86_64", "i686")
+
+
+def test_slices_compiled_for_size_give_the_same_bits(ur5, tmp_path, rng):
+    """GCC on x86 compiles the slices for size (AGGSYM_SLICE: optimize("Os")), which runs faster than its -O2 code of
+    them; defining AGGSYM_SLICES_AS_COMPILED gives them the command line's -O2.  The code differs (under GCC on
+    x86) and every output is the same, bit for bit."""
+    model, gen, lib = ur5
+    folder = tmp_path / "as_compiled"
+    write(gen, folder)
+    plain = _compile(model, folder, "plain.so", extra=("-O2", "-DAGGSYM_SLICES_AS_COMPILED"))
+    own = tmp_path / "own.so"
+    compile_shared(folder / f"{model.name}.c", own, extra=("-O2",))
+    differs = own.read_bytes() != (folder / "plain.so").read_bytes()
+    assert differs == _gcc_on_x86()
+    for r in gen.routines:
+        for _ in range(3):
+            args = random_inputs(model, r.routine.role, rng)
+            for a, b in zip(_tuple(plain.call(r.routine.role, *args)), _tuple(lib.call(r.routine.role, *args))):
+                assert np.array_equal(a, b), r.routine.role
+
+
 def test_an_output_may_alias_an_input(ur5, rng):
     """Sliced inverse dynamics writing tau over qdd, and forward dynamics writing qdd over tau, give what they give
     into separate arrays (every input is read in the first slice, before any output is written)."""
@@ -143,7 +170,7 @@ def test_an_output_may_alias_an_input(ur5, rng):
 def _slices_in_call_order(text, symbol):
     """The bodies (lists of lines) of SYMBOL's slices, in the order its public function calls them."""
     bodies = {}
-    for m in re.finditer(r"^static AGGSYM_NOINLINE void (\w+)\([^)]*\)\n\{\n(.*?)^\}", text, re.M | re.S):
+    for m in re.finditer(r"^static AGGSYM_SLICE void (\w+)\([^)]*\)\n\{\n(.*?)^\}", text, re.M | re.S):
         bodies[m.group(1)] = [line.strip() for line in m.group(2).splitlines()]
     public = re.search(rf"^\w+ {symbol}\([^)]*\)\n\{{\n(.*?)^\}}", text, re.M | re.S).group(1)
     return [bodies[f"{name}_slice{k}"] for name, k in SLICE_CALL.findall(public)]
@@ -233,7 +260,7 @@ def test_slices_only_above_the_threshold():
             function = "\n".join([r.prototype, "{"] + [f"    {line}" for line in r.c_body] + ["}"])
             assert function in text and function in plain_text, role
     assert generate(model, latex=False).files == plain.files
-    assert "slice" not in plain_text and "AGGSYM_NOINLINE" in text
+    assert "slice" not in plain_text and "AGGSYM_SLICE" in text
 
 
 def test_the_default_threshold_on_talos():
@@ -283,7 +310,7 @@ def test_split_make_builds_the_library_with_sliced_routines(tmp_path, rng):
                              check=True).stdout
     exported = {line.split()[-1] for line in symbols.splitlines() if len(line.split()) == 3}
     assert exported == set(manifest["functions"].values())
-    # the slices are local symbols of the objects: not inlined back into the public function (AGGSYM_NOINLINE)
+    # the slices are local symbols of the objects: not inlined back into the public function (AGGSYM_SLICE)
     assert " t manipulator6_coriolis_slice0\n" in subprocess.run(["nm", str(archive)], capture_output=True, text=True,
                                                                  check=True).stdout
     lib = CLibrary(shared_from_archive(archive, tmp_path / "split.so"), manifest)

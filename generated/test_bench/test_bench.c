@@ -127,17 +127,24 @@ static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, 
  * called in turn by the public function: one huge function takes the compiler minutes (its register allocation),
  * and small ones also run faster.  A value that a later slice uses passes through w, a local array of the public
  * function.  The slices are never inlined: GCC and Clang would inline a static function called once back into
- * its caller. */
-#if defined(__GNUC__)
-#define AGGSYM_NOINLINE __attribute__((noinline))
+ * its caller.  With GCC on x86 at -O1 and above they are also compiled for size (optimize("Os")): straight-line
+ * code this long runs at the speed the processor fetches and decodes it, and GCC 12's -O2 code of the slices is
+ * larger and slower (Talos' forward dynamics 29 % slower, benchmarks/slicing_runtime.py).  The results are the
+ * same, bit for bit: no option that changes rounding differs between the levels.  Define AGGSYM_SLICES_AS_COMPILED
+ * to compile them with the command line's options alone. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && defined(__OPTIMIZE__) \
+    && (defined(__x86_64__) || defined(__i386__)) && !defined(AGGSYM_SLICES_AS_COMPILED)
+#define AGGSYM_SLICE __attribute__((noinline, optimize("Os")))
+#elif defined(__GNUC__)
+#define AGGSYM_SLICE __attribute__((noinline))
 #elif defined(_MSC_VER)
-#define AGGSYM_NOINLINE __declspec(noinline)
+#define AGGSYM_SLICE __declspec(noinline)
 #else
-#define AGGSYM_NOINLINE
+#define AGGSYM_SLICE
 #endif
 
 /* test_bench_inertia, slice 0 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice0(const double *q, double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice0(const double *q, double *A, double *restrict w)
 {
     const double q_3 = q[3];
     w[0] = q_3;
@@ -387,7 +394,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice0(const double *q, double *A
 }
 
 /* test_bench_inertia, slice 1 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice1(double *A)
+static AGGSYM_SLICE void test_bench_inertia_slice1(double *A)
 {
     A[493] = 0;
     A[494] = 0;
@@ -592,7 +599,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice1(double *A)
 }
 
 /* test_bench_inertia, slice 2 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice2(double *A)
+static AGGSYM_SLICE void test_bench_inertia_slice2(double *A)
 {
     A[753] = 0;
     A[754] = 0;
@@ -797,7 +804,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice2(double *A)
 }
 
 /* test_bench_inertia, slice 3 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice3(double *A)
+static AGGSYM_SLICE void test_bench_inertia_slice3(double *A)
 {
     A[1015] = 0;
     A[1016] = 0;
@@ -1002,7 +1009,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice3(double *A)
 }
 
 /* test_bench_inertia, slice 4 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice4(double *A)
+static AGGSYM_SLICE void test_bench_inertia_slice4(double *A)
 {
     A[1278] = 0;
     A[1279] = 0;
@@ -1207,7 +1214,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice4(double *A)
 }
 
 /* test_bench_inertia, slice 5 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice5(double *A)
+static AGGSYM_SLICE void test_bench_inertia_slice5(double *A)
 {
     A[1545] = 0;
     A[1546] = 0;
@@ -1412,7 +1419,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice5(double *A)
 }
 
 /* test_bench_inertia, slice 6 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice6(double *A)
+static AGGSYM_SLICE void test_bench_inertia_slice6(double *A)
 {
     A[1805] = 0;
     A[1806] = 0;
@@ -1617,7 +1624,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice6(double *A)
 }
 
 /* test_bench_inertia, slice 7 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice7(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice7(double *A, double *restrict w)
 {
     A[2074] = 0;
     A[2075] = 0;
@@ -1853,7 +1860,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice7(double *A, double *restric
 }
 
 /* test_bench_inertia, slice 8 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice8(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice8(double *A, double *restrict w)
 {
     const double q_16 = w[13];
     const double q_17 = w[14];
@@ -2065,7 +2072,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice8(double *A, double *restric
 }
 
 /* test_bench_inertia, slice 9 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice9(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice9(double *A, double *restrict w)
 {
     const double x125 = w[130];
     const double x136 = 6 + x125;
@@ -2209,7 +2216,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice9(double *A, double *restric
 }
 
 /* test_bench_inertia, slice 10 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice10(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice10(double *A, double *restrict w)
 {
     const double x65 = w[96];
     const double x203 = w[145];
@@ -2346,7 +2353,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice10(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 11 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice11(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice11(double *A, double *restrict w)
 {
     const double x265 = w[175];
     const double x259 = w[170];
@@ -2483,7 +2490,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice11(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 12 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice12(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice12(double *A, double *restrict w)
 {
     const double x45 = w[77];
     const double x323 = w[199];
@@ -2615,7 +2622,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice12(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 13 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice13(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice13(double *A, double *restrict w)
 {
     const double x390 = w[226];
     const double x391 = w[227];
@@ -2761,7 +2768,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice13(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 14 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice14(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice14(double *A, double *restrict w)
 {
     const double x463 = w[269];
     const double x470 = 0.5*x463;
@@ -2899,7 +2906,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice14(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 15 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice15(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice15(double *A, double *restrict w)
 {
     const double x13 = w[57];
     const double x527 = w[298];
@@ -3048,7 +3055,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice15(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 16 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice16(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice16(double *A, double *restrict w)
 {
     const double x158 = w[25];
     const double x142 = w[14];
@@ -3196,7 +3203,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice16(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 17 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice17(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice17(double *A, double *restrict w)
 {
     const double x610 = w[302];
     const double x3 = w[47];
@@ -3328,7 +3335,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice17(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 18 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice18(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice18(double *A, double *restrict w)
 {
     const double x6 = w[52];
     const double x652 = w[21];
@@ -3439,7 +3446,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice18(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 19 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice19(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice19(double *A, double *restrict w)
 {
     const double x11 = w[55];
     const double x694 = w[30];
@@ -3550,7 +3557,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice19(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 20 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice20(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice20(double *A, double *restrict w)
 {
     const double x741 = w[155];
     A[11] = x741;
@@ -3671,7 +3678,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice20(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 21 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice21(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice21(double *A, double *restrict w)
 {
     const double x0 = w[46];
     const double x781 = w[28];
@@ -3785,7 +3792,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice21(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 22 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice22(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice22(double *A, double *restrict w)
 {
     const double x22 = w[66];
     const double x452 = w[261];
@@ -3885,7 +3892,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice22(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 23 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice23(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice23(double *A, double *restrict w)
 {
     const double x866 = w[29];
     A[161] = x866;
@@ -4001,7 +4008,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice23(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 24 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice24(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice24(double *A, double *restrict w)
 {
     const double x21 = w[67];
     const double x910 = w[22];
@@ -4115,7 +4122,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice24(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 25 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice25(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice25(double *A, double *restrict w)
 {
     const double x952 = w[2];
     A[69] = x952;
@@ -4217,7 +4224,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice25(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 26 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice26(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice26(double *A, double *restrict w)
 {
     const double x991 = w[5];
     A[1107] = x991;
@@ -4333,7 +4340,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice26(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 27 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice27(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice27(double *A, double *restrict w)
 {
     const double x1035 = w[2];
     const double x1038 = w[21];
@@ -4435,7 +4442,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice27(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 28 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice28(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice28(double *A, double *restrict w)
 {
     const double x1079 = w[5];
     A[1249] = x1079;
@@ -4552,7 +4559,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice28(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 29 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice29(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice29(double *A, double *restrict w)
 {
     const double x0 = w[46];
     const double x1116 = w[0];
@@ -4661,7 +4668,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice29(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 30 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice30(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice30(double *A, double *restrict w)
 {
     const double x5 = w[49];
     const double x1155 = w[2];
@@ -4782,7 +4789,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice30(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 31 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice31(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice31(double *A, double *restrict w)
 {
     const double x50 = w[81];
     const double x1205 = w[0];
@@ -4903,7 +4910,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice31(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 32 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice32(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice32(double *A, double *restrict w)
 {
     const double x1252 = w[8];
     A[35] = x1252;
@@ -5013,7 +5020,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice32(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 33 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice33(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice33(double *A, double *restrict w)
 {
     const double x1291 = w[20];
     A[1780] = x1291;
@@ -5134,7 +5141,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice33(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 34 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice34(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice34(double *A, double *restrict w)
 {
     const double x61 = w[92];
     const double x1327 = w[2];
@@ -5240,7 +5247,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice34(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 35 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice35(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice35(double *A, double *restrict w)
 {
     const double x1379 = w[20];
     A[40] = x1379;
@@ -5366,7 +5373,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice35(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 36 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice36(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice36(double *A, double *restrict w)
 {
     const double x5 = w[49];
     const double x1410 = w[2];
@@ -5482,7 +5489,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice36(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 37 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice37(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice37(double *A, double *restrict w)
 {
     const double x71 = w[103];
     const double x1460 = w[10];
@@ -5586,7 +5593,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_slice37(double *A, double *restri
 }
 
 /* test_bench_inertia, slice 38 of 39 */
-static AGGSYM_NOINLINE void test_bench_inertia_slice38(double *A, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_slice38(double *A, double *restrict w)
 {
     const double x1503 = w[4];
     A[94] = x1503;
@@ -6585,7 +6592,7 @@ void test_bench_bias(const double *q, const double *qd, const double *p, double 
 }
 
 /* test_bench_coriolis, slice 0 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice0(const double *q, const double *qd, double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice0(const double *q, const double *qd, double *C, double *restrict w)
 {
     const double q_0 = q[0];
     w[0] = q_0;
@@ -6886,7 +6893,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice0(const double *q, const do
 }
 
 /* test_bench_coriolis, slice 1 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice1(double *C)
+static AGGSYM_SLICE void test_bench_coriolis_slice1(double *C)
 {
     C[428] = 0;
     C[429] = 0;
@@ -7091,7 +7098,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice1(double *C)
 }
 
 /* test_bench_coriolis, slice 2 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice2(double *C)
+static AGGSYM_SLICE void test_bench_coriolis_slice2(double *C)
 {
     C[706] = 0;
     C[707] = 0;
@@ -7296,7 +7303,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice2(double *C)
 }
 
 /* test_bench_coriolis, slice 3 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice3(double *C)
+static AGGSYM_SLICE void test_bench_coriolis_slice3(double *C)
 {
     C[977] = 0;
     C[978] = 0;
@@ -7501,7 +7508,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice3(double *C)
 }
 
 /* test_bench_coriolis, slice 4 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice4(double *C)
+static AGGSYM_SLICE void test_bench_coriolis_slice4(double *C)
 {
     C[1255] = 0;
     C[1256] = 0;
@@ -7706,7 +7713,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice4(double *C)
 }
 
 /* test_bench_coriolis, slice 5 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice5(double *C)
+static AGGSYM_SLICE void test_bench_coriolis_slice5(double *C)
 {
     C[1527] = 0;
     C[1528] = 0;
@@ -7911,7 +7918,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice5(double *C)
 }
 
 /* test_bench_coriolis, slice 6 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice6(double *C)
+static AGGSYM_SLICE void test_bench_coriolis_slice6(double *C)
 {
     C[1798] = 0;
     C[1799] = 0;
@@ -8116,7 +8123,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice6(double *C)
 }
 
 /* test_bench_coriolis, slice 7 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice7(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice7(double *C, double *restrict w)
 {
     C[2076] = 0;
     C[2077] = 0;
@@ -8368,7 +8375,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice7(double *C, double *restri
 }
 
 /* test_bench_coriolis, slice 8 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice8(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice8(double *restrict w)
 {
     const double q_23 = w[23];
     const double q_24 = w[24];
@@ -8581,7 +8588,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice8(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 9 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice9(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice9(double *restrict w)
 {
     const double x13 = w[108];
     const double x119 = w[189];
@@ -8735,7 +8742,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice9(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 10 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice10(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice10(double *restrict w)
 {
     const double x27 = w[124];
     const double x186 = w[214];
@@ -8883,7 +8890,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice10(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 11 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice11(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice11(double *restrict w)
 {
     const double x40 = w[6];
     const double x239 = w[240];
@@ -9029,7 +9036,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice11(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 12 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice12(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice12(double *restrict w)
 {
     const double x55 = w[21];
     const double x292 = w[268];
@@ -9176,7 +9183,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice12(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 13 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice13(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice13(double *restrict w)
 {
     const double x349 = w[297];
     const double x70 = w[148];
@@ -9325,7 +9332,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice13(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 14 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice14(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice14(double *restrict w)
 {
     const double q_0 = w[0];
     const double x1 = w[96];
@@ -9452,7 +9459,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice14(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 15 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice15(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice15(double *restrict w)
 {
     const double x105 = w[175];
     const double x449 = w[342];
@@ -9570,7 +9577,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice15(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 16 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice16(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice16(double *restrict w)
 {
     const double x131 = w[199];
     const double x495 = w[375];
@@ -9713,7 +9720,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice16(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 17 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice17(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice17(double *restrict w)
 {
     const double x157 = w[43];
     const double x541 = w[412];
@@ -9831,7 +9838,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice17(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 18 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice18(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice18(double *restrict w)
 {
     const double x583 = w[438];
     const double qd_17 = w[65];
@@ -9974,7 +9981,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice18(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 19 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice19(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice19(double *restrict w)
 {
     const double x632 = w[477];
     const double qd_21 = w[69];
@@ -10090,7 +10097,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice19(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 20 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice20(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice20(double *restrict w)
 {
     const double x678 = w[505];
     const double qd_24 = w[72];
@@ -10229,7 +10236,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice20(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 21 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice21(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice21(double *restrict w)
 {
     const double x727 = w[543];
     const double qd_28 = w[76];
@@ -10341,7 +10348,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice21(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 22 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice22(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice22(double *restrict w)
 {
     const double x773 = w[571];
     const double qd_31 = w[79];
@@ -10477,7 +10484,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice22(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 23 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice23(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice23(double *restrict w)
 {
     const double x822 = w[609];
     const double qd_35 = w[83];
@@ -10585,7 +10592,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice23(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 24 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice24(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice24(double *restrict w)
 {
     const double x336 = w[284];
     const double x350 = w[298];
@@ -10723,7 +10730,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice24(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 25 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice25(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice25(double *restrict w)
 {
     const double x364 = w[136];
     const double x378 = w[301];
@@ -10833,7 +10840,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice25(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 26 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice26(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice26(double *restrict w)
 {
     const double x382 = w[303];
     const double x397 = w[317];
@@ -10934,7 +10941,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice26(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 27 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice27(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice27(double *restrict w)
 {
     const double x990 = w[726];
     const double x1022 = 2*x990;
@@ -11072,7 +11079,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice27(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 28 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice28(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice28(double *restrict w)
 {
     const double x989 = w[725];
     const double x1063 = w[763];
@@ -11246,7 +11253,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice28(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 29 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice29(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice29(double *restrict w)
 {
     const double x1132 = w[810];
     const double x377 = w[300];
@@ -11408,7 +11415,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice29(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 30 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice30(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice30(double *restrict w)
 {
     const double x1120 = w[798];
     const double x974 = w[713];
@@ -11548,7 +11555,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice30(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 31 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice31(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice31(double *restrict w)
 {
     const double x930 = w[688];
     const double x1220 = w[812];
@@ -11744,7 +11751,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice31(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 32 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice32(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice32(double *restrict w)
 {
     const double x347 = w[295];
     const double x1292 = w[844];
@@ -11888,7 +11895,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice32(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 33 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice33(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice33(double *restrict w)
 {
     const double x347 = w[295];
     const double x1350 = w[864];
@@ -12047,7 +12054,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice33(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 34 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice34(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice34(double *restrict w)
 {
     const double x895 = w[659];
     const double x1311 = w[684];
@@ -12195,7 +12202,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice34(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 35 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice35(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice35(double *restrict w)
 {
     const double x1398 = w[853];
     const double x1450 = w[858];
@@ -12355,7 +12362,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice35(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 36 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice36(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice36(double *restrict w)
 {
     const double x1520 = w[913];
     const double x320 = w[274];
@@ -12541,7 +12548,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice36(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 37 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice37(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice37(double *restrict w)
 {
     const double x304 = w[11];
     const double x1581 = w[896];
@@ -12690,7 +12697,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice37(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 38 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice38(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice38(double *restrict w)
 {
     const double x1654 = w[959];
     const double x295 = w[271];
@@ -12856,7 +12863,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice38(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 39 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice39(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice39(double *restrict w)
 {
     const double x1629 = w[934];
     const double x1672 = w[923];
@@ -12977,7 +12984,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice39(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 40 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice40(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice40(double *restrict w)
 {
     const double x789 = w[77];
     const double x1726 = w[945];
@@ -13171,7 +13178,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice40(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 41 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice41(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice41(double *restrict w)
 {
     const double x1812 = w[995];
     const double x268 = w[250];
@@ -13340,7 +13347,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice41(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 42 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice42(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice42(double *restrict w)
 {
     const double x1788 = w[921];
     const double x744 = w[74];
@@ -13477,7 +13484,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice42(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 43 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice43(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice43(double *restrict w)
 {
     const double x1918 = w[1028];
     const double x1910 = w[1021];
@@ -13628,7 +13635,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice43(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 44 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice44(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice44(double *restrict w)
 {
     const double x1917 = w[1027];
     const double x1963 = w[1033];
@@ -13794,7 +13801,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice44(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 45 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice45(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice45(double *restrict w)
 {
     const double x245 = w[3];
     const double x2010 = w[1073];
@@ -13964,7 +13971,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice45(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 46 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice46(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice46(double *restrict w)
 {
     const double x2006 = w[1069];
     const double x2044 = w[73];
@@ -14114,7 +14121,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice46(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 47 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice47(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice47(double *restrict w)
 {
     const double x2067 = w[582];
     const double x2122 = w[1037];
@@ -14254,7 +14261,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice47(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 48 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice48(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice48(double *restrict w)
 {
     const double x618 = w[464];
     const double x2190 = 2*x618;
@@ -14392,7 +14399,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice48(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 49 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice49(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice49(double *restrict w)
 {
     const double x617 = w[463];
     const double x2231 = w[1035];
@@ -14566,7 +14573,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice49(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 50 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice50(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice50(double *restrict w)
 {
     const double x2300 = w[1146];
     const double x184 = w[212];
@@ -14728,7 +14735,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice50(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 51 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice51(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice51(double *restrict w)
 {
     const double x2288 = w[1134];
     const double x602 = w[410];
@@ -14868,7 +14875,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice51(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 52 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice52(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice52(double *restrict w)
 {
     const double x558 = w[372];
     const double x2388 = w[1148];
@@ -15064,7 +15071,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice52(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 53 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice53(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice53(double *restrict w)
 {
     const double x146 = w[34];
     const double x2460 = w[1180];
@@ -15208,7 +15215,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice53(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 54 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice54(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice54(double *restrict w)
 {
     const double x146 = w[34];
     const double x2518 = w[1200];
@@ -15367,7 +15374,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice54(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 55 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice55(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice55(double *restrict w)
 {
     const double x523 = w[394];
     const double x2479 = w[60];
@@ -15515,7 +15522,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice55(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 56 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice56(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice56(double *restrict w)
 {
     const double x2566 = w[1189];
     const double x2618 = w[1194];
@@ -15675,7 +15682,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice56(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 57 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice57(double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice57(double *restrict w)
 {
     const double x2688 = w[1249];
     const double x119 = w[189];
@@ -15866,7 +15873,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice57(double *restrict w)
 }
 
 /* test_bench_coriolis, slice 58 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice58(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice58(double *C, double *restrict w)
 {
     const double x2757 = w[1261];
     const double x88 = w[163];
@@ -16039,7 +16046,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice58(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 59 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice59(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice59(double *C, double *restrict w)
 {
     const double x2798 = w[1279];
     C[2] = x2798;
@@ -16259,7 +16266,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice59(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 60 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice60(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice60(double *C, double *restrict w)
 {
     const double x1287 = w[839];
     const double x1579 = w[875];
@@ -16370,7 +16377,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice60(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 61 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice61(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice61(double *C, double *restrict w)
 {
     const double x419 = w[150];
     const double x2797 = w[1278];
@@ -16477,7 +16484,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice61(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 62 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice62(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice62(double *C, double *restrict w)
 {
     const double x405 = w[325];
     const double x2850 = w[179];
@@ -16623,7 +16630,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice62(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 63 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice63(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice63(double *C, double *restrict w)
 {
     const double x433 = w[326];
     const double x2876 = w[1253];
@@ -16743,7 +16750,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice63(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 64 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice64(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice64(double *C, double *restrict w)
 {
     const double x103 = w[174];
     const double x2729 = w[393];
@@ -16845,7 +16852,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice64(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 65 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice65(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice65(double *C, double *restrict w)
 {
     const double x101 = w[173];
     const double x2716 = w[61];
@@ -16991,7 +16998,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice65(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 66 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice66(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice66(double *C, double *restrict w)
 {
     const double x2940 = w[400];
     C[56] = x2940;
@@ -17096,7 +17103,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice66(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 67 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice67(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice67(double *C, double *restrict w)
 {
     const double x405 = w[325];
     const double x2939 = w[396];
@@ -17241,7 +17248,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice67(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 68 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice68(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice68(double *C, double *restrict w)
 {
     const double x2974 = w[342];
     C[105] = x2974;
@@ -17356,7 +17363,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice68(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 69 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice69(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice69(double *C, double *restrict w)
 {
     const double x418 = w[149];
     const double x2972 = w[340];
@@ -17497,7 +17504,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice69(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 70 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice70(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice70(double *C, double *restrict w)
 {
     const double x3006 = w[350];
     C[58] = x3006;
@@ -17602,7 +17609,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice70(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 71 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice71(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice71(double *C, double *restrict w)
 {
     const double x405 = w[325];
     const double x3005 = w[339];
@@ -17707,7 +17714,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice71(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 72 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice72(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice72(double *C, double *restrict w)
 {
     const double x512 = w[383];
     const double x2564 = w[1184];
@@ -17812,7 +17819,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice72(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 73 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice73(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice73(double *C, double *restrict w)
 {
     const double x511 = w[343];
     const double x133 = w[201];
@@ -17916,7 +17923,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice73(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 74 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice74(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice74(double *C, double *restrict w)
 {
     const double x466 = w[352];
     const double x3038 = w[0];
@@ -18057,7 +18064,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice74(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 75 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice75(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice75(double *C, double *restrict w)
 {
     const double x147 = w[35];
     const double x2467 = w[1187];
@@ -18163,7 +18170,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice75(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 76 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice76(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice76(double *C, double *restrict w)
 {
     const double x481 = w[361];
     const double x3068 = w[40];
@@ -18309,7 +18316,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice76(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 77 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice77(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice77(double *C, double *restrict w)
 {
     const double x532 = w[403];
     const double x2447 = w[1032];
@@ -18424,7 +18431,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice77(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 78 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice78(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice78(double *C, double *restrict w)
 {
     const double x418 = w[149];
     const double x3113 = w[0];
@@ -18550,7 +18557,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice78(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 79 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice79(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice79(double *C, double *restrict w)
 {
     const double x3133 = w[26];
     const double x544 = w[415];
@@ -18672,7 +18679,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice79(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 80 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice80(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice80(double *C, double *restrict w)
 {
     const double x175 = w[206];
     const double x2362 = w[1157];
@@ -18774,7 +18781,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice80(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 81 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice81(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice81(double *C, double *restrict w)
 {
     const double x561 = w[375];
     const double x2343 = w[1040];
@@ -18902,7 +18909,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice81(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 82 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice82(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice82(double *C, double *restrict w)
 {
     const double x574 = w[429];
     const double x2353 = w[1108];
@@ -19006,7 +19013,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice82(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 83 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice83(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice83(double *C, double *restrict w)
 {
     const double x574 = w[429];
     const double x2344 = w[1070];
@@ -19117,7 +19124,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice83(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 84 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice84(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice84(double *C, double *restrict w)
 {
     const double x590 = w[445];
     const double x2351 = w[1106];
@@ -19218,7 +19225,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice84(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 85 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice85(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice85(double *C, double *restrict w)
 {
     const double x590 = w[445];
     const double x191 = w[219];
@@ -19328,7 +19335,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice85(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 86 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice86(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice86(double *C, double *restrict w)
 {
     const double x559 = w[373];
     const double x3242 = w[28];
@@ -19478,7 +19485,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice86(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 87 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice87(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice87(double *C, double *restrict w)
 {
     const double x3254 = w[40];
     const double x3255 = w[41];
@@ -19610,7 +19617,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice87(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 88 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice88(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice88(double *C, double *restrict w)
 {
     const double x544 = w[415];
     const double x3269 = w[64];
@@ -19746,7 +19753,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice88(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 89 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice89(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice89(double *C, double *restrict w)
 {
     const double x199 = w[115];
     const double x3299 = w[51];
@@ -19866,7 +19873,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice89(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 90 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice90(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice90(double *C, double *restrict w)
 {
     const double x559 = w[373];
     const double x3299 = w[51];
@@ -20010,7 +20017,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice90(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 91 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice91(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice91(double *C, double *restrict w)
 {
     const double x3339 = w[60];
     C[68] = x3339;
@@ -20119,7 +20126,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice91(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 92 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice92(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice92(double *C, double *restrict w)
 {
     const double x405 = w[325];
     const double x3344 = w[25];
@@ -20261,7 +20268,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice92(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 93 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice93(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice93(double *C, double *restrict w)
 {
     const double x3355 = w[33];
     const double x3356 = w[34];
@@ -20379,7 +20386,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice93(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 94 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice94(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice94(double *C, double *restrict w)
 {
     const double x653 = w[440];
     const double x2059 = w[529];
@@ -20480,7 +20487,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice94(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 95 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice95(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice95(double *C, double *restrict w)
 {
     const double x653 = w[440];
     const double x224 = w[230];
@@ -20590,7 +20597,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice95(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 96 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice96(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice96(double *C, double *restrict w)
 {
     const double x667 = w[496];
     const double x2059 = w[529];
@@ -20693,7 +20700,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice96(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 97 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice97(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice97(double *C, double *restrict w)
 {
     const double x669 = w[498];
     const double x226 = w[232];
@@ -20802,7 +20809,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice97(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 98 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice98(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice98(double *C, double *restrict w)
 {
     const double x652 = w[439];
     const double x3440 = w[27];
@@ -20926,7 +20933,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice98(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 99 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice99(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice99(double *C, double *restrict w)
 {
     const double x3464 = w[4];
     const double x3463 = w[0];
@@ -21044,7 +21051,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice99(double *C, double *restr
 }
 
 /* test_bench_coriolis, slice 100 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice100(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice100(double *C, double *restrict w)
 {
     const double x652 = w[439];
     const double x3467 = w[25];
@@ -21188,7 +21195,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice100(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 101 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice101(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice101(double *C, double *restrict w)
 {
     const double x236 = w[238];
     const double x3503 = w[61];
@@ -21320,7 +21327,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice101(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 102 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice102(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice102(double *C, double *restrict w)
 {
     const double x625 = w[471];
     const double x3509 = w[27];
@@ -21460,7 +21467,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice102(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 103 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice103(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice103(double *C, double *restrict w)
 {
     const double x248 = w[124];
     const double x1907 = w[993];
@@ -21589,7 +21596,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice103(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 104 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice104(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice104(double *C, double *restrict w)
 {
     const double x652 = w[439];
     const double x3530 = w[44];
@@ -21733,7 +21740,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice104(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 105 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice105(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice105(double *C, double *restrict w)
 {
     const double x3570 = w[59];
     C[75] = x3570;
@@ -21842,7 +21849,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice105(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 106 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice106(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice106(double *C, double *restrict w)
 {
     const double x405 = w[325];
     const double x3575 = w[28];
@@ -21984,7 +21991,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice106(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 107 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice107(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice107(double *C, double *restrict w)
 {
     const double x3586 = w[0];
     const double x3587 = w[4];
@@ -22102,7 +22109,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice107(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 108 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice108(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice108(double *C, double *restrict w)
 {
     const double x746 = w[505];
     const double x1767 = w[267];
@@ -22203,7 +22210,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice108(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 109 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice109(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice109(double *C, double *restrict w)
 {
     const double x746 = w[505];
     const double x272 = w[254];
@@ -22313,7 +22320,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice109(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 110 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice110(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice110(double *C, double *restrict w)
 {
     const double x760 = w[562];
     const double x1767 = w[267];
@@ -22416,7 +22423,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice110(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 111 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice111(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice111(double *C, double *restrict w)
 {
     const double x762 = w[564];
     const double x274 = w[256];
@@ -22525,7 +22532,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice111(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 112 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice112(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice112(double *C, double *restrict w)
 {
     const double x745 = w[75];
     const double x3671 = w[26];
@@ -22649,7 +22656,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice112(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 113 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice113(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice113(double *C, double *restrict w)
 {
     const double x3695 = w[3];
     const double x3694 = w[0];
@@ -22767,7 +22774,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice113(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 114 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice114(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice114(double *C, double *restrict w)
 {
     const double x745 = w[75];
     const double x3698 = w[24];
@@ -22911,7 +22918,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice114(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 115 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice115(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice115(double *C, double *restrict w)
 {
     const double x284 = w[262];
     const double x3734 = w[58];
@@ -23043,7 +23050,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice115(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 116 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice116(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice116(double *C, double *restrict w)
 {
     const double x718 = w[537];
     const double x3740 = w[26];
@@ -23183,7 +23190,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice116(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 117 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice117(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice117(double *C, double *restrict w)
 {
     const double x296 = w[272];
     const double x1615 = w[912];
@@ -23312,7 +23319,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice117(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 118 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice118(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice118(double *C, double *restrict w)
 {
     const double x745 = w[75];
     const double x3761 = w[23];
@@ -23456,7 +23463,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice118(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 119 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice119(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice119(double *C, double *restrict w)
 {
     const double x3801 = w[48];
     C[82] = x3801;
@@ -23565,7 +23572,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice119(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 120 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice120(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice120(double *C, double *restrict w)
 {
     const double x405 = w[325];
     const double x3806 = w[26];
@@ -23707,7 +23714,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice120(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 121 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice121(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice121(double *C, double *restrict w)
 {
     const double x3817 = w[0];
     const double x3818 = w[3];
@@ -23825,7 +23832,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice121(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 122 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice122(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice122(double *C, double *restrict w)
 {
     const double x839 = w[81];
     const double x1475 = w[907];
@@ -23926,7 +23933,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice122(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 123 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice123(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice123(double *C, double *restrict w)
 {
     const double x839 = w[81];
     const double x320 = w[274];
@@ -24036,7 +24043,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice123(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 124 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice124(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice124(double *C, double *restrict w)
 {
     const double x853 = w[628];
     const double x1475 = w[907];
@@ -24139,7 +24146,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice124(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 125 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice125(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice125(double *C, double *restrict w)
 {
     const double x855 = w[630];
     const double x322 = w[276];
@@ -24248,7 +24255,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice125(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 126 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice126(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice126(double *C, double *restrict w)
 {
     const double x838 = w[80];
     const double x3902 = w[8];
@@ -24372,7 +24379,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice126(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 127 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice127(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice127(double *C, double *restrict w)
 {
     const double x3926 = w[3];
     const double x3925 = w[0];
@@ -24490,7 +24497,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice127(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 128 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice128(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice128(double *C, double *restrict w)
 {
     const double x838 = w[80];
     const double x3929 = w[6];
@@ -24634,7 +24641,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice128(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 129 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice129(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice129(double *C, double *restrict w)
 {
     const double x332 = w[282];
     const double x3965 = w[41];
@@ -24766,7 +24773,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice129(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 130 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice130(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice130(double *C, double *restrict w)
 {
     const double x811 = w[603];
     const double x3971 = w[9];
@@ -24906,7 +24913,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice130(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 131 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice131(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice131(double *C, double *restrict w)
 {
     const double x344 = w[292];
     const double x1323 = w[814];
@@ -25035,7 +25042,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice131(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 132 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice132(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice132(double *C, double *restrict w)
 {
     const double x838 = w[80];
     const double x3992 = w[24];
@@ -25179,7 +25186,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice132(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 133 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice133(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice133(double *C, double *restrict w)
 {
     const double x4032 = w[36];
     C[89] = x4032;
@@ -25288,7 +25295,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice133(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 134 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice134(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice134(double *C, double *restrict w)
 {
     const double x405 = w[325];
     const double x4037 = w[10];
@@ -25430,7 +25437,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice134(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 135 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice135(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice135(double *C, double *restrict w)
 {
     const double x4048 = w[0];
     const double x4049 = w[3];
@@ -25548,7 +25555,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice135(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 136 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice136(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice136(double *C, double *restrict w)
 {
     const double x932 = w[87];
     const double x1183 = w[770];
@@ -25649,7 +25656,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice136(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 137 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice137(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice137(double *C, double *restrict w)
 {
     const double x932 = w[87];
     const double x368 = w[140];
@@ -25759,7 +25766,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice137(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 138 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice138(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice138(double *C, double *restrict w)
 {
     const double x946 = w[691];
     const double x1183 = w[770];
@@ -25862,7 +25869,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice138(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 139 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice139(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice139(double *C, double *restrict w)
 {
     const double x948 = w[693];
     const double x370 = w[142];
@@ -25971,7 +25978,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice139(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 140 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice140(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice140(double *C, double *restrict w)
 {
     const double x931 = w[689];
     const double x4133 = w[8];
@@ -26095,7 +26102,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice140(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 141 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice141(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice141(double *C, double *restrict w)
 {
     const double x4157 = w[3];
     const double x4156 = w[0];
@@ -26213,7 +26220,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice141(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 142 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice142(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice142(double *C, double *restrict w)
 {
     const double x931 = w[689];
     const double x4160 = w[6];
@@ -26357,7 +26364,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice142(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 143 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice143(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice143(double *C, double *restrict w)
 {
     const double x380 = w[302];
     const double x4196 = w[38];
@@ -26489,7 +26496,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice143(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 144 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice144(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice144(double *C, double *restrict w)
 {
     const double x904 = w[668];
     const double x4202 = w[9];
@@ -26629,7 +26636,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice144(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 145 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice145(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice145(double *C, double *restrict w)
 {
     const double x392 = w[312];
     const double x1031 = w[742];
@@ -26758,7 +26765,7 @@ static AGGSYM_NOINLINE void test_bench_coriolis_slice145(double *C, double *rest
 }
 
 /* test_bench_coriolis, slice 146 of 147 */
-static AGGSYM_NOINLINE void test_bench_coriolis_slice146(double *C, double *restrict w)
+static AGGSYM_SLICE void test_bench_coriolis_slice146(double *C, double *restrict w)
 {
     const double x931 = w[689];
     const double x4223 = w[26];
@@ -31921,7 +31928,7 @@ void test_bench_joint_wrenches(const double *q, const double *qd, const double *
 }
 
 /* test_bench_forward_dynamics, slice 0 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice0(const double *q, const double *qd, const double *tau, double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice0(const double *q, const double *qd, const double *tau, double *restrict w)
 {
     const double q_3 = q[3];
     const double q_4 = q[4];
@@ -32284,7 +32291,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice0(const double *q, 
 }
 
 /* test_bench_forward_dynamics, slice 1 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice1(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice1(double *restrict w)
 {
     const double q_44 = w[5];
     const double q_45 = w[6];
@@ -32565,7 +32572,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice1(double *restrict 
 }
 
 /* test_bench_forward_dynamics, slice 2 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice2(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice2(double *restrict w)
 {
     const double x168 = w[267];
     const double x169 = w[268];
@@ -32696,7 +32703,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice2(double *restrict 
 }
 
 /* test_bench_forward_dynamics, slice 3 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice3(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice3(double *restrict w)
 {
     const double x19 = w[121];
     const double x169 = w[268];
@@ -32831,7 +32838,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice3(double *restrict 
 }
 
 /* test_bench_forward_dynamics, slice 4 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice4(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice4(double *restrict w)
 {
     const double qd_20 = w[26];
     const double x167 = w[266];
@@ -32957,7 +32964,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice4(double *restrict 
 }
 
 /* test_bench_forward_dynamics, slice 5 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice5(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice5(double *restrict w)
 {
     const double x47 = w[150];
     const double x345 = w[352];
@@ -33097,7 +33104,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice5(double *restrict 
 }
 
 /* test_bench_forward_dynamics, slice 6 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice6(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice6(double *restrict w)
 {
     const double x402 = w[381];
     const double x394 = w[376];
@@ -33229,7 +33236,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice6(double *restrict 
 }
 
 /* test_bench_forward_dynamics, slice 7 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice7(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice7(double *restrict w)
 {
     const double x77 = w[180];
     const double x447 = w[391];
@@ -33382,7 +33389,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice7(double *restrict 
 }
 
 /* test_bench_forward_dynamics, slice 8 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice8(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice8(double *restrict w)
 {
     const double qd_12 = w[18];
     const double x224 = w[295];
@@ -33543,7 +33550,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice8(double *restrict 
 }
 
 /* test_bench_forward_dynamics, slice 9 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice9(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice9(double *restrict w)
 {
     const double x357 = w[30];
     const double x564 = w[445];
@@ -33703,7 +33710,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice9(double *restrict 
 }
 
 /* test_bench_forward_dynamics, slice 10 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice10(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice10(double *restrict w)
 {
     const double x79 = w[182];
     const double x612 = w[462];
@@ -33817,7 +33824,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice10(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 11 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice11(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice11(double *restrict w)
 {
     const double x366 = w[33];
     const double x382 = w[367];
@@ -33942,7 +33949,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice11(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 12 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice12(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice12(double *restrict w)
 {
     const double x215 = w[289];
     const double x231 = w[301];
@@ -34063,7 +34070,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice12(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 13 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice13(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice13(double *restrict w)
 {
     const double x89 = w[191];
     const double x725 = w[329];
@@ -34189,7 +34196,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice13(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 14 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice14(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice14(double *restrict w)
 {
     const double x783 = w[405];
     const double x792 = w[424];
@@ -34330,7 +34337,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice14(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 15 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice15(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice15(double *restrict w)
 {
     const double x96 = w[198];
     const double x861 = w[480];
@@ -34457,7 +34464,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice15(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 16 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice16(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice16(double *restrict w)
 {
     const double x927 = w[437];
     const double x923 = w[422];
@@ -34571,7 +34578,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice16(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 17 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice17(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice17(double *restrict w)
 {
     const double x106 = w[208];
     const double x981 = w[480];
@@ -34695,7 +34702,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice17(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 18 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice18(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice18(double *restrict w)
 {
     const double x1054 = w[492];
     const double x1057 = w[495];
@@ -34819,7 +34826,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice18(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 19 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice19(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice19(double *restrict w)
 {
     const double x1109 = w[505];
     const double x1114 = w[510];
@@ -34956,7 +34963,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice19(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 20 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice20(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice20(double *restrict w)
 {
     const double x120 = w[222];
     const double x1191 = w[542];
@@ -35083,7 +35090,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice20(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 21 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice21(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice21(double *restrict w)
 {
     const double x1257 = w[520];
     const double x1253 = w[516];
@@ -35197,7 +35204,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice21(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 22 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice22(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice22(double *restrict w)
 {
     const double x130 = w[232];
     const double x1311 = w[542];
@@ -35321,7 +35328,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice22(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 23 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice23(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice23(double *restrict w)
 {
     const double x1384 = w[556];
     const double x1387 = w[559];
@@ -35445,7 +35452,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice23(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 24 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice24(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice24(double *restrict w)
 {
     const double x1439 = w[569];
     const double x1444 = w[574];
@@ -35574,7 +35581,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice24(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 25 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice25(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice25(double *restrict w)
 {
     const double x1513 = w[602];
     const double x1517 = w[606];
@@ -35697,7 +35704,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice25(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 26 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice26(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice26(double *restrict w)
 {
     const double x1581 = w[577];
     const double x1572 = w[571];
@@ -35804,7 +35811,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice26(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 27 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice27(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice27(double *restrict w)
 {
     const double x1640 = w[610];
     const double x1643 = w[613];
@@ -35913,7 +35920,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice27(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 28 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice28(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice28(double *restrict w)
 {
     const double x1670 = w[576];
     const double x1675 = w[581];
@@ -36052,7 +36059,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice28(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 29 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice29(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice29(double *restrict w)
 {
     const double x5 = w[106];
     const double x1690 = w[408];
@@ -36164,7 +36171,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice29(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 30 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice30(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice30(double *restrict w)
 {
     const double x1748 = w[404];
     const double x1749 = w[406];
@@ -36291,7 +36298,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice30(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 31 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice31(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice31(double *restrict w)
 {
     const double tau_40 = w[94];
     const double x632 = w[361];
@@ -36418,7 +36425,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice31(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 32 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice32(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice32(double *restrict w)
 {
     const double x577 = w[277];
     const double x641 = w[464];
@@ -36547,7 +36554,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice32(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 33 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice33(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice33(double *restrict w)
 {
     const double tau_25 = w[79];
     const double x654 = w[49];
@@ -36676,7 +36683,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice33(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 34 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice34(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice34(double *restrict w)
 {
     const double x288 = w[328];
     const double x658 = w[268];
@@ -36809,7 +36816,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice34(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 35 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice35(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice35(double *restrict w)
 {
     const double x16 = w[119];
     const double x1939 = w[53];
@@ -36953,7 +36960,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice35(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 36 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice36(double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice36(double *restrict w)
 {
     const double tau_5 = w[59];
     const double x1973 = w[73];
@@ -37073,7 +37080,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice36(double *restrict
 }
 
 /* test_bench_forward_dynamics, slice 37 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice37(double *qdd, double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice37(double *qdd, double *restrict w)
 {
     const double x1987 = w[61];
     qdd[0] = x1987;
@@ -37209,7 +37216,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice37(double *qdd, dou
 }
 
 /* test_bench_forward_dynamics, slice 38 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice38(double *qdd, double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice38(double *qdd, double *restrict w)
 {
     const double x1552 = w[243];
     const double x1947 = w[51];
@@ -37342,7 +37349,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice38(double *qdd, dou
 }
 
 /* test_bench_forward_dynamics, slice 39 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice39(double *qdd, double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice39(double *qdd, double *restrict w)
 {
     const double x2064 = w[60];
     const double x2067 = w[63];
@@ -37474,7 +37481,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice39(double *qdd, dou
 }
 
 /* test_bench_forward_dynamics, slice 40 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice40(double *qdd, double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice40(double *qdd, double *restrict w)
 {
     const double x2105 = w[22];
     qdd[27] = x2105;
@@ -37603,7 +37610,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice40(double *qdd, dou
 }
 
 /* test_bench_forward_dynamics, slice 41 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice41(double *qdd, double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice41(double *qdd, double *restrict w)
 {
     const double x62 = w[165];
     const double x2142 = w[25];
@@ -37726,7 +37733,7 @@ static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice41(double *qdd, dou
 }
 
 /* test_bench_forward_dynamics, slice 42 of 43 */
-static AGGSYM_NOINLINE void test_bench_forward_dynamics_slice42(double *qdd, double *restrict w)
+static AGGSYM_SLICE void test_bench_forward_dynamics_slice42(double *qdd, double *restrict w)
 {
     const double x79 = w[182];
     const double x2170 = w[1];
@@ -37805,7 +37812,7 @@ void test_bench_forward_dynamics(const double *q, const double *qd, const double
 }
 
 /* test_bench_inertia_inverse, slice 0 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice0(const double *q, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice0(const double *q, double *restrict w)
 {
     const double q_3 = q[3];
     const double q_4 = q[4];
@@ -38075,7 +38082,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice0(const double *q, d
 }
 
 /* test_bench_inertia_inverse, slice 1 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice1(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice1(double *restrict w)
 {
     const double x29 = w[34];
     const double x126 = x29*x29;
@@ -38245,7 +38252,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice1(double *restrict w
 }
 
 /* test_bench_inertia_inverse, slice 2 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice2(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice2(double *restrict w)
 {
     const double x74 = w[81];
     const double x180 = w[165];
@@ -38375,7 +38382,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice2(double *restrict w
 }
 
 /* test_bench_inertia_inverse, slice 3 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice3(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice3(double *restrict w)
 {
     const double x264 = w[198];
     const double x86 = w[92];
@@ -38505,7 +38512,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice3(double *restrict w
 }
 
 /* test_bench_inertia_inverse, slice 4 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice4(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice4(double *restrict w)
 {
     const double x329 = w[222];
     const double x332 = w[225];
@@ -38628,7 +38635,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice4(double *restrict w
 }
 
 /* test_bench_inertia_inverse, slice 5 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice5(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice5(double *restrict w)
 {
     const double x395 = w[196];
     const double x406 = 0.5*x395;
@@ -38733,7 +38740,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice5(double *restrict w
 }
 
 /* test_bench_inertia_inverse, slice 6 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice6(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice6(double *restrict w)
 {
     const double x54 = w[61];
     const double x455 = w[226];
@@ -38866,7 +38873,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice6(double *restrict w
 }
 
 /* test_bench_inertia_inverse, slice 7 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice7(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice7(double *restrict w)
 {
     const double x515 = w[242];
     const double x532 = w[253];
@@ -38995,7 +39002,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice7(double *restrict w
 }
 
 /* test_bench_inertia_inverse, slice 8 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice8(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice8(double *restrict w)
 {
     const double x586 = w[259];
     const double x591 = w[264];
@@ -39117,7 +39124,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice8(double *restrict w
 }
 
 /* test_bench_inertia_inverse, slice 9 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice9(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice9(double *restrict w)
 {
     const double x659 = w[280];
     const double x662 = w[283];
@@ -39240,7 +39247,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice9(double *restrict w
 }
 
 /* test_bench_inertia_inverse, slice 10 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice10(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice10(double *restrict w)
 {
     const double x725 = w[269];
     const double x736 = 0.5*x725;
@@ -39345,7 +39352,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice10(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 11 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice11(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice11(double *restrict w)
 {
     const double x30 = w[37];
     const double x785 = w[290];
@@ -39478,7 +39485,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice11(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 12 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice12(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice12(double *restrict w)
 {
     const double x845 = w[306];
     const double x862 = w[317];
@@ -39607,7 +39614,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice12(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 13 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice13(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice13(double *restrict w)
 {
     const double x916 = w[323];
     const double x921 = w[328];
@@ -39736,7 +39743,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice13(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 14 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice14(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice14(double *restrict w)
 {
     const double x992 = w[352];
     const double x994 = 0.44999999999999996 + x992;
@@ -39854,7 +39861,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice14(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 15 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice15(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice15(double *restrict w)
 {
     const double x1038 = w[327];
     const double x1063 = x1038 + x1038;
@@ -39962,7 +39969,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice15(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 16 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice16(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice16(double *restrict w)
 {
     const double x9 = w[14];
     const double x1092 = w[149];
@@ -40087,7 +40094,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice16(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 17 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice17(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice17(double *restrict w)
 {
     const double x1150 = w[355];
     const double x1155 = w[372];
@@ -40226,7 +40233,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice17(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 18 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice18(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice18(double *restrict w)
 {
     const double x5 = w[10];
     const double x1170 = w[203];
@@ -40338,7 +40345,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice18(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 19 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice19(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice19(double *Ainv, double *restrict w)
 {
     const double x1228 = w[192];
     const double x1229 = w[193];
@@ -40454,7 +40461,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice19(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 20 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice20(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice20(double *restrict w)
 {
     const double x1282 = w[203];
     const double x1278 = w[200];
@@ -40574,7 +40581,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice20(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 21 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice21(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice21(double *restrict w)
 {
     const double x66 = w[73];
     const double x1339 = w[236];
@@ -40684,7 +40691,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice21(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 22 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice22(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice22(double *restrict w)
 {
     const double x0 = w[7];
     const double x1389 = w[269];
@@ -40805,7 +40812,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice22(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 23 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice23(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice23(double *restrict w)
 {
     const double x58 = w[65];
     const double x1445 = w[289];
@@ -40909,7 +40916,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice23(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 24 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice24(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice24(double *restrict w)
 {
     const double x61 = w[66];
     const double x369 = w[186];
@@ -41020,7 +41027,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice24(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 25 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice25(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice25(double *restrict w)
 {
     const double x56 = w[63];
     const double x417 = w[100];
@@ -41138,7 +41145,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice25(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 26 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice26(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice26(double *restrict w)
 {
     const double x1607 = w[374];
     const double x1606 = w[373];
@@ -41265,7 +41272,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice26(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 27 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice27(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice27(double *restrict w)
 {
     const double x43 = w[48];
     const double x1667 = w[393];
@@ -41394,7 +41401,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice27(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 28 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice28(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice28(double *restrict w)
 {
     const double x1726 = w[417];
     const double x1728 = w[419];
@@ -41528,7 +41535,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice28(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 29 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice29(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice29(double *restrict w)
 {
     const double x1784 = w[442];
     const double x1787 = w[445];
@@ -41640,7 +41647,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice29(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 30 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice30(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice30(double *restrict w)
 {
     const double x1 = w[6];
     const double x1837 = w[453];
@@ -41758,7 +41765,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice30(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 31 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice31(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice31(double *restrict w)
 {
     const double x2 = w[9];
     const double x4 = w[11];
@@ -41882,7 +41889,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice31(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 32 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice32(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice32(double *restrict w)
 {
     const double x1954 = w[506];
     const double x1953 = w[505];
@@ -42002,7 +42009,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice32(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 33 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice33(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice33(double *restrict w)
 {
     const double x21 = w[26];
     const double x2003 = w[511];
@@ -42117,7 +42124,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice33(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 34 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice34(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice34(double *restrict w)
 {
     const double x2067 = w[541];
     const double x2065 = w[539];
@@ -42234,7 +42241,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice34(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 35 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice35(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice35(double *restrict w)
 {
     const double x18 = w[25];
     const double x2118 = w[558];
@@ -42343,7 +42350,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice35(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 36 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice36(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice36(double *restrict w)
 {
     const double x0 = w[7];
     const double x2167 = w[567];
@@ -42458,7 +42465,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice36(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 37 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice37(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice37(double *restrict w)
 {
     const double x5 = w[10];
     const double x2225 = w[584];
@@ -42576,7 +42583,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice37(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 38 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice38(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice38(double *restrict w)
 {
     const double x0 = w[7];
     const double x2283 = w[607];
@@ -42709,7 +42716,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice38(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 39 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice39(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice39(double *restrict w)
 {
     const double x2333 = w[630];
     const double x2332 = w[629];
@@ -42813,7 +42820,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice39(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 40 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice40(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice40(double *restrict w)
 {
     const double x2268 = w[600];
     const double x2270 = w[601];
@@ -42935,7 +42942,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice40(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 41 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice41(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice41(double *restrict w)
 {
     const double x2204 = w[575];
     const double x2337 = w[632];
@@ -43055,7 +43062,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice41(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 42 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice42(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice42(double *restrict w)
 {
     const double x2136 = w[319];
     const double x2324 = w[623];
@@ -43161,7 +43168,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice42(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 43 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice43(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice43(double *restrict w)
 {
     const double x2073 = w[33];
     const double x2072 = w[32];
@@ -43276,7 +43283,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice43(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 44 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice44(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice44(double *restrict w)
 {
     const double x2 = w[9];
     const double x1989 = w[281];
@@ -43416,7 +43423,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice44(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 45 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice45(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice45(double *restrict w)
 {
     const double x1930 = w[490];
     const double x1929 = w[489];
@@ -43530,7 +43537,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice45(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 46 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice46(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice46(double *restrict w)
 {
     const double x1865 = w[459];
     const double x2324 = w[623];
@@ -43649,7 +43656,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice46(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 47 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice47(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice47(double *restrict w)
 {
     const double x1799 = w[51];
     const double x2324 = w[623];
@@ -43777,7 +43784,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice47(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 48 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice48(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice48(double *restrict w)
 {
     const double x1230 = w[105];
     const double x1714 = w[410];
@@ -43900,7 +43907,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice48(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 49 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice49(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice49(double *restrict w)
 {
     const double x1651 = w[384];
     const double x2337 = w[632];
@@ -44024,7 +44031,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice49(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 50 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice50(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice50(double *restrict w)
 {
     const double x1579 = w[354];
     const double x2324 = w[623];
@@ -44130,7 +44137,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice50(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 51 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice51(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice51(double *restrict w)
 {
     const double x1516 = w[296];
     const double x1515 = w[289];
@@ -44245,7 +44252,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice51(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 52 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice52(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice52(double *restrict w)
 {
     const double x2 = w[9];
     const double x1432 = w[276];
@@ -44381,7 +44388,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice52(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 53 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice53(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice53(double *restrict w)
 {
     const double x1375 = w[250];
     const double x1374 = w[249];
@@ -44493,7 +44500,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice53(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 54 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice54(double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice54(double *restrict w)
 {
     const double x1308 = w[211];
     const double x1400 = w[84];
@@ -44608,7 +44615,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice54(double *restrict 
 }
 
 /* test_bench_inertia_inverse, slice 55 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice55(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice55(double *Ainv, double *restrict w)
 {
     const double x1246 = w[155];
     const double x1400 = w[84];
@@ -44858,7 +44865,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice55(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 56 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice56(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice56(double *Ainv, double *restrict w)
 {
     const double x2713 = w[273];
     Ainv[45] = x2713;
@@ -45069,7 +45076,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice56(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 57 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice57(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice57(double *Ainv, double *restrict w)
 {
     const double x2769 = w[343];
     Ainv[76] = x2769;
@@ -45273,7 +45280,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice57(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 58 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice58(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice58(double *Ainv, double *restrict w)
 {
     const double x2821 = w[405];
     Ainv[105] = x2821;
@@ -45460,7 +45467,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice58(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 59 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice59(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice59(double *Ainv, double *restrict w)
 {
     const double x1225 = w[171];
     const double x2547 = w[56];
@@ -45648,7 +45655,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice59(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 60 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice60(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice60(double *Ainv, double *restrict w)
 {
     const double x2907 = w[471];
     Ainv[152] = x2907;
@@ -45822,7 +45829,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice60(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 61 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice61(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice61(double *Ainv, double *restrict w)
 {
     const double x1211 = w[152];
     const double x2511 = w[254];
@@ -45996,7 +46003,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice61(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 62 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice62(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice62(double *Ainv, double *restrict w)
 {
     const double x2980 = w[527];
     const double x2643 = w[243];
@@ -46169,7 +46176,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice62(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 63 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice63(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice63(double *Ainv, double *restrict w)
 {
     const double x3011 = w[550];
     Ainv[209] = x3011;
@@ -46341,7 +46348,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice63(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 64 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice64(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice64(double *Ainv, double *restrict w)
 {
     const double x3043 = w[574];
     Ainv[225] = x3043;
@@ -46516,7 +46523,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice64(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 65 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice65(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice65(double *Ainv, double *restrict w)
 {
     const double x3073 = w[601];
     Ainv[246] = x3073;
@@ -46683,7 +46690,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice65(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 66 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice66(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice66(double *Ainv, double *restrict w)
 {
     const double x3101 = w[609];
     Ainv[260] = x3101;
@@ -46850,7 +46857,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice66(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 67 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice67(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice67(double *Ainv, double *restrict w)
 {
     const double x3129 = w[624];
     Ainv[274] = x3129;
@@ -47021,7 +47028,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice67(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 68 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice68(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice68(double *Ainv, double *restrict w)
 {
     const double x1111 = w[353];
     const double x2359 = w[145];
@@ -47168,7 +47175,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice68(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 69 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice69(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice69(double *Ainv, double *restrict w)
 {
     const double x2454 = w[302];
     const double x2674 = w[158];
@@ -47313,7 +47320,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice69(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 70 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice70(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice70(double *Ainv, double *restrict w)
 {
     const double x3189 = w[275];
     Ainv[322] = x3189;
@@ -47463,7 +47470,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice70(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 71 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice71(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice71(double *Ainv, double *restrict w)
 {
     const double x3203 = w[353];
     const double x2360 = w[146];
@@ -47610,7 +47617,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice71(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 72 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice72(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice72(double *Ainv, double *restrict w)
 {
     const double x3220 = w[129];
     Ainv[356] = x3220;
@@ -47758,7 +47765,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice72(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 73 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice73(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice73(double *Ainv, double *restrict w)
 {
     const double x3235 = w[0];
     Ainv[371] = x3235;
@@ -47911,7 +47918,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice73(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 74 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice74(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice74(double *Ainv, double *restrict w)
 {
     const double x3249 = w[129];
     Ainv[393] = x3249;
@@ -48062,7 +48069,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice74(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 75 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice75(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice75(double *Ainv, double *restrict w)
 {
     const double x3264 = w[10];
     Ainv[407] = x3264;
@@ -48210,7 +48217,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice75(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 76 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice76(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice76(double *Ainv, double *restrict w)
 {
     const double x3279 = w[15];
     Ainv[422] = x3279;
@@ -48358,7 +48365,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice76(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 77 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice77(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice77(double *Ainv, double *restrict w)
 {
     const double x3291 = w[10];
     Ainv[444] = x3291;
@@ -48506,7 +48513,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice77(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 78 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice78(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice78(double *Ainv, double *restrict w)
 {
     const double x3306 = w[11];
     Ainv[459] = x3306;
@@ -48654,7 +48661,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice78(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 79 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice79(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice79(double *Ainv, double *restrict w)
 {
     const double x3321 = w[10];
     Ainv[474] = x3321;
@@ -48805,7 +48812,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice79(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 80 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice80(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice80(double *Ainv, double *restrict w)
 {
     const double x3335 = w[15];
     Ainv[497] = x3335;
@@ -48953,7 +48960,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice80(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 81 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice81(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice81(double *Ainv, double *restrict w)
 {
     const double x3350 = w[0];
     Ainv[512] = x3350;
@@ -49101,7 +49108,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice81(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 82 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice82(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice82(double *Ainv, double *restrict w)
 {
     const double x3365 = w[10];
     Ainv[527] = x3365;
@@ -49248,7 +49255,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice82(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 83 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice83(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice83(double *Ainv, double *restrict w)
 {
     const double x3378 = w[0];
     Ainv[552] = x3378;
@@ -49396,7 +49403,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice83(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 84 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice84(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice84(double *Ainv, double *restrict w)
 {
     const double x3393 = w[10];
     Ainv[567] = x3393;
@@ -49545,7 +49552,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice84(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 85 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice85(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice85(double *Ainv, double *restrict w)
 {
     const double x3406 = w[0];
     Ainv[593] = x3406;
@@ -49693,7 +49700,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice85(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 86 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice86(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice86(double *Ainv, double *restrict w)
 {
     const double x3421 = w[10];
     Ainv[608] = x3421;
@@ -49841,7 +49848,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice86(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 87 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice87(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice87(double *Ainv, double *restrict w)
 {
     const double x3436 = w[0];
     Ainv[623] = x3436;
@@ -49989,7 +49996,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice87(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 88 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice88(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice88(double *Ainv, double *restrict w)
 {
     const double x3454 = w[16];
     Ainv[1213] = x3454;
@@ -50136,7 +50143,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice88(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 89 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice89(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice89(double *Ainv, double *restrict w)
 {
     const double x3469 = w[0];
     Ainv[664] = x3469;
@@ -50293,7 +50300,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice89(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 90 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice90(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice90(double *Ainv, double *restrict w)
 {
     const double x3486 = w[21];
     Ainv[691] = x3486;
@@ -50441,7 +50448,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice90(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 91 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice91(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice91(double *Ainv, double *restrict w)
 {
     const double x3501 = w[0];
     Ainv[706] = x3501;
@@ -50590,7 +50597,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice91(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 92 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice92(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice92(double *Ainv, double *restrict w)
 {
     const double x881 = w[133];
     const double x2061 = w[536];
@@ -50734,7 +50741,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice92(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 93 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice93(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice93(double *Ainv, double *restrict w)
 {
     const double x3529 = w[21];
     Ainv[748] = x3529;
@@ -50882,7 +50889,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice93(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 94 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice94(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice94(double *Ainv, double *restrict w)
 {
     const double x3544 = w[11];
     Ainv[763] = x3544;
@@ -51030,7 +51037,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice94(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 95 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice95(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice95(double *Ainv, double *restrict w)
 {
     const double x3556 = w[16];
     Ainv[792] = x3556;
@@ -51178,7 +51185,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice95(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 96 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice96(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice96(double *Ainv, double *restrict w)
 {
     const double x3571 = w[0];
     Ainv[807] = x3571;
@@ -51329,7 +51336,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice96(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 97 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice97(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice97(double *Ainv, double *restrict w)
 {
     const double x3585 = w[12];
     Ainv[837] = x3585;
@@ -51477,7 +51484,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice97(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 98 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice98(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice98(double *Ainv, double *restrict w)
 {
     const double x3600 = w[0];
     Ainv[852] = x3600;
@@ -51630,7 +51637,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice98(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 99 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice99(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice99(double *Ainv, double *restrict w)
 {
     const double x3613 = w[10];
     Ainv[884] = x3613;
@@ -51778,7 +51785,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice99(double *Ainv, dou
 }
 
 /* test_bench_inertia_inverse, slice 100 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice100(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice100(double *Ainv, double *restrict w)
 {
     const double x3628 = w[0];
     Ainv[899] = x3628;
@@ -51927,7 +51934,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice100(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 101 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice101(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice101(double *Ainv, double *restrict w)
 {
     const double x3641 = w[1];
     Ainv[932] = x3641;
@@ -52075,7 +52082,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice101(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 102 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice102(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice102(double *Ainv, double *restrict w)
 {
     const double x3656 = w[0];
     Ainv[947] = x3656;
@@ -52223,7 +52230,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice102(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 103 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice103(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice103(double *Ainv, double *restrict w)
 {
     const double x777 = w[126];
     const double x2473 = w[121];
@@ -52375,7 +52382,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice103(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 104 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice104(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice104(double *Ainv, double *restrict w)
 {
     const double x3689 = w[12];
     Ainv[995] = x3689;
@@ -52525,7 +52532,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice104(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 105 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice105(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice105(double *Ainv, double *restrict w)
 {
     const double x3703 = w[14];
     Ainv[1030] = x3703;
@@ -52673,7 +52680,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice105(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 106 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice106(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice106(double *Ainv, double *restrict w)
 {
     const double x3720 = w[18];
     Ainv[1043] = x3720;
@@ -52826,7 +52833,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice106(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 107 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice107(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice107(double *Ainv, double *restrict w)
 {
     const double x3734 = w[14];
     Ainv[1079] = x3734;
@@ -52977,7 +52984,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice107(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 108 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice108(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice108(double *Ainv, double *restrict w)
 {
     const double x3749 = w[19];
     Ainv[1093] = x3749;
@@ -53134,7 +53141,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice108(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 109 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice109(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice109(double *Ainv, double *restrict w)
 {
     const double x3762 = w[0];
     Ainv[1130] = x3762;
@@ -53282,7 +53289,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice109(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 110 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice110(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice110(double *Ainv, double *restrict w)
 {
     const double x3777 = w[1];
     Ainv[1145] = x3777;
@@ -53433,7 +53440,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice110(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 111 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice111(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice111(double *Ainv, double *restrict w)
 {
     const double x3791 = w[12];
     Ainv[1182] = x3791;
@@ -53581,7 +53588,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice111(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 112 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice112(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice112(double *Ainv, double *restrict w)
 {
     const double x3806 = w[1];
     Ainv[1197] = x3806;
@@ -53734,7 +53741,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice112(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 113 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice113(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice113(double *Ainv, double *restrict w)
 {
     const double x3819 = w[7];
     Ainv[1236] = x3819;
@@ -53883,7 +53890,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice113(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 114 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice114(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice114(double *Ainv, double *restrict w)
 {
     const double x3832 = w[0];
     Ainv[1276] = x3832;
@@ -54031,7 +54038,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice114(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 115 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice115(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice115(double *Ainv, double *restrict w)
 {
     const double x3847 = w[1];
     Ainv[1291] = x3847;
@@ -54185,7 +54192,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice115(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 116 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice116(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice116(double *Ainv, double *restrict w)
 {
     const double x3865 = w[12];
     Ainv[1707] = x3865;
@@ -54334,7 +54341,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice116(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 117 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice117(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice117(double *Ainv, double *restrict w)
 {
     const double x3879 = w[13];
     Ainv[1373] = x3879;
@@ -54482,7 +54489,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice117(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 118 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice118(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice118(double *Ainv, double *restrict w)
 {
     const double x3896 = w[17];
     Ainv[1386] = x3896;
@@ -54635,7 +54642,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice118(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 119 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice119(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice119(double *Ainv, double *restrict w)
 {
     const double x3910 = w[18];
     Ainv[1428] = x3910;
@@ -54790,7 +54797,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice119(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 120 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice120(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice120(double *Ainv, double *restrict w)
 {
     const double x3923 = w[1];
     Ainv[1472] = x3923;
@@ -54933,7 +54940,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice120(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 121 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice121(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice121(double *Ainv, double *restrict w)
 {
     const double x3937 = w[0];
     Ainv[1486] = x3937;
@@ -55084,7 +55091,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice121(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 122 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice122(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice122(double *Ainv, double *restrict w)
 {
     const double x3951 = w[3];
     Ainv[1530] = x3951;
@@ -55237,7 +55244,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice122(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 123 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice123(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice123(double *Ainv, double *restrict w)
 {
     const double x3964 = w[0];
     Ainv[1576] = x3964;
@@ -55386,7 +55393,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice123(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 124 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice124(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice124(double *Ainv, double *restrict w)
 {
     const double x3977 = w[1];
     Ainv[1623] = x3977;
@@ -55545,7 +55552,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice124(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 125 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice125(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice125(double *Ainv, double *restrict w)
 {
     const double x3995 = w[10];
     Ainv[1671] = x3995;
@@ -55702,7 +55709,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice125(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 126 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice126(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice126(double *Ainv, double *restrict w)
 {
     const double x4012 = w[15];
     Ainv[1719] = x4012;
@@ -55853,7 +55860,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice126(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 127 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice127(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice127(double *Ainv, double *restrict w)
 {
     const double x4027 = w[18];
     Ainv[1768] = x4027;
@@ -55989,7 +55996,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice127(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 128 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice128(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice128(double *Ainv, double *restrict w)
 {
     const double x4039 = w[0];
     Ainv[1818] = x4039;
@@ -56122,7 +56129,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice128(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 129 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice129(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice129(double *Ainv, double *restrict w)
 {
     const double x4053 = w[11];
     Ainv[1869] = x4053;
@@ -56250,7 +56257,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice129(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 130 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice130(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice130(double *Ainv, double *restrict w)
 {
     const double x2620 = w[271];
     const double x2708 = w[251];
@@ -56373,7 +56380,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice130(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 131 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice131(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice131(double *Ainv, double *restrict w)
 {
     const double x246 = w[180];
     const double x2634 = w[181];
@@ -56486,7 +56493,7 @@ static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice131(double *Ainv, do
 }
 
 /* test_bench_inertia_inverse, slice 132 of 133 */
-static AGGSYM_NOINLINE void test_bench_inertia_inverse_slice132(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void test_bench_inertia_inverse_slice132(double *Ainv, double *restrict w)
 {
     const double x2643 = w[243];
     const double x2712 = w[272];
@@ -56718,7 +56725,7 @@ void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv)
 }
 
 /* test_bench_transvective_factors, slice 0 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice0(const double *q, double *targs, double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice0(const double *q, double *targs, double *diag, double *restrict w)
 {
     const double q_3 = q[3];
     const double q_4 = q[4];
@@ -56988,7 +56995,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice0(const double 
 }
 
 /* test_bench_transvective_factors, slice 1 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice1(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice1(double *diag, double *restrict w)
 {
     const double x47 = w[52];
     const double x108 = x47*x47;
@@ -57195,7 +57202,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice1(double *diag,
 }
 
 /* test_bench_transvective_factors, slice 2 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice2(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice2(double *diag, double *restrict w)
 {
     const double x188 = w[171];
     const double x192 = x188 + x188;
@@ -57323,7 +57330,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice2(double *diag,
 }
 
 /* test_bench_transvective_factors, slice 3 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice3(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice3(double *diag, double *restrict w)
 {
     const double x240 = w[179];
     const double x244 = w[181];
@@ -57443,7 +57450,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice3(double *diag,
 }
 
 /* test_bench_transvective_factors, slice 4 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice4(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice4(double *diag, double *restrict w)
 {
     const double x309 = w[171];
     const double x308 = w[170];
@@ -57567,7 +57574,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice4(double *diag,
 }
 
 /* test_bench_transvective_factors, slice 5 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice5(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice5(double *diag, double *restrict w)
 {
     const double x95 = w[101];
     const double x383 = w[191];
@@ -57693,7 +57700,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice5(double *diag,
 }
 
 /* test_bench_transvective_factors, slice 6 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice6(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice6(double *diag, double *restrict w)
 {
     const double x56 = w[63];
     const double x430 = w[205];
@@ -57829,7 +57836,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice6(double *diag,
 }
 
 /* test_bench_transvective_factors, slice 7 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice7(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice7(double *diag, double *restrict w)
 {
     const double x519 = w[243];
     const double x526 = 0.011 + x519;
@@ -57960,7 +57967,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice7(double *diag,
 }
 
 /* test_bench_transvective_factors, slice 8 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice8(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice8(double *diag, double *restrict w)
 {
     const double x590 = w[226];
     const double x594 = w[250];
@@ -58076,7 +58083,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice8(double *diag,
 }
 
 /* test_bench_transvective_factors, slice 9 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice9(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice9(double *diag, double *restrict w)
 {
     const double x656 = w[257];
     const double x655 = w[256];
@@ -58207,7 +58214,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice9(double *diag,
 }
 
 /* test_bench_transvective_factors, slice 10 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice10(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice10(double *diag, double *restrict w)
 {
     const double x712 = w[223];
     const double x720 = w[249];
@@ -58335,7 +58342,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice10(double *diag
 }
 
 /* test_bench_transvective_factors, slice 11 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice11(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice11(double *diag, double *restrict w)
 {
     const double x771 = w[267];
     const double x793 = w[283];
@@ -58474,7 +58481,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice11(double *diag
 }
 
 /* test_bench_transvective_factors, slice 12 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice12(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice12(double *diag, double *restrict w)
 {
     const double x851 = w[298];
     const double x855 = w[301];
@@ -58599,7 +58606,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice12(double *diag
 }
 
 /* test_bench_transvective_factors, slice 13 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice13(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice13(double *diag, double *restrict w)
 {
     const double x929 = w[281];
     const double x930 = 0.5*x929;
@@ -58712,7 +58719,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice13(double *diag
 }
 
 /* test_bench_transvective_factors, slice 14 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice14(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice14(double *diag, double *restrict w)
 {
     const double x136 = w[142];
     const double x988 = w[307];
@@ -58842,7 +58849,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice14(double *diag
 }
 
 /* test_bench_transvective_factors, slice 15 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice15(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice15(double *diag, double *restrict w)
 {
     const double x1038 = w[310];
     const double x1055 = w[319];
@@ -58969,7 +58976,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice15(double *diag
 }
 
 /* test_bench_transvective_factors, slice 16 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice16(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice16(double *diag, double *restrict w)
 {
     const double x8 = w[15];
     const double x1121 = w[331];
@@ -59100,7 +59107,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice16(double *diag
 }
 
 /* test_bench_transvective_factors, slice 17 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice17(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice17(double *diag, double *restrict w)
 {
     const double x89 = w[95];
     const double x299 = w[91];
@@ -59260,7 +59267,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice17(double *diag
 }
 
 /* test_bench_transvective_factors, slice 18 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice18(double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice18(double *diag, double *restrict w)
 {
     const double x326 = w[93];
     const double x498 = w[236];
@@ -59394,7 +59401,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice18(double *diag
 }
 
 /* test_bench_transvective_factors, slice 19 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice19(double *targs, double *diag, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice19(double *targs, double *diag, double *restrict w)
 {
     const double x4 = w[11];
     const double x1201 = w[332];
@@ -59512,7 +59519,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice19(double *targ
 }
 
 /* test_bench_transvective_factors, slice 20 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice20(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice20(double *targs, double *restrict w)
 {
     const double x1281 = w[116];
     const double x1277 = w[101];
@@ -59609,7 +59616,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice20(double *targ
 }
 
 /* test_bench_transvective_factors, slice 21 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice21(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice21(double *targs, double *restrict w)
 {
     const double x69 = w[74];
     const double x1317 = w[90];
@@ -59701,7 +59708,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice21(double *targ
 }
 
 /* test_bench_transvective_factors, slice 22 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice22(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice22(double *targs, double *restrict w)
 {
     const double x69 = w[74];
     const double x221 = w[85];
@@ -59785,7 +59792,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice22(double *targ
 }
 
 /* test_bench_transvective_factors, slice 23 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice23(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice23(double *targs, double *restrict w)
 {
     const double x2 = w[9];
     const double x1387 = w[5];
@@ -59883,7 +59890,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice23(double *targ
 }
 
 /* test_bench_transvective_factors, slice 24 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice24(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice24(double *targs, double *restrict w)
 {
     const double x55 = w[60];
     const double x1433 = w[75];
@@ -59976,7 +59983,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice24(double *targ
 }
 
 /* test_bench_transvective_factors, slice 25 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice25(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice25(double *targs, double *restrict w)
 {
     const double x57 = w[62];
     const double x1465 = w[5];
@@ -60064,7 +60071,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice25(double *targ
 }
 
 /* test_bench_transvective_factors, slice 26 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice26(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice26(double *targs, double *restrict w)
 {
     const double x1508 = w[69];
     const double x1503 = w[66];
@@ -60157,7 +60164,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice26(double *targ
 }
 
 /* test_bench_transvective_factors, slice 27 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice27(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice27(double *targs, double *restrict w)
 {
     const double x5 = w[10];
     const double x1541 = w[62];
@@ -60254,7 +60261,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice27(double *targ
 }
 
 /* test_bench_transvective_factors, slice 28 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice28(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice28(double *targs, double *restrict w)
 {
     const double x1584 = w[66];
     const double x1586 = w[68];
@@ -60348,7 +60355,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice28(double *targ
 }
 
 /* test_bench_transvective_factors, slice 29 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice29(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice29(double *targs, double *restrict w)
 {
     const double x43 = w[48];
     const double x1623 = w[5];
@@ -60446,7 +60453,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice29(double *targ
 }
 
 /* test_bench_transvective_factors, slice 30 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice30(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice30(double *targs, double *restrict w)
 {
     const double x35 = w[40];
     const double x1658 = w[54];
@@ -60536,7 +60543,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice30(double *targ
 }
 
 /* test_bench_transvective_factors, slice 31 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice31(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice31(double *targs, double *restrict w)
 {
     const double x2 = w[9];
     const double x4 = w[11];
@@ -60628,7 +60635,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice31(double *targ
 }
 
 /* test_bench_transvective_factors, slice 32 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice32(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice32(double *targs, double *restrict w)
 {
     const double x5 = w[10];
     const double x1732 = w[46];
@@ -60712,7 +60719,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice32(double *targ
 }
 
 /* test_bench_transvective_factors, slice 33 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice33(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice33(double *targs, double *restrict w)
 {
     const double x1 = w[6];
     const double x1771 = w[3];
@@ -60802,7 +60809,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice33(double *targ
 }
 
 /* test_bench_transvective_factors, slice 34 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice34(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice34(double *targs, double *restrict w)
 {
     const double x24 = w[31];
     const double x1808 = w[5];
@@ -60889,7 +60896,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice34(double *targ
 }
 
 /* test_bench_transvective_factors, slice 35 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice35(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice35(double *targs, double *restrict w)
 {
     const double x2 = w[9];
     const double x1845 = w[3];
@@ -60980,7 +60987,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice35(double *targ
 }
 
 /* test_bench_transvective_factors, slice 36 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice36(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice36(double *targs, double *restrict w)
 {
     const double x2 = w[9];
     const double x1883 = w[1];
@@ -61080,7 +61087,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice36(double *targ
 }
 
 /* test_bench_transvective_factors, slice 37 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice37(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice37(double *targs, double *restrict w)
 {
     const double x8 = w[15];
     const double x1917 = w[4];
@@ -61171,7 +61178,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice37(double *targ
 }
 
 /* test_bench_transvective_factors, slice 38 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice38(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice38(double *targs, double *restrict w)
 {
     const double x12 = w[19];
     const double x1960 = w[1];
@@ -61251,7 +61258,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice38(double *targ
 }
 
 /* test_bench_transvective_factors, slice 39 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice39(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice39(double *targs, double *restrict w)
 {
     const double x11 = w[16];
     const double x1078 = w[145];
@@ -61339,7 +61346,7 @@ static AGGSYM_NOINLINE void test_bench_transvective_factors_slice39(double *targ
 }
 
 /* test_bench_transvective_factors, slice 40 of 41 */
-static AGGSYM_NOINLINE void test_bench_transvective_factors_slice40(double *targs, double *restrict w)
+static AGGSYM_SLICE void test_bench_transvective_factors_slice40(double *targs, double *restrict w)
 {
     const double x2 = w[9];
     const double x2036 = w[4];

@@ -127,13 +127,20 @@ static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, 
  * called in turn by the public function: one huge function takes the compiler minutes (its register allocation),
  * and small ones also run faster.  A value that a later slice uses passes through w, a local array of the public
  * function.  The slices are never inlined: GCC and Clang would inline a static function called once back into
- * its caller. */
-#if defined(__GNUC__)
-#define AGGSYM_NOINLINE __attribute__((noinline))
+ * its caller.  With GCC on x86 at -O1 and above they are also compiled for size (optimize("Os")): straight-line
+ * code this long runs at the speed the processor fetches and decodes it, and GCC 12's -O2 code of the slices is
+ * larger and slower (Talos' forward dynamics 29 % slower, benchmarks/slicing_runtime.py).  The results are the
+ * same, bit for bit: no option that changes rounding differs between the levels.  Define AGGSYM_SLICES_AS_COMPILED
+ * to compile them with the command line's options alone. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && defined(__OPTIMIZE__) \
+    && (defined(__x86_64__) || defined(__i386__)) && !defined(AGGSYM_SLICES_AS_COMPILED)
+#define AGGSYM_SLICE __attribute__((noinline, optimize("Os")))
+#elif defined(__GNUC__)
+#define AGGSYM_SLICE __attribute__((noinline))
 #elif defined(_MSC_VER)
-#define AGGSYM_NOINLINE __declspec(noinline)
+#define AGGSYM_SLICE __declspec(noinline)
 #else
-#define AGGSYM_NOINLINE
+#define AGGSYM_SLICE
 #endif
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -1769,7 +1776,7 @@ void walking_machine_bias(const double *q, const double *qd, const double *p, do
 }
 
 /* walking_machine_coriolis, slice 0 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice0(const double *q, const double *qd, double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice0(const double *q, const double *qd, double *C, double *restrict w)
 {
     const double q_0 = q[0];
     w[0] = q_0;
@@ -2022,7 +2029,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice0(const double *q, con
 }
 
 /* walking_machine_coriolis, slice 1 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice1(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice1(double *C, double *restrict w)
 {
     C[392] = 0;
     C[393] = 0;
@@ -2255,7 +2262,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice1(double *C, double *r
 }
 
 /* walking_machine_coriolis, slice 2 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice2(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice2(double *restrict w)
 {
     const double x10 = w[53];
     const double x58 = 0.4*x10;
@@ -2410,7 +2417,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice2(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 3 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice3(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice3(double *restrict w)
 {
     const double x15 = w[58];
     const double x28 = w[70];
@@ -2562,7 +2569,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice3(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 4 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice4(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice4(double *restrict w)
 {
     const double x9 = w[52];
     const double x40 = w[82];
@@ -2710,7 +2717,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice4(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 5 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice5(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice5(double *restrict w)
 {
     const double x14 = w[57];
     const double x15 = w[58];
@@ -2828,7 +2835,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice5(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 6 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice6(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice6(double *restrict w)
 {
     const double x14 = w[57];
     const double x270 = w[233];
@@ -2956,7 +2963,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice6(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 7 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice7(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice7(double *restrict w)
 {
     const double x278 = w[24];
     const double x273 = w[236];
@@ -3088,7 +3095,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice7(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 8 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice8(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice8(double *restrict w)
 {
     const double x272 = w[235];
     const double qd_12 = w[36];
@@ -3228,7 +3235,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice8(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 9 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice9(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice9(double *restrict w)
 {
     const double x418 = w[367];
     const double x419 = w[368];
@@ -3364,7 +3371,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice9(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 10 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice10(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice10(double *restrict w)
 {
     const double x171 = w[180];
     const double x458 = w[403];
@@ -3511,7 +3518,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice10(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 11 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice11(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice11(double *restrict w)
 {
     const double x196 = w[191];
     const double x222 = w[217];
@@ -3615,7 +3622,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice11(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 12 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice12(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice12(double *restrict w)
 {
     const double x531 = w[466];
     const double x561 = w[477];
@@ -3763,7 +3770,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice12(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 13 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice13(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice13(double *restrict w)
 {
     const double x627 = w[518];
     const double x622 = w[514];
@@ -3935,7 +3942,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice13(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 14 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice14(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice14(double *restrict w)
 {
     const double x599 = w[495];
     const double x515 = w[457];
@@ -4090,7 +4097,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice14(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 15 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice15(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice15(double *restrict w)
 {
     const double x661 = w[524];
     const double x501 = w[443];
@@ -4263,7 +4270,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice15(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 16 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice16(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice16(double *restrict w)
 {
     const double x797 = w[594];
     const double x792 = w[590];
@@ -4422,7 +4429,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice16(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 17 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice17(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice17(double *restrict w)
 {
     const double x184 = w[77];
     const double x849 = w[598];
@@ -4585,7 +4592,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice17(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 18 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice18(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice18(double *restrict w)
 {
     const double x846 = w[553];
     const double x474 = w[416];
@@ -4728,7 +4735,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice18(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 19 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice19(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice19(double *restrict w)
 {
     const double x460 = w[405];
     const double x958 = w[634];
@@ -4926,7 +4933,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice19(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 20 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice20(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice20(double *restrict w)
 {
     const double x166 = w[175];
     const double x1029 = x166*x166;
@@ -5055,7 +5062,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice20(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 21 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice21(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice21(double *restrict w)
 {
     const double x1054 = w[632];
     const double x1046 = w[605];
@@ -5200,7 +5207,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice21(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 22 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice22(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice22(double *restrict w)
 {
     const double x1071 = w[669];
     const double x432 = w[377];
@@ -5370,7 +5377,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice22(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 23 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice23(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice23(double *restrict w)
 {
     const double x1185 = w[716];
     const double x1180 = w[712];
@@ -5542,7 +5549,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice23(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 24 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice24(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice24(double *restrict w)
 {
     const double x1164 = w[699];
     const double x416 = w[365];
@@ -5670,7 +5677,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice24(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 25 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice25(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice25(double *restrict w)
 {
     const double x406 = w[355];
     const double x1269 = w[701];
@@ -5785,7 +5792,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice25(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 26 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice26(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice26(double *restrict w)
 {
     const double x388 = w[337];
     const double x1350 = 1.2*x388;
@@ -5969,7 +5976,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice26(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 27 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice27(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice27(double *restrict w)
 {
     const double x123 = w[63];
     const double x1403 = w[766];
@@ -6141,7 +6148,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice27(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 28 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice28(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice28(double *restrict w)
 {
     const double x1390 = w[753];
     const double x1434 = w[709];
@@ -6283,7 +6290,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice28(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 29 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice29(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice29(double *restrict w)
 {
     const double x362 = w[314];
     const double x1524 = 0.8*x362;
@@ -6425,7 +6432,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice29(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 30 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice30(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice30(double *restrict w)
 {
     const double x100 = w[120];
     const double x1563 = w[743];
@@ -6594,7 +6601,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice30(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 31 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice31(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice31(double *restrict w)
 {
     const double x1556 = w[711];
     const double x344 = w[296];
@@ -6757,7 +6764,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice31(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 32 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice32(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice32(double *restrict w)
 {
     const double x1619 = w[833];
     const double x1673 = w[821];
@@ -6910,7 +6917,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice32(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 33 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice33(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice33(double *restrict w)
 {
     const double x1723 = w[882];
     const double x1732 = w[885];
@@ -7067,7 +7074,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice33(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 34 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice34(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice34(double *restrict w)
 {
     const double x73 = w[18];
     const double x1798 = w[822];
@@ -7238,7 +7245,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice34(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 35 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice35(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice35(double *restrict w)
 {
     const double x1768 = w[106];
     const double x1830 = w[273];
@@ -7396,7 +7403,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice35(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 36 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice36(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice36(double *restrict w)
 {
     const double x1848 = w[910];
     const double x291 = w[246];
@@ -7571,7 +7578,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice36(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 37 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice37(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice37(double *restrict w)
 {
     const double x1978 = w[962];
     const double x12 = w[55];
@@ -7787,7 +7794,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice37(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 38 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice38(double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice38(double *restrict w)
 {
     const double x754 = w[199];
     const double x989 = w[417];
@@ -8005,7 +8012,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice38(double *restrict w)
 }
 
 /* walking_machine_coriolis, slice 39 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice39(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice39(double *C, double *restrict w)
 {
     const double x225 = w[220];
     const double x2016 = w[935];
@@ -8083,7 +8090,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice39(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 40 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice40(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice40(double *C, double *restrict w)
 {
     const double x225 = w[220];
     const double x2060 = w[0];
@@ -8175,7 +8182,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice40(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 41 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice41(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice41(double *C, double *restrict w)
 {
     const double x233 = w[10];
     const double x2026 = w[58];
@@ -8272,7 +8279,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice41(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 42 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice42(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice42(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2039 = w[971];
@@ -8407,7 +8414,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice42(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 43 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice43(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice43(double *C, double *restrict w)
 {
     const double x2084 = w[1];
     const double x2085 = w[2];
@@ -8523,7 +8530,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice43(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 44 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice44(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice44(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2093 = w[242];
@@ -8643,7 +8650,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice44(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 45 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice45(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice45(double *C, double *restrict w)
 {
     const double x2118 = w[1];
     const double x293 = w[248];
@@ -8748,7 +8755,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice45(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 46 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice46(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice46(double *C, double *restrict w)
 {
     const double x275 = w[238];
     const double x2120 = w[12];
@@ -8874,7 +8881,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice46(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 47 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice47(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice47(double *C, double *restrict w)
 {
     const double x2145 = w[1];
     const double x308 = w[263];
@@ -8979,7 +8986,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice47(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 48 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice48(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice48(double *C, double *restrict w)
 {
     const double x275 = w[238];
     const double x2147 = w[19];
@@ -9109,7 +9116,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice48(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 49 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice49(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice49(double *C, double *restrict w)
 {
     const double x2168 = w[1];
     const double x2169 = w[2];
@@ -9225,7 +9232,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice49(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 50 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice50(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice50(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2177 = w[96];
@@ -9345,7 +9352,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice50(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 51 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice51(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice51(double *C, double *restrict w)
 {
     const double x2202 = w[1];
     const double x335 = w[287];
@@ -9450,7 +9457,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice51(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 52 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice52(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice52(double *C, double *restrict w)
 {
     const double x323 = w[278];
     const double x2204 = w[18];
@@ -9576,7 +9583,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice52(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 53 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice53(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice53(double *C, double *restrict w)
 {
     const double x2229 = w[1];
     const double x350 = w[302];
@@ -9681,7 +9688,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice53(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 54 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice54(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice54(double *C, double *restrict w)
 {
     const double x323 = w[278];
     const double x2231 = w[19];
@@ -9811,7 +9818,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice54(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 55 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice55(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice55(double *C, double *restrict w)
 {
     const double x2252 = w[1];
     const double x2253 = w[2];
@@ -9927,7 +9934,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice55(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 56 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice56(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice56(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2261 = w[35];
@@ -10047,7 +10054,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice56(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 57 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice57(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice57(double *C, double *restrict w)
 {
     const double x2286 = w[1];
     const double x377 = w[326];
@@ -10152,7 +10159,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice57(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 58 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice58(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice58(double *C, double *restrict w)
 {
     const double x365 = w[317];
     const double x2288 = w[18];
@@ -10278,7 +10285,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice58(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 59 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice59(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice59(double *C, double *restrict w)
 {
     const double x2313 = w[1];
     const double x392 = w[341];
@@ -10383,7 +10390,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice59(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 60 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice60(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice60(double *C, double *restrict w)
 {
     const double x365 = w[317];
     const double x2315 = w[19];
@@ -10513,7 +10520,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice60(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 61 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice61(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice61(double *C, double *restrict w)
 {
     const double x2336 = w[1];
     const double x2337 = w[2];
@@ -10629,7 +10636,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice61(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 62 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice62(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice62(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2345 = w[32];
@@ -10749,7 +10756,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice62(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 63 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice63(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice63(double *C, double *restrict w)
 {
     const double x2370 = w[1];
     const double x419 = w[368];
@@ -10854,7 +10861,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice63(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 64 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice64(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice64(double *C, double *restrict w)
 {
     const double x407 = w[356];
     const double x2372 = w[18];
@@ -10980,7 +10987,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice64(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 65 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice65(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice65(double *C, double *restrict w)
 {
     const double x2397 = w[1];
     const double x434 = w[379];
@@ -11085,7 +11092,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice65(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 66 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice66(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice66(double *C, double *restrict w)
 {
     const double x407 = w[356];
     const double x2399 = w[19];
@@ -11215,7 +11222,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice66(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 67 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice67(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice67(double *C, double *restrict w)
 {
     const double x2420 = w[1];
     const double x2421 = w[2];
@@ -11331,7 +11338,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice67(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 68 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice68(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice68(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2429 = w[35];
@@ -11451,7 +11458,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice68(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 69 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice69(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice69(double *C, double *restrict w)
 {
     const double x2454 = w[1];
     const double x461 = w[406];
@@ -11556,7 +11563,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice69(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 70 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice70(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice70(double *C, double *restrict w)
 {
     const double x449 = w[394];
     const double x2456 = w[5];
@@ -11682,7 +11689,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice70(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 71 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice71(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice71(double *C, double *restrict w)
 {
     const double x2481 = w[1];
     const double x476 = w[418];
@@ -11787,7 +11794,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice71(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 72 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice72(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice72(double *C, double *restrict w)
 {
     const double x449 = w[394];
     const double x2483 = w[19];
@@ -11917,7 +11924,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice72(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 73 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice73(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice73(double *C, double *restrict w)
 {
     const double x2504 = w[1];
     const double x2505 = w[2];
@@ -12033,7 +12040,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice73(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 74 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice74(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice74(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2513 = w[30];
@@ -12153,7 +12160,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice74(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 75 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice75(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice75(double *C, double *restrict w)
 {
     const double x2538 = w[1];
     const double x503 = w[445];
@@ -12258,7 +12265,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice75(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 76 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice76(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice76(double *C, double *restrict w)
 {
     const double x491 = w[433];
     const double x2540 = w[16];
@@ -12384,7 +12391,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice76(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 77 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice77(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice77(double *C, double *restrict w)
 {
     const double x2565 = w[1];
     const double x518 = w[460];
@@ -12489,7 +12496,7 @@ static AGGSYM_NOINLINE void walking_machine_coriolis_slice77(double *C, double *
 }
 
 /* walking_machine_coriolis, slice 78 of 79 */
-static AGGSYM_NOINLINE void walking_machine_coriolis_slice78(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_coriolis_slice78(double *C, double *restrict w)
 {
     const double x491 = w[433];
     const double x2567 = w[19];
@@ -16619,7 +16626,7 @@ void walking_machine_forward_dynamics(const double *q, const double *qd, const d
 }
 
 /* walking_machine_inertia_inverse, slice 0 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice0(const double *q, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice0(const double *q, double *restrict w)
 {
     const double q_3 = q[3];
     const double q_4 = q[4];
@@ -16834,7 +16841,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice0(const double 
 }
 
 /* walking_machine_inertia_inverse, slice 1 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice1(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice1(double *restrict w)
 {
     const double x19 = w[13];
     const double x107 = x19*x19;
@@ -16962,7 +16969,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice1(double *restr
 }
 
 /* walking_machine_inertia_inverse, slice 2 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice2(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice2(double *restrict w)
 {
     const double x168 = w[130];
     const double x161 = w[124];
@@ -17088,7 +17095,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice2(double *restr
 }
 
 /* walking_machine_inertia_inverse, slice 3 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice3(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice3(double *restrict w)
 {
     const double x73 = w[68];
     const double x239 = 0.17357933579335796*x73;
@@ -17205,7 +17212,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice3(double *restr
 }
 
 /* walking_machine_inertia_inverse, slice 4 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice4(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice4(double *restrict w)
 {
     const double x32 = w[28];
     const double x303 = 0.24 + 0.11200000000000002*x32;
@@ -17321,7 +17328,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice4(double *restr
 }
 
 /* walking_machine_inertia_inverse, slice 5 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice5(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice5(double *restrict w)
 {
     const double x26 = w[22];
     const double x367 = 0.24 + 0.11200000000000002*x26;
@@ -17444,7 +17451,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice5(double *restr
 }
 
 /* walking_machine_inertia_inverse, slice 6 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice6(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice6(double *restrict w)
 {
     const double x424 = w[211];
     const double x431 = 1/(0.037 + 0.09*x424);
@@ -17577,7 +17584,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice6(double *restr
 }
 
 /* walking_machine_inertia_inverse, slice 7 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice7(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice7(double *restrict w)
 {
     const double x176 = w[48];
     const double x235 = w[156];
@@ -17711,7 +17718,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice7(double *restr
 }
 
 /* walking_machine_inertia_inverse, slice 8 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice8(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice8(double *restrict w)
 {
     const double x363 = w[190];
     const double x175 = w[47];
@@ -17846,7 +17853,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice8(double *restr
 }
 
 /* walking_machine_inertia_inverse, slice 9 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice9(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice9(double *restrict w)
 {
     const double x5 = w[1];
     const double x547 = w[166];
@@ -17992,7 +17999,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice9(double *restr
 }
 
 /* walking_machine_inertia_inverse, slice 10 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice10(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice10(double *restrict w)
 {
     const double x12 = w[9];
     const double x608 = w[205];
@@ -18134,7 +18141,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice10(double *rest
 }
 
 /* walking_machine_inertia_inverse, slice 11 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice11(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice11(double *restrict w)
 {
     const double x29 = w[23];
     const double x671 = w[251];
@@ -18284,7 +18291,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice11(double *rest
 }
 
 /* walking_machine_inertia_inverse, slice 12 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice12(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice12(double *restrict w)
 {
     const double x3 = w[0];
     const double x732 = w[283];
@@ -18436,7 +18443,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice12(double *rest
 }
 
 /* walking_machine_inertia_inverse, slice 13 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice13(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice13(double *restrict w)
 {
     const double x7 = w[5];
     const double x796 = w[322];
@@ -18579,7 +18586,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice13(double *rest
 }
 
 /* walking_machine_inertia_inverse, slice 14 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice14(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice14(double *Ainv, double *restrict w)
 {
     const double x161 = w[124];
     const double x225 = w[147];
@@ -18667,7 +18674,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice14(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 15 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice15(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice15(double *restrict w)
 {
     const double x829 = w[330];
     const double x845 = w[1];
@@ -18780,7 +18787,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice15(double *rest
 }
 
 /* walking_machine_inertia_inverse, slice 16 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice16(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice16(double *restrict w)
 {
     const double x762 = w[295];
     const double x759 = w[293];
@@ -18902,7 +18909,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice16(double *rest
 }
 
 /* walking_machine_inertia_inverse, slice 17 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice17(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice17(double *restrict w)
 {
     const double x701 = w[260];
     const double x845 = w[1];
@@ -19027,7 +19034,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice17(double *rest
 }
 
 /* walking_machine_inertia_inverse, slice 18 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice18(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice18(double *restrict w)
 {
     const double x635 = w[167];
     const double x638 = w[223];
@@ -19150,7 +19157,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice18(double *rest
 }
 
 /* walking_machine_inertia_inverse, slice 19 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice19(double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice19(double *restrict w)
 {
     const double x584 = w[172];
     const double x578 = w[153];
@@ -19278,7 +19285,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice19(double *rest
 }
 
 /* walking_machine_inertia_inverse, slice 20 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice20(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice20(double *Ainv, double *restrict w)
 {
     const double x524 = w[128];
     const double x845 = w[1];
@@ -19496,7 +19503,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice20(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 21 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice21(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice21(double *Ainv, double *restrict w)
 {
     const double x1040 = w[168];
     Ainv[35] = x1040;
@@ -19689,7 +19696,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice21(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 22 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice22(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice22(double *Ainv, double *restrict w)
 {
     const double x1089 = w[198];
     const double x941 = w[193];
@@ -19873,7 +19880,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice22(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 23 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice23(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice23(double *Ainv, double *restrict w)
 {
     const double x1128 = w[221];
     Ainv[86] = x1128;
@@ -20046,7 +20053,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice23(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 24 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice24(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice24(double *Ainv, double *restrict w)
 {
     const double x1160 = w[233];
     Ainv[268] = x1160;
@@ -20215,7 +20222,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice24(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 25 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice25(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice25(double *Ainv, double *restrict w)
 {
     const double x1189 = w[241];
     const double x896 = w[139];
@@ -20377,7 +20384,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice25(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 26 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice26(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice26(double *Ainv, double *restrict w)
 {
     const double x1216 = w[244];
     Ainv[141] = x1216;
@@ -20531,7 +20538,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice26(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 27 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice27(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice27(double *Ainv, double *restrict w)
 {
     const double x1233 = w[249];
     Ainv[161] = x1233;
@@ -20681,7 +20688,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice27(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 28 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice28(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice28(double *Ainv, double *restrict w)
 {
     const double x1247 = w[89];
     Ainv[182] = x1247;
@@ -20829,7 +20836,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice28(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 29 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice29(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice29(double *Ainv, double *restrict w)
 {
     const double x1260 = w[86];
     Ainv[296] = x1260;
@@ -20978,7 +20985,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice29(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 30 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice30(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice30(double *Ainv, double *restrict w)
 {
     const double x1275 = w[88];
     Ainv[227] = x1275;
@@ -21128,7 +21135,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice30(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 31 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice31(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice31(double *Ainv, double *restrict w)
 {
     const double x1289 = w[13];
     Ainv[251] = x1289;
@@ -21270,7 +21277,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice31(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 32 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice32(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice32(double *Ainv, double *restrict w)
 {
     const double x1302 = w[3];
     Ainv[299] = x1302;
@@ -21407,7 +21414,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice32(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 33 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice33(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice33(double *Ainv, double *restrict w)
 {
     const double x1317 = w[10];
     Ainv[302] = x1317;
@@ -21539,7 +21546,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice33(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 34 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice34(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice34(double *Ainv, double *restrict w)
 {
     const double x1331 = w[11];
     Ainv[329] = x1331;
@@ -21663,7 +21670,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice34(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 35 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice35(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice35(double *Ainv, double *restrict w)
 {
     const double x1344 = w[4];
     Ainv[518] = x1344;
@@ -21789,7 +21796,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice35(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 36 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice36(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice36(double *Ainv, double *restrict w)
 {
     const double x1359 = w[6];
     Ainv[402] = x1359;
@@ -21902,7 +21909,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice36(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 37 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice37(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice37(double *Ainv, double *restrict w)
 {
     const double x1372 = w[4];
     Ainv[451] = x1372;
@@ -22009,7 +22016,7 @@ static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice37(double *Ainv
 }
 
 /* walking_machine_inertia_inverse, slice 38 of 39 */
-static AGGSYM_NOINLINE void walking_machine_inertia_inverse_slice38(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_inertia_inverse_slice38(double *Ainv, double *restrict w)
 {
     const double x138 = w[111];
     const double x530 = w[134];

@@ -133,13 +133,20 @@ static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, 
  * called in turn by the public function: one huge function takes the compiler minutes (its register allocation),
  * and small ones also run faster.  A value that a later slice uses passes through w, a local array of the public
  * function.  The slices are never inlined: GCC and Clang would inline a static function called once back into
- * its caller. */
-#if defined(__GNUC__)
-#define AGGSYM_NOINLINE __attribute__((noinline))
+ * its caller.  With GCC on x86 at -O1 and above they are also compiled for size (optimize("Os")): straight-line
+ * code this long runs at the speed the processor fetches and decodes it, and GCC 12's -O2 code of the slices is
+ * larger and slower (Talos' forward dynamics 29 % slower, benchmarks/slicing_runtime.py).  The results are the
+ * same, bit for bit: no option that changes rounding differs between the levels.  Define AGGSYM_SLICES_AS_COMPILED
+ * to compile them with the command line's options alone. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && defined(__OPTIMIZE__) \
+    && (defined(__x86_64__) || defined(__i386__)) && !defined(AGGSYM_SLICES_AS_COMPILED)
+#define AGGSYM_SLICE __attribute__((noinline, optimize("Os")))
+#elif defined(__GNUC__)
+#define AGGSYM_SLICE __attribute__((noinline))
 #elif defined(_MSC_VER)
-#define AGGSYM_NOINLINE __declspec(noinline)
+#define AGGSYM_SLICE __declspec(noinline)
 #else
-#define AGGSYM_NOINLINE
+#define AGGSYM_SLICE
 #endif
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
@@ -1775,7 +1782,7 @@ void walking_machine_on_ground_bias(const double *q, const double *qd, const dou
 }
 
 /* walking_machine_on_ground_coriolis, slice 0 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice0(const double *q, const double *qd, double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice0(const double *q, const double *qd, double *C, double *restrict w)
 {
     const double q_0 = q[0];
     w[0] = q_0;
@@ -2028,7 +2035,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice0(const doub
 }
 
 /* walking_machine_on_ground_coriolis, slice 1 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice1(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice1(double *C, double *restrict w)
 {
     C[392] = 0;
     C[393] = 0;
@@ -2261,7 +2268,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice1(double *C,
 }
 
 /* walking_machine_on_ground_coriolis, slice 2 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice2(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice2(double *restrict w)
 {
     const double x10 = w[53];
     const double x58 = 0.4*x10;
@@ -2416,7 +2423,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice2(double *re
 }
 
 /* walking_machine_on_ground_coriolis, slice 3 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice3(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice3(double *restrict w)
 {
     const double x15 = w[58];
     const double x28 = w[70];
@@ -2568,7 +2575,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice3(double *re
 }
 
 /* walking_machine_on_ground_coriolis, slice 4 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice4(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice4(double *restrict w)
 {
     const double x9 = w[52];
     const double x40 = w[82];
@@ -2716,7 +2723,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice4(double *re
 }
 
 /* walking_machine_on_ground_coriolis, slice 5 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice5(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice5(double *restrict w)
 {
     const double x14 = w[57];
     const double x15 = w[58];
@@ -2834,7 +2841,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice5(double *re
 }
 
 /* walking_machine_on_ground_coriolis, slice 6 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice6(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice6(double *restrict w)
 {
     const double x14 = w[57];
     const double x270 = w[233];
@@ -2962,7 +2969,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice6(double *re
 }
 
 /* walking_machine_on_ground_coriolis, slice 7 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice7(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice7(double *restrict w)
 {
     const double x278 = w[24];
     const double x273 = w[236];
@@ -3094,7 +3101,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice7(double *re
 }
 
 /* walking_machine_on_ground_coriolis, slice 8 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice8(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice8(double *restrict w)
 {
     const double x272 = w[235];
     const double qd_12 = w[36];
@@ -3234,7 +3241,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice8(double *re
 }
 
 /* walking_machine_on_ground_coriolis, slice 9 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice9(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice9(double *restrict w)
 {
     const double x418 = w[367];
     const double x419 = w[368];
@@ -3370,7 +3377,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice9(double *re
 }
 
 /* walking_machine_on_ground_coriolis, slice 10 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice10(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice10(double *restrict w)
 {
     const double x171 = w[180];
     const double x458 = w[403];
@@ -3517,7 +3524,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice10(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 11 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice11(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice11(double *restrict w)
 {
     const double x196 = w[191];
     const double x222 = w[217];
@@ -3621,7 +3628,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice11(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 12 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice12(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice12(double *restrict w)
 {
     const double x531 = w[466];
     const double x561 = w[477];
@@ -3769,7 +3776,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice12(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 13 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice13(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice13(double *restrict w)
 {
     const double x627 = w[518];
     const double x622 = w[514];
@@ -3941,7 +3948,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice13(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 14 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice14(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice14(double *restrict w)
 {
     const double x599 = w[495];
     const double x515 = w[457];
@@ -4096,7 +4103,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice14(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 15 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice15(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice15(double *restrict w)
 {
     const double x661 = w[524];
     const double x501 = w[443];
@@ -4269,7 +4276,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice15(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 16 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice16(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice16(double *restrict w)
 {
     const double x797 = w[594];
     const double x792 = w[590];
@@ -4428,7 +4435,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice16(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 17 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice17(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice17(double *restrict w)
 {
     const double x184 = w[77];
     const double x849 = w[598];
@@ -4591,7 +4598,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice17(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 18 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice18(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice18(double *restrict w)
 {
     const double x846 = w[553];
     const double x474 = w[416];
@@ -4734,7 +4741,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice18(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 19 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice19(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice19(double *restrict w)
 {
     const double x460 = w[405];
     const double x958 = w[634];
@@ -4932,7 +4939,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice19(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 20 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice20(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice20(double *restrict w)
 {
     const double x166 = w[175];
     const double x1029 = x166*x166;
@@ -5061,7 +5068,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice20(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 21 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice21(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice21(double *restrict w)
 {
     const double x1054 = w[632];
     const double x1046 = w[605];
@@ -5206,7 +5213,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice21(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 22 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice22(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice22(double *restrict w)
 {
     const double x1071 = w[669];
     const double x432 = w[377];
@@ -5376,7 +5383,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice22(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 23 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice23(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice23(double *restrict w)
 {
     const double x1185 = w[716];
     const double x1180 = w[712];
@@ -5548,7 +5555,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice23(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 24 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice24(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice24(double *restrict w)
 {
     const double x1164 = w[699];
     const double x416 = w[365];
@@ -5676,7 +5683,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice24(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 25 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice25(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice25(double *restrict w)
 {
     const double x406 = w[355];
     const double x1269 = w[701];
@@ -5791,7 +5798,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice25(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 26 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice26(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice26(double *restrict w)
 {
     const double x388 = w[337];
     const double x1350 = 1.2*x388;
@@ -5975,7 +5982,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice26(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 27 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice27(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice27(double *restrict w)
 {
     const double x123 = w[63];
     const double x1403 = w[766];
@@ -6147,7 +6154,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice27(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 28 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice28(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice28(double *restrict w)
 {
     const double x1390 = w[753];
     const double x1434 = w[709];
@@ -6289,7 +6296,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice28(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 29 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice29(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice29(double *restrict w)
 {
     const double x362 = w[314];
     const double x1524 = 0.8*x362;
@@ -6431,7 +6438,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice29(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 30 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice30(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice30(double *restrict w)
 {
     const double x100 = w[120];
     const double x1563 = w[743];
@@ -6600,7 +6607,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice30(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 31 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice31(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice31(double *restrict w)
 {
     const double x1556 = w[711];
     const double x344 = w[296];
@@ -6763,7 +6770,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice31(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 32 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice32(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice32(double *restrict w)
 {
     const double x1619 = w[833];
     const double x1673 = w[821];
@@ -6916,7 +6923,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice32(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 33 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice33(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice33(double *restrict w)
 {
     const double x1723 = w[882];
     const double x1732 = w[885];
@@ -7073,7 +7080,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice33(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 34 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice34(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice34(double *restrict w)
 {
     const double x73 = w[18];
     const double x1798 = w[822];
@@ -7244,7 +7251,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice34(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 35 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice35(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice35(double *restrict w)
 {
     const double x1768 = w[106];
     const double x1830 = w[273];
@@ -7402,7 +7409,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice35(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 36 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice36(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice36(double *restrict w)
 {
     const double x1848 = w[910];
     const double x291 = w[246];
@@ -7577,7 +7584,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice36(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 37 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice37(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice37(double *restrict w)
 {
     const double x1978 = w[962];
     const double x12 = w[55];
@@ -7793,7 +7800,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice37(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 38 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice38(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice38(double *restrict w)
 {
     const double x754 = w[199];
     const double x989 = w[417];
@@ -8011,7 +8018,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice38(double *r
 }
 
 /* walking_machine_on_ground_coriolis, slice 39 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice39(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice39(double *C, double *restrict w)
 {
     const double x225 = w[220];
     const double x2016 = w[935];
@@ -8089,7 +8096,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice39(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 40 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice40(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice40(double *C, double *restrict w)
 {
     const double x225 = w[220];
     const double x2060 = w[0];
@@ -8181,7 +8188,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice40(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 41 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice41(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice41(double *C, double *restrict w)
 {
     const double x233 = w[10];
     const double x2026 = w[58];
@@ -8278,7 +8285,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice41(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 42 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice42(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice42(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2039 = w[971];
@@ -8413,7 +8420,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice42(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 43 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice43(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice43(double *C, double *restrict w)
 {
     const double x2084 = w[1];
     const double x2085 = w[2];
@@ -8529,7 +8536,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice43(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 44 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice44(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice44(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2093 = w[242];
@@ -8649,7 +8656,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice44(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 45 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice45(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice45(double *C, double *restrict w)
 {
     const double x2118 = w[1];
     const double x293 = w[248];
@@ -8754,7 +8761,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice45(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 46 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice46(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice46(double *C, double *restrict w)
 {
     const double x275 = w[238];
     const double x2120 = w[12];
@@ -8880,7 +8887,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice46(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 47 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice47(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice47(double *C, double *restrict w)
 {
     const double x2145 = w[1];
     const double x308 = w[263];
@@ -8985,7 +8992,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice47(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 48 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice48(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice48(double *C, double *restrict w)
 {
     const double x275 = w[238];
     const double x2147 = w[19];
@@ -9115,7 +9122,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice48(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 49 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice49(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice49(double *C, double *restrict w)
 {
     const double x2168 = w[1];
     const double x2169 = w[2];
@@ -9231,7 +9238,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice49(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 50 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice50(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice50(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2177 = w[96];
@@ -9351,7 +9358,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice50(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 51 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice51(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice51(double *C, double *restrict w)
 {
     const double x2202 = w[1];
     const double x335 = w[287];
@@ -9456,7 +9463,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice51(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 52 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice52(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice52(double *C, double *restrict w)
 {
     const double x323 = w[278];
     const double x2204 = w[18];
@@ -9582,7 +9589,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice52(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 53 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice53(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice53(double *C, double *restrict w)
 {
     const double x2229 = w[1];
     const double x350 = w[302];
@@ -9687,7 +9694,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice53(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 54 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice54(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice54(double *C, double *restrict w)
 {
     const double x323 = w[278];
     const double x2231 = w[19];
@@ -9817,7 +9824,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice54(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 55 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice55(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice55(double *C, double *restrict w)
 {
     const double x2252 = w[1];
     const double x2253 = w[2];
@@ -9933,7 +9940,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice55(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 56 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice56(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice56(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2261 = w[35];
@@ -10053,7 +10060,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice56(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 57 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice57(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice57(double *C, double *restrict w)
 {
     const double x2286 = w[1];
     const double x377 = w[326];
@@ -10158,7 +10165,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice57(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 58 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice58(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice58(double *C, double *restrict w)
 {
     const double x365 = w[317];
     const double x2288 = w[18];
@@ -10284,7 +10291,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice58(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 59 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice59(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice59(double *C, double *restrict w)
 {
     const double x2313 = w[1];
     const double x392 = w[341];
@@ -10389,7 +10396,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice59(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 60 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice60(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice60(double *C, double *restrict w)
 {
     const double x365 = w[317];
     const double x2315 = w[19];
@@ -10519,7 +10526,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice60(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 61 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice61(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice61(double *C, double *restrict w)
 {
     const double x2336 = w[1];
     const double x2337 = w[2];
@@ -10635,7 +10642,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice61(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 62 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice62(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice62(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2345 = w[32];
@@ -10755,7 +10762,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice62(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 63 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice63(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice63(double *C, double *restrict w)
 {
     const double x2370 = w[1];
     const double x419 = w[368];
@@ -10860,7 +10867,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice63(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 64 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice64(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice64(double *C, double *restrict w)
 {
     const double x407 = w[356];
     const double x2372 = w[18];
@@ -10986,7 +10993,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice64(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 65 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice65(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice65(double *C, double *restrict w)
 {
     const double x2397 = w[1];
     const double x434 = w[379];
@@ -11091,7 +11098,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice65(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 66 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice66(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice66(double *C, double *restrict w)
 {
     const double x407 = w[356];
     const double x2399 = w[19];
@@ -11221,7 +11228,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice66(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 67 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice67(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice67(double *C, double *restrict w)
 {
     const double x2420 = w[1];
     const double x2421 = w[2];
@@ -11337,7 +11344,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice67(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 68 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice68(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice68(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2429 = w[35];
@@ -11457,7 +11464,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice68(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 69 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice69(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice69(double *C, double *restrict w)
 {
     const double x2454 = w[1];
     const double x461 = w[406];
@@ -11562,7 +11569,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice69(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 70 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice70(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice70(double *C, double *restrict w)
 {
     const double x449 = w[394];
     const double x2456 = w[5];
@@ -11688,7 +11695,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice70(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 71 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice71(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice71(double *C, double *restrict w)
 {
     const double x2481 = w[1];
     const double x476 = w[418];
@@ -11793,7 +11800,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice71(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 72 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice72(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice72(double *C, double *restrict w)
 {
     const double x449 = w[394];
     const double x2483 = w[19];
@@ -11923,7 +11930,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice72(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 73 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice73(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice73(double *C, double *restrict w)
 {
     const double x2504 = w[1];
     const double x2505 = w[2];
@@ -12039,7 +12046,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice73(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 74 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice74(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice74(double *C, double *restrict w)
 {
     const double x237 = w[84];
     const double x2513 = w[30];
@@ -12159,7 +12166,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice74(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 75 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice75(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice75(double *C, double *restrict w)
 {
     const double x2538 = w[1];
     const double x503 = w[445];
@@ -12264,7 +12271,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice75(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 76 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice76(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice76(double *C, double *restrict w)
 {
     const double x491 = w[433];
     const double x2540 = w[16];
@@ -12390,7 +12397,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice76(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 77 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice77(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice77(double *C, double *restrict w)
 {
     const double x2565 = w[1];
     const double x518 = w[460];
@@ -12495,7 +12502,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice77(double *C
 }
 
 /* walking_machine_on_ground_coriolis, slice 78 of 79 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_coriolis_slice78(double *C, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_coriolis_slice78(double *C, double *restrict w)
 {
     const double x491 = w[433];
     const double x2567 = w[19];
@@ -16625,7 +16632,7 @@ void walking_machine_on_ground_forward_dynamics(const double *q, const double *q
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 0 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice0(const double *q, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice0(const double *q, double *restrict w)
 {
     const double q_3 = q[3];
     const double q_4 = q[4];
@@ -16840,7 +16847,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice0(con
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 1 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice1(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice1(double *restrict w)
 {
     const double x19 = w[13];
     const double x107 = x19*x19;
@@ -16968,7 +16975,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice1(dou
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 2 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice2(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice2(double *restrict w)
 {
     const double x168 = w[130];
     const double x161 = w[124];
@@ -17094,7 +17101,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice2(dou
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 3 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice3(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice3(double *restrict w)
 {
     const double x73 = w[68];
     const double x239 = 0.17357933579335796*x73;
@@ -17211,7 +17218,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice3(dou
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 4 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice4(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice4(double *restrict w)
 {
     const double x32 = w[28];
     const double x303 = 0.24 + 0.11200000000000002*x32;
@@ -17327,7 +17334,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice4(dou
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 5 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice5(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice5(double *restrict w)
 {
     const double x26 = w[22];
     const double x367 = 0.24 + 0.11200000000000002*x26;
@@ -17450,7 +17457,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice5(dou
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 6 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice6(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice6(double *restrict w)
 {
     const double x424 = w[211];
     const double x431 = 1/(0.037 + 0.09*x424);
@@ -17583,7 +17590,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice6(dou
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 7 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice7(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice7(double *restrict w)
 {
     const double x176 = w[48];
     const double x235 = w[156];
@@ -17717,7 +17724,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice7(dou
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 8 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice8(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice8(double *restrict w)
 {
     const double x363 = w[190];
     const double x175 = w[47];
@@ -17852,7 +17859,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice8(dou
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 9 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice9(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice9(double *restrict w)
 {
     const double x5 = w[1];
     const double x547 = w[166];
@@ -17998,7 +18005,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice9(dou
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 10 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice10(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice10(double *restrict w)
 {
     const double x12 = w[9];
     const double x608 = w[205];
@@ -18140,7 +18147,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice10(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 11 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice11(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice11(double *restrict w)
 {
     const double x29 = w[23];
     const double x671 = w[251];
@@ -18290,7 +18297,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice11(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 12 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice12(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice12(double *restrict w)
 {
     const double x3 = w[0];
     const double x732 = w[283];
@@ -18442,7 +18449,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice12(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 13 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice13(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice13(double *restrict w)
 {
     const double x7 = w[5];
     const double x796 = w[322];
@@ -18585,7 +18592,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice13(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 14 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice14(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice14(double *Ainv, double *restrict w)
 {
     const double x161 = w[124];
     const double x225 = w[147];
@@ -18673,7 +18680,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice14(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 15 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice15(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice15(double *restrict w)
 {
     const double x829 = w[330];
     const double x845 = w[1];
@@ -18786,7 +18793,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice15(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 16 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice16(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice16(double *restrict w)
 {
     const double x762 = w[295];
     const double x759 = w[293];
@@ -18908,7 +18915,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice16(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 17 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice17(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice17(double *restrict w)
 {
     const double x701 = w[260];
     const double x845 = w[1];
@@ -19033,7 +19040,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice17(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 18 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice18(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice18(double *restrict w)
 {
     const double x635 = w[167];
     const double x638 = w[223];
@@ -19156,7 +19163,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice18(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 19 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice19(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice19(double *restrict w)
 {
     const double x584 = w[172];
     const double x578 = w[153];
@@ -19284,7 +19291,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice19(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 20 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice20(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice20(double *Ainv, double *restrict w)
 {
     const double x524 = w[128];
     const double x845 = w[1];
@@ -19502,7 +19509,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice20(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 21 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice21(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice21(double *Ainv, double *restrict w)
 {
     const double x1040 = w[168];
     Ainv[35] = x1040;
@@ -19695,7 +19702,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice21(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 22 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice22(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice22(double *Ainv, double *restrict w)
 {
     const double x1089 = w[198];
     const double x941 = w[193];
@@ -19879,7 +19886,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice22(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 23 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice23(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice23(double *Ainv, double *restrict w)
 {
     const double x1128 = w[221];
     Ainv[86] = x1128;
@@ -20052,7 +20059,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice23(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 24 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice24(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice24(double *Ainv, double *restrict w)
 {
     const double x1160 = w[233];
     Ainv[268] = x1160;
@@ -20221,7 +20228,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice24(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 25 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice25(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice25(double *Ainv, double *restrict w)
 {
     const double x1189 = w[241];
     const double x896 = w[139];
@@ -20383,7 +20390,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice25(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 26 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice26(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice26(double *Ainv, double *restrict w)
 {
     const double x1216 = w[244];
     Ainv[141] = x1216;
@@ -20537,7 +20544,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice26(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 27 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice27(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice27(double *Ainv, double *restrict w)
 {
     const double x1233 = w[249];
     Ainv[161] = x1233;
@@ -20687,7 +20694,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice27(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 28 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice28(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice28(double *Ainv, double *restrict w)
 {
     const double x1247 = w[89];
     Ainv[182] = x1247;
@@ -20835,7 +20842,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice28(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 29 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice29(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice29(double *Ainv, double *restrict w)
 {
     const double x1260 = w[86];
     Ainv[296] = x1260;
@@ -20984,7 +20991,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice29(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 30 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice30(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice30(double *Ainv, double *restrict w)
 {
     const double x1275 = w[88];
     Ainv[227] = x1275;
@@ -21134,7 +21141,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice30(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 31 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice31(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice31(double *Ainv, double *restrict w)
 {
     const double x1289 = w[13];
     Ainv[251] = x1289;
@@ -21276,7 +21283,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice31(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 32 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice32(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice32(double *Ainv, double *restrict w)
 {
     const double x1302 = w[3];
     Ainv[299] = x1302;
@@ -21413,7 +21420,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice32(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 33 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice33(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice33(double *Ainv, double *restrict w)
 {
     const double x1317 = w[10];
     Ainv[302] = x1317;
@@ -21545,7 +21552,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice33(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 34 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice34(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice34(double *Ainv, double *restrict w)
 {
     const double x1331 = w[11];
     Ainv[329] = x1331;
@@ -21669,7 +21676,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice34(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 35 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice35(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice35(double *Ainv, double *restrict w)
 {
     const double x1344 = w[4];
     Ainv[518] = x1344;
@@ -21795,7 +21802,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice35(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 36 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice36(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice36(double *Ainv, double *restrict w)
 {
     const double x1359 = w[6];
     Ainv[402] = x1359;
@@ -21908,7 +21915,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice36(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 37 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice37(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice37(double *Ainv, double *restrict w)
 {
     const double x1372 = w[4];
     Ainv[451] = x1372;
@@ -22015,7 +22022,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice37(do
 }
 
 /* walking_machine_on_ground_inertia_inverse, slice 38 of 39 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_inertia_inverse_slice38(double *Ainv, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_inertia_inverse_slice38(double *Ainv, double *restrict w)
 {
     const double x138 = w[111];
     const double x530 = w[134];
@@ -24241,7 +24248,7 @@ void walking_machine_on_ground_constraint_bias(const double *q, const double *qd
 }
 
 /* walking_machine_on_ground_delassus, slice 0 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice0(const double *q, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice0(const double *q, double *restrict w)
 {
     const double q_0 = q[0];
     w[0] = q_0;
@@ -24458,7 +24465,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice0(const doub
 }
 
 /* walking_machine_on_ground_delassus, slice 1 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice1(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice1(double *restrict w)
 {
     const double x102 = w[100];
     const double x105 = 0.021280000000000004*x102;
@@ -24620,7 +24627,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice1(double *re
 }
 
 /* walking_machine_on_ground_delassus, slice 2 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice2(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice2(double *restrict w)
 {
     const double x164 = w[162];
     const double x158 = w[156];
@@ -24786,7 +24793,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice2(double *re
 }
 
 /* walking_machine_on_ground_delassus, slice 3 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice3(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice3(double *restrict w)
 {
     const double x10 = w[10];
     const double x12 = w[12];
@@ -24902,7 +24909,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice3(double *re
 }
 
 /* walking_machine_on_ground_delassus, slice 4 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice4(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice4(double *restrict w)
 {
     const double x277 = w[238];
     const double x288 = 0.0003 - x277;
@@ -25031,7 +25038,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice4(double *re
 }
 
 /* walking_machine_on_ground_delassus, slice 5 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice5(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice5(double *restrict w)
 {
     const double x342 = w[262];
     const double x352 = 0.0003 - x342;
@@ -25159,7 +25166,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice5(double *re
 }
 
 /* walking_machine_on_ground_delassus, slice 6 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice6(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice6(double *restrict w)
 {
     const double x416 = w[289];
     const double x415 = w[288];
@@ -25288,7 +25295,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice6(double *re
 }
 
 /* walking_machine_on_ground_delassus, slice 7 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice7(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice7(double *restrict w)
 {
     const double x480 = w[309];
     const double x479 = w[308];
@@ -25418,7 +25425,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice7(double *re
 }
 
 /* walking_machine_on_ground_delassus, slice 8 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice8(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice8(double *restrict w)
 {
     const double x534 = w[321];
     const double x521 = w[313];
@@ -25539,7 +25546,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice8(double *re
 }
 
 /* walking_machine_on_ground_delassus, slice 9 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice9(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice9(double *restrict w)
 {
     const double x603 = w[342];
     const double x597 = w[336];
@@ -25671,7 +25678,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice9(double *re
 }
 
 /* walking_machine_on_ground_delassus, slice 10 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice10(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice10(double *restrict w)
 {
     const double x475 = w[304];
     const double x286 = w[244];
@@ -25788,7 +25795,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice10(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 11 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice11(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice11(double *restrict w)
 {
     const double x287 = w[245];
     const double x351 = w[269];
@@ -25909,7 +25916,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice11(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 12 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice12(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice12(double *restrict w)
 {
     const double x173 = w[171];
     const double x33 = w[30];
@@ -26111,7 +26118,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice12(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 13 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice13(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice13(double *restrict w)
 {
     const double x156 = w[154];
     const double x739 = w[246];
@@ -26314,7 +26321,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice13(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 14 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice14(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice14(double *restrict w)
 {
     const double x230 = w[116];
     const double x701 = w[91];
@@ -26434,7 +26441,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice14(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 15 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice15(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice15(double *restrict w)
 {
     const double x844 = w[71];
     const double x661 = w[52];
@@ -26562,7 +26569,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice15(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 16 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice16(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice16(double *restrict w)
 {
     const double x499 = w[237];
     const double x888 = w[188];
@@ -26689,7 +26696,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice16(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 17 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice17(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice17(double *restrict w)
 {
     const double x9 = w[9];
     const double x714 = w[113];
@@ -26814,7 +26821,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice17(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 18 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice18(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice18(double *restrict w)
 {
     const double x22 = w[21];
     const double x958 = w[185];
@@ -26937,7 +26944,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice18(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 19 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice19(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice19(double *restrict w)
 {
     const double x229 = w[227];
     const double x10 = w[10];
@@ -27061,7 +27068,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice19(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 20 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice20(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice20(double *restrict w)
 {
     const double x1050 = w[187];
     const double x1051 = 0.05*x1050;
@@ -27195,7 +27202,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice20(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 21 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice21(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice21(double *restrict w)
 {
     const double x1084 = w[158];
     const double x1083 = w[156];
@@ -27316,7 +27323,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice21(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 22 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice22(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice22(double *restrict w)
 {
     const double x1121 = w[203];
     const double x619 = w[108];
@@ -27436,7 +27443,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice22(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 23 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice23(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice23(double *restrict w)
 {
     const double x771 = w[151];
     const double x1170 = 5.166051660516605*x771;
@@ -27562,7 +27569,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice23(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 24 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice24(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice24(double *restrict w)
 {
     const double x1208 = w[124];
     const double x332 = w[257];
@@ -27687,7 +27694,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice24(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 25 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice25(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice25(double *restrict w)
 {
     const double x1244 = w[217];
     const double x618 = w[107];
@@ -27808,7 +27815,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice25(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 26 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice26(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice26(double *restrict w)
 {
     const double x1288 = w[134];
     const double x663 = w[63];
@@ -27932,7 +27939,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice26(double *r
 }
 
 /* walking_machine_on_ground_delassus, slice 27 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice27(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice27(double *G, double *restrict w)
 {
     const double x1329 = w[217];
     const double x1330 = w[218];
@@ -28078,7 +28085,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice27(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 28 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice28(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice28(double *G, double *restrict w)
 {
     const double x1369 = w[209];
     G[2] = x1369;
@@ -28226,7 +28233,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice28(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 29 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice29(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice29(double *G, double *restrict w)
 {
     const double x1384 = w[0];
     G[17] = x1384;
@@ -28377,7 +28384,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice29(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 30 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice30(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice30(double *G, double *restrict w)
 {
     const double x1405 = w[9];
     G[31] = x1405;
@@ -28528,7 +28535,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice30(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 31 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice31(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice31(double *G, double *restrict w)
 {
     const double x1423 = w[15];
     G[46] = x1423;
@@ -28679,7 +28686,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice31(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 32 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice32(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice32(double *G, double *restrict w)
 {
     const double x1443 = w[9];
     G[61] = x1443;
@@ -28836,7 +28843,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice32(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 33 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice33(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice33(double *G, double *restrict w)
 {
     const double x1464 = w[13];
     G[78] = x1464;
@@ -28987,7 +28994,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice33(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 34 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice34(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice34(double *G, double *restrict w)
 {
     const double x1482 = w[9];
     G[96] = x1482;
@@ -29141,7 +29148,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice34(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 35 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice35(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice35(double *G, double *restrict w)
 {
     const double x1503 = w[16];
     G[115] = x1503;
@@ -29286,7 +29293,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice35(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 36 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice36(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice36(double *G, double *restrict w)
 {
     const double x1523 = w[9];
     G[134] = x1523;
@@ -29419,7 +29426,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice36(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 37 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice37(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice37(double *G, double *restrict w)
 {
     const double x1541 = w[13];
     G[155] = x1541;
@@ -29552,7 +29559,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice37(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 38 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice38(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice38(double *G, double *restrict w)
 {
     const double x1561 = w[9];
     G[176] = x1561;
@@ -29681,7 +29688,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice38(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 39 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice39(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice39(double *G, double *restrict w)
 {
     const double x1200 = w[82];
     const double x1581 = w[0];
@@ -29787,7 +29794,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice39(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 40 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice40(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice40(double *G, double *restrict w)
 {
     const double x1606 = w[1];
     G[233] = x1606;
@@ -29901,7 +29908,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice40(double *G
 }
 
 /* walking_machine_on_ground_delassus, slice 41 of 42 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_delassus_slice41(double *G, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_delassus_slice41(double *G, double *restrict w)
 {
     const double x1326 = w[216];
     const double x1629 = w[0];
@@ -30011,7 +30018,7 @@ void walking_machine_on_ground_delassus(const double *q, const double *p, double
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 0 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice0(const double *q, const double *qd, const double *tau, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice0(const double *q, const double *qd, const double *tau, double *restrict w)
 {
     const double q_0 = q[0];
     w[0] = q_0;
@@ -30283,7 +30290,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 1 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice1(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice1(double *restrict w)
 {
     const double x32 = w[82];
     const double x33 = w[81];
@@ -30461,7 +30468,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 2 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice2(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice2(double *restrict w)
 {
     const double x16 = w[58];
     const double x126 = w[167];
@@ -30616,7 +30623,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 3 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice3(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice3(double *restrict w)
 {
     const double x208 = w[236];
     const double x212 = w[240];
@@ -30775,7 +30782,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 4 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice4(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice4(double *restrict w)
 {
     const double x271 = w[295];
     const double x272 = w[296];
@@ -30946,7 +30953,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 5 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice5(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice5(double *restrict w)
 {
     const double x15 = w[66];
     const double x16 = w[58];
@@ -31099,7 +31106,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 6 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice6(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice6(double *restrict w)
 {
     const double q_2 = w[2];
     const double x339 = w[352];
@@ -31250,7 +31257,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 7 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice7(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice7(double *restrict w)
 {
     const double x439 = w[441];
     const double x434 = w[438];
@@ -31403,7 +31410,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 8 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice8(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice8(double *restrict w)
 {
     const double x497 = w[486];
     const double x161 = w[194];
@@ -31584,7 +31591,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 9 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice9(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice9(double *restrict w)
 {
     const double x284 = w[303];
     const double x559 = w[524];
@@ -31724,7 +31731,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 10 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice10(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice10(double *restrict w)
 {
     const double x235 = w[261];
     const double x237 = w[263];
@@ -31870,7 +31877,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 11 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice11(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice11(double *restrict w)
 {
     const double x616 = w[341];
     const double x617 = w[342];
@@ -32024,7 +32031,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 12 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice12(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice12(double *restrict w)
 {
     const double x696 = w[554];
     const double x700 = w[558];
@@ -32162,7 +32169,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 13 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice13(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice13(double *restrict w)
 {
     const double x761 = w[568];
     const double x765 = w[572];
@@ -32300,7 +32307,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 14 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice14(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice14(double *restrict w)
 {
     const double x77 = w[126];
     const double x79 = w[128];
@@ -32437,7 +32444,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 15 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice15(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice15(double *restrict w)
 {
     const double x892 = w[606];
     const double x895 = 0.05*x892;
@@ -32573,7 +32580,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 16 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice16(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice16(double *restrict w)
 {
     const double x956 = w[624];
     const double x959 = 0.05*x956;
@@ -32709,7 +32716,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 17 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice17(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice17(double *restrict w)
 {
     const double x1017 = w[643];
     const double x1020 = w[646];
@@ -32853,7 +32860,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 18 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice18(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice18(double *restrict w)
 {
     const double x1058 = w[622];
     const double x1063 = w[647];
@@ -32988,7 +32995,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 19 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice19(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice19(double *restrict w)
 {
     const double tau_21 = w[48];
     const double x1088 = w[343];
@@ -33125,7 +33132,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 20 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice20(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice20(double *restrict w)
 {
     const double x36 = w[86];
     const double x1118 = w[527];
@@ -33261,7 +33268,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 21 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice21(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice21(double *restrict w)
 {
     const double tau_10 = w[37];
     const double x1152 = w[298];
@@ -33392,7 +33399,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 22 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice22(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice22(double *restrict w)
 {
     const double x14 = w[65];
     const double x136 = w[174];
@@ -33531,7 +33538,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 23 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice23(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice23(double *restrict w)
 {
     const double x1096 = w[250];
     const double x1205 = 46.12546125461254*x1096;
@@ -33666,7 +33673,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 24 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice24(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice24(double *restrict w)
 {
     const double x1229 = w[175];
     const double x1234 = w[180];
@@ -33837,7 +33844,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 25 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice25(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice25(double *restrict w)
 {
     const double x331 = w[266];
     const double x1294 = w[240];
@@ -34006,7 +34013,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 26 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice26(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice26(double *restrict w)
 {
     const double x387 = w[397];
     const double x1360 = w[303];
@@ -34172,7 +34179,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 27 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice27(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice27(double *restrict w)
 {
     const double x482 = w[473];
     const double x1426 = w[386];
@@ -34351,7 +34358,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 28 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice28(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice28(double *restrict w)
 {
     const double x244 = w[269];
     const double x1488 = 0.3*x244;
@@ -34510,7 +34517,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 29 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice29(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice29(double *restrict w)
 {
     const double x38 = w[88];
     const double x1489 = w[52];
@@ -34653,7 +34660,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 30 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice30(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice30(double *restrict w)
 {
     const double x1279 = w[159];
     const double x10 = w[61];
@@ -34775,7 +34782,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 31 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice31(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice31(double *restrict w)
 {
     const double x481 = w[472];
     const double x10 = w[61];
@@ -34914,7 +34921,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 32 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice32(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice32(double *restrict w)
 {
     const double x23 = w[71];
     const double x1639 = w[254];
@@ -35034,7 +35041,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 33 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice33(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice33(double *restrict w)
 {
     const double x1674 = w[283];
     const double x1066 = w[114];
@@ -35163,7 +35170,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 34 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice34(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice34(double *restrict w)
 {
     const double x1723 = w[308];
     const double x1724 = w[309];
@@ -35288,7 +35295,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 35 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice35(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice35(double *restrict w)
 {
     const double x1343 = w[282];
     const double x5 = w[55];
@@ -35409,7 +35416,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 36 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice36(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice36(double *restrict w)
 {
     const double x484 = w[475];
     const double x12 = w[63];
@@ -35535,7 +35542,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 37 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice37(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice37(double *restrict w)
 {
     const double x1856 = w[469];
     const double x834 = w[115];
@@ -35657,7 +35664,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 38 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice38(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice38(double *restrict w)
 {
     const double x1893 = w[488];
     const double x1064 = w[110];
@@ -35772,7 +35779,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 39 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice39(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice39(double *restrict w)
 {
     const double x1424 = w[384];
     const double x1944 = 5.166051660516605*x1424;
@@ -35901,7 +35908,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 40 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice40(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice40(double *restrict w)
 {
     const double x40 = w[90];
     const double x1981 = w[508];
@@ -36023,7 +36030,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 41 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice41(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice41(double *restrict w)
 {
     const double x2029 = w[528];
     const double x1238 = w[186];
@@ -36146,7 +36153,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 42 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice42(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice42(double *restrict w)
 {
     const double x2078 = w[537];
     const double x2079 = 0.05*x2078;
@@ -36302,7 +36309,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 43 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice43(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice43(double *restrict w)
 {
     const double x1224 = w[152];
     const double x1618 = w[226];
@@ -36478,7 +36485,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 44 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice44(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice44(double *restrict w)
 {
     const double x1257 = w[124];
     const double x1816 = w[339];
@@ -36657,7 +36664,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 45 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice45(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice45(double *restrict w)
 {
     const double x1257 = w[124];
     const double x2005 = w[522];
@@ -36815,7 +36822,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 46 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice46(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice46(double *restrict w)
 {
     const double tau_1 = w[28];
     const double x12 = w[63];
@@ -36981,7 +36988,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 47 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice47(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice47(double *restrict w)
 {
     const double x1848 = w[463];
     const double x2102 = w[539];
@@ -37129,7 +37136,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 48 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice48(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice48(double *restrict w)
 {
     const double x2297 = w[246];
     const double x1784 = w[421];
@@ -37266,7 +37273,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 49 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice49(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice49(double *restrict w)
 {
     const double x2315 = w[712];
     const double x1689 = w[254];
@@ -37392,7 +37399,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 50 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice50(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice50(double *restrict w)
 {
     const double x2315 = w[712];
     const double x2037 = w[510];
@@ -37528,7 +37535,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 51 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice51(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice51(double *restrict w)
 {
     const double x2332 = w[733];
     const double x1880 = w[485];
@@ -37668,7 +37675,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 52 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice52(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice52(double *restrict w)
 {
     const double x2348 = w[712];
     const double x1752 = w[329];
@@ -37784,7 +37791,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 53 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice53(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice53(double *restrict w)
 {
     const double x2348 = w[712];
     const double x2005 = w[522];
@@ -37908,7 +37915,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 54 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice54(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice54(double *restrict w)
 {
     const double x2363 = w[744];
     const double x1848 = w[463];
@@ -38034,7 +38041,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 55 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice55(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice55(double *restrict w)
 {
     const double x2363 = w[744];
     const double x2101 = w[538];
@@ -38166,7 +38173,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 56 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice56(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice56(double *restrict w)
 {
     const double x2377 = w[751];
     const double x1943 = w[500];
@@ -38285,7 +38292,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 57 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice57(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice57(double *restrict w)
 {
     const double x2389 = w[604];
     const double x2390 = 1/x2389;
@@ -38409,7 +38416,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 58 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice58(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice58(double *restrict w)
 {
     const double x2390 = w[595];
     const double x2005 = w[522];
@@ -38531,7 +38538,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 59 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice59(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice59(double *restrict w)
 {
     const double x2402 = w[751];
     const double x1880 = w[485];
@@ -38655,7 +38662,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 60 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice60(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice60(double *restrict w)
 {
     const double x2402 = w[751];
     const double x2069 = w[533];
@@ -38796,7 +38803,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 61 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice61(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice61(double *restrict w)
 {
     const double x2413 = w[760];
     const double x1974 = w[505];
@@ -38911,7 +38918,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 62 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice62(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice62(double *restrict w)
 {
     const double x2202 = w[652];
     const double x2111 = w[548];
@@ -39025,7 +39032,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 63 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice63(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice63(double *restrict w)
 {
     const double x2423 = w[628];
     const double x2037 = w[510];
@@ -39153,7 +39160,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 64 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice64(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice64(double *restrict w)
 {
     const double x2432 = w[649];
     const double x1974 = w[505];
@@ -39282,7 +39289,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 65 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice65(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice65(double *restrict w)
 {
     const double x2219 = w[669];
     const double x2111 = w[548];
@@ -39411,7 +39418,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 66 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice66(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice66(double *restrict w)
 {
     const double x2440 = w[648];
     const double x2101 = w[538];
@@ -39540,7 +39547,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 67 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice67(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice67(double *restrict w)
 {
     const double x2447 = w[657];
     const double x2069 = w[533];
@@ -39668,7 +39675,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 68 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice68(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice68(double *restrict w)
 {
     const double x2453 = w[662];
     const double x2069 = w[533];
@@ -39787,7 +39794,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 69 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice69(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice69(double *restrict w)
 {
     const double x2458 = w[667];
     const double x2101 = w[538];
@@ -39892,7 +39899,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 70 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice70(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice70(double *restrict w)
 {
     const double x2277 = w[716];
     const double x2279 = w[718];
@@ -40052,7 +40059,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 71 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice71(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice71(double *restrict w)
 {
     const double x2277 = w[716];
     const double x2284 = w[723];
@@ -40211,7 +40218,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 72 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice72(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice72(double *restrict w)
 {
     const double x2277 = w[716];
     const double x2288 = w[4];
@@ -40390,7 +40397,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 73 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice73(double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice73(double *restrict w)
 {
     const double x2277 = w[716];
     const double x2292 = w[129];
@@ -40551,7 +40558,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 74 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice74(double *lambda, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice74(double *lambda, double *restrict w)
 {
     const double x2277 = w[716];
     const double x2295 = w[221];
@@ -40718,7 +40725,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 75 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice75(double *lambda, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice75(double *lambda, double *restrict w)
 {
     const double x2490 = w[131];
     lambda[7] = x2490;
@@ -40867,7 +40874,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 76 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice76(double *qdd, double *lambda, double *status, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice76(double *qdd, double *lambda, double *status, double *restrict w)
 {
     const double x2497 = w[12];
     lambda[0] = -x2497;
@@ -41033,7 +41040,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 77 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice77(double *qdd, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice77(double *qdd, double *restrict w)
 {
     const double x2525 = w[9];
     qdd[2] = x2525;
@@ -41195,7 +41202,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 78 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice78(double *qdd, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice78(double *qdd, double *restrict w)
 {
     const double x2548 = w[33];
     qdd[6] = x2548;
@@ -41326,7 +41333,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 79 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice79(double *qdd, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice79(double *qdd, double *restrict w)
 {
     const double x1131 = w[170];
     const double x1363 = w[310];
@@ -41467,7 +41474,7 @@ static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynami
 }
 
 /* walking_machine_on_ground_constrained_forward_dynamics, slice 80 of 81 */
-static AGGSYM_NOINLINE void walking_machine_on_ground_constrained_forward_dynamics_slice80(double *qdd, double *restrict w)
+static AGGSYM_SLICE void walking_machine_on_ground_constrained_forward_dynamics_slice80(double *qdd, double *restrict w)
 {
     const double x2606 = w[11];
     qdd[21] = x2606;
