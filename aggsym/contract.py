@@ -77,6 +77,8 @@ class Routine:
     # inertia is shared between bodies: generated from the internal model (aggsym.model.reframe).  Not the Coriolis
     # matrix: of the many C with C qd = b and A' - 2C skew, the one built from the bodies' B (2.17) depends on them
     slice_size: int | None = None  # the C's slices (aggsym.codegen.slicing) where smaller than the default's run faster
+    scalar_stores: bool = False  # a symmetric matrix: its C compiled without GCC's basic-block vectorizer
+    # (AGGSYM_SCALAR_STORES, templates/attributes.c.j2), which packs the neighbouring stores into shuffled vectors
 
     @property
     def written(self) -> tuple:
@@ -345,7 +347,7 @@ def _joint_wrenches(bound, kin, x):
 register(Routine("inertia", ("q", "p"), (Output("A", nq_square),),
                  lambda bound, kin, x: (_flat(inertia_matrix(bound, kin)),),
                  "A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)",
-                 coupled="matrix", frame_free=True))
+                 coupled="matrix", frame_free=True, scalar_stores=True))
 register(Routine("bias", ("q", "qd", "p"), (Output("b", nq_vector),),
                  lambda bound, kin, x: (sweeps.d_vector(bound, kin, x["qd"], gravity=False),),
                  "b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) "
@@ -398,7 +400,8 @@ register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_
                  "evaluated in O(n)", coupled="forward", regular=True, frame_free=True))
 register(Routine("inertia_inverse", ("q", "p"), (Output("Ainv", nq_square),),
                  lambda bound, kin, x: (_flat(transvective.inertia_inverse(bound, kin)),),
-                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)", coupled="inverse", regular=True, frame_free=True))
+                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)", coupled="inverse", regular=True, frame_free=True,
+                 scalar_stores=True))
 register(Routine("transvective_factors", ("q", "p"),
                  (Output("targs", transvection_count), Output("diag", nq_vector)),
                  lambda bound, kin, x: transvective.factor_outputs(bound, kin),

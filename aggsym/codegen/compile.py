@@ -113,7 +113,8 @@ class CLibrary:
                     raise ValueError(f"{role}: {name} has {arr.size} entries, expected {size}")
             keep.append(arr)
             cargs.append(arr.ctypes.data_as(ctypes.POINTER(self.ctype)))
-        outs = [np.zeros(o["shape"], dtype=self.dtype) for o in sig["outputs"]]
+        # NaN-filled: an entry the C leaves unwritten shows (every output entry is written, zeros too)
+        outs = [np.full(o["shape"], np.nan, dtype=self.dtype) for o in sig["outputs"]]
         for o in outs:
             cargs.append(o.ctypes.data_as(ctypes.POINTER(self.ctype)))
         if sig.get("returns", "void") != "void":

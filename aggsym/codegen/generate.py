@@ -245,15 +245,23 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     pending = _pending_pairs(sl.steps, trig)
     hoisted = {}  # temps emitted early for a sincos pair: their NumPy right-hand side, appended at their step
     shapes = [out.shape(model) for out in routine.outputs]
-    for step in sl.steps:
+    zeros = _zero_runs(sl.steps, outputs)
+    memsets = []  # (statement index, output, first entry, entries) of each memset
+    for s, step in enumerate(sl.steps):
         before = ops_so_far()
         if step[0] == "out":
             _, o, k = step
             x = outputs[o][k]
             name = routine.outputs[o].name
+            idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
+            if s in zeros:  # this entry and the next zeros[s] - 1 of its output: 0 (C: one memset; its run's rest
+                if zeros[s]:  # is marked 0)
+                    emit([f"memset({name} + {k}, 0, {zeros[s]} * sizeof *{name});"], arrays=(name,))
+                    memsets.append((len(stmts) - 1, name, k, zeros[s], both(x)[0]))
+                py_body.append(f"{routine.outputs[o].py}[..., {idx}] = 0")
+                continue
             rhs_c, rhs_py = both(x, top=not (isinstance(x, Node) and x.id in names))
             emit([f"{name}[{k}] = {rhs_c};"], arrays=(name,), ops=ops_so_far() - before)
-            idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
             py_body.append(f"{routine.outputs[o].py}[..., {idx}] = {rhs_py}")
             continue
         i = step[1]
@@ -294,18 +302,51 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
              defines=c_names, ops=ops_so_far() - before)
     if status is not None:
         emit([f"return {status.name}[0] != {_number(0.0, scalar)};"], entry="tail")
-    c_body = [line for st in stmts for line in st.lines]
-    # what count_ops reads from "\n".join(c_body), counted while printing (the other statements hold none);
-    # the C printer prints only what is emitted, the sincos pair's discarded sin/cos trees were never printed
+    # what count_ops reads from the C, counted while printing (the other statements hold none); the C printer
+    # prints only what is emitted, the sincos pair's discarded sin/cos trees were never printed
     ops = dict(cp.counts)
-    sliced, size = None, sum(work(st) for st in stmts)
+    sliced, size = None, sum(work(st) for st in stmts) + sum(n - 1 for *_, n, _ in memsets)  # (a store per entry)
     if slicing is not None and size > slicing[0]:
+        # the slices are compiled for size (templates/attributes.c.j2), and GCC's -Os makes a memset of more than
+        # two doubles a rep stos: one store per entry there
+        for at, name, k, n, zero in reversed(memsets):
+            stmts[at:at + 1] = [Statement([f"{name}[{k + j}] = {zero};"], arrays=(name,)) for j in range(n)]
         arrays = {k: f"const {scalar} *{k}" for k in inputs}
         arrays.update({o.name: f"{scalar} *{o.name}" for o in routine.outputs})
         pieces = min(slicing[1], routine.slice_size or slicing[1])
         sliced = slice_routine(c_symbol(model, routine), arrays, stmts, scalar, pieces)
+    c_body = [line for st in stmts for line in st.lines]
     return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine, scalar),
                           python_parameters(model, routine), c_body, py_body, ops, len(sl.temps), size, sliced)
+
+
+# Runs of at least 2 and at most ZERO_RUN consecutive zero entries of one output are written by one memset: GCC
+# stores them as 16-byte vectors (its expansion of a small constant memset), where one store per entry takes an
+# 8-byte immediate each and a long memset becomes rep stos (slow to start)
+ZERO_RUN = 8
+
+
+def _zero_runs(steps, outputs) -> dict:
+    """{index of a step: n} for the steps storing a constant 0 that start a run of n >= 2 consecutive entries of
+    one output, all 0 (at most ZERO_RUN); the run's other steps map to 0.  (The constant outputs' steps come first,
+    in the order of their entries: :func:`aggsym.core.program.straight_line`.)"""
+    runs, start = {}, None
+    for s, step in enumerate(steps):
+        zero = step[0] == "out" and not isinstance(outputs[step[1]][step[2]], Node) \
+            and float(outputs[step[1]][step[2]]) == 0.0
+        if zero and start is not None and runs[start] < ZERO_RUN and steps[start][1] == step[1] \
+                and steps[start][2] + runs[start] == step[2]:
+            runs[start] += 1
+            runs[s] = 0
+            continue
+        if start is not None and runs[start] < 2:
+            del runs[start]
+        start = s if zero else None
+        if zero:
+            runs[s] = 1
+    if start is not None and runs[start] < 2:
+        del runs[start]
+    return runs
 
 
 def _trig_pairs(prog, temps) -> dict:
@@ -447,6 +488,7 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         "sincos2": any("aggsym_sincos2(" in line for r in emitted for line in r.c_body),
         "sign": any("aggsym_sign(" in line for r in emitted for line in r.c_body),
         "sliced": any(r.sliced for r in emitted),
+        "scalar_stores": any(r.routine.scalar_stores for r in emitted),
         "time": model.time_dependent,
         "elastic": any(b.pair.elastic for b in model.bodies),
     }
