@@ -59,6 +59,11 @@ class EmittedRoutine:
     work: int = 0  # the C's size as slicing.work measures it (operations + statements)
     sliced: Sliced | None = None  # the C as several functions (slicing.py), for a routine above the threshold
 
+    @property
+    def zeros(self) -> bool:
+        """Whether its C writes a chunk of zero entries with AGGSYM_ZEROS (templates/attributes.c.j2)."""
+        return any(line.startswith("AGGSYM_ZEROS(") for line in self.c_body)
+
 
 @dataclass
 class Generated:
@@ -245,8 +250,7 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     pending = _pending_pairs(sl.steps, trig)
     hoisted = {}  # temps emitted early for a sincos pair: their NumPy right-hand side, appended at their step
     shapes = [out.shape(model) for out in routine.outputs]
-    zeros = _zero_runs(sl.steps, outputs)
-    memsets = []  # (statement index, output, first entry, entries) of each memset
+    zeros = _zero_chunks(sl.steps, outputs, ZERO_BYTES // SCALAR_BYTES[scalar])
     for s, step in enumerate(sl.steps):
         before = ops_so_far()
         if step[0] == "out":
@@ -254,10 +258,9 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
             x = outputs[o][k]
             name = routine.outputs[o].name
             idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
-            if s in zeros:  # this entry and the next zeros[s] - 1 of its output: 0 (C: one memset; its run's rest
-                if zeros[s]:  # is marked 0)
-                    emit([f"memset({name} + {k}, 0, {zeros[s]} * sizeof *{name});"], arrays=(name,))
-                    memsets.append((len(stmts) - 1, name, k, zeros[s], both(x)[0]))
+            if s in zeros:  # one of a chunk of zero entries: the first writes them all (AGGSYM_ZEROS)
+                if zeros[s]:
+                    emit([f"AGGSYM_ZEROS({name} + {k});"], arrays=(name,))
                 py_body.append(f"{routine.outputs[o].py}[..., {idx}] = 0")
                 continue
             rhs_c, rhs_py = both(x, top=not (isinstance(x, Node) and x.id in names))
@@ -305,12 +308,8 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     # what count_ops reads from the C, counted while printing (the other statements hold none); the C printer
     # prints only what is emitted, the sincos pair's discarded sin/cos trees were never printed
     ops = dict(cp.counts)
-    sliced, size = None, sum(work(st) for st in stmts) + sum(n - 1 for *_, n, _ in memsets)  # (a store per entry)
+    sliced, size = None, sum(work(st) for st in stmts)
     if slicing is not None and size > slicing[0]:
-        # the slices are compiled for size (templates/attributes.c.j2), and GCC's -Os makes a memset of more than
-        # two doubles a rep stos: one store per entry there
-        for at, name, k, n, zero in reversed(memsets):
-            stmts[at:at + 1] = [Statement([f"{name}[{k + j}] = {zero};"], arrays=(name,)) for j in range(n)]
         arrays = {k: f"const {scalar} *{k}" for k in inputs}
         arrays.update({o.name: f"{scalar} *{o.name}" for o in routine.outputs})
         pieces = min(slicing[1], routine.slice_size or slicing[1])
@@ -320,33 +319,31 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
                           python_parameters(model, routine), c_body, py_body, ops, len(sl.temps), size, sliced)
 
 
-# Runs of at least 2 and at most ZERO_RUN consecutive zero entries of one output are written by one memset: GCC
-# stores them as 16-byte vectors (its expansion of a small constant memset), where one store per entry takes an
-# 8-byte immediate each and a long memset becomes rep stos (slow to start)
-ZERO_RUN = 8
+# The bytes AGGSYM_ZEROS writes at once (templates/attributes.c.j2): 2 doubles, 4 floats
+ZERO_BYTES = 16
+SCALAR_BYTES = {"double": 8, "float": 4}
 
 
-def _zero_runs(steps, outputs) -> dict:
-    """{index of a step: n} for the steps storing a constant 0 that start a run of n >= 2 consecutive entries of
-    one output, all 0 (at most ZERO_RUN); the run's other steps map to 0.  (The constant outputs' steps come first,
-    in the order of their entries: :func:`aggsym.core.program.straight_line`.)"""
-    runs, start = {}, None
+def _zero_chunks(steps, outputs, width: int) -> dict:
+    """{index of a step: 1 or 0}: the steps storing a constant 0 that fall in chunks of ``width`` consecutive
+    zero entries of one output (each run of zeros cut into chunks from its start; what is left over is stored
+    entry by entry), 1 for a chunk's first step, 0 for the others.  (The constant outputs' steps come first, in
+    the order of their entries: :func:`aggsym.core.program.straight_line`.)"""
+    chunks, run = {}, []
+
+    def close():
+        for c in range(0, len(run) - width + 1, width):
+            chunks.update((s, int(j == 0)) for j, s in enumerate(run[c:c + width]))
+        run.clear()
     for s, step in enumerate(steps):
-        zero = step[0] == "out" and not isinstance(outputs[step[1]][step[2]], Node) \
-            and float(outputs[step[1]][step[2]]) == 0.0
-        if zero and start is not None and runs[start] < ZERO_RUN and steps[start][1] == step[1] \
-                and steps[start][2] + runs[start] == step[2]:
-            runs[start] += 1
-            runs[s] = 0
-            continue
-        if start is not None and runs[start] < 2:
-            del runs[start]
-        start = s if zero else None
+        x = outputs[step[1]][step[2]] if step[0] == "out" else None
+        zero = step[0] == "out" and not isinstance(x, Node) and float(x) == 0.0
+        if run and not (zero and steps[run[-1]][1] == step[1] and steps[run[-1]][2] + 1 == step[2]):
+            close()
         if zero:
-            runs[s] = 1
-    if start is not None and runs[start] < 2:
-        del runs[start]
-    return runs
+            run.append(s)
+    close()
+    return chunks
 
 
 def _trig_pairs(prog, temps) -> dict:
@@ -489,6 +486,8 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         "sign": any("aggsym_sign(" in line for r in emitted for line in r.c_body),
         "sliced": any(r.sliced for r in emitted),
         "scalar_stores": any(r.routine.scalar_stores for r in emitted),
+        "zeros": any(r.zeros for r in emitted),
+        "zero_width": ZERO_BYTES // SCALAR_BYTES[scalar],
         "time": model.time_dependent,
         "elastic": any(b.pair.elastic for b in model.bodies),
     }

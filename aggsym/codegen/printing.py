@@ -336,8 +336,8 @@ class NumPyPrinter(_Common, _SympyNumPyPrinter):
 
 
 _COMMENT = re.compile(r"/\*.*?\*/", re.S)
-# a memset of an output's zero entries (generate._zero_runs): stores, no operation
-_MEMSET = re.compile(r"\bmemset\([^;]*\);")
+# a chunk of an output's zero entries (generate._zero_chunks): a store, no operation
+_ZEROS = re.compile(r"\bAGGSYM_ZEROS\([^;]*\);")
 # a numeric literal (not the digits of a name): one value token, whatever signs its exponent holds
 _LITERAL = re.compile(r"(?<![A-Za-z_0-9.])(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 # a binary + or -: one that follows a value (a name, a literal, a closing bracket), spaces between
@@ -354,9 +354,9 @@ def count_ops(c_code: str) -> dict:
 
     A ``+`` or ``-`` is an addition when it follows a value (a name, a number, ``)`` or ``]``), as in C's grammar;
     numeric literals are read as one token first, so the sign of an exponent (``2.5e-3``) is not an operation.
-    A memset (of zero entries) holds none.  Regular expressions over the whole text: linear, with no Python work
+    AGGSYM_ZEROS (a chunk of zero entries) holds none.  Regular expressions over the whole text: linear, with no Python work
     per token."""
-    code = _LITERAL.sub("0", _MEMSET.sub(" ", _COMMENT.sub(" ", c_code)))
+    code = _LITERAL.sub("0", _ZEROS.sub(" ", _COMMENT.sub(" ", c_code)))
     calls = sum(_ANGLES.get(m.group(1), 1) for m in _CALL.finditer(code) if m.group(1) not in _KEYWORDS)
     return {"mul": code.count("*"), "add": len(_BINARY.findall(code)), "div": code.count("/"), "call": calls}
 
