@@ -123,12 +123,18 @@ static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, 
 #endif
 #undef AGGSYM_KEEP
 
-/* A symmetric matrix (A, A^-1) stores each value twice, in entries that neighbour other values.  GCC's basic-block
- * vectorizer (on at -O2 since GCC 12) packs such neighbours into 16-byte vector stores, each built by a shuffle once both
- * values exist: slower by 5 to 16 % (UR5, Panda, Solo12, Talos with GCC 12 on x86).  With GCC on x86 these
- * routines are compiled without it, the same results bit for bit; AGGSYM_AS_COMPILED as above. */
+/* AGGSYM_GCC_X86: GCC (not Clang, not Intel's) on x86 when optimizing, where the attributes below were measured
+ * (GCC 12); define AGGSYM_AS_COMPILED to compile every function with the command line's options alone. */
 #if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && defined(__OPTIMIZE__) \
     && (defined(__x86_64__) || defined(__i386__)) && !defined(AGGSYM_AS_COMPILED)
+#define AGGSYM_GCC_X86 1
+#endif
+
+/* A symmetric matrix (A, A^-1) stores each value twice, in entries that neighbour other values.  GCC's
+ * basic-block vectorizer (on at -O2 since GCC 12) packs such neighbours into 16-byte vector stores, each built by
+ * a shuffle once both values exist: A and A^-1 are 3 to 17 % slower with it (UR5, Panda, Solo12, Talos with GCC 12
+ * on x86).  With GCC on x86 these routines are compiled without it, the same results bit for bit. */
+#if defined(AGGSYM_GCC_X86)
 #define AGGSYM_SCALAR_STORES __attribute__((optimize("no-tree-slp-vectorize")))
 #else
 #define AGGSYM_SCALAR_STORES

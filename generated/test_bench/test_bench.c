@@ -123,6 +123,13 @@ static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, 
 #endif
 #undef AGGSYM_KEEP
 
+/* AGGSYM_GCC_X86: GCC (not Clang, not Intel's) on x86 when optimizing, where the attributes below were measured
+ * (GCC 12); define AGGSYM_AS_COMPILED to compile every function with the command line's options alone. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && defined(__OPTIMIZE__) \
+    && (defined(__x86_64__) || defined(__i386__)) && !defined(AGGSYM_AS_COMPILED)
+#define AGGSYM_GCC_X86 1
+#endif
+
 /* A large routine is emitted as static functions, its slices, each holding a contiguous part of its statements, and
  * called in turn by the public function: one huge function takes the compiler minutes (its register allocation),
  * and small ones also run faster.  A value that a later slice uses passes through w, a local array of the public
@@ -130,10 +137,8 @@ static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, 
  * its caller.  With GCC on x86 at -O1 and above they are also compiled for size (optimize("Os")): straight-line
  * code this long runs at the speed the processor fetches and decodes it, and GCC 12's -O2 code of the slices is
  * larger and slower (Talos' forward dynamics 1.6 times slower, benchmarks/slicing_runtime.py).  Without
- * -ffast-math the results are the same, bit for bit (no option that changes rounding differs between the levels).
- * Define AGGSYM_AS_COMPILED to compile every function with the command line's options alone. */
-#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && defined(__OPTIMIZE__) \
-    && (defined(__x86_64__) || defined(__i386__)) && !defined(AGGSYM_AS_COMPILED)
+ * -ffast-math the results are the same, bit for bit (no option that changes rounding differs between the levels). */
+#if defined(AGGSYM_GCC_X86)
 #define AGGSYM_SLICE __attribute__((noinline, optimize("Os")))
 #elif defined(__GNUC__)
 #define AGGSYM_SLICE __attribute__((noinline))
@@ -143,21 +148,20 @@ static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, 
 #define AGGSYM_SLICE
 #endif
 
-/* A symmetric matrix (A, A^-1) stores each value twice, in entries that neighbour other values.  GCC's basic-block
- * vectorizer (on at -O2 since GCC 12) packs such neighbours into 16-byte vector stores, each built by a shuffle once both
- * values exist: slower by 5 to 16 % (UR5, Panda, Solo12, Talos with GCC 12 on x86).  With GCC on x86 these
- * routines are compiled without it, the same results bit for bit; AGGSYM_AS_COMPILED as above. */
-#if defined(__GNUC__) && !defined(__clang__) && !defined(__INTEL_COMPILER) && defined(__OPTIMIZE__) \
-    && (defined(__x86_64__) || defined(__i386__)) && !defined(AGGSYM_AS_COMPILED)
+/* A symmetric matrix (A, A^-1) stores each value twice, in entries that neighbour other values.  GCC's
+ * basic-block vectorizer (on at -O2 since GCC 12) packs such neighbours into 16-byte vector stores, each built by
+ * a shuffle once both values exist: A and A^-1 are 3 to 17 % slower with it (UR5, Panda, Solo12, Talos with GCC 12
+ * on x86).  With GCC on x86 these routines are compiled without it, the same results bit for bit. */
+#if defined(AGGSYM_GCC_X86)
 #define AGGSYM_SCALAR_STORES __attribute__((optimize("no-tree-slp-vectorize")))
 #else
 #define AGGSYM_SCALAR_STORES
 #endif
 
-/* AGGSYM_ZEROS(p): the 2 entries p[0] ... p[1] = 0, a chunk of zero entries of an output (the
- * blocks of A between the branches of a tree, say): one unaligned 16-byte store under GCC and Clang (their vector
- * extension), where an 8-byte immediate store per entry (GCC without its basic-block vectorizer, above) makes
- * Talos' A 7 % slower. */
+/* AGGSYM_ZEROS(p): p[0] = ... = p[1] = 0, a chunk of zero entries of an output (the blocks of A
+ * between the branches of a tree, say): one unaligned 16-byte store under GCC and Clang (their vector extension),
+ * where an 8-byte immediate store per entry (GCC without its basic-block vectorizer, above) makes Talos' A 7 %
+ * slower. */
 #if defined(__GNUC__)
 typedef double aggsym_zeros_t __attribute__((vector_size(16), aligned(sizeof(double)), may_alias));
 #define AGGSYM_ZEROS(p) (*(aggsym_zeros_t *)(p) = (aggsym_zeros_t){0})
