@@ -400,8 +400,8 @@ register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_
                  "evaluated in O(n)", coupled="forward", regular=True, frame_free=True))
 register(Routine("inertia_inverse", ("q", "p"), (Output("Ainv", nq_square),),
                  lambda bound, kin, x: (_flat(transvective.inertia_inverse(bound, kin)),),
-                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)", coupled="inverse", regular=True, frame_free=True,
-                 scalar_stores=True))
+                 "A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)", coupled="inverse", regular=True,
+                 frame_free=True, scalar_stores=True))
 register(Routine("transvective_factors", ("q", "p"),
                  (Output("targs", transvection_count), Output("diag", nq_vector)),
                  lambda bound, kin, x: transvective.factor_outputs(bound, kin),

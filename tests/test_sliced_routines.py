@@ -5,8 +5,8 @@ models' routines are cut into many slices, which compiles in a second:
 
 * the sliced C against the unsliced straight-line program evaluated on floats and against Pinocchio (UR5), against
   the same routines compiled unsliced and the numeric twin (a returned status, a time input, single precision),
-  under -ffast-math, compiled for size or at the command line's level (the same bits), and with an output that
-  aliases an input;
+  under -ffast-math, with and without the attributes for GCC (the same bits), and with an output that aliases an
+  input;
 * the workspace: every load reads the value last stored in its entry (entries are reused);
 * slices only above the threshold, the routines below it printed exactly as unsliced; the default threshold slices
   Talos' C but not its A, b + g, inverse dynamics (which run slower sliced);
@@ -130,10 +130,11 @@ def _gcc_on_x86() -> bool:
     return "gcc version" in version and "clang" not in version.lower() and platform.machine() in ("x86_64", "i686")
 
 
-def test_slices_compiled_for_size_give_the_same_bits(ur5, tmp_path, rng):
-    """GCC on x86 compiles the slices for size (AGGSYM_SLICE: optimize("Os")), which runs faster than its -O2 code of
-    them; defining AGGSYM_AS_COMPILED gives them the command line's -O2.  The code differs (under GCC on
-    x86) and every output is the same, bit for bit."""
+def test_the_gcc_attributes_give_the_same_bits(ur5, tmp_path, rng):
+    """GCC on x86 compiles the slices for size (AGGSYM_SLICE: optimize("Os")) and A and A^-1 without its basic-block
+    vectorizer (AGGSYM_SCALAR_STORES), which run faster than its -O2 code of them; defining AGGSYM_AS_COMPILED gives
+    every function the command line's -O2.  The code differs (under GCC on x86) and every output is the same, bit
+    for bit."""
     model, gen, lib = ur5
     folder = tmp_path / "as_compiled"
     write(gen, folder)

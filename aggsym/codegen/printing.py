@@ -354,8 +354,8 @@ def count_ops(c_code: str) -> dict:
 
     A ``+`` or ``-`` is an addition when it follows a value (a name, a number, ``)`` or ``]``), as in C's grammar;
     numeric literals are read as one token first, so the sign of an exponent (``2.5e-3``) is not an operation.
-    AGGSYM_ZEROS (a chunk of zero entries) holds none.  Regular expressions over the whole text: linear, with no Python work
-    per token."""
+    AGGSYM_ZEROS (a chunk of zero entries) holds none.  Regular expressions over the whole text: linear, with no
+    Python work per token."""
     code = _LITERAL.sub("0", _ZEROS.sub(" ", _COMMENT.sub(" ", c_code)))
     calls = sum(_ANGLES.get(m.group(1), 1) for m in _CALL.finditer(code) if m.group(1) not in _KEYWORDS)
     return {"mul": code.count("*"), "add": len(_BINARY.findall(code)), "div": code.count("/"), "call": calls}
