@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import os
 import sys
 import time
@@ -50,6 +51,10 @@ def _parser() -> argparse.ArgumentParser:
                             "joint rates) (nv = n + 6)"),
         p.add_argument("--mimic", choices=["independent", "couple"], default="independent",
                        help="URDF only: <mimic> joints keep their own coordinate (default) or follow their master")
+        p.add_argument("--snap-angles", metavar="TOL", type=_snap_tolerance, default=0.0,
+                       help="URDF only, an approximation on request (off by default): take the rpy angles of the "
+                            "file's origins within TOL rad of a multiple of pi/2 as that multiple (1.5708 -> pi/2); "
+                            "every angle it moves is listed in the manifest's 'snapped_angles'")
         p.add_argument("--armature", metavar="VALUE", type=_armature, default=0.0,
                        help="add a rotor inertia VALUE (kg m^2, or kg for a prismatic joint) on every coordinate, as "
                             "Pinocchio's armature: A(q) + VALUE E (makes A regular where a joint moves no mass)")
@@ -111,8 +116,11 @@ def _load(args):
     options = {"floating_base": args.floating_base} if args.floating_base else {}
     if args.mimic != "independent":
         options["mimic"] = args.mimic
+    if args.snap_angles:
+        options["snap_angles"] = args.snap_angles
     if (options or args.constraints or args.support) and path.suffix.lower() != ".urdf":
-        raise AggsymError(f"{path}: --floating-base, --mimic, --constraints and --support apply to URDF models only "
+        raise AggsymError(f"{path}: --floating-base, --mimic, --snap-angles, --constraints and --support apply to URDF "
+                          f"models only "
                           f"(a YAML model lists its constraints and support itself)")
     if args.support and not args.floating_base:
         raise AggsymError(f"{path}: --support needs --floating-base (the support is the free root)")
@@ -167,6 +175,17 @@ def _armature(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
     if not (0.0 <= value < float("inf")):
         raise argparse.ArgumentTypeError(f"{text!r}: the armature is a finite number >= 0")
+    return value
+
+
+def _snap_tolerance(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (0.0 < value < math.pi / 4):
+        raise argparse.ArgumentTypeError(f"{text!r}: the tolerance is an angle in radians, above 0 and below pi/4 "
+                                         f"(e.g. 1e-4)")
     return value
 
 

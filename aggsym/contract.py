@@ -1131,6 +1131,8 @@ def manifest(model, routines, ops: dict, omitted=None, scalar: str = "double", l
         out["constraints"] = constraints_entry(model)
     if any(r.role.startswith("frame_") for r in routines):
         out["frames"] = frames_entry(model)
+    if model.meta.get("snapped_angles"):  # an approximation the user asked for (--snap-angles), recorded
+        out["snapped_angles"] = model.meta["snapped_angles"]
     if layout is not None:
         out["split"] = layout
     return out

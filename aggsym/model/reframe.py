@@ -32,9 +32,10 @@ So the internal model is used only for the routines whose outputs depend on the 
 the energies, the derivatives of the dynamics); routines whose outputs are in body or link frames (joint wrenches,
 frames and Jacobians, the regressor, momentum, centre of mass) run on the model as read.
 
-Angles and lengths computed here that are within 1e-12 (relative) of a multiple of pi/2, of 0 or of +-1 are
-round-off of this computation and are taken exactly; the file's own angles are not snapped here (xarm7's 1.5708
-stays what it is).
+Exactness: the tolerances here only choose (which axes count as parallel, which origin a frame takes); every
+constant motion and Mises matrix is then computed from the frames chosen.  The only values replaced are those
+within :data:`ROUND_OFF` (relative) of 0, +-1 or a multiple of pi/2, the round-off of this computation; the file's
+own angles are not snapped here (xarm7's 1.5708 stays what it is).
 """
 from __future__ import annotations
 
@@ -48,9 +49,15 @@ from .inertials import mises_in_frame, moved_mises
 from .tree import Tree
 from .types import Inertial, Model, code_index
 
-EPS = 1e-12
-ROUND_OFF = 1e-14  # an entry of a body's grouped Mises matrix below this times its largest entry is round-off: 0 (the
-# exact arithmetic of SymPy gave 0 there, where products of lengths and masses cancel)
+ROUND_OFF = 1e-14  # a value computed here within this (relative to its scale) of 0, of +-1 or of a multiple of pi/2
+# is the round-off of this computation (a few dozen units in the last place of double precision) and is taken
+# exactly; so is an entry of a body's grouped Mises matrix below this times its largest entry (the exact
+# arithmetic of SymPy gave 0 there, where products of lengths and masses cancel).  Nothing larger is ever rounded:
+# the internal model is the model as read, to round-off.
+PARALLEL = 0.1  # two axes whose angle has a sine below this are taken as parallel when the frames are chosen: the
+# common normal of nearly parallel axes lies far off (at about the distance / sin), where its foot, exact in
+# exact arithmetic, would carry lengths that cancel in the recursion and cost (1/sin)^2 of the digits.  A choice
+# only: the constant motions are computed from the frames chosen, whatever they are.
 MAX_CANDIDATES = 8  # origins tried per body by _origins (the first ones): parallel axes pass every candidate of the
 # parent on as a projection, so without a bound a chain of n parallel axes had n candidates per body and the choice
 # took O(n^3) (a 200-link planar chain: 16 s); the arms of the benchmark have at most 4
@@ -77,18 +84,18 @@ def eligible(model: Model) -> bool:
 
 def _exact_angle(x: float) -> sp.Expr:
     k = round(x / (math.pi / 2))
-    if abs(x - k * math.pi / 2) < EPS:
+    if abs(x - k * math.pi / 2) < ROUND_OFF * max(1, abs(k)):
         return sp.Integer(k) * sp.pi / 2 if k else sp.Integer(0)
     return sp.Float(x)
 
 
 def _length(x: float, scale: float) -> sp.Expr:
-    return sp.Integer(0) if abs(x) < EPS * scale else sp.Float(x)
+    return sp.Integer(0) if abs(x) < ROUND_OFF * scale else sp.Float(x)
 
 
 def _unit(x: float) -> sp.Expr:
     for target in (0, 1, -1):
-        if abs(x - target) < EPS:
+        if abs(x - target) < ROUND_OFF:
             return sp.Integer(target)
     return sp.Float(x)
 
@@ -116,7 +123,7 @@ def _foot(o, z, t, u):
     o itself."""
     w = np.cross(z, u)
     sw = np.linalg.norm(w)
-    if sw > 1e-9:
+    if sw > PARALLEL:
         # o + s z and t + r u closest: (o + s z - t - r u) . z = 0, . u = 0
         d = t - o
         zu = np.dot(z, u)
@@ -126,13 +133,13 @@ def _foot(o, z, t, u):
         P, Q = o + s * z, t + r * u
         n = Q - P
         dist = np.linalg.norm(n)
-        n = n / dist if dist > 1e-9 * (1 + np.linalg.norm(d)) else w / sw
+        n = n / dist if dist > 1e-9 * np.linalg.norm(d) else w / sw
         return P, Q, n
     r = np.dot(o - t, u)
     Q = t + r * u
     n = Q - o
     dist = np.linalg.norm(n)
-    return o, Q, (n / dist if dist > 1e-9 * (1 + np.linalg.norm(t - o)) else None)
+    return o, Q, (n / dist if dist > 1e-9 * np.linalg.norm(t - o) else None)
 
 
 def _line(k, c0, t0, axis):
@@ -175,7 +182,7 @@ def _axes(model, tree, t0, c0, axis, revolute, main, normals) -> list:
 
 
 def _nonzeros(v, scale) -> int:
-    return sum(1 for x in v if abs(x) >= EPS * scale)
+    return sum(1 for x in v if abs(x) >= ROUND_OFF * scale)
 
 
 def _origins(tree, t0, c0, axis, main, R, fewest=True) -> list:
@@ -197,7 +204,7 @@ def _origins(tree, t0, c0, axis, main, R, fewest=True) -> list:
         points = []
         if axis[p] is not None:
             P, Q, n = _foot(np.zeros(3), R[p][:, 2], t, u)
-            points += [Q] if np.linalg.norm(np.cross(R[p][:, 2], u)) > 1e-9 else \
+            points += [Q] if np.linalg.norm(np.cross(R[p][:, 2], u)) > PARALLEL else \
                 [t + np.dot(op - t, u) * u for op in cand[p]]
         else:
             points += [t + np.dot(op - t, u) * u for op in cand[p]]
@@ -421,10 +428,10 @@ def _constant_motion(Rp, c0, Rk, t0, ok, op):
     tr = Rp.T @ (c0 @ ok + t0 - op)
     u = C[:, 2]
     alpha = math.atan2(math.hypot(u[0], u[1]), u[2])
-    gamma = 0.0 if math.hypot(u[0], u[1]) < EPS else math.atan2(u[0], -u[1])
-    if abs(abs(gamma) - math.pi) < EPS:
+    gamma = 0.0 if math.hypot(u[0], u[1]) < ROUND_OFF else math.atan2(u[0], -u[1])
+    if abs(abs(gamma) - math.pi) < ROUND_OFF:
         gamma, alpha = 0.0, -alpha
-    if abs(gamma) < EPS:
+    if abs(gamma) < ROUND_OFF:
         gamma = 0.0
     gamma_x, alpha_x = _exact_angle(gamma), _exact_angle(alpha)
     rest = _rx(-float(alpha_x)) @ _rz(-float(gamma_x)) @ C

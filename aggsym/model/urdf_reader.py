@@ -56,7 +56,9 @@ The mapping
   for the frame routines), ``leaf_links`` (the links without a child link: the frames emitted by default),
   ``link_parts`` (each link's own mass, centre of mass and inertia about it, in its body's axes, for
   :mod:`aggsym.model.inertials`),
-  ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`.
+  ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`;
+  ``snapped_angles`` (only when ``snap_angles`` moved an angle of the file: the tolerance and each angle moved,
+  where, its value and the multiple of pi/2 taken; the manifest repeats it).
 
 Physical validity (where the dynamics sees it)
 ----------------------------------------------
@@ -278,41 +280,77 @@ def _tidy(rotation) -> list:
     return out
 
 
-ANGLE_SNAP = 1e-9  # rad
+ANGLE_ROUND_OFF = 1e-14  # rad: an angle of the file this close to a multiple of pi/2 is that multiple written to
+# double precision (1.5707963267948966, 1.57079632679490, 3.14159265358979): it is taken as the exact multiple, the
+# change being round-off.  Nothing farther is moved: 1.57079632679 (5e-12 off) or 1.5708 stay what they are, unless
+# the user asks for it (``snap_angles``, recorded in the manifest).
 
 
-def _angle(value: float) -> sp.Expr:
-    """An angle from the file; within 1e-9 rad of a multiple of pi/2 (``1.57079632679`` and the like) it is taken
-    as that exact multiple, so the zeros and ones of the right-angle rotation fold in the generated code.  The
-    change is below 1e-9 rad (results move by about that much relative, far inside the tests' 1e-9 tolerance
-    against Pinocchio, which uses the file's float)."""
+ROUND_OFF = 1e-14  # an entry of a translation, centre of mass or inertia tensor computed here (through rotations)
+# below this times the largest entry of its vector or tensor is round-off: 0.  Relative, so that a millimetre robot
+# with milligram links keeps every digit of its own.
+
+
+def _round_off(M: sp.Matrix) -> sp.Matrix:
+    """``M`` (a vector or tensor of numbers, expanded) with the entries below :data:`ROUND_OFF` of its largest set to
+    0."""
+    M = M.applyfunc(sp.expand)
+    sizes = [abs(float(x)) for x in M if x.is_Number]
+    tiny = ROUND_OFF * max(sizes, default=0.0)
+    return M.applyfunc(lambda x: sp.Integer(0) if x.is_Number and abs(float(x)) < tiny else x)
+
+
+def _right_angle(value: float, tolerance: float):
+    """k when ``value`` is within ``tolerance`` (at least the round-off) of k pi/2, else None."""
     k = round(float(value) / (math.pi / 2))
-    if abs(float(value) - k * math.pi / 2) < ANGLE_SNAP:
+    return k if abs(float(value) - k * math.pi / 2) <= max(tolerance, ANGLE_ROUND_OFF * max(1, abs(k))) else None
+
+
+def _angle(value: float, snap: float = 0.0) -> sp.Expr:
+    """An angle from the file: the exact multiple of pi/2 within round-off of it (or within ``snap`` when the user
+    asked for :func:`load_urdf`'s ``snap_angles``), so that the zeros and ones of the right-angle rotation fold in
+    the generated code; otherwise the file's float, as Pinocchio reads it."""
+    k = _right_angle(value, snap)
+    if k is not None:
         return sp.Integer(k) * sp.pi / 2
     return sp.Float(value)  # (an integer angle kept exact would leave sin(7) unevaluated, growing along chains)
 
 
-def _rpy(rpy) -> list:
+def _rpy(rpy, snap: float = 0.0) -> list:
     """URDF roll-pitch-yaw as elementary rotations: R = Rz(y) Ry(p) Rx(r)."""
     r, p, y = rpy
-    return _tidy([(3, _angle(y)), (2, _angle(p)), (1, _angle(r))])
+    return _tidy([(3, _angle(y, snap)), (2, _angle(p, snap)), (1, _angle(r, snap))])
 
 
-def _quaternion_rpy(x, y, z, w) -> tuple:
-    """roll, pitch, yaw of a unit quaternion (x, y, z, w), R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    return _matrix_rpy(np.array([
+def _matrix_rpy(R) -> tuple:
+    """roll, pitch, yaw of a rotation matrix, R = Rz(yaw) Ry(pitch) Rx(roll) (ill-conditioned near pitch = +-pi/2:
+    :func:`_rotations` avoids that)."""
+    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
+    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
+
+
+# right-angle turns P (exact) with P e1 = e_j, as elementary rotations, and their matrices
+_TURNS = ((), ((3, sp.pi / 2),), ((2, -sp.pi / 2),))
+_TURN_MATRICES = (np.eye(3), np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]), np.array([[0.0, 0, -1], [0, 1, 0], [1, 0, 0]]))
+
+
+def _rotations(R) -> list:
+    """A rotation matrix (floats) as elementary rotations, exactly to round-off: roll-pitch-yaw of R P and then
+    P^T, where the right-angle turn P (exact) takes e1 to the axis e_j whose entry of R's last row is the smallest,
+    so that |sin(pitch)| <= 1/sqrt(3), far from the gimbal lock where roll and yaw lose their digits (P = I unless
+    |sin(pitch)| would exceed 0.99)."""
+    j = int(np.argmin(np.abs(R[2]))) if abs(R[2, 0]) > 0.99 else 0
+    rpy = _rpy(_matrix_rpy(R @ _TURN_MATRICES[j]))
+    return _tidy(rpy + [(axis, -angle) for axis, angle in reversed(_TURNS[j])])
+
+
+def _quaternion_rotations(x, y, z, w) -> list:
+    """A unit quaternion (x, y, z, w) as elementary rotations (:func:`_rotations`)."""
+    return _rotations(np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
     ]))
-
-
-def _matrix_rpy(R) -> tuple:
-    """roll, pitch, yaw of a rotation matrix, R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
-    if math.hypot(R[0, 0], R[1, 0]) < 1e-12:  # gimbal lock: put everything into roll
-        return math.atan2(-R[1, 2], R[1, 1]), pitch, 0.0
-    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
 
 
 def _fold(rotation: list) -> list:
@@ -324,7 +362,7 @@ def _fold(rotation: list) -> list:
         E = {1: [[1, 0, 0], [0, c, -s], [0, s, c]], 2: [[c, 0, s], [0, 1, 0], [-s, 0, c]],
              3: [[c, -s, 0], [s, c, 0], [0, 0, 1]]}[axis]
         R = R @ np.array(E)
-    return _rpy(_matrix_rpy(R))
+    return _rotations(R)
 
 
 def _align(axis) -> tuple:
@@ -425,8 +463,10 @@ class _Place:
 
 
 class _Reader:
-    def __init__(self, file: Path, root: _Element, floating_base: bool, mimic: str):
+    def __init__(self, file: Path, root: _Element, floating_base: bool, mimic: str, snap_angles: float = 0.0):
         self.file = file
+        self.snap_angles = snap_angles
+        self.snapped: list[dict] = []  # the angles that snap_angles moved (the manifest's "snapped_angles")
         self.root = root
         self.floating_base = floating_base
         self.mimic = mimic
@@ -502,8 +542,15 @@ class _Reader:
             norm = math.sqrt(x * x + y * y + z * z + w * w)
             if abs(norm - 1) > 1e-6:
                 self.fail(o, f"quat_xyzw is not a unit quaternion (norm {norm:g})")
-            return xyz, _rpy(_quaternion_rpy(x / norm, y / norm, z / norm, w / norm))
-        return xyz, _rpy(self.numbers(o, "rpy", 3, (0.0, 0.0, 0.0)))
+            return xyz, _quaternion_rotations(x / norm, y / norm, z / norm, w / norm)
+        rpy = self.numbers(o, "rpy", 3, (0.0, 0.0, 0.0))
+        if self.snap_angles:
+            for name, value in zip(("roll", "pitch", "yaw"), rpy):
+                k = _right_angle(value, self.snap_angles)
+                if k is not None and _right_angle(value, 0.0) is None:
+                    self.snapped.append({"where": f"{_where(o)}, line {o.line}", "angle": name, "value": value,
+                                         "taken_as": f"{k}*pi/2"})
+        return xyz, _rpy(rpy, self.snap_angles)
 
     # the document ---------------------------------------------------------------------------------------
     def read(self) -> Model:
@@ -721,7 +768,7 @@ class _Reader:
             J = sp.Matrix(3, 3, lambda i, j: _exact(data.inertia[i][j]))
             if data.rotation or where.rotation:
                 J = _product(_product(R, J), R.T)
-            rows[where.body]["parts"].append((_exact(data.mass), com, J.applyfunc(snap)))
+            rows[where.body]["parts"].append((_exact(data.mass), com, _round_off(J)))
             link_parts[link] = rows[where.body]["parts"][-1]
 
         root_pair_name = _identifier(ROOT_PAIR, pair_names, "joint")
@@ -751,7 +798,7 @@ class _Reader:
                     R = _matrix(rotation)
                 else:  # R_here times the joint's own rotation: O(1) whatever the chain's length
                     R = _product(here.R, _matrix(joint.rotation)).applyfunc(snap) if joint.rotation else here.R
-                place[joint.child] = _Place(here.body, rotation, R, t.applyfunc(snap))
+                place[joint.child] = _Place(here.body, rotation, R, _round_off(t))
             else:
                 align, i = _align(joint.axis)
                 code = CODES[MOVABLE[joint.type]][i]
@@ -787,7 +834,9 @@ class _Reader:
                                             for link, p in place.items()},
                             "leaf_links": [link for link in place if not children[link]],
                             "link_parts": link_parts,
-                            "floating_base": self.floating_base, "warnings": list(self.warnings)})
+                            "floating_base": self.floating_base, "warnings": list(self.warnings),
+                            **({"snapped_angles": {"tolerance": self.snap_angles, "angles": list(self.snapped)}}
+                               if self.snapped else {})})
         model = dataclasses.replace(model, frames=default_frames(model))
         if model.nq == 0:
             self.fail(self.root, "the robot has no movable joint (revolute, continuous or prismatic); there are "
@@ -867,8 +916,7 @@ def _combine(parts) -> Inertial | None:
         return None
     if len(parts) == 1:  # nothing to move
         mass, com, J = parts[0]
-        com = com.applyfunc(lambda x: snap(sp.expand(x)))
-        J = J.applyfunc(lambda x: snap(sp.expand(x)))
+        com, J = _round_off(com), _round_off(J)
         if mass.is_zero:
             com = sp.zeros(3, 1)
             if all(x.is_zero for x in J):
@@ -883,8 +931,7 @@ def _combine(parts) -> Inertial | None:
     for m, c, Jk in parts:
         d = c - com
         J += Jk + m * (d.dot(d) * sp.eye(3) - d * d.T)
-    J = J.applyfunc(lambda x: snap(sp.expand(x)))
-    com = com.applyfunc(lambda x: snap(sp.expand(x)))
+    J, com = _round_off(J), _round_off(com)
     if mass.is_zero and all(x.is_zero for x in J):
         return None
     return Inertial(mass, tuple(com), tuple(tuple(J[i, j] for j in range(3)) for i in range(3)))
@@ -901,9 +948,14 @@ def friction_parameters(coordinates) -> tuple:
     return tuple(out)
 
 
-def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent") -> Model:
-    """Read and validate a URDF file; raises :class:`ModelError` naming the element and line of a problem."""
+def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent", snap_angles: float = 0.0) -> Model:
+    """Read and validate a URDF file; raises :class:`ModelError` naming the element and line of a problem.
+    ``snap_angles``: an approximation on request (off by default): the angles of joint and inertial origins
+    (``rpy``) within this many radians of a multiple of pi/2 are taken as that multiple (recorded in
+    ``model.meta["snapped_angles"]`` and the manifest); below it the file's values are kept (to round-off)."""
     path = Path(path)
+    if not (isinstance(snap_angles, (int, float)) and 0 <= snap_angles < math.pi / 4):
+        raise ValueError(f"snap_angles must be a number of radians from 0 to pi/4 (exclusive), got {snap_angles!r}")
     if mimic not in MIMIC_OPTIONS:
         raise ValueError(f"mimic must be one of {', '.join(MIMIC_OPTIONS)}, got {mimic!r}")
     if not any(floating_base is v or (isinstance(v, str) and floating_base == v) for v in FLOATING_BASES):
@@ -921,4 +973,4 @@ def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent
     if len(data) > MAX_BYTES:
         raise ModelError(path, "", f"the file is larger than {MAX_BYTES // 2 ** 20} MiB; a URDF this large is not "
                                    f"read (the limit guards against files made to exhaust memory)")
-    return _Reader(path, _parse(path, data), floating_base, mimic).read()
+    return _Reader(path, _parse(path, data), floating_base, mimic, float(snap_angles)).read()
