@@ -90,7 +90,8 @@ def _exact_angle(x: float) -> sp.Expr:
 
 
 def _length(x: float, scale: float) -> sp.Expr:
-    return sp.Integer(0) if abs(x) < ROUND_OFF * scale else sp.Float(x)
+    """A length computed here from lengths of size ``scale`` (relative: a millimetre robot keeps its digits)."""
+    return sp.Integer(0) if x == 0 or abs(x) < ROUND_OFF * scale else sp.Float(x)
 
 
 def _unit(x: float) -> sp.Expr:
@@ -174,6 +175,7 @@ def _axes(model, tree, t0, c0, axis, revolute, main, normals) -> list:
                 h = inertial.mises()[1]
                 if not any(getattr(v, "free_symbols", None) for v in h):
                     x = np.array([float(v) for v in h])
+                    x = x / np.linalg.norm(x) if np.any(x) else None  # (a direction, whatever the robot's size)
         if x is not None:
             x = x - np.dot(x, z) * z
         x = x / np.linalg.norm(x) if x is not None and np.linalg.norm(x) > 1e-9 else _perp(z)
@@ -182,7 +184,7 @@ def _axes(model, tree, t0, c0, axis, revolute, main, normals) -> list:
 
 
 def _nonzeros(v, scale) -> int:
-    return sum(1 for x in v if abs(x) >= ROUND_OFF * scale)
+    return sum(1 for x in v if x != 0 and abs(x) >= ROUND_OFF * scale)
 
 
 def _origins(tree, t0, c0, axis, main, R, fewest=True) -> list:
@@ -216,7 +218,7 @@ def _origins(tree, t0, c0, axis, main, R, fewest=True) -> list:
             cand[k].append(e * np.dot(c0[k].T @ (Q - t), e))
         unique = []
         for x in cand[k]:
-            if all(np.linalg.norm(x - y) > 1e-12 * (1 + np.linalg.norm(y)) for y in unique):
+            if all(np.linalg.norm(x - y) > 1e-12 * (np.linalg.norm(x) + np.linalg.norm(y)) for y in unique):
                 unique.append(x)
                 if len(unique) == MAX_CANDIDATES:
                     break
@@ -227,7 +229,7 @@ def _origins(tree, t0, c0, axis, main, R, fewest=True) -> list:
         if not moving[p]:
             return 0
         tr = R[p].T @ (c0[k] @ ok + t0[k] - op)
-        return _nonzeros(tr, 1 + np.linalg.norm(t0[k]) + np.linalg.norm(ok) + np.linalg.norm(op))
+        return _nonzeros(tr, np.linalg.norm(t0[k]) + np.linalg.norm(ok) + np.linalg.norm(op))
 
     if not fewest:
         o = [np.zeros(3) for _ in range(N)]
@@ -296,7 +298,7 @@ def reframe(model: Model, normals: bool = True, fewest: bool = True) -> Model:
             R[k] = R[k] @ _quarter(quarter)
             C, tr, gamma_x, alpha_x, theta0 = _constant_motion(R[p], c0[k], R[k], t0[k], o[k], o[p])
             offset = _exact_angle(theta0)
-        scale = 1 + float(np.linalg.norm(t0[k])) + float(np.linalg.norm(o[k])) + float(np.linalg.norm(o[p]))
+        scale = float(np.linalg.norm(t0[k])) + float(np.linalg.norm(o[k])) + float(np.linalg.norm(o[p]))
         translation = tuple(_length(float(x), scale) for x in tr)
         turn = 0 if revolute[k] else offset  # a prismatic pair has no angle to take the turn: it stays constant
         rotation = tuple((a, v) for a, v in ((3, gamma_x), (1, alpha_x), (3, turn)) if v != 0)
@@ -308,7 +310,7 @@ def reframe(model: Model, normals: bool = True, fewest: bool = True) -> Model:
         Cx = pairs[k].constructive_rotation()
         motions[k] = (Cx, sp.Matrix(translation))
     axes = [sp.Matrix(3, 3, lambda i, j: _unit(float(R[k][i, j]))) for k in range(N)]
-    places = [sp.Matrix([_length(float(x), 1 + float(np.linalg.norm(o[k]))) for x in o[k]]) for k in range(N)]
+    places = [sp.Matrix([_length(float(x), float(np.linalg.norm(o[k]))) for x in o[k]]) for k in range(N)]
     forms = [None if b.inertial is None else b.inertial.mises() for b in bodies]
     grouped = _grouped_numbers if all(f is None or _numeric(f) for f in forms) else _grouped_symbols
     mises = grouped(tree, forms, axes, places, motions, revolute)
