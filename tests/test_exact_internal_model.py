@@ -190,3 +190,49 @@ def test_the_perturbation_reaches_the_file(tmp_path):
     for a, b in zip(old_axes, new_axes):
         angle = math.acos(min(1.0, np.dot(a, b) / np.linalg.norm(a) / np.linalg.norm(b)))
         assert 0 < angle <= 1.1e-3
+
+
+def test_angles_are_snapped_only_on_request_and_then_recorded(tmp_path):
+    """xarm7 writes its right angles as 1.5708: by default they stay (the manifest has no snapped_angles and the
+    dynamics are Pinocchio's on the file to 1e-12); ``--snap-angles 1e-4`` takes them as pi/2, lists every angle it
+    moved in the manifest (where, value, multiple taken) and gives Pinocchio's dynamics of the file with those
+    angles written as pi/2; a tolerance outside (0, pi/4) is exit 2."""
+    import json
+    import subprocess
+    import sys
+
+    source = robots_directory() / FILES["xarm7"]
+    out = {}
+    for tag, extra in (("default", []), ("snapped", ["--snap-angles", "1e-4"])):
+        folder = tmp_path / tag
+        done = subprocess.run([sys.executable, "-m", "aggsym.cli", "generate", str(source), "-o", str(folder), "-q",
+                               "--routines", "inertia,inverse_dynamics", *extra], capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        out[tag] = json.loads(next(folder.glob("*.json")).read_text())
+    assert "snapped_angles" not in out["default"]
+    record = out["snapped"]["snapped_angles"]
+    assert record["tolerance"] == 1e-4
+    assert len(record["angles"]) == 6 and all(abs(abs(a["value"]) - 1.5708) < 1e-12 for a in record["angles"])
+    assert {a["taken_as"] for a in record["angles"]} == {"1*pi/2", "-1*pi/2"}
+    assert all('<joint name="joint' in a["where"] and "line" in a["where"] for a in record["angles"])
+    ops = {tag: sum(m["ops"]["inverse_dynamics"][k] for k in ("mul", "add", "div")) for tag, m in out.items()}
+    assert ops["snapped"] < ops["default"]
+
+    rng = np.random.default_rng(3)
+    model = aggsym.load(source, snap_angles=1e-4)
+    assert model.meta["snapped_angles"] == record
+    exact = tmp_path / "xarm7_pi_2.urdf"
+    exact.write_text(source.read_text().replace('"1.5708 ', f'"{math.pi / 2!r} ').replace(
+        '"-1.5708 ', f'"{-math.pi / 2!r} '))
+    n = model.nv
+    q = rng.uniform(-math.pi, math.pi, n)
+    qd, qdd, tau = rng.normal(size=(3, n))
+    ref = pinocchio_outputs(exact, q, qd, qdd, tau)
+    x = {"q": list(q), "qd": list(qd), "qdd": list(qdd), "tau": list(tau)}
+    for role in ("inertia", "inverse_dynamics", "forward_dynamics"):
+        got = ours(reframe(model), role, x).reshape(np.shape(ref[role]))
+        assert relative_error(got, ref[role]) <= EXACT, role
+    bad = subprocess.run([sys.executable, "-m", "aggsym.cli", "generate", str(source), "-o", str(tmp_path / "bad"),
+                          "--snap-angles", "1"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr and "pi/4" in bad.stderr
+    assert not (tmp_path / "bad").exists()
