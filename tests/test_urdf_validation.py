@@ -472,20 +472,31 @@ def test_messages_have_no_placeholders(write):
     assert not re.search(r"\{|\}", str(error(write(text))))
 
 
-def test_right_angles_written_as_decimals_are_exact(tmp_path):
-    """rpy="1.57079632679 0 -3.14159265359" is taken as (pi/2, 0, -pi): the constant rotation has exact zeros and
-    ones, so they fold in the generated code."""
+def test_right_angles_are_exact_only_to_round_off(tmp_path):
+    """rpy="1.5707963267948966 0 -3.141592653589793" (pi/2 and -pi to double precision) is taken as (pi/2, 0, -pi):
+    the constant rotation has exact zeros and ones, so they fold in the generated code.  "1.57079632679" and
+    "-3.14159265359" (5e-12 and 2e-12 off) are the file's own angles and stay floats, as Pinocchio reads them;
+    ``snap_angles=1e-9`` (on request) takes them as exact and records both."""
     import aggsym
 
-    text = """<robot name="r">
+    def rotation(rpy, **options):
+        text = f"""<robot name="r">
   <link name="a"/>
   <link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
   <joint name="j" type="revolute"><parent link="a"/><child link="b"/>
-    <origin xyz="0 0 0.1" rpy="1.57079632679 0 -3.14159265359"/><axis xyz="0 0 1"/>
+    <origin xyz="0 0 0.1" rpy="{rpy}"/><axis xyz="0 0 1"/>
     <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
 </robot>"""
-    path = tmp_path / "r.urdf"
-    path.write_text(text)
-    model = aggsym.load(path)
-    c = model.bodies[-1].pair.constructive_rotation()
+        path = tmp_path / "r.urdf"
+        path.write_text(text)
+        model = aggsym.load(path, **options)
+        return model.bodies[-1].pair.constructive_rotation(), model
+
+    c, _ = rotation("1.5707963267948966 0 -3.141592653589793")
     assert all(x in (0, 1, -1) for x in c), c
+    c, model = rotation("1.57079632679 0 -3.14159265359")
+    assert not all(x in (0, 1, -1) for x in c), c
+    assert "snapped_angles" not in model.meta
+    c, model = rotation("1.57079632679 0 -3.14159265359", snap_angles=1e-9)
+    assert all(x in (0, 1, -1) for x in c), c
+    assert [a["angle"] for a in model.meta["snapped_angles"]["angles"]] == ["roll", "yaw"]
