@@ -199,7 +199,8 @@ REPEATS = {  # the element, written once, and again identically (other spellings
     "dynamics": ('<dynamics damping="0.5" friction="0.1"/>', '\n    <dynamics friction=".1" damping="0.50"/>',
                  '<joint name="elbow"> <dynamics>'),
     "inertial origin": ('<origin xyz="0.1 0 0.2" rpy="0.1 0.2 0.3"/>',
-                        '\n      <origin xyz="0.1 0 0.2" rpy="0.1 0.2 0.3"/>', '<link name="upper"> <inertial> <origin>'),
+                        '\n      <origin xyz="0.1 0 0.2" rpy="0.1 0.2 0.3"/>',
+                        '<link name="upper"> <inertial> <origin>'),
     "mass": ('<mass value="0.5"/>', '\n      <mass value="0.50"/>', '<link name="lower"> <inertial> <mass>'),
     "inertia": ('<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>',
                 '\n      <inertia ixx="0.01" iyy="0.01" izz="0.01"  ixy="0" ixz="0" iyz="-0"/>',
@@ -261,3 +262,99 @@ def test_a_repeat_that_differs_is_refused_naming_file_element_and_line(what, tmp
     assert_clean_error(code, err, f"{path}:{second}: at {where}: a second {tag} that differs from the first "
                                   f"(line {first})", "give one")
     assert not out.exists()
+
+
+# output folders: all or nothing --------------------------------------------------------------------------
+
+
+def test_a_folder_where_a_file_goes_is_a_clear_error_and_nothing_changes(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert run(capsys, "generate", model_path("planar_2link"), "-o", out, "-q")[0] == 0
+    (out / "planar_2link.c").unlink()
+    (out / "planar_2link.c").mkdir()
+    (out / "notes.txt").write_text("mine")
+    before = listing(out)
+    code, err = run(capsys, "generate", model_path("planar_2link"), "-o", out, "-q")
+    assert_clean_error(code, err, f"{out / 'planar_2link.c'}: a folder stands where", "move or remove it",
+                       "-o OUTDIR")
+    assert listing(out) == before and sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_a_failure_while_files_take_their_place_puts_the_earlier_generation_back(tmp_path, capsys, monkeypatch):
+    """An earlier --split generation; the next (one file) fails at its third file: every earlier file (the stale
+    split ones too) is back as it was, and nothing of the new run is left."""
+    out = tmp_path / "out"
+    assert run(capsys, "generate", model_path("planar_2link"), "-o", out, "-q", "--split")[0] == 0
+    (out / "notes.txt").write_text("mine")
+    before = listing(out)
+    assert "planar_2link_inertia.c" in before and "planar_2link.c" not in before
+    replace, calls = os.replace, []
+
+    def failing(src, dst):
+        calls.append((src, dst))
+        if len(calls) == 5:  # the third file's move into place (each existing file is first put aside)
+            raise PermissionError(13, "Permission denied")
+        return replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", failing)
+    code, err = run(capsys, "generate", model_path("planar_2link"), "-o", out, "-q")
+    monkeypatch.setattr(os, "replace", replace)
+    assert_clean_error(code, err, f"{out}: cannot write the output folder: Permission denied", "nothing was written")
+    assert len(calls) > 5 and listing(out) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_a_new_folder_that_cannot_be_made_leaves_no_parent_behind(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "a" / "b" / "out"
+    monkeypatch.setattr(os, "replace", lambda src, dst: (_ for _ in ()).throw(OSError(28, "No space left on device")))
+    code, err = run(capsys, "generate", model_path("planar_2link"), "-o", out, "-q")
+    assert_clean_error(code, err, f"{out}: cannot write the output folder: No space left on device")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_generating_again_replaces_the_files_and_removes_the_stale_ones(tmp_path, capsys):
+    """The all-or-nothing swap still does the ordinary job."""
+    out = tmp_path / "out"
+    assert run(capsys, "generate", model_path("planar_2link"), "-o", out, "-q", "--split")[0] == 0
+    (out / "notes.txt").write_text("mine")
+    assert run(capsys, "generate", model_path("planar_2link"), "-o", out, "-q")[0] == 0
+    expected = ["notes.txt"] + [f"planar_2link.{e}" for e in ("c", "h", "json", "py", "tex")]
+    assert sorted(listing(out)) == sorted(expected)
+
+
+LONG = "n" * 300
+
+
+@pytest.mark.parametrize("how", ["--name", "yaml", "urdf", "urdf, default folder"])
+def test_a_name_too_long_for_the_file_system_names_where_it_came_from(how, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    if how == "--name":
+        path, extra, says = model_path("planar_2link"), ["--name", LONG], "comes from the option --name"
+    elif how == "yaml":
+        path, extra = tmp_path / "long.yaml", []
+        path.write_text(model_path("planar_2link").read_text().replace("name: planar_2link", f"name: {LONG}", 1))
+        says = f"comes from {path} (its 'name:')"
+    else:
+        path, extra = tmp_path / "long.urdf", []
+        path.write_text(URDF.replace('<robot name="r">', f'<robot name="{LONG}">'))
+        says = f'comes from {path} (its <robot name="...">)'
+    out = tmp_path / "x" / "out"
+    folder = [] if how.endswith("default folder") else ["-o", out]
+    before = sorted(p.name for p in tmp_path.iterdir())
+    code, err = run(capsys, "generate", path, *folder, "-q", *extra)
+    assert_clean_error(code, err, "too long for the file system", says, "give a shorter one with --name SHORTER",
+                       "(300 characters)")
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_a_name_too_long_found_only_when_writing_still_names_its_origin(tmp_path, capsys, monkeypatch):
+    """The early check looks at NAME.json; write() checks every file (here: a --split routine's longer name)."""
+    import aggsym.codegen.generate as generate_module
+
+    name = "n" * 248  # NAME.json fits, NAME_transvective_factors.c does not
+    out = tmp_path / "out"
+    code, err = run(capsys, "generate", model_path("planar_2link"), "-o", out, "-q", "--split", "--name", name)
+    assert_clean_error(code, err, f"{out}: cannot write the file", "_transvective_factors", "the option --name",
+                       "--name SHORTER")
+    assert list(tmp_path.iterdir()) == []
+    assert generate_module.check_file_names  # (the check is the module's, for library callers of write too)
