@@ -213,11 +213,13 @@ def cmd_generate(args) -> int:
             why = "on request" if r.on_request or model.routines is None else "not selected"
             print(f"{c_symbol(model, r).ljust(width)}  ({why}: --routines {r.role}) {r.doc}")
         return 0
-    from .codegen.generate import generate, write
+    from .codegen.generate import check_file_names, generate, write
 
-    gen = generate(model, progress=_progress(args.quiet, model.name), scalar=args.scalar, split=args.split)
     outdir = Path(args.output) if args.output else Path("generated") / model.name
-    paths = write(gen, outdir)
+    origin = "the option --name" if args.name is not None else None  # (else the model file: name_origin)
+    check_file_names(outdir, [f"{model.name}.json"], model, origin)  # (before the work: write checks every file)
+    gen = generate(model, progress=_progress(args.quiet, model.name), scalar=args.scalar, split=args.split)
+    paths = write(gen, outdir, origin)
     if not args.quiet:
         print(f"aggsym: {model.name}: wrote {len(paths)} files to {outdir} in {time.perf_counter() - t0:.2f} s",
               file=sys.stderr)

@@ -9,6 +9,7 @@ generated, through a temporary folder, so a failure leaves the output folder as 
 """
 from __future__ import annotations
 
+import errno
 import json
 import os
 import re
@@ -557,22 +558,36 @@ def split_files(env, ctx, emitted) -> dict:
     return files
 
 
-def write(gen: Generated, outdir) -> list:
-    """Write the files into ``outdir`` through a temporary folder beside it; returns the paths written.
+def write(gen: Generated, outdir, origin: str | None = None) -> list:
+    """Write the files into ``outdir`` through a temporary folder; returns the paths written.
 
-    A new folder appears whole (the temporary one is renamed); in an existing folder each file is replaced
-    atomically, after the folder was found writable.  An output path that cannot be used (a file, read-only, a
-    name too long for the file system) is the user's error, reported with that path."""
+    All or nothing: a new folder appears whole (the temporary one, beside it, is renamed); in an existing folder
+    the new files are written into a temporary folder inside it, then each takes its place while the file it
+    replaces (and each stale file of an earlier generation, :func:`stale_files`) is kept aside until all are in
+    place; a failure puts everything back, so the folder is left as it was.  An output path that cannot be used
+    (a file, read-only, a folder where a file goes, a name too long for the file system) is the user's error,
+    reported with that path and the fix; ``origin`` says where the model's name came from (default: the model
+    file, see :func:`name_origin`), for a name too long."""
     outdir = Path(outdir)
     tmp = None
+    created = []  # the folders above outdir this run made, removed again on failure
     try:
+        check_file_names(outdir, list(gen.files), gen.model, origin)
         if outdir.exists() and not outdir.is_dir():
-            raise AggsymError(f"{outdir}: the output folder is a file")
+            raise AggsymError(f"{outdir}: the output folder is a file; remove it, or write elsewhere with -o OUTDIR")
         if outdir.is_dir() and not os.access(outdir, os.W_OK | os.X_OK):
             raise AggsymError(f"{outdir}: the output folder is not writable")
+        if outdir.is_dir():
+            for name in gen.files:
+                if (outdir / name).is_dir() and not (outdir / name).is_symlink():
+                    raise AggsymError(f"{outdir / name}: a folder stands where aggsym writes its file {name}; move "
+                                      f"or remove it, or write elsewhere with -o OUTDIR (nothing was written)")
         stale = stale_files(outdir, gen) if outdir.is_dir() else []
-        outdir.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=".aggsym-", dir=outdir.parent))
+        for folder in reversed(outdir.parents):
+            if not folder.exists():
+                folder.mkdir()
+                created.append(folder)
+        tmp = Path(tempfile.mkdtemp(prefix=".aggsym-", dir=outdir if outdir.is_dir() else outdir.parent))
         for name, text in gen.files.items():
             (tmp / name).write_text(text, encoding="utf-8")
         if not outdir.exists():
@@ -580,16 +595,102 @@ def write(gen: Generated, outdir) -> list:
             os.replace(tmp, outdir)
             tmp = None
         else:
-            for name in gen.files:
-                os.replace(tmp / name, outdir / name)
-            for name in stale:
-                (outdir / name).unlink(missing_ok=True)
+            _swap(tmp, outdir, list(gen.files), stale)
+        created = []
         return [outdir / name for name in gen.files]
     except OSError as exc:
-        raise AggsymError(f"{outdir}: cannot write the output folder: {exc.strerror or exc}") from None
+        if exc.errno == errno.ENAMETOOLONG:
+            raise AggsymError(f"{outdir}: cannot write the output folder: a path is too long for the file system; "
+                              f"{_shorter(gen.model, origin)}, or a shorter -o OUTDIR (nothing was written)") from None
+        raise AggsymError(f"{outdir}: cannot write the output folder: {exc.strerror or exc} (nothing was "
+                          f"written)") from None
     finally:
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
+        for folder in reversed(created):
+            try:
+                folder.rmdir()
+            except OSError:
+                break
+
+
+def _swap(tmp: Path, outdir: Path, names: list, stale: list) -> None:
+    """Move the files ``names`` from ``tmp`` into ``outdir`` and the ``stale`` ones out of it, all or nothing: what
+    they replace is kept in ``tmp`` until every move is done, and put back if one fails."""
+    aside = tmp / ".previous"  # (no generated name starts with a dot)
+    aside.mkdir()
+    kept, placed = [], []
+    try:
+        for name in names:
+            target = outdir / name
+            if os.path.lexists(target):
+                os.replace(target, aside / name)
+                kept.append(name)
+            os.replace(tmp / name, target)
+            placed.append(name)
+        for name in stale:
+            target = outdir / name
+            if os.path.lexists(target) and not (target.is_dir() and not target.is_symlink()):
+                os.replace(target, aside / name)
+                kept.append(name)
+    except BaseException:  # (an interrupt too: the files put aside must not go with the temporary folder)
+        try:
+            for name in placed:
+                (outdir / name).unlink(missing_ok=True)
+            for name in kept:
+                os.replace(aside / name, outdir / name)
+        except OSError as undo:  # keep the earlier files where they are, and say where
+            os.replace(tmp, tmp.with_name(tmp.name + "-previous"))
+            raise AggsymError(f"{outdir}: cannot write the output folder, nor restore it ({undo.strerror or undo}); "
+                              f"the earlier files are in {tmp.with_name(tmp.name + '-previous') / aside.name}") \
+                from None
+        raise
+
+
+def name_origin(model) -> str:
+    """Where a model's name comes from, for messages: its file's ``<robot name=...>`` or ``name:``."""
+    source = model.source
+    if not source:
+        return "the model"
+    if Path(source).suffix.lower() == ".urdf":
+        return f'{source} (its <robot name="...">)'
+    if model.name == Path(source).stem:
+        return f"{source} (its 'name:', or the file's own name when it has none)"
+    return f"{source} (its 'name:')"
+
+
+def _short(name: str) -> str:
+    """A long name shortened for a message, its start and its end kept."""
+    return name if len(name) <= 48 else f"{name[:20]}...{name[-24:]}"
+
+
+def _shorter(model, origin) -> str:
+    return (f"the name {_short(model.name)!r} ({len(model.name)} characters) comes from "
+            f"{origin or name_origin(model)}: give a shorter one with --name SHORTER")
+
+
+def check_file_names(outdir: Path, names: list, model, origin: str | None = None) -> None:
+    """The files ``names`` and the folders of ``outdir`` still to be made must fit the file system's limit on a
+    name (NAME_MAX, usually 255 bytes): an AggsymError naming where the model's name came from and the fix
+    otherwise (``origin``: e.g. ``the option --name``; default :func:`name_origin`)."""
+    existing = outdir
+    missing = []
+    while not os.path.exists(existing) and existing != existing.parent:  # (False, not an error, for a long name)
+        missing.append(existing.name)
+        existing = existing.parent
+    try:
+        limit = os.pathconf(existing, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        limit = 255
+    for name in sorted(missing + list(names), key=lambda n: -len(os.fsencode(n))):
+        size = len(os.fsencode(name))
+        if size > limit:
+            what = "folder" if name in missing else "file"
+            fix = (_shorter(model, origin) if what == "file" or model.name in name else
+                   "choose a shorter output folder with -o OUTDIR")
+            raise AggsymError(f"{outdir}: cannot write the {what} {_short(name)!r}: its name of {size} bytes is too "
+                              f"long for the file system (at most {limit}); {fix} (nothing was written)")
+        break  # (the longest fits: all do)
 
 
 def stale_files(outdir: Path, gen: Generated) -> list:

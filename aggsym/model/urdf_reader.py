@@ -2,7 +2,9 @@
 
 Every mistake is reported as :class:`ModelError` with the file, the element (``<joint name="elbow">``, or
 ``<joint name="elbow"> <axis>`` for a part of it), the line, and what is wrong.  The file is parsed with the
-standard library's expat, which gives the line of every element.
+standard library's expat, which gives the line of every element (:mod:`aggsym.model.xml_source`, which also
+accepts with a warning what urdfdom reads and whose meaning is clear: an XML declaration after white space, an
+element the reader takes once given again identically; a repeat that differs is an error).
 
 The mapping
 -----------
@@ -87,9 +89,8 @@ import math
 import re
 import dataclasses
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from xml.parsers import expat
 
 import numpy as np
 import sympy as sp
@@ -101,6 +102,7 @@ from .types import _snap as snap
 from .types import (WORLD, Body, Coordinate, Coupling, Inertial, JointDynamics, JointLimits, Model, Pair, Parameter,
                     elementary_rotation)
 from .validate import kinetic_energy_problem, motion_space, principal_problem
+from .xml_source import MAX_ELEMENTS, MAX_JOINTS, MAX_LINKS, NUMBER as _NUMBER, _Element, _parse, _where  # noqa: F401
 
 GRAVITY = (sp.Integer(0), sp.Integer(0), sp.Float(-9.81))
 MOVABLE = {"revolute": "theta", "continuous": "theta", "prismatic": "o"}
@@ -118,126 +120,10 @@ FREE_FLYER_POSITIONS = ("base_x", "base_y", "base_z", "base_qx", "base_qy", "bas
 FLOATING_BASES = (False, True, "euler", "quaternion")
 MIMIC_OPTIONS = ("independent", "couple")
 ROOT_PAIR = "root_joint"
-_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 _AXIS_TOL = 1e-12
 
 MAX_BYTES = 64 * 2 ** 20  # the largest URDF read (example-robot-data's largest is under 1 MiB)
-MAX_LINKS = 10_000
-MAX_JOINTS = 10_000
-MAX_ELEMENTS = 1_000_000  # every XML element, read or skipped
 MAX_ROTATIONS = 9  # elementary rotations a chain of fixed joints may pile up before they are folded into one rpy
-
-# The elements the reader uses, by parent; everything else (visual, collision, gazebo, transmission, ...) is
-# skipped without being stored.
-_USED = {
-    "robot": {"link", "joint"},
-    "link": {"inertial"},
-    "inertial": {"origin", "mass", "inertia"},
-    "joint": {"parent", "child", "origin", "axis", "limit", "dynamics", "mimic"},
-}
-
-
-@dataclass
-class _Element:
-    """An XML element with the line it starts on."""
-
-    tag: str
-    attrib: dict
-    line: int
-    parent: "_Element | None" = None
-    children: list = field(default_factory=list)
-
-    def all(self, tag: str) -> list:
-        return [c for c in self.children if c.tag == tag]
-
-
-def _named(tag: str, attrib: dict) -> str:
-    name = attrib.get("name")
-    return f'<{tag} name="{name}">' if name is not None else f"<{tag}>"
-
-
-def _parse(file: Path, data: bytes) -> _Element:
-    """Parse XML with expat, recording each element's line; raises ModelError for malformed XML, for entity
-    declarations and for a document over the element limits.
-
-    Only the elements of :data:`_USED` are stored, and of each tag at most two under one parent (a second one is
-    all the reader needs to report a duplicate); the others are only counted.
-    """
-    parser = expat.ParserCreate()
-    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
-    stack: list = []  # _Element, or None inside a skipped element
-    top: list[_Element] = []
-    counts = {"elements": 0, "link": 0, "joint": 0}
-
-    def refuse(where, message):
-        raise ModelError(file, where, message, parser.CurrentLineNumber)
-
-    def start(tag, attrib):
-        counts["elements"] += 1
-        if counts["elements"] > MAX_ELEMENTS:
-            refuse(_named(tag, attrib), f"more than {MAX_ELEMENTS:,} XML elements; a URDF this large is not "
-                                        f"read (the limit guards against files made to exhaust memory)")
-        parent = stack[-1] if stack else None
-        if stack and (parent is None or tag not in _USED.get(parent.tag, ())
-                      or (parent.tag != "robot" and len(parent.all(tag)) >= 2)):
-            stack.append(None)
-            return
-        if parent is not None and parent.tag == "robot":
-            counts[tag] += 1
-            limit = MAX_LINKS if tag == "link" else MAX_JOINTS
-            if counts[tag] > limit:
-                refuse(_named(tag, attrib), f"more than {limit:,} <{tag}> elements; larger robots are not read "
-                                            f"(the limit guards against files made to exhaust time and memory)")
-        el = _Element(tag, attrib, parser.CurrentLineNumber, parent)
-        (parent.children if parent is not None else top).append(el)
-        stack.append(el)
-
-    def end(tag):
-        stack.pop()
-
-    def entity(name, is_parameter, value, base, system_id, public_id, notation):
-        kind = "an external" if system_id or public_id else "a parameter" if is_parameter else "an"
-        refuse("<!DOCTYPE>", f"{kind} entity declaration (<!ENTITY {'% ' if is_parameter else ''}{name} ...>) is "
-                             f"refused: URDF needs no entities, and expanding them can exhaust memory or read "
-                             f"other files")
-
-    def external(context, base, system_id, public_id):
-        refuse("<!DOCTYPE>", f"a reference to the external entity {system_id!r} is refused; nothing outside the "
-                             f"file is read")
-
-    def doctype(name, system_id, public_id, has_internal_subset):
-        if system_id or public_id:
-            refuse("<!DOCTYPE>", f"a document type naming an external DTD ({system_id or public_id!r}) is refused; "
-                                 f"nothing outside the file is read")
-
-    parser.StartDoctypeDeclHandler = doctype
-    parser.StartElementHandler = start
-    parser.EndElementHandler = end
-    parser.EntityDeclHandler = entity
-    parser.UnparsedEntityDeclHandler = lambda name, base, system_id, public_id, notation: entity(
-        name, False, None, base, system_id, public_id, notation)
-    parser.ExternalEntityRefHandler = external
-    try:
-        parser.Parse(data, True)
-    except expat.ExpatError as exc:
-        raise ModelError(file, "", f"not XML: {expat.errors.messages[exc.code]}", exc.lineno) from None
-    except LookupError as exc:  # <?xml encoding="..."?> that Python does not know
-        raise ModelError(file, "<?xml?>", f"not XML that can be read: {exc}", parser.CurrentLineNumber) from None
-    return top[0]
-
-
-def _where(el: _Element) -> str:
-    """The element as a reader finds it: ``<joint name="elbow">``, or ``<joint name="elbow"> <axis>``."""
-    parts = []
-    while el is not None:
-        name = el.attrib.get("name")
-        top_level = el.parent is None or el.parent.tag == "robot"
-        if el.tag in ("robot", "link", "joint") and (name is not None or top_level):
-            parts.append(f'<{el.tag} name="{name}">' if name is not None else f"<{el.tag}>")
-            break
-        parts.append(f"<{el.tag}>")
-        el = el.parent
-    return " ".join(reversed(parts))
 
 
 def _exact(value: float) -> sp.Expr:
@@ -463,7 +349,8 @@ class _Place:
 
 
 class _Reader:
-    def __init__(self, file: Path, root: _Element, floating_base: bool, mimic: str, snap_angles: float = 0.0):
+    def __init__(self, file: Path, root: _Element, floating_base: bool, mimic: str, snap_angles: float = 0.0,
+                 notes=()):
         self.file = file
         self.snap_angles = snap_angles
         self.snapped: list[dict] = []  # the angles that snap_angles moved (the manifest's "snapped_angles")
@@ -471,13 +358,13 @@ class _Reader:
         self.floating_base = floating_base
         self.mimic = mimic
         self.version = (1, 0)
-        self.warnings: list[str] = []
+        self.warnings: list[str] = list(notes)  # (the parser's, already issued)
 
     def fail(self, el: _Element, message: str):
         raise ModelError(self.file, _where(el), message, el.line)
 
-    def warn(self, el: _Element, message: str):
-        text = str(ModelError(self.file, _where(el), message, el.line))
+    def warn(self, el: _Element, message: str, line: int | None = None):
+        text = str(ModelError(self.file, _where(el), message, el.line if line is None else line))
         self.warnings.append(text)
         warnings.warn(text, ModelWarning, stacklevel=2)
 
@@ -490,13 +377,19 @@ class _Reader:
 
     def single(self, el, tag, required=False):
         found = el.all(tag)
-        if len(found) > 1:
-            self.fail(found[1], f"a second <{tag}> (the first is on line {found[0].line}); give one")
+        if len(found) > 1:  # (xml_source keeps a repeat only when it differs from the first)
+            self.fail(found[1], f"a second <{tag}> that differs from the first (line {found[0].line}): which one is "
+                                f"meant is not clear; give one")
         if not found:
             if required:
                 self.fail(el, f"missing <{tag}> element")
             return None
-        return found[0]
+        first = found[0]
+        if first.repeated_on is not None:
+            again = f" ({first.repeats} repeats in all)" if first.repeats > 1 else ""
+            self.warn(first, f"a second <{tag}> identical to the first (line {first.line}){again} is ignored; give "
+                             f"one", line=first.repeated_on)
+        return first
 
     def numbers(self, el, name, n, default=None) -> tuple:
         """The attribute as n finite floats separated by white space."""
@@ -517,7 +410,8 @@ class _Reader:
                 self.fail(el, f'{name}="{shown}": {part[:40]!r} is not a number{hint}')
             value = float(part)
             if not math.isfinite(value):
-                self.fail(el, f'{name}="{shown}": {part[:40]!r} is not finite')
+                self.fail(el, f'{name}="{shown}": {part[:40]!r} is not finite (beyond the largest double, about '
+                              f"1.8e308); give a finite number")
             values.append(0.0 if value == 0 else value)
         return tuple(values)
 
@@ -558,7 +452,7 @@ class _Reader:
         if robot.tag != "robot":
             self.fail(robot, f"not a URDF file: the top element is <{robot.tag}>, expected <robot>")
         version = robot.attrib.get("version", "1.0")
-        if not re.fullmatch(r"\d+\.\d+", version.strip()):
+        if not re.fullmatch(r"\d{1,9}\.\d{1,9}", version.strip()):
             self.fail(robot, f'version="{version[:40]}" is not a version number like 1.0')
         self.version = tuple(int(x) for x in version.strip().split("."))
         robot_name = self.attribute(robot, "name")
@@ -973,4 +867,6 @@ def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent
     if len(data) > MAX_BYTES:
         raise ModelError(path, "", f"the file is larger than {MAX_BYTES // 2 ** 20} MiB; a URDF this large is not "
                                    f"read (the limit guards against files made to exhaust memory)")
-    return _Reader(path, _parse(path, data), floating_base, mimic, float(snap_angles)).read()
+    notes: list[str] = []
+    root = _parse(path, data, notes)
+    return _Reader(path, root, floating_base, mimic, float(snap_angles), notes).read()

@@ -44,6 +44,7 @@ turns by the prescribed angle.
 from __future__ import annotations
 
 import dataclasses
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -107,6 +108,8 @@ _NOT_TEXT_START = frozenset("-+.0123456789<~=")
 _WORDS = frozenset("yes Yes YES no No NO true True TRUE false False FALSE on On ON off Off OFF null Null NULL".split())
 _STR = "tag:yaml.org,2002:str"
 _FLOAT = "tag:yaml.org,2002:float"
+_INT = "tag:yaml.org,2002:int"
+_LARGEST = sys.float_info.max  # an integer beyond it is no finite double: no mass, length or parameter
 
 
 class _Composer(_BASE_COMPOSER):
@@ -177,17 +180,19 @@ class _Doc:
             finally:
                 self._open.discard(id(node))
         try:
-            return self._scalar(node)
+            return self._scalar(node, path)
         except yaml.YAMLError as exc:
             raise ModelError(self.file, _path(path), f"not valid YAML: {getattr(exc, 'problem', None) or exc}",
                              line) from None
 
-    def _scalar(self, node):
+    def _scalar(self, node, path):
         """A scalar by its tag's constructor directly (what construct_object does for a scalar, without its
         bookkeeping: a model has tens of thousands of scalars)."""
         tag = node.tag
         if tag == _STR:
             return node.value
+        if tag == _INT:
+            return self._integer(node, path)
         if tag == _FLOAT and ":" not in node.value and node.value[:1] != ".":
             try:  # the resolver matched YAML's float pattern: digits, a point, an exponent, underscores
                 return float(node.value)
@@ -197,6 +202,22 @@ class _Doc:
             return self._constructor.yaml_constructors[tag](self._constructor, node)
         return self._constructor.construct_object(node, deep=True)
 
+    def _integer(self, node, path) -> int:
+        """A YAML integer; one beyond every finite double (e.g. 5,000 digits, which Python will not even convert
+        from text) is an error naming its path and line."""
+        try:
+            value = self._constructor.yaml_constructors[_INT](self._constructor, node)
+        except ValueError:  # more digits than Python converts (sys.get_int_max_str_digits)
+            value = None
+        if value is None or abs(value) > _LARGEST:
+            text = node.value.strip()
+            digits = sum(ch.isdigit() for ch in text)
+            raise ModelError(self.file, _path(path), f"the integer {text[:20]}... ({digits:,} digits) is larger "
+                                                     f"than any finite double (about 1.8e308): write the intended "
+                                                     f"value, e.g. as a float with an exponent such as 1.5e40",
+                             node.start_mark.line + 1)
+        return value
+
     def _collection(self, node, path):
         if isinstance(node, yaml.MappingNode):
             out = {}
@@ -205,7 +226,7 @@ class _Doc:
                         key_node.tag == "tag:yaml.org,2002:map":
                     raise ModelError(self.file, _path(path), "a key must be a name",
                                      key_node.start_mark.line + 1)
-                key = self._scalar(key_node)
+                key = self._scalar(key_node, path)
                 if not isinstance(key, (str, int)):
                     raise ModelError(self.file, _path(path), f"a key must be a name, got {key!r}",
                                      key_node.start_mark.line + 1)
