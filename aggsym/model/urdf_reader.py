@@ -166,9 +166,9 @@ def _tidy(rotation) -> list:
     return out
 
 
-ANGLE_ROUND_OFF = 1e-14  # rad: an angle of the file this close to a multiple of pi/2 is that multiple written to
-# double precision (1.5707963267948966, 1.57079632679490, 3.14159265358979): it is taken as the exact multiple, the
-# change being round-off.  Nothing farther is moved: 1.57079632679 (5e-12 off) or 1.5708 stay what they are, unless
+ANGLE_ROUND_OFF = 1e-15  # rad (times k for k pi/2): an angle of the file this close to a multiple of pi/2 is that
+# multiple written to double precision (1.5707963267948966, 1.570796326794897, 3.141592653589793; a few units in the
+# last place): it is taken as the exact multiple, the change being round-off.  Nothing farther is moved: 1.57079632679 (5e-12 off) or 1.5708 stay what they are, unless
 # the user asks for it (``snap_angles``, recorded in the manifest).
 
 
