@@ -225,7 +225,7 @@ def test_numeric_grouping_is_the_symbolic_one_without_its_round_off(robot, monke
     exact, fast = module._grouped_symbols(*calls[0]), numbers(*calls[0])
     assert fast == [None if b.inertial is None else b.inertial.mises() for b in inner.bodies]
     flushed = 0
-    for s, f in zip(exact, fast):
+    for s, f in zip(exact, fast):  # (s, f: each body's Mises matrix, SymPy's and NumPy's)
         assert (s is None) == (f is None)
         if s is None:
             continue
@@ -236,5 +236,8 @@ def test_numeric_grouping_is_the_symbolic_one_without_its_round_off(robot, monke
             assert abs(a - b) <= 1e-13 * scale
             assert (b == 0) == (abs(a) <= module.ROUND_OFF * scale)
             flushed += a != 0 and b == 0
-    if "hyq" in robot:
-        assert flushed == 4
+    if "hyq" in robot:  # the upper legs' h3: SymPy once left 6.8e-21 kg m there (flushed by the numeric path); with
+        # the reader's round-off taken relative to each vector's size (issue 30) it is exactly 0 in both
+        upper = [k for k, b in enumerate(model.bodies) if b.name.endswith("upperleg")]
+        assert len(upper) == 4 and all(fast[k][1][2] == 0 and exact[k][1][2] == 0 for k in upper)
+        assert flushed == 0
