@@ -7,7 +7,7 @@ import sympy as sp
 from aggsym.core.backend import Numeric, Symbolic
 from aggsym.core.program import Node, Program
 from aggsym.core.program import to_sympy
-from aggsym.mechanics.group import Motion, phi_force, phi_motion, rotation
+from aggsym.mechanics.group import Chain, Motion, phi_force, phi_motion, rotation
 from aggsym.mechanics.kinematics import pair_functional, pair_velocity_product
 from aggsym.mechanics.linalg import mm
 
@@ -33,6 +33,13 @@ def test_value_numbering_shares_equal_operations():
     n = len(prog.ops)
     _ = prog.cos(x) * y, prog.cos(x) * y
     assert len(prog.ops) == n + 2  # cos(x) once, the product once
+
+
+def test_a_term_and_its_opposite_cancel():
+    prog = Program()
+    x, y = prog.input("q", 0), prog.input("q", 1)
+    assert (x - y) - x == -y and (x + y) - y == x and (x - y) + y == x and x + (y - x) == y
+    assert x - (x + y) == -y and x - (x - y) == y
 
 
 def test_program_evaluates_like_floats():
@@ -67,6 +74,19 @@ def test_motion_group(rng):
     # power is invariant: (L^T V) . F = V . (L F)
     V = tuple(rng.normal(size=6))
     assert np.isclose(np.dot(L1.twist(V), F), np.dot(V, L1.wrench(F)))
+
+
+def test_a_chain_turns_like_its_product(rng):
+    factors = [rotation(1, np.cos(a), np.sin(a)) if i % 2 else rotation(3, np.cos(a), np.sin(a))
+               for i, a in enumerate(rng.uniform(-3, 3, 3))]
+    c = mm(mm(factors[0], factors[1]), factors[2])
+    L = Motion(c, tuple(rng.normal(size=3)))
+    C = Chain(c, L.o, factors)
+    F = tuple(rng.normal(size=6))
+    for method in ("wrench", "twist", "motion"):
+        assert np.allclose(getattr(C, method)(F), getattr(L, method)(F))
+    assert np.allclose(C.rotate_free(F[:3]), L.rotate_free(F[:3]))
+    assert np.allclose(C.unrotate_free(F[:3]), L.unrotate_free(F[:3]))
 
 
 def test_phi_is_derivative_of_motion(rng):

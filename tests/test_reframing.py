@@ -34,8 +34,8 @@ ARMS = {  # example-robot-data files (benchmarks/run.py OPSN_ROBOTS)
 # operations per coordinate (mul + add + div + call of the emitted C, as the manifest counts them) reached by the
 # internal frames; before them: ID 57.5 / 95.1 / 120.2 / 129.7, FD 110.2 / 181.8 / 279.5 / 276.7
 OPS_PER_N = {  # role -> robot -> bound
-    "inverse_dynamics": {"ur5": 46, "panda": 76, "so100": 91, "xarm7": 116},
-    "forward_dynamics": {"ur5": 83, "panda": 150, "so100": 172, "xarm7": 254},
+    "inverse_dynamics": {"ur5": 46, "panda": 75, "so100": 88, "xarm7": 110},
+    "forward_dynamics": {"ur5": 82, "panda": 148, "so100": 168, "xarm7": 247},
 }
 
 

@@ -145,6 +145,11 @@ class Node:
         return f"<t{self.id} {self.prog.ops[self.id][0]}>"
 
 
+def _same(x, node) -> bool:
+    """x is the node ``node`` (an operand that is a constant is not)."""
+    return x.__class__ is Node and x.id == node.id
+
+
 def _key(x):
     """Hash key and sort key of an operand: constants first, then nodes by id."""
     if isinstance(x, Node):
@@ -321,6 +326,10 @@ class Program:
             ea = ops[a.id]
             if ea[0] == NEG:
                 return self._sub(b, ea[1])
+            if ea[0] == SUB and _same(ea[2], b):  # (x - b) + b = x
+                return ea[1]
+            if eb[0] == SUB and _same(eb[2], a):  # a + (x - a) = x
+                return eb[1]
             return self._make2(ADD, a, b)
         if type(a) in _EXACT and a == 0:
             return b
@@ -350,6 +359,15 @@ class Program:
             ea = ops[a.id]
             if ea[0] == NEG:  # -x - b = -(x + b)
                 return self._neg(self._add(ea[1], b))
+            # a term and its opposite cancel: (x + b) - b = x, (b - y) - b = -y, a - (a + y) = -y, a - (a - y) = y
+            if ea[0] == ADD and (_same(ea[1], b) or _same(ea[2], b)):
+                return ea[2] if _same(ea[1], b) else ea[1]
+            if ea[0] == SUB and _same(ea[1], b):
+                return self._neg(ea[2])
+            if eb[0] == ADD and (_same(eb[1], a) or _same(eb[2], a)):
+                return self._neg(eb[2] if _same(eb[1], a) else eb[1])
+            if eb[0] == SUB and _same(eb[1], a):
+                return eb[2]
             return self._make2(SUB, a, b)
         if type(b) in _EXACT and b == 0:
             return a

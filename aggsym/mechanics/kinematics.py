@@ -29,7 +29,7 @@ from __future__ import annotations
 from ..model.types import code_index
 from .aggregates import Rigid
 from ..core.program import is_zero
-from .group import Motion, phi_motion, rotation
+from .group import Chain, Motion, phi_motion, rotation
 from .linalg import EYE3, ZERO3, add, cross, dot, mm, mtv, mv, scale, sub
 
 ZERO6 = (0, 0, 0, 0, 0, 0)
@@ -162,7 +162,10 @@ class TreeKinematics:
                 functional, psi, rots = free_flyer(qv)
             else:
                 functional, psi, rots = pair_functional(body.codes, qv, bound.backend)
-            self.L.append(body.L0.compose(functional))
+            L = body.L0.compose(functional)
+            if body.steps is not None and rots:  # a constant rotation by an angle not a multiple of pi/2
+                L = Chain(L.c, L.o, [rotation(a, c, s) for a, c, s in body.steps] + [m for _, m in rots])
+            self.L.append(L)
             self.psi.append(psi)
             self.functional.append(functional)
             self.rotations.append(rots)

@@ -405,6 +405,7 @@ def _grouped_numbers(tree, forms, axes, places, motions, revolute) -> list:
         return kept[0], np.array(kept[1]), np.array(kept[2])
 
     def finish(m, h, th):
+        th = (th + th.T) / 2  # symmetric exactly: the two round-offs of one product of inertia are one number
         tiny = ROUND_OFF * max(abs(float(x)) for x in (m, *h, *th.flat))
 
         def number(x):

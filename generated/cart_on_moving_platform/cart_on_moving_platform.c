@@ -440,7 +440,7 @@ void cart_on_moving_platform_joint_wrenches(const double *q, const double *qd, c
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 30 mul, 19 add, 4 div, 1 call */
+ * operations: 30 mul, 18 add, 4 div, 1 call */
 void cart_on_moving_platform_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd)
 {
     const double q_3 = q[3];
@@ -463,25 +463,24 @@ void cart_on_moving_platform_forward_dynamics(const double *q, const double *qd,
     const double x4 = x0*qd_3*qd_3;
     const double x5 = 1/(0.001 + p_1*p_2*p_2);
     const double x6 = x0*x5;
-    const double x7 = p_1 - x0*x6;
-    const double x8 = p_1 - x7;
-    const double x9 = x2*x2*x8;
-    const double x10 = x1*x2*x8;
-    const double x11 = 1/(p_0 + p_1 - x9);
-    const double x12 = x10*x11;
-    const double x13 = tau_3 - p_6*x0*x2;
-    const double x14 = x6*x13;
-    const double x15 = tau_2 - p_6*x3 - x1*x4 - x2*x14;
-    const double x16 = 1/(p_0 + x7 + x9 - x10*x12)*(tau_0 - x2*x4 + x1*x14 - x12*x15);
-    qdd[0] = x16;
+    const double x7 = x0*x6;
+    const double x8 = x2*x2*x7;
+    const double x9 = x1*x2*x7;
+    const double x10 = 1/(p_0 + p_1 - x8);
+    const double x11 = x9*x10;
+    const double x12 = tau_3 - p_6*x0*x2;
+    const double x13 = x6*x12;
+    const double x14 = tau_2 - p_6*x3 - x1*x4 - x2*x13;
+    const double x15 = 1/(p_0 + p_1 - x7 + x8 - x9*x11)*(tau_0 - x2*x4 + x1*x13 - x11*x14);
+    qdd[0] = x15;
     qdd[1] = tau_1*1/x3;
-    const double x17 = x11*x15 - x12*x16;
-    qdd[2] = x17;
-    qdd[3] = x5*x13 + x6*(x1*x16 - x2*x17);
+    const double x16 = x10*x14 - x11*x15;
+    qdd[2] = x16;
+    qdd[3] = x5*x12 + x6*(x1*x15 - x2*x16);
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 21 mul, 14 add, 4 div, 1 call */
+ * operations: 21 mul, 13 add, 4 div, 1 call */
 AGGSYM_SCALAR_STORES void cart_on_moving_platform_inertia_inverse(const double *q, const double *t, const double *p, double *Ainv)
 {
     const double q_3 = q[3];
@@ -501,34 +500,33 @@ AGGSYM_SCALAR_STORES void cart_on_moving_platform_inertia_inverse(const double *
     aggsym_sincos(q_3, &x2, &x1);
     const double x3 = 1/(0.001 + p_1*p_2*p_2);
     const double x4 = x0*x3;
-    const double x5 = p_1 - x0*x4;
-    const double x6 = p_1 - x5;
-    const double x7 = x2*x2*x6;
-    const double x8 = x1*x2*x6;
-    const double x9 = 1/(p_0 + p_1 - x7);
-    const double x10 = x8*x9;
+    const double x5 = x0*x4;
+    const double x6 = x2*x2*x5;
+    const double x7 = x1*x2*x5;
+    const double x8 = 1/(p_0 + p_1 - x6);
+    const double x9 = x7*x8;
     Ainv[5] = 1/(p_0 + p_1);
-    const double x11 = 1/(p_0 + x5 + x7 - x8*x10);
-    Ainv[0] = x11;
-    const double x12 = x2*x4;
-    const double x13 = x1*x4 + x10*x12;
-    const double x14 = x10*x11;
-    const double x15 = -x14;
-    Ainv[2] = x15;
-    Ainv[8] = x15;
-    const double x16 = x11*x13;
-    Ainv[3] = x16;
-    Ainv[12] = x16;
-    Ainv[10] = x9 + x10*x14;
-    const double x17 = x9*x12;
-    const double x18 = -(x17 + x13*x14);
-    Ainv[11] = x18;
-    Ainv[14] = x18;
-    Ainv[15] = x3 + x13*x16 + x12*x17;
+    const double x10 = 1/(p_0 + p_1 - x5 + x6 - x7*x9);
+    Ainv[0] = x10;
+    const double x11 = x2*x4;
+    const double x12 = x1*x4 + x9*x11;
+    const double x13 = x9*x10;
+    const double x14 = -x13;
+    Ainv[2] = x14;
+    Ainv[8] = x14;
+    const double x15 = x10*x12;
+    Ainv[3] = x15;
+    Ainv[12] = x15;
+    Ainv[10] = x8 + x9*x13;
+    const double x16 = x8*x11;
+    const double x17 = -(x16 + x12*x13);
+    Ainv[11] = x17;
+    Ainv[14] = x17;
+    Ainv[15] = x3 + x12*x15 + x11*x16;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 13 mul, 9 add, 2 div, 1 call */
+ * operations: 13 mul, 8 add, 2 div, 1 call */
 void cart_on_moving_platform_transvective_factors(const double *q, const double *t, const double *p, double *targs, double *diag)
 {
     const double q_3 = q[3];
@@ -548,15 +546,14 @@ void cart_on_moving_platform_transvective_factors(const double *q, const double 
     aggsym_sincos(q_3, &x3, &x2);
     diag[1] = p_0 + p_1;
     const double x4 = x0*1/x1;
-    const double x5 = p_1 - x0*x4;
-    const double x6 = p_1 - x5;
-    const double x7 = x3*x3*x6;
-    const double x8 = x2*x3*x6;
-    const double x9 = p_0 + p_1 - x7;
-    diag[2] = x9;
-    const double x10 = x8*1/x9;
-    targs[1] = x10;
-    diag[0] = p_0 + x5 + x7 - x8*x10;
+    const double x5 = x0*x4;
+    const double x6 = x3*x3*x5;
+    const double x7 = x2*x3*x5;
+    const double x8 = p_0 + p_1 - x6;
+    diag[2] = x8;
+    const double x9 = x7*1/x8;
+    targs[1] = x9;
+    diag[0] = p_0 + p_1 - x5 + x6 - x7*x9;
     targs[3] = -x2*x4;
     targs[5] = x3*x4;
 }
@@ -655,7 +652,7 @@ void cart_on_moving_platform_slip_velocities(const double *q, const double *qd, 
 }
 
 /* G = J A^-1 J^T, m*m row-major, by the transvective factors: P = T J^T, G = P^T diag(1/(beta,beta)) P (3.19)
- * operations: 31 mul, 15 add, 4 div, 3 call */
+ * operations: 31 mul, 14 add, 4 div, 3 call */
 void cart_on_moving_platform_delassus(const double *q, const double *t, const double *p, double *G)
 {
     const double q_3 = q[3];
@@ -668,33 +665,32 @@ void cart_on_moving_platform_delassus(const double *q, const double *t, const do
     const double p_4 = p[4];
     const double p_5 = p[5];
     const double x0 = p_1*p_2;
-    double x2, x1, x11, x11_cos;
-    aggsym_sincos2(q_3, p_5*0.5*t_0, &x2, &x1, &x11, &x11_cos);
-    const double x3 = p_1 - x0*x0*1/(0.001 + p_1*p_2*p_2);
-    const double x4 = p_1 - x3;
-    const double x5 = x2*x2*x4;
-    const double x6 = x1*x2*x4;
-    const double x7 = 1/(p_0 + p_1 - x5);
-    const double x8 = x6*x7;
-    const double x9 = 1/(p_0 + p_1);
-    const double x10 = 1/(p_0 + x3 + x5 - x6*x8);
-    const double x12 = p_4*x11;
-    double x14, x13;
-    aggsym_sincos(x12, &x14, &x13);
-    const double x15 = x8*x14;
-    const double x16 = x8*x13;
-    const double x17 = x10*x15;
-    const double x18 = x9*x13;
-    const double x19 = x7*x14;
-    G[0] = x15*x17 + x13*x18 + x14*x19;
-    const double x20 = x16*x17 - x14*x18 + x13*x19;
-    G[1] = x20;
-    G[2] = x20;
-    G[3] = x16*x10*x16 + x14*x9*x14 + x13*x7*x13;
+    double x2, x1, x10, x10_cos;
+    aggsym_sincos2(q_3, p_5*0.5*t_0, &x2, &x1, &x10, &x10_cos);
+    const double x3 = x0*x0*1/(0.001 + p_1*p_2*p_2);
+    const double x4 = x2*x2*x3;
+    const double x5 = x1*x2*x3;
+    const double x6 = 1/(p_0 + p_1 - x4);
+    const double x7 = x5*x6;
+    const double x8 = 1/(p_0 + p_1);
+    const double x9 = 1/(p_0 + p_1 - x3 + x4 - x5*x7);
+    const double x11 = p_4*x10;
+    double x13, x12;
+    aggsym_sincos(x11, &x13, &x12);
+    const double x14 = x7*x13;
+    const double x15 = x7*x12;
+    const double x16 = x9*x14;
+    const double x17 = x8*x12;
+    const double x18 = x6*x13;
+    G[0] = x14*x16 + x12*x17 + x13*x18;
+    const double x19 = x15*x16 - x13*x17 + x12*x18;
+    G[1] = x19;
+    G[2] = x19;
+    G[3] = x15*x9*x15 + x13*x8*x13 + x12*x6*x12;
 }
 
 /* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution)
- * operations: 120 mul, 71 add, 7 div, 6 call */
+ * operations: 120 mul, 70 add, 7 div, 6 call */
 int cart_on_moving_platform_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd, double *lambda)
 {
     double status[1];
@@ -719,71 +715,70 @@ int cart_on_moving_platform_constrained_forward_dynamics(const double *q, const 
     const double p_5 = p[5];
     const double p_6 = p[6];
     const double x0 = p_1*p_2;
-    const double x22 = p_5*0.5*t_0;
-    double x2, x1, x23, x33;
-    aggsym_sincos2(q_3, x22, &x2, &x1, &x23, &x33);
+    const double x21 = p_5*0.5*t_0;
+    double x2, x1, x22, x32;
+    aggsym_sincos2(q_3, x21, &x2, &x1, &x22, &x32);
     const double x3 = p_0 + p_1;
     const double x4 = x0*qd_3*qd_3;
     const double x5 = 1/(0.001 + p_1*p_2*p_2);
     const double x6 = x0*x5;
-    const double x7 = p_1 - x0*x6;
-    const double x8 = p_1 - x7;
-    const double x9 = x2*x2*x8;
-    const double x10 = x1*x2*x8;
-    const double x11 = 1/(p_0 + p_1 - x9);
-    const double x12 = x10*x11;
-    const double x13 = 1/x3;
-    const double x14 = 1/(p_0 + x7 + x9 - x10*x12);
-    const double x15 = tau_3 - p_6*x0*x2;
-    const double x16 = x6*x15;
-    const double x17 = tau_2 - p_6*x3 - x1*x4 - x2*x16;
-    const double x18 = tau_0 - x2*x4 + x1*x16 - x12*x17;
-    const double x19 = x14*x18;
-    const double x20 = tau_1*x13;
-    const double x21 = x11*x17;
-    const double x24 = p_4*x23;
-    const double x27 = p_5*t_0;
-    double x26, x25, x28, x29;
-    aggsym_sincos2(x24, x27, &x26, &x25, &x28, &x29);
-    const double x30 = x29*p_3*p_5;
-    const double x31 = p_5*p_5;
-    const double x32 = x25*x25;
-    const double x34 = p_5*0.5*p_4;
-    const double x35 = x26*x26;
-    const double x36 = x33*x32*x34 + x33*x34*x35;
-    const double x37 = x31*0.25*p_4;
-    const double x38 = x23*x32*x37 + x23*x35*x37;
-    const double x39 = q_2 - p_3*x28;
-    const double x40 = qd_2 - x30;
-    const double x41 = x36*x39;
-    const double x42 = q_1*x36;
-    const double x43 = x36*x40 - x38*x39 + x36*(x40 - x42);
-    const double x44 = x28*p_3*x31 + q_1*x38 - qd_1*x36 - x36*(qd_1 + x41);
-    const double x45 = x12*x26;
-    const double x46 = x12*x25;
-    const double x47 = x14*x45;
-    const double x48 = x13*x25;
-    const double x49 = x11*x26;
-    const double x50 = x45*x47 + x25*x48 + x26*x49;
-    const double x51 = x46*x14*x46 + x26*x13*x26 + x25*x11*x25;
-    const double x52 = x30 + x42;
-    const double x53 = x25*x43 + x26*x44 + x20*x25 - x19*x45 + x21*x26 + 20*(x25*x41 - x26*x52 + qd_1*x25 + qd_2*x26) + 100*(q_1*x25 + x26*x39);
-    const double x54 = (x46*x47 - x26*x48 + x25*x49)*1/x50;
-    const double x55 = x51 - x50*x54*x54;
-    const double x56 = (x26*x43 - x25*x44 - x21*x25 + x19*x46 + x20*x26 - 20*(qd_2*x25 - qd_1*x26 - x26*x41 - x25*x52) - 100*(x25*x39 - q_1*x26) + x53*x54)/x55;
-    lambda[1] = x56;
-    const double x57 = x53/x50 + x54*x56;
-    lambda[0] = -x57;
-    const double x58 = 5e-13*(x50 + x51);
-    const double x59 = aggsym_sign(x58 - x50);
-    const double x60 = aggsym_sign(x58 - x55);
-    status[0] = 2 + x59 + x60;
-    const double x61 = x14*(x18 + x45*x57 - x46*x56);
-    qdd[0] = x61;
-    qdd[1] = x13*(tau_1 - x25*x57 - x26*x56);
-    const double x62 = x11*(x17 - x26*x57 + x25*x56) - x12*x61;
-    qdd[2] = x62;
-    qdd[3] = x5*x15 + x6*(x1*x61 - x2*x62);
+    const double x7 = x0*x6;
+    const double x8 = x2*x2*x7;
+    const double x9 = x1*x2*x7;
+    const double x10 = 1/(p_0 + p_1 - x8);
+    const double x11 = x9*x10;
+    const double x12 = 1/x3;
+    const double x13 = 1/(p_0 + p_1 - x7 + x8 - x9*x11);
+    const double x14 = tau_3 - p_6*x0*x2;
+    const double x15 = x6*x14;
+    const double x16 = tau_2 - p_6*x3 - x1*x4 - x2*x15;
+    const double x17 = tau_0 - x2*x4 + x1*x15 - x11*x16;
+    const double x18 = x13*x17;
+    const double x19 = tau_1*x12;
+    const double x20 = x10*x16;
+    const double x23 = p_4*x22;
+    const double x26 = p_5*t_0;
+    double x25, x24, x27, x28;
+    aggsym_sincos2(x23, x26, &x25, &x24, &x27, &x28);
+    const double x29 = x28*p_3*p_5;
+    const double x30 = p_5*p_5;
+    const double x31 = x24*x24;
+    const double x33 = p_5*0.5*p_4;
+    const double x34 = x25*x25;
+    const double x35 = x32*x31*x33 + x32*x33*x34;
+    const double x36 = x30*0.25*p_4;
+    const double x37 = x22*x31*x36 + x22*x34*x36;
+    const double x38 = q_2 - p_3*x27;
+    const double x39 = qd_2 - x29;
+    const double x40 = x35*x38;
+    const double x41 = q_1*x35;
+    const double x42 = x35*x39 - x37*x38 + x35*(x39 - x41);
+    const double x43 = x27*p_3*x30 + q_1*x37 - qd_1*x35 - x35*(qd_1 + x40);
+    const double x44 = x11*x25;
+    const double x45 = x11*x24;
+    const double x46 = x13*x44;
+    const double x47 = x12*x24;
+    const double x48 = x10*x25;
+    const double x49 = x44*x46 + x24*x47 + x25*x48;
+    const double x50 = x45*x13*x45 + x25*x12*x25 + x24*x10*x24;
+    const double x51 = x29 + x41;
+    const double x52 = x24*x42 + x25*x43 + x19*x24 - x18*x44 + x20*x25 + 20*(x24*x40 - x25*x51 + qd_1*x24 + qd_2*x25) + 100*(q_1*x24 + x25*x38);
+    const double x53 = (x45*x46 - x25*x47 + x24*x48)*1/x49;
+    const double x54 = x50 - x49*x53*x53;
+    const double x55 = (x25*x42 - x24*x43 - x20*x24 + x18*x45 + x19*x25 - 20*(qd_2*x24 - qd_1*x25 - x25*x40 - x24*x51) - 100*(x24*x38 - q_1*x25) + x52*x53)/x54;
+    lambda[1] = x55;
+    const double x56 = x52/x49 + x53*x55;
+    lambda[0] = -x56;
+    const double x57 = 5e-13*(x49 + x50);
+    const double x58 = aggsym_sign(x57 - x49);
+    const double x59 = aggsym_sign(x57 - x54);
+    status[0] = 2 + x58 + x59;
+    const double x60 = x13*(x17 + x44*x56 - x45*x55);
+    qdd[0] = x60;
+    qdd[1] = x12*(tau_1 - x24*x56 - x25*x55);
+    const double x61 = x10*(x16 - x25*x56 + x24*x55) - x11*x60;
+    qdd[2] = x61;
+    qdd[3] = x5*x14 + x6*(x1*x60 - x2*x61);
     return status[0] != 0.0;
 }
 
@@ -837,13 +832,11 @@ void cart_on_moving_platform_frame_jacobians(const double *q, const double *t, c
 }
 
 /* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
- * operations: 14 mul, 10 add, 0 div, 1 call */
+ * operations: 8 mul, 4 add, 0 div, 1 call */
 void cart_on_moving_platform_frame_accelerations(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *a)
 {
     const double q_3 = q[3];
-    const double qd_0 = qd[0];
-    const double qd_2 = qd[2];
-    const double qd_3 = qd[3];
+    (void)qd;
     const double qdd_0 = qdd[0];
     const double qdd_1 = qdd[1];
     const double qdd_2 = qdd[2];
@@ -856,12 +849,10 @@ void cart_on_moving_platform_frame_accelerations(const double *q, const double *
     a[4] = qdd_3;
     double x1, x0;
     aggsym_sincos(q_3, &x1, &x0);
-    const double x2 = qd_3*(qd_0*x1 + qd_2*x0);
-    const double x3 = qd_3*(qd_0*x0 - qd_2*x1);
-    const double x4 = x2 + qdd_0*x0 - qdd_2*x1 - x2;
-    const double x5 = x3 + qdd_0*x1 + qdd_2*x0 - x3;
-    a[0] = x0*x4 + x1*x5;
-    a[2] = x0*x5 - x1*x4;
+    const double x2 = qdd_0*x0 - qdd_2*x1;
+    const double x3 = qdd_0*x1 + qdd_2*x0;
+    a[0] = x0*x2 + x1*x3;
+    a[2] = x0*x3 - x1*x2;
 }
 
 /* the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)
@@ -888,11 +879,9 @@ void cart_on_moving_platform_center_of_mass(const double *q, const double *t, co
 }
 
 /* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
- * operations: 8 mul, 5 add, 1 div, 1 call */
+ * operations: 6 mul, 1 add, 1 div, 1 call */
 void cart_on_moving_platform_com_jacobian(const double *q, const double *t, const double *p, double *Jc)
 {
-    const double q_0 = q[0];
-    const double q_2 = q[2];
     const double q_3 = q[3];
     (void)t;
     static const double p_defaults[7] = {2.0, 0.5, 0.6, 0.05, 0.1, 3.0, 9.81};
@@ -913,8 +902,6 @@ void cart_on_moving_platform_com_jacobian(const double *q, const double *t, cons
     Jc[0] = x5;
     Jc[5] = x5;
     Jc[10] = x5;
-    const double x6 = p_1*q_0;
-    const double x7 = p_1*q_2;
-    Jc[3] = x4*(x7 - x0*x1 - x7);
-    Jc[11] = x4*(x6 + x0*x2 - x6);
+    Jc[11] = x0*x2*x4;
+    Jc[3] = -x0*x1*x4;
 }

@@ -547,7 +547,7 @@ void double_pendulum_joint_wrenches(const double *q, const double *qd, const dou
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 52 mul, 33 add, 3 div, 2 call */
+ * operations: 52 mul, 32 add, 3 div, 2 call */
 void double_pendulum_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_1 = q[1];
@@ -587,16 +587,16 @@ void double_pendulum_forward_dynamics(const double *q, const double *qd, const d
     const double x17 = x7*x16;
     const double x18 = 1/x3;
     const double x19 = x0*x18;
-    const double x20 = p_1 - x0*x19;
+    const double x20 = x0*x19;
     const double x21 = tau_2 - x0*x17 + x10*x14;
-    const double x22 = 1/(p_0 + x20 + x8*(p_1 - x20))*(tau_0 - x6*(x0*x14 + p_1*x17 + x19*x21) + x7*(x0*(x12*x12 + qd_2*qd_2) + p_1*x6*x16));
+    const double x22 = 1/(p_0 + p_1 - x20 + x8*x20)*(tau_0 - x6*(x0*x14 + p_1*x17 + x19*x21) + x7*(x0*(x12*x12 + qd_2*qd_2) + p_1*x6*x16));
     qdd[0] = x22;
     qdd[1] = 1/(p_6 + p_0*p_2*p_2 + p_4*(x9 + p_1*p_4) + x2 + x8*x10 + p_4*x9)*(tau_1 - x7*qd_2*x12*(x3 + x10) - x6*(x13*(p_8 - x3) - x2*x13 - x0*x15) + p_4*(x0*(x13 + x13) + p_1*x15) + p_0*p_2*x15);
     qdd[2] = x18*x21 - x19*x6*x22;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 17 mul, 14 add, 3 div, 1 call */
+ * operations: 17 mul, 13 add, 3 div, 1 call */
 AGGSYM_SCALAR_STORES void double_pendulum_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_2 = q[2];
@@ -624,9 +624,9 @@ AGGSYM_SCALAR_STORES void double_pendulum_inertia_inverse(const double *q, const
     const double x6 = x0*x3;
     const double x7 = 1/(p_10 + x1);
     const double x8 = x0*x7;
-    const double x9 = p_1 - x0*x8;
+    const double x9 = x0*x8;
     Ainv[4] = 1/(p_6 + p_0*p_2*p_2 + p_4*(x6 + p_1*p_4) + x2 + x5*(p_8 - x2) + p_4*x6);
-    const double x10 = 1/(p_0 + x9 + x5*(p_1 - x9));
+    const double x10 = 1/(p_0 + p_1 - x9 + x5*x9);
     Ainv[0] = x10;
     const double x11 = x3*x8;
     const double x12 = x10*x11;
@@ -637,7 +637,7 @@ AGGSYM_SCALAR_STORES void double_pendulum_inertia_inverse(const double *q, const
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 15 mul, 13 add, 1 div, 1 call */
+ * operations: 15 mul, 12 add, 1 div, 1 call */
 void double_pendulum_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_2 = q[2];
@@ -664,8 +664,8 @@ void double_pendulum_transvective_factors(const double *q, const double *p, doub
     const double x6 = x5*x5;
     const double x7 = x0*x4;
     const double x8 = x0*1/x3;
-    const double x9 = p_1 - x0*x8;
-    diag[0] = p_0 + x9 + x6*(p_1 - x9);
+    const double x9 = x0*x8;
+    diag[0] = p_0 + p_1 - x9 + x6*x9;
     diag[1] = p_6 + p_0*p_2*p_2 + p_4*(x7 + p_1*p_4) + x2 + x6*(p_8 - x2) + p_4*x7;
     targs[1] = x4*x8;
 }

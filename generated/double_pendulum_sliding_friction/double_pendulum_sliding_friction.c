@@ -541,7 +541,7 @@ void double_pendulum_sliding_friction_joint_wrenches(const double *q, const doub
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 52 mul, 33 add, 3 div, 2 call */
+ * operations: 52 mul, 32 add, 3 div, 2 call */
 void double_pendulum_sliding_friction_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_1 = q[1];
@@ -581,16 +581,16 @@ void double_pendulum_sliding_friction_forward_dynamics(const double *q, const do
     const double x17 = x7*x16;
     const double x18 = 1/x3;
     const double x19 = x0*x18;
-    const double x20 = p_1 - x0*x19;
+    const double x20 = x0*x19;
     const double x21 = tau_2 - x0*x17 + x10*x14;
-    const double x22 = 1/(p_0 + x20 + x8*(p_1 - x20))*(tau_0 - x6*(x0*x14 + p_1*x17 + x19*x21) + x7*(x0*(x12*x12 + qd_2*qd_2) + p_1*x6*x16));
+    const double x22 = 1/(p_0 + p_1 - x20 + x8*x20)*(tau_0 - x6*(x0*x14 + p_1*x17 + x19*x21) + x7*(x0*(x12*x12 + qd_2*qd_2) + p_1*x6*x16));
     qdd[0] = x22;
     qdd[1] = 1/(p_9 + p_0*p_2*p_2 + p_4*(x9 + p_1*p_4) + x2 + x8*x10 + p_4*x9)*(tau_1 - p_0*p_2*x15 - x7*qd_2*x12*(x3 + x10) - x6*(x13*(p_11 - x3) - x2*x13 + x0*x15) + p_4*(x0*(x13 + x13) - p_1*x15));
     qdd[2] = x18*x21 - x19*x6*x22;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 17 mul, 14 add, 3 div, 1 call */
+ * operations: 17 mul, 13 add, 3 div, 1 call */
 AGGSYM_SCALAR_STORES void double_pendulum_sliding_friction_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_2 = q[2];
@@ -618,9 +618,9 @@ AGGSYM_SCALAR_STORES void double_pendulum_sliding_friction_inertia_inverse(const
     const double x6 = x0*x3;
     const double x7 = 1/(p_13 + x1);
     const double x8 = x0*x7;
-    const double x9 = p_1 - x0*x8;
+    const double x9 = x0*x8;
     Ainv[4] = 1/(p_9 + p_0*p_2*p_2 + p_4*(x6 + p_1*p_4) + x2 + x5*(p_11 - x2) + p_4*x6);
-    const double x10 = 1/(p_0 + x9 + x5*(p_1 - x9));
+    const double x10 = 1/(p_0 + p_1 - x9 + x5*x9);
     Ainv[0] = x10;
     const double x11 = x3*x8;
     const double x12 = x10*x11;
@@ -631,7 +631,7 @@ AGGSYM_SCALAR_STORES void double_pendulum_sliding_friction_inertia_inverse(const
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 15 mul, 13 add, 1 div, 1 call */
+ * operations: 15 mul, 12 add, 1 div, 1 call */
 void double_pendulum_sliding_friction_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_2 = q[2];
@@ -658,8 +658,8 @@ void double_pendulum_sliding_friction_transvective_factors(const double *q, cons
     const double x6 = x5*x5;
     const double x7 = x0*x4;
     const double x8 = x0*1/x3;
-    const double x9 = p_1 - x0*x8;
-    diag[0] = p_0 + x9 + x6*(p_1 - x9);
+    const double x9 = x0*x8;
+    diag[0] = p_0 + p_1 - x9 + x6*x9;
     diag[1] = p_9 + p_0*p_2*p_2 + p_4*(x7 + p_1*p_4) + x2 + x6*(p_11 - x2) + p_4*x7;
     targs[1] = x4*x8;
 }
@@ -681,10 +681,9 @@ void double_pendulum_sliding_friction_constraint_residual(const double *q, const
 }
 
 /* J(q) = D_lambda^T, m*n row-major: the forbidden relative motions per unit rate of each coordinate, rows of the parastrophic matrix S moved to the contact points (4.5)-(4.12)
- * operations: 5 mul, 3 add, 0 div, 2 call */
+ * operations: 5 mul, 1 add, 0 div, 2 call */
 void double_pendulum_sliding_friction_constraint_jacobian(const double *q, const double *p, double *J)
 {
-    const double q_0 = q[0];
     const double q_1 = q[1];
     const double q_2 = q[2];
     static const double p_defaults[15] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.4, 0.7, 0.3, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
@@ -695,11 +694,11 @@ void double_pendulum_sliding_friction_constraint_jacobian(const double *q, const
     double x1, x0, x3, x2;
     aggsym_sincos2(q_1, q_2, &x1, &x0, &x3, &x2);
     J[1] = -(p_4*x1 + p_5*x1*x2);
-    J[2] = -x0*(q_0 + p_5*x3 - q_0);
+    J[2] = -x0*p_5*x3;
 }
 
 /* gamma(q, qd) = J' qd: the relative accelerations at qdd = 0 (S'^T qd of (2.37) at the contact points), so that J qdd + gamma is the constraints' acceleration
- * operations: 21 mul, 10 add, 0 div, 2 call */
+ * operations: 20 mul, 8 add, 0 div, 2 call */
 void double_pendulum_sliding_friction_constraint_bias(const double *q, const double *qd, const double *p, double *gamma)
 {
     const double q_1 = q[1];
@@ -715,19 +714,16 @@ void double_pendulum_sliding_friction_constraint_bias(const double *q, const dou
     aggsym_sincos2(q_1, q_2, &x1, &x0, &x3, &x2);
     const double x4 = qd_1*x3;
     const double x5 = qd_1*x2;
-    const double x6 = qd_0*x3;
-    const double x7 = qd_0*x2;
-    const double x8 = qd_2*x6;
-    const double x9 = x7 + p_5*qd_2;
-    const double x10 = p_4*qd_1 + p_5*x5;
-    gamma[0] = x0*x2*(qd_2*x7 - x5*x10 - qd_2*x9) - x0*x3*(x8 + x4*x10 - x8) + x1*(p_5*qd_2*x4 + x4*x9 - x5*x6);
+    const double x6 = qd_0*x2;
+    const double x7 = x6 + p_5*qd_2;
+    const double x8 = p_4*qd_1 + p_5*x5;
+    gamma[0] = x0*x2*(qd_2*x6 - x5*x8 - qd_2*x7) - x0*x3*x4*x8 + x1*(p_5*qd_2*x4 + x4*x7 - x5*qd_0*x3);
 }
 
 /* w(q, qd) = D_k+^T V (4.33)-(4.34): each contact point's velocity relative to the medium along the free translations of its constraint (the sliding velocities friction acts on)
- * operations: 13 mul, 9 add, 0 div, 2 call */
+ * operations: 12 mul, 4 add, 0 div, 2 call */
 void double_pendulum_sliding_friction_slip_velocities(const double *q, const double *qd, const double *p, double *w)
 {
-    const double q_0 = q[0];
     const double q_1 = q[1];
     const double q_2 = q[2];
     const double qd_0 = qd[0];
@@ -739,18 +735,15 @@ void double_pendulum_sliding_friction_slip_velocities(const double *q, const dou
     const double p_5 = p[5];
     double x1, x0, x3, x2;
     aggsym_sincos2(q_1, q_2, &x1, &x0, &x3, &x2);
-    const double x4 = p_4*x0;
-    const double x5 = p_4*x1;
-    const double x6 = x4 + p_5*x0*x2;
-    w[0] = qd_0 + qd_2*(x0*(x6 - x4) - x1*(x5 - x5 - p_5*x1*x2));
-    w[1] = qd_2*x1*(q_0 + p_5*x3 - q_0) - qd_1*x6;
+    const double x4 = p_5*x0*x2;
+    w[0] = qd_0 + qd_2*(x0*x4 + x1*p_5*x1*x2);
+    w[1] = qd_2*x1*p_5*x3 - qd_1*(p_4*x0 + x4);
 }
 
 /* G = J A^-1 J^T, m*m row-major, by the transvective factors: P = T J^T, G = P^T diag(1/(beta,beta)) P (3.19)
- * operations: 27 mul, 18 add, 3 div, 2 call */
+ * operations: 27 mul, 15 add, 3 div, 2 call */
 void double_pendulum_sliding_friction_delassus(const double *q, const double *p, double *G)
 {
-    const double q_0 = q[0];
     const double q_1 = q[1];
     const double q_2 = q[2];
     static const double p_defaults[15] = {1.0, 0.8, 0.25, 0.2, 0.5, 0.4, 0.7, 0.3, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81};
@@ -774,19 +767,18 @@ void double_pendulum_sliding_friction_delassus(const double *q, const double *p,
     const double x8 = x0*x5;
     const double x9 = 1/(p_13 + x1);
     const double x10 = x0*x9;
-    const double x11 = p_1 - x0*x10;
+    const double x11 = x0*x10;
     const double x12 = p_4*x4 + p_5*x4*x5;
-    const double x13 = x3*(q_0 + p_5*x6 - q_0);
+    const double x13 = x3*p_5*x6;
     const double x14 = x5*x10*x13;
-    G[0] = x14*1/(p_0 + x11 + x7*(p_1 - x11))*x14 + x12*1/(p_9 + p_0*p_2*p_2 + p_4*(x8 + p_1*p_4) + x2 + x7*(p_11 - x2) + p_4*x8)*x12 + x13*x9*x13;
+    G[0] = x14*1/(p_0 + p_1 - x11 + x7*x11)*x14 + x12*1/(p_9 + p_0*p_2*p_2 + p_4*(x8 + p_1*p_4) + x2 + x7*(p_11 - x2) + p_4*x8)*x12 + x13*x9*x13;
 }
 
 /* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution)
- * operations: 128 mul, 80 add, 7 div, 8 call */
+ * operations: 127 mul, 73 add, 7 div, 8 call */
 int double_pendulum_sliding_friction_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd, double *lambda)
 {
     double status[1];
-    const double q_0 = q[0];
     const double q_1 = q[1];
     const double q_2 = q[2];
     const double qd_0 = qd[0];
@@ -823,61 +815,59 @@ int double_pendulum_sliding_friction_constrained_forward_dynamics(const double *
     const double x12 = qd_1*x6;
     const double x13 = qd_2*x11;
     const double x14 = x11*x12;
-    const double x15 = qd_0*x7;
-    const double x16 = qd_0*x6;
-    const double x17 = p_14*x5;
-    const double x18 = p_4*qd_1*qd_1 + p_14*x4;
-    const double x19 = x7*x18;
-    const double x20 = x4*x6;
-    const double x21 = p_4*x4;
-    const double x22 = p_4*x5;
-    const double x23 = 1/x3;
-    const double x24 = x0*x23;
-    const double x25 = p_1 - x0*x24;
-    const double x26 = 1/(p_9 + p_0*p_2*p_2 + p_4*(x9 + p_1*p_4) + x2 + x8*x10 + p_4*x9);
-    const double x27 = 1/(p_0 + x25 + x8*(p_1 - x25));
-    const double x28 = tau_2 - x0*x19 + x10*x14;
-    const double x29 = tau_0 - x6*(x0*x14 + p_1*x19 + x24*x28) + x7*(x0*(x12*x12 + qd_2*qd_2) + p_1*x6*x18);
-    const double x30 = tau_1 - p_0*p_2*x17 - x7*qd_2*x12*(x3 + x10) - x6*(x13*(p_11 - x3) - x2*x13 + x0*x17) + p_4*(x0*(x13 + x13) - p_1*x17);
-    const double x31 = x21 + p_5*x20;
-    const double x32 = x22 + p_5*x5*x6;
-    const double x33 = q_0 + p_5*x7 - q_0;
-    const double x34 = x4*x33;
-    const double x35 = x4*(x31 - x21) - x5*(x22 - x32);
-    const double x36 = x5*x33;
-    const double x37 = qd_2*x15;
-    const double x38 = x16 + p_5*qd_2;
-    const double x39 = p_4*qd_1 + p_5*x12;
-    const double x40 = qd_0 + qd_2*x35;
-    const double x41 = qd_2*x36 - qd_1*x31;
-    const double x42 = x6*x24*x34;
-    const double x43 = x27*x42;
-    const double x44 = x26*x32;
-    const double x45 = x23*x34;
-    const double x46 = 20*(qd_1*x32 + qd_2*x34) - x20*(qd_2*x16 - x12*x39 - qd_2*x38) + x4*x7*(x37 + x11*x39 - x37) - x5*(p_5*x13 + x11*x38 - x12*x15) - x27*x29*x42 + x26*x30*x32 + x23*x28*x34 - 100*(x31 - p_6);
-    const double x47 = aggsym_sign(x46/(x42*x43 + x32*x44 + x34*x45));
-    const double x48 = sqrt(x40*x40 + x41*x41);
-    const double x49 = aggsym_sign(x48 - 1e-09);
-    const double x50 = 0.5*(x49 + x49*x49);
-    const double x51 = 1 + x48 - x50;
-    const double x52 = x40*x50/x51;
-    const double x53 = x41*x50/x51;
-    const double x54 = p_7*x47;
-    const double x55 = (x35*x52 + x36*x53)*x54;
-    const double x56 = x42 + x6*x24*x55 - x52*x54;
-    const double x57 = x31*x53*x54 - x32;
-    const double x58 = x34 + x55;
-    const double x59 = x43*x56 - x44*x57 + x45*x58;
-    const double x60 = x46/x59;
-    lambda[0] = x60;
-    const double x61 = fabs(x59);
-    const double x62 = aggsym_sign(1e-12*x61 - x61);
-    const double x63 = aggsym_sign(-x47*x60);
-    status[0] = 0.5*(x62 + x62*x62) + 0.5*(x63 + x63*x63);
-    const double x64 = x27*(x29 + x56*x60);
-    qdd[0] = x64;
-    qdd[1] = x26*(x30 + x57*x60);
-    qdd[2] = x23*(x28 - x58*x60) - x24*x6*x64;
+    const double x15 = qd_0*x6;
+    const double x16 = p_14*x5;
+    const double x17 = p_4*qd_1*qd_1 + p_14*x4;
+    const double x18 = x7*x17;
+    const double x19 = x4*x6;
+    const double x20 = 1/x3;
+    const double x21 = x0*x20;
+    const double x22 = x0*x21;
+    const double x23 = 1/(p_9 + p_0*p_2*p_2 + p_4*(x9 + p_1*p_4) + x2 + x8*x10 + p_4*x9);
+    const double x24 = 1/(p_0 + p_1 - x22 + x8*x22);
+    const double x25 = tau_2 - x0*x18 + x10*x14;
+    const double x26 = tau_0 - x6*(x0*x14 + p_1*x18 + x21*x25) + x7*(x0*(x12*x12 + qd_2*qd_2) + p_1*x6*x17);
+    const double x27 = tau_1 - p_0*p_2*x16 - x7*qd_2*x12*(x3 + x10) - x6*(x13*(p_11 - x3) - x2*x13 + x0*x16) + p_4*(x0*(x13 + x13) - p_1*x16);
+    const double x28 = p_5*x19;
+    const double x29 = p_5*x7;
+    const double x30 = p_5*x5*x6;
+    const double x31 = p_4*x4 + x28;
+    const double x32 = p_4*x5 + x30;
+    const double x33 = x4*x29;
+    const double x34 = x4*x28 + x5*x30;
+    const double x35 = x5*x29;
+    const double x36 = x15 + p_5*qd_2;
+    const double x37 = p_4*qd_1 + p_5*x12;
+    const double x38 = qd_0 + qd_2*x34;
+    const double x39 = qd_2*x35 - qd_1*x31;
+    const double x40 = x6*x21*x33;
+    const double x41 = x24*x40;
+    const double x42 = x23*x32;
+    const double x43 = x20*x33;
+    const double x44 = 20*(qd_1*x32 + qd_2*x33) - x19*(qd_2*x15 - x12*x37 - qd_2*x36) + x4*x7*x11*x37 - x5*(p_5*x13 + x11*x36 - x12*qd_0*x7) - x24*x26*x40 + x23*x27*x32 + x20*x25*x33 - 100*(x31 - p_6);
+    const double x45 = aggsym_sign(x44/(x40*x41 + x32*x42 + x33*x43));
+    const double x46 = sqrt(x38*x38 + x39*x39);
+    const double x47 = aggsym_sign(x46 - 1e-09);
+    const double x48 = 0.5*(x47 + x47*x47);
+    const double x49 = 1 + x46 - x48;
+    const double x50 = x38*x48/x49;
+    const double x51 = x39*x48/x49;
+    const double x52 = p_7*x45;
+    const double x53 = (x34*x50 + x35*x51)*x52;
+    const double x54 = x40 + x6*x21*x53 - x50*x52;
+    const double x55 = x31*x51*x52 - x32;
+    const double x56 = x33 + x53;
+    const double x57 = x41*x54 - x42*x55 + x43*x56;
+    const double x58 = x44/x57;
+    lambda[0] = x58;
+    const double x59 = fabs(x57);
+    const double x60 = aggsym_sign(1e-12*x59 - x59);
+    const double x61 = aggsym_sign(-x45*x58);
+    status[0] = 0.5*(x60 + x60*x60) + 0.5*(x61 + x61*x61);
+    const double x62 = x24*(x26 + x54*x58);
+    qdd[0] = x62;
+    qdd[1] = x23*(x27 + x55*x58);
+    qdd[2] = x20*(x25 - x56*x58) - x21*x6*x62;
     return status[0] != 0.0;
 }
 

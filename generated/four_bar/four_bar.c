@@ -577,7 +577,7 @@ void four_bar_joint_wrenches(const double *q, const double *qd, const double *qd
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 76 mul, 53 add, 3 div, 3 call */
+ * operations: 76 mul, 51 add, 3 div, 3 call */
 void four_bar_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_0 = q[0];
@@ -610,36 +610,34 @@ void four_bar_forward_dynamics(const double *q, const double *qd, const double *
     const double x15 = x13 - p_1*x9;
     const double x16 = x6*x14 - x7*x15;
     const double x17 = 0.4*(x6*x15 + x7*x14) - x1*x10*x10;
-    const double x18 = x1*x16;
-    const double x19 = 1/(0.002 + 0.1*p_2*p_2);
-    const double x20 = x1*x19;
-    const double x21 = 0.4 - x1*x20;
-    const double x22 = 0.4 - x21;
-    const double x23 = x7*x7*x22;
-    const double x24 = x6*x7*x22;
-    const double x25 = x21 + x23;
+    const double x18 = 1/(0.002 + 0.1*p_2*p_2);
+    const double x19 = x1*x18;
+    const double x20 = 0.4 - x1*x19;
+    const double x21 = 0.4 - x20;
+    const double x22 = x7*x7*x21;
+    const double x23 = x6*x7*x21;
+    const double x24 = x20 + x22;
+    const double x25 = p_1*x23;
     const double x26 = p_1*x24;
-    const double x27 = p_1*x25;
-    const double x28 = x0 + x27;
-    const double x29 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x27);
-    const double x30 = x26*x29;
-    const double x31 = x28*x29;
-    const double x32 = x24 - x26*x31;
-    const double x33 = 0.5 + x25 - x28*x31;
-    const double x34 = tau_2 - x18;
-    const double x35 = 0.4*x16 + x20*x34;
-    const double x36 = x7*x17 + x6*x35;
-    const double x37 = x0*x14 + x18 + x34 + p_1*x36;
-    const double x38 = tau_1 - x37;
-    const double x39 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x33 + x5*x5*(0.9 - x23 - x26*x30 - x33) + x4*x5*(x32 + x32)))*(tau_0 - 0.1*p_0*x11 - x37 - x38 - p_0*(x5*(0.5*x13 + x6*x17 - x7*x35 - x0*x9 + x30*x38) + x4*(0.5*x14 + x36 + x31*x38)));
-    qdd[0] = x39;
-    const double x40 = p_0*x39;
-    const double x41 = x5*x40;
-    const double x42 = x4*x40;
-    const double x43 = x29*x38 - x39 - x30*x41 - x31*x42;
-    qdd[1] = x43;
-    const double x44 = x39 + x43;
-    qdd[2] = x19*x34 - x44 - x20*(x6*(x42 + p_1*x44) - x7*x41);
+    const double x27 = x0 + x26;
+    const double x28 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x26);
+    const double x29 = x25*x28;
+    const double x30 = x27*x28;
+    const double x31 = x23 - x25*x30;
+    const double x32 = 0.5 + x24 - x27*x30;
+    const double x33 = tau_2 - x1*x16;
+    const double x34 = 0.4*x16 + x19*x33;
+    const double x35 = x7*x17 + x6*x34;
+    const double x36 = tau_1 - x0*x14 - tau_2 - p_1*x35;
+    const double x37 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x32 + x5*x5*(0.9 - x22 - x25*x29 - x32) + x4*x5*(x31 + x31)))*(tau_0 - 0.1*p_0*x11 - tau_1 - p_0*(x5*(0.5*x13 + x6*x17 - x7*x34 - x0*x9 + x29*x36) + x4*(0.5*x14 + x35 + x30*x36)));
+    qdd[0] = x37;
+    const double x38 = p_0*x37;
+    const double x39 = x5*x38;
+    const double x40 = x4*x38;
+    const double x41 = x28*x36 - x37 - x29*x39 - x30*x40;
+    qdd[1] = x41;
+    const double x42 = x37 + x41;
+    qdd[2] = x18*x33 - x42 - x19*(x6*(x40 + p_1*x42) - x7*x39);
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
@@ -756,7 +754,7 @@ void four_bar_constraint_residual(const double *q, const double *p, double *phi)
 }
 
 /* J(q) = D_lambda^T, m*n row-major: the forbidden relative motions per unit rate of each coordinate, rows of the parastrophic matrix S moved to the contact points (4.5)-(4.12)
- * operations: 14 mul, 12 add, 0 div, 3 call */
+ * operations: 14 mul, 10 add, 0 div, 3 call */
 void four_bar_constraint_jacobian(const double *q, const double *p, double *J)
 {
     const double q_0 = q[0];
@@ -775,16 +773,16 @@ void four_bar_constraint_jacobian(const double *q, const double *p, double *J)
     const double x7 = x0*x3 + x1*x2;
     const double x8 = p_0*x0;
     const double x9 = p_0*x1;
-    const double x10 = x8 + p_1*x6;
-    const double x11 = x9 + p_1*x7;
-    const double x12 = x10 + p_2*(x4*x6 - x5*x7);
+    const double x10 = p_2*(x4*x6 - x5*x7);
+    J[5] = x10;
+    const double x11 = p_2*(x5*x6 + x4*x7);
+    const double x12 = x8 + p_1*x6 + x10;
     J[3] = x12;
-    const double x13 = x11 + p_2*(x5*x6 + x4*x7);
+    const double x13 = x9 + p_1*x7 + x11;
     J[0] = -x13;
     J[4] = x12 - x8;
     J[1] = x9 - x13;
-    J[5] = x12 - x10;
-    J[2] = x11 - x13;
+    J[2] = -x11;
 }
 
 /* gamma(q, qd) = J' qd: the relative accelerations at qdd = 0 (S'^T qd of (2.37) at the contact points), so that J qdd + gamma is the constraints' acceleration
@@ -837,7 +835,7 @@ void four_bar_slip_velocities(const double *q, const double *qd, const double *p
 }
 
 /* G = J A^-1 J^T, m*m row-major, by the transvective factors: P = T J^T, G = P^T diag(1/(beta,beta)) P (3.19)
- * operations: 75 mul, 52 add, 3 div, 3 call */
+ * operations: 75 mul, 48 add, 3 div, 3 call */
 void four_bar_delassus(const double *q, const double *p, double *G)
 {
     const double q_0 = q[0];
@@ -857,50 +855,48 @@ void four_bar_delassus(const double *q, const double *p, double *G)
     const double x8 = x1*x4 + x2*x3;
     const double x9 = p_0*x1;
     const double x10 = p_0*x2;
-    const double x11 = x9 + p_1*x7;
-    const double x12 = x10 + p_1*x8;
-    const double x13 = 1/(0.002 + 0.1*p_2*p_2);
-    const double x14 = x0*x13;
-    const double x15 = 0.4 - x0*x14;
-    const double x16 = 0.4 - x15;
-    const double x17 = x6*x6*x16;
-    const double x18 = x5*x6*x16;
-    const double x19 = x15 + x17;
-    const double x20 = p_1*x18;
-    const double x21 = p_1*x19;
-    const double x22 = 0.25*p_1 + x21;
-    const double x23 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x21);
-    const double x24 = x20*x23;
-    const double x25 = x22*x23;
-    const double x26 = x18 - x20*x25;
-    const double x27 = 0.5 + x19 - x22*x25;
-    const double x28 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x27 + x4*x4*(0.9 - x17 - x20*x24 - x27) + x3*x4*(x26 + x26)));
-    const double x29 = x11 + p_2*(x5*x7 - x6*x8);
-    const double x30 = x12 + p_2*(x6*x7 + x5*x8);
-    const double x31 = x29 - x11;
-    const double x32 = x12 - x30;
-    const double x33 = x14*x32;
+    const double x11 = 1/(0.002 + 0.1*p_2*p_2);
+    const double x12 = x0*x11;
+    const double x13 = 0.4 - x0*x12;
+    const double x14 = 0.4 - x13;
+    const double x15 = x6*x6*x14;
+    const double x16 = x5*x6*x14;
+    const double x17 = x13 + x15;
+    const double x18 = p_1*x16;
+    const double x19 = p_1*x17;
+    const double x20 = 0.25*p_1 + x19;
+    const double x21 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x19);
+    const double x22 = x18*x21;
+    const double x23 = x20*x21;
+    const double x24 = x16 - x18*x23;
+    const double x25 = 0.5 + x17 - x20*x23;
+    const double x26 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x25 + x4*x4*(0.9 - x15 - x18*x22 - x25) + x3*x4*(x24 + x24)));
+    const double x27 = p_2*(x5*x7 - x6*x8);
+    const double x28 = p_2*(x6*x7 + x5*x8);
+    const double x29 = x9 + p_1*x7 + x27;
+    const double x30 = x10 + p_1*x8 + x28;
+    const double x31 = x29 - x9;
+    const double x32 = x10 - x30;
+    const double x33 = x12*x28;
     const double x34 = x5*x33;
-    const double x35 = x32 + p_1*x34;
-    const double x36 = x10 - x30 - x35;
-    const double x37 = x30 + x35 + x36 + p_0*(x4*(x24*x36 - x6*x33) + x3*(x34 + x25*x36));
-    const double x38 = x14*x31;
-    const double x39 = x5*x38;
-    const double x40 = x31 + p_1*x39;
-    const double x41 = x29 - x9 - x40;
-    const double x42 = x29 - x40 - x41 - p_0*(x4*(x24*x41 - x6*x38) + x3*(x39 + x25*x41));
-    const double x43 = x28*x37;
-    const double x44 = x23*x36;
-    const double x45 = x13*x32;
-    G[0] = x37*x43 + x36*x44 + x32*x45;
-    const double x46 = x41*x44 - x42*x43 + x31*x45;
-    G[1] = x46;
-    G[2] = x46;
-    G[3] = x42*x28*x42 + x41*x23*x41 + x31*x13*x31;
+    const double x35 = x32 + x28 + p_1*x34;
+    const double x36 = x30 + x32 + p_0*(x4*(x6*x33 + x22*x35) + x3*(x23*x35 - x34));
+    const double x37 = x12*x27;
+    const double x38 = x5*x37;
+    const double x39 = x31 - x27 - p_1*x38;
+    const double x40 = x29 - x31 - p_0*(x4*(x22*x39 - x6*x37) + x3*(x38 + x23*x39));
+    const double x41 = x26*x36;
+    const double x42 = x21*x35;
+    const double x43 = x11*x28;
+    G[0] = x36*x41 + x35*x42 + x28*x43;
+    const double x44 = x39*x42 - x40*x41 - x27*x43;
+    G[1] = x44;
+    G[2] = x44;
+    G[3] = x40*x26*x40 + x39*x21*x39 + x27*x11*x27;
 }
 
 /* qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution)
- * operations: 177 mul, 128 add, 6 div, 5 call */
+ * operations: 177 mul, 122 add, 6 div, 5 call */
 int four_bar_constrained_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd, double *lambda)
 {
     double status[1];
@@ -941,85 +937,79 @@ int four_bar_constrained_forward_dynamics(const double *q, const double *qd, con
     const double x21 = x19 - p_1*x9;
     const double x22 = x6*x20 - x7*x21;
     const double x23 = 0.4*(x6*x21 + x7*x20) - x1*x10*x10;
-    const double x24 = x1*x22;
-    const double x25 = x2*x4 - x3*x5;
-    const double x26 = x2*x5 + x3*x4;
-    const double x27 = p_0*x2;
-    const double x28 = p_0*x3;
-    const double x29 = x6*x25 - x7*x26;
-    const double x30 = x7*x25 + x6*x26;
-    const double x31 = x27 + p_1*x25;
-    const double x32 = x28 + p_1*x26;
-    const double x33 = 1/(0.002 + 0.1*p_2*p_2);
-    const double x34 = x1*x33;
-    const double x35 = 0.4 - x1*x34;
-    const double x36 = 0.4 - x35;
-    const double x37 = x7*x7*x36;
-    const double x38 = x6*x7*x36;
-    const double x39 = x35 + x37;
-    const double x40 = p_1*x38;
-    const double x41 = p_1*x39;
-    const double x42 = x0 + x41;
-    const double x43 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x41);
-    const double x44 = x40*x43;
-    const double x45 = x42*x43;
-    const double x46 = x38 - x40*x45;
-    const double x47 = 0.5 + x39 - x42*x45;
-    const double x48 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x47 + x5*x5*(0.9 - x37 - x40*x44 - x47) + x4*x5*(x46 + x46)));
-    const double x49 = tau_2 - x24;
-    const double x50 = 0.4*x22 + x34*x49;
-    const double x51 = x7*x23 + x6*x50;
-    const double x52 = x0*x20 + x24 + x49 + p_1*x51;
-    const double x53 = tau_1 - x52;
-    const double x54 = tau_0 - 0.1*p_0*x17 - x52 - x53 - p_0*(x5*(0.5*x19 + x6*x23 - x7*x50 - x0*x9 + x44*x53) + x4*(0.5*x20 + x51 + x45*x53));
-    const double x55 = x48*x54;
-    const double x56 = x43*x53;
-    const double x57 = x33*x49;
-    const double x58 = x31 + p_2*x29;
-    const double x59 = x32 + p_2*x30;
-    const double x60 = x58 - x27;
-    const double x61 = x28 - x59;
-    const double x62 = x58 - x31;
-    const double x63 = x32 - x59;
-    const double x64 = qd_1*x13;
-    const double x65 = qd_1*x12;
-    const double x66 = x6*x64 - x7*x65 + qd_2*x16 - x10*(x16 + p_2*x10);
-    const double x67 = x10*x15 - x7*x64 - x6*x65 - qd_2*x15;
-    const double x68 = x34*x63;
+    const double x24 = x2*x4 - x3*x5;
+    const double x25 = x2*x5 + x3*x4;
+    const double x26 = p_0*x2;
+    const double x27 = p_0*x3;
+    const double x28 = x6*x24 - x7*x25;
+    const double x29 = x7*x24 + x6*x25;
+    const double x30 = 1/(0.002 + 0.1*p_2*p_2);
+    const double x31 = x1*x30;
+    const double x32 = 0.4 - x1*x31;
+    const double x33 = 0.4 - x32;
+    const double x34 = x7*x7*x33;
+    const double x35 = x6*x7*x33;
+    const double x36 = x32 + x34;
+    const double x37 = p_1*x35;
+    const double x38 = p_1*x36;
+    const double x39 = x0 + x38;
+    const double x40 = 1/(0.004 + 0.125*p_1*p_1 + p_1*x38);
+    const double x41 = x37*x40;
+    const double x42 = x39*x40;
+    const double x43 = x35 - x37*x42;
+    const double x44 = 0.5 + x36 - x39*x42;
+    const double x45 = 1/(0.0002 + 0.05*p_0*p_0 + p_0*p_0*(x44 + x5*x5*(0.9 - x34 - x37*x41 - x44) + x4*x5*(x43 + x43)));
+    const double x46 = tau_2 - x1*x22;
+    const double x47 = 0.4*x22 + x31*x46;
+    const double x48 = x7*x23 + x6*x47;
+    const double x49 = tau_1 - x0*x20 - tau_2 - p_1*x48;
+    const double x50 = tau_0 - 0.1*p_0*x17 - tau_1 - p_0*(x5*(0.5*x19 + x6*x23 - x7*x47 - x0*x9 + x41*x49) + x4*(0.5*x20 + x48 + x42*x49));
+    const double x51 = x45*x50;
+    const double x52 = x40*x49;
+    const double x53 = x30*x46;
+    const double x54 = p_2*x28;
+    const double x55 = p_2*x29;
+    const double x56 = x26 + p_1*x24 + x54;
+    const double x57 = x27 + p_1*x25 + x55;
+    const double x58 = x56 - x26;
+    const double x59 = x27 - x57;
+    const double x60 = qd_1*x13;
+    const double x61 = qd_1*x12;
+    const double x62 = x6*x60 - x7*x61 + qd_2*x16 - x10*(x16 + p_2*x10);
+    const double x63 = x10*x15 - x7*x60 - x6*x61 - qd_2*x15;
+    const double x64 = x31*x55;
+    const double x65 = x6*x64;
+    const double x66 = x59 + x55 + p_1*x65;
+    const double x67 = x57 + x59 + p_0*(x5*(x7*x64 + x41*x66) + x4*(x42*x66 - x65));
+    const double x68 = x31*x54;
     const double x69 = x6*x68;
-    const double x70 = x63 + p_1*x69;
-    const double x71 = x61 - x70;
-    const double x72 = x59 + x70 + x71 + p_0*(x5*(x44*x71 - x7*x68) + x4*(x69 + x45*x71));
-    const double x73 = x34*x62;
-    const double x74 = x6*x73;
-    const double x75 = x62 + p_1*x74;
-    const double x76 = x60 - x75;
-    const double x77 = x58 - x75 - x76 - p_0*(x5*(x44*x76 - x7*x73) + x4*(x74 + x45*x76));
-    const double x78 = x48*x72;
-    const double x79 = x43*x71;
-    const double x80 = x33*x63;
-    const double x81 = x72*x78 + x71*x79 + x63*x80;
-    const double x82 = x77*x48*x77 + x76*x43*x76 + x62*x33*x62;
-    const double x83 = x30*x67 - x29*x66 - x56*x71 + x55*x72 - x57*x63 - 20*(qd_1*x61 - qd_0*x59 + qd_2*x63) - 100*(x58 - p_3);
-    const double x84 = (x76*x79 - x77*x78 + x62*x80)*1/x81;
-    const double x85 = x82 - x81*x84*x84;
-    const double x86 = (x30*x66 + x29*x67 + x55*x77 + x56*x76 + x57*x62 + 20*(qd_0*x58 + qd_1*x60 + qd_2*x62) + 100*x59 + x83*x84)/x85;
-    lambda[1] = -x86;
-    const double x87 = x83/x81 + x84*x86;
-    lambda[0] = x87;
-    const double x88 = 5e-13*(x81 + x82);
-    const double x89 = aggsym_sign(x88 - x81);
-    const double x90 = aggsym_sign(x88 - x85);
-    status[0] = 2 + x89 + x90;
-    const double x91 = x48*(x54 - x72*x87 - x77*x86);
-    qdd[0] = x91;
-    const double x92 = p_0*x91;
-    const double x93 = x5*x92;
-    const double x94 = x4*x92;
-    const double x95 = x43*(x53 + x71*x87 - x76*x86) - x91 - x44*x93 - x45*x94;
-    qdd[1] = x95;
-    const double x96 = x91 + x95;
-    qdd[2] = x33*(x49 + x63*x87 - x62*x86) - x96 - x34*(x6*(x94 + p_1*x96) - x7*x93);
+    const double x70 = x58 - x54 - p_1*x69;
+    const double x71 = x56 - x58 - p_0*(x5*(x41*x70 - x7*x68) + x4*(x69 + x42*x70));
+    const double x72 = x45*x67;
+    const double x73 = x40*x66;
+    const double x74 = x30*x55;
+    const double x75 = x67*x72 + x66*x73 + x55*x74;
+    const double x76 = x71*x45*x71 + x70*x40*x70 + x54*x30*x54;
+    const double x77 = x29*x63 - x28*x62 - x52*x66 + x51*x67 + x53*x55 - 20*(qd_1*x59 - qd_0*x57 - qd_2*x55) - 100*(x56 - p_3);
+    const double x78 = (x70*x73 - x71*x72 - x54*x74)*1/x75;
+    const double x79 = x76 - x75*x78*x78;
+    const double x80 = (x29*x62 + x28*x63 + x51*x71 + x52*x70 + x53*x54 + 20*(qd_0*x56 + qd_1*x58 + qd_2*x54) + 100*x57 + x77*x78)/x79;
+    lambda[1] = -x80;
+    const double x81 = x77/x75 + x78*x80;
+    lambda[0] = x81;
+    const double x82 = 5e-13*(x75 + x76);
+    const double x83 = aggsym_sign(x82 - x75);
+    const double x84 = aggsym_sign(x82 - x79);
+    status[0] = 2 + x83 + x84;
+    const double x85 = x45*(x50 - x67*x81 - x71*x80);
+    qdd[0] = x85;
+    const double x86 = p_0*x85;
+    const double x87 = x5*x86;
+    const double x88 = x4*x86;
+    const double x89 = x40*(x49 + x66*x81 - x70*x80) - x85 - x41*x87 - x42*x88;
+    qdd[1] = x89;
+    const double x90 = x85 + x89;
+    qdd[2] = x30*(x46 - x55*x81 - x54*x80) - x90 - x31*(x6*(x88 + p_1*x90) - x7*x87);
     return status[0] != 0.0;
 }
 
@@ -1056,7 +1046,7 @@ void four_bar_frame_poses(const double *q, const double *p, double *X)
 }
 
 /* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin
- * operations: 8 mul, 6 add, 0 div, 2 call */
+ * operations: 8 mul, 4 add, 0 div, 2 call */
 void four_bar_frame_jacobians(const double *q, const double *p, double *J)
 {
     const double q_0 = q[0];
@@ -1076,14 +1066,12 @@ void four_bar_frame_jacobians(const double *q, const double *p, double *J)
     J[17] = 1;
     double x1, x0, x3, x2;
     aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
-    const double x4 = p_0*x0;
-    const double x5 = p_0*x1;
-    const double x6 = x4 + p_1*(x0*x2 - x1*x3);
-    J[3] = x6;
-    const double x7 = x5 + p_1*(x0*x3 + x1*x2);
-    J[0] = -x7;
-    J[4] = x6 - x4;
-    J[1] = x5 - x7;
+    const double x4 = p_1*(x0*x2 - x1*x3);
+    J[4] = x4;
+    const double x5 = p_1*(x0*x3 + x1*x2);
+    J[3] = p_0*x0 + x4;
+    J[0] = -(p_0*x1 + x5);
+    J[1] = -x5;
 }
 
 /* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
@@ -1161,7 +1149,7 @@ void four_bar_center_of_mass(const double *q, const double *p, double *c)
 }
 
 /* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
- * operations: 33 mul, 18 add, 0 div, 3 call */
+ * operations: 33 mul, 16 add, 0 div, 3 call */
 void four_bar_com_jacobian(const double *q, const double *p, double *Jc)
 {
     const double q_0 = q[0];
@@ -1185,16 +1173,14 @@ void four_bar_com_jacobian(const double *q, const double *p, double *Jc)
     const double x10 = x3*x6 + x4*x5;
     const double x11 = p_0*x3;
     const double x12 = p_0*x4;
-    const double x13 = 0.4*(x11 + p_1*x9);
-    const double x14 = 0.4*(x12 + p_1*x10);
-    const double x15 = x2*(x7*x9 - x8*x10) + x13;
-    const double x16 = x2*(x8*x9 + x7*x10) + x14;
-    const double x17 = x1*x9 + 0.5*x11 + x15;
-    const double x18 = x1*x10 + 0.5*x12 + x16;
-    Jc[3] = 0.9090909090909091*(x0*x3 + x17);
-    Jc[0] = -0.9090909090909091*(x0*x4 + x18);
-    Jc[1] = 0.9090909090909091*(0.9*x12 - x18);
-    Jc[4] = 0.9090909090909091*(x17 - 0.9*x11);
-    Jc[2] = 0.9090909090909091*(x14 - x16);
-    Jc[5] = 0.9090909090909091*(x15 - x13);
+    const double x13 = x2*(x7*x9 - x8*x10);
+    const double x14 = x2*(x8*x9 + x7*x10);
+    const double x15 = x1*x9 + 0.5*x11 + x13 + 0.4*(x11 + p_1*x9);
+    const double x16 = x1*x10 + 0.5*x12 + x14 + 0.4*(x12 + p_1*x10);
+    Jc[3] = 0.9090909090909091*(x0*x3 + x15);
+    Jc[0] = -0.9090909090909091*(x0*x4 + x16);
+    Jc[1] = 0.9090909090909091*(0.9*x12 - x16);
+    Jc[4] = 0.9090909090909091*(x15 - 0.9*x11);
+    Jc[2] = -0.9090909090909091*x14;
+    Jc[5] = 0.9090909090909091*x13;
 }

@@ -240,7 +240,7 @@ void gyroscope_coriolis(const double *q, const double *qd, const double *p, doub
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
- * operations: 11 mul, 3 add, 0 div, 2 call */
+ * operations: 9 mul, 3 add, 0 div, 2 call */
 void gyroscope_gravity(const double *q, const double *p, double *g)
 {
     const double q_0 = q[0];
@@ -249,12 +249,12 @@ void gyroscope_gravity(const double *q, const double *p, double *g)
     g[2] = 0;
     double x1, x0, x3, x2;
     aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
-    g[0] = -0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
-    g[1] = -(0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1));
+    g[0] = -0.0024*x2*(1.9244737576459987*x0 + 9.218384609909762*x1);
+    g[1] = -(0.0065962400664231376*x2 + 0.0024*x3*(9.218384609909762*x0 - 1.9244737576459987*x1));
 }
 
 /* d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)
- * operations: 38 mul, 18 add, 0 div, 3 call */
+ * operations: 36 mul, 18 add, 0 div, 3 call */
 void gyroscope_nonlinear_effects(const double *q, const double *qd, const double *p, double *d)
 {
     const double q_0 = q[0];
@@ -278,12 +278,12 @@ void gyroscope_nonlinear_effects(const double *q, const double *qd, const double
     d[2] = x12;
     const double x13 = 0.0011048*(qd_2*x10 - x4*x8) + 0.0008952000000000001*x10*x11;
     const double x14 = 0.0011048*(x5*x8 - qd_2*x9) - 0.0008952000000000001*x9*x11;
-    d[1] = x5*x13 + x4*x14 - 0.006596240066423136*x2 - 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1);
-    d[0] = x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) + x3*(x12 + x12) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
+    d[1] = x5*x13 + x4*x14 - 0.0065962400664231376*x2 - 0.0024*x3*(9.218384609909762*x0 - 1.9244737576459987*x1);
+    d[0] = x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) + x3*(x12 + x12) - 0.0024*x2*(1.9244737576459987*x0 + 9.218384609909762*x1);
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)
- * operations: 46 mul, 26 add, 0 div, 3 call */
+ * operations: 44 mul, 26 add, 0 div, 3 call */
 void gyroscope_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *p, double *tau)
 {
     const double q_0 = q[0];
@@ -313,8 +313,8 @@ void gyroscope_inverse_dynamics(const double *q, const double *qd, const double 
     const double x16 = 0.0011048*(qdd_1*x4 - x5*x13 - qd_2*x10) - 0.0008952000000000001*x10*x12;
     const double x17 = 0.002*(qdd_2 + x14);
     tau[2] = x17;
-    tau[1] = 0.002*qdd_1 + x5*x15 + x4*x16 - 0.006596240066423136*x2 - 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1);
-    tau[0] = 0.004*qdd_0 + x2*(0.0015*x13 - 0.0005*x8 + x4*x15 - x5*x16) + x3*(0.0015*x14 + 0.0005*x9 + x17) - 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1);
+    tau[1] = 0.002*qdd_1 + x5*x15 + x4*x16 - 0.0065962400664231376*x2 - 0.0024*x3*(9.218384609909762*x0 - 1.9244737576459987*x1);
+    tau[0] = 0.004*qdd_0 + x2*(0.0015*x13 - 0.0005*x8 + x4*x15 - x5*x16) + x3*(0.0015*x14 + 0.0005*x9 + x17) - 0.0024*x2*(1.9244737576459987*x0 + 9.218384609909762*x1);
 }
 
 /* T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins
@@ -338,7 +338,7 @@ void gyroscope_kinetic_energy(const double *q, const double *qd, const double *p
 }
 
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs
- * operations: 6 mul, 2 add, 0 div, 2 call */
+ * operations: 5 mul, 2 add, 0 div, 2 call */
 void gyroscope_potential_energy(const double *q, const double *p, double *U)
 {
     const double q_0 = q[0];
@@ -346,7 +346,7 @@ void gyroscope_potential_energy(const double *q, const double *p, double *U)
     (void)p;
     double x1, x0, x3, x2;
     aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
-    U[0] = 0.0024*(x2*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1) - 2.7484333610096403*x3);
+    U[0] = 0.0024*(x2*(9.218384609909762*x0 - 1.9244737576459987*x1) - 2.7484333610096408*x3);
 }
 
 /* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)
@@ -399,11 +399,11 @@ void gyroscope_momentum(const double *q, const double *qd, const double *p, doub
     h[2] = x19*x34 - x18*x35;
     h[3] = 0.003079004525280229*qd_0 + x17*x24 + x2*x22 + x16*x25 + x21*x30 + x20*x31 + x23*x25;
     h[4] = 0.002294305745404184*qd_0 + x17*x26 + x4*x22 + x16*x27 + x21*x32 + x20*x33 + x23*x27;
-    h[5] = x6*x22 - x17*x28 + x16*x29 - 0.001120665998372942*qd_0 + x21*x34 + x20*x35 + x23*x29;
+    h[5] = x6*x22 - x17*x28 + x16*x29 - 0.0011206659983729421*qd_0 + x21*x34 + x20*x35 + x23*x29;
 }
 
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
- * operations: 74 mul, 46 add, 0 div, 3 call */
+ * operations: 72 mul, 46 add, 0 div, 3 call */
 void gyroscope_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W)
 {
     const double q_0 = q[0];
@@ -416,65 +416,63 @@ void gyroscope_joint_wrenches(const double *q, const double *qd, const double *q
     const double qdd_1 = qdd[1];
     const double qdd_2 = qdd[2];
     (void)p;
-    double x1, x0, x5, x4;
-    aggsym_sincos2(q_0, q_1, &x1, &x0, &x5, &x4);
-    const double x2 = 0.19617469496901108*x0 + 0.9396926207859084*x1;
-    const double x3 = 0.9396926207859084*x0 - 0.19617469496901108*x1;
-    double x7, x6;
-    aggsym_sincos(q_2, &x7, &x6);
-    const double x8 = qd_0*x4;
-    const double x9 = qd_0*x5;
-    const double x10 = qd_1*x9;
-    const double x11 = qd_1*x8;
-    const double x12 = x6*x8 + qd_1*x7;
-    const double x13 = qd_1*x6 - x7*x8;
-    const double x14 = qd_2 + x9;
-    const double x15 = x12*x14;
-    const double x16 = x13*x14;
-    const double x17 = 9.81*x2;
-    const double x18 = 9.81*x3;
-    const double x19 = 2.7484333610096403*x4 + x5*x18;
-    const double x20 = x4*x18 - 2.7484333610096403*x5;
-    const double x21 = x7*x17 - x6*x19;
-    const double x22 = x7*x19 + x6*x17;
-    const double x23 = qdd_0*x4 - x10;
-    const double x24 = x11 + qdd_0*x5;
-    const double x25 = qd_2*x13 + x6*x23 + qdd_1*x7;
-    const double x26 = qdd_1*x6 - x7*x23 - qd_2*x12;
-    const double x27 = 0.002*(qdd_2 + x24);
-    W[17] = x27;
-    const double x28 = 0.0015*x24 + 0.0005*x11 + x27;
-    W[11] = x28;
-    const double x29 = 0.0024*(x15 + x26) + 1.2*x21;
-    W[12] = x29;
-    const double x30 = 0.0024*(x16 - x25) + 1.2*x22;
-    W[13] = x30;
-    const double x31 = 1.2*x20 - 0.0024*(x8*x8 + qd_1*qd_1);
-    W[14] = x31;
-    const double x32 = 0.0008952000000000001*x16 + 0.0011048*x25 - 0.0024*x22;
-    W[15] = x32;
-    const double x33 = 0.0011048*x26 + 0.0024*x21 - 0.0008952000000000001*x15;
-    W[16] = x33;
-    const double x34 = x6*x29 - x7*x30 - 0.4*x19;
-    W[6] = x34;
-    const double x35 = 3.9240000000000004*x2 + x7*x29 + x6*x30;
-    W[7] = x35;
-    const double x36 = 0.4*x20 + x31;
-    W[8] = x36;
-    const double x37 = 0.0015*x23 - 0.0005*x10 + x6*x32 - x7*x33;
-    W[9] = x37;
-    const double x38 = 0.002*qdd_1 + x7*x32 + x6*x33;
-    W[4] = x38;
-    W[10] = x38;
-    W[5] = x4*x28 - x5*x37;
-    W[0] = x4*x34 + x5*x36 - 1.649060016605784;
-    W[1] = 5.886*x2 + x35;
-    W[2] = 5.886*x3 + x4*x36 - x5*x34;
-    W[3] = 0.004*qdd_0 + x5*x28 + x4*x37;
+    double x1, x0, x3, x2;
+    aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
+    double x5, x4;
+    aggsym_sincos(q_2, &x5, &x4);
+    const double x6 = qd_0*x2;
+    const double x7 = qd_0*x3;
+    const double x8 = qd_1*x7;
+    const double x9 = qd_1*x6;
+    const double x10 = x4*x6 + qd_1*x5;
+    const double x11 = qd_1*x4 - x5*x6;
+    const double x12 = qd_2 + x7;
+    const double x13 = x10*x12;
+    const double x14 = x11*x12;
+    const double x15 = 1.9244737576459987*x0 + 9.218384609909762*x1;
+    const double x16 = 9.218384609909762*x0 - 1.9244737576459987*x1;
+    const double x17 = 2.7484333610096408*x2 + x3*x16;
+    const double x18 = x2*x16 - 2.7484333610096408*x3;
+    const double x19 = x5*x15 - x4*x17;
+    const double x20 = x5*x17 + x4*x15;
+    const double x21 = qdd_0*x2 - x8;
+    const double x22 = x9 + qdd_0*x3;
+    const double x23 = qd_2*x11 + x4*x21 + qdd_1*x5;
+    const double x24 = qdd_1*x4 - x5*x21 - qd_2*x10;
+    const double x25 = 0.002*(qdd_2 + x22);
+    W[17] = x25;
+    const double x26 = 0.0015*x22 + 0.0005*x9 + x25;
+    W[11] = x26;
+    const double x27 = 0.0024*(x13 + x24) + 1.2*x19;
+    W[12] = x27;
+    const double x28 = 0.0024*(x14 - x23) + 1.2*x20;
+    W[13] = x28;
+    const double x29 = 1.2*x18 - 0.0024*(x6*x6 + qd_1*qd_1);
+    W[14] = x29;
+    const double x30 = 0.0008952000000000001*x14 + 0.0011048*x23 - 0.0024*x20;
+    W[15] = x30;
+    const double x31 = 0.0011048*x24 + 0.0024*x19 - 0.0008952000000000001*x13;
+    W[16] = x31;
+    const double x32 = x4*x27 - x5*x28 - 0.4*x17;
+    W[6] = x32;
+    const double x33 = 0.4*x15 + x5*x27 + x4*x28;
+    W[7] = x33;
+    const double x34 = 0.4*x18 + x29;
+    W[8] = x34;
+    const double x35 = 0.0015*x21 - 0.0005*x8 + x4*x30 - x5*x31;
+    W[9] = x35;
+    const double x36 = 0.002*qdd_1 + x5*x30 + x4*x31;
+    W[4] = x36;
+    W[10] = x36;
+    W[5] = x2*x26 - x3*x35;
+    W[0] = x2*x32 + x3*x34 - 1.6490600166057845;
+    W[1] = 0.6*x15 + x33;
+    W[2] = 0.6*x16 + x2*x34 - x3*x32;
+    W[3] = 0.004*qdd_0 + x3*x26 + x2*x35;
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 44 mul, 24 add, 1 div, 3 call */
+ * operations: 42 mul, 23 add, 1 div, 3 call */
 void gyroscope_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_0 = q[0];
@@ -500,11 +498,10 @@ void gyroscope_forward_dynamics(const double *q, const double *qd, const double 
     const double x12 = 0.002*qd_1*x6;
     const double x13 = 0.0011048*(qd_2*x10 - x4*x8) + 0.0008952000000000001*x10*x11;
     const double x14 = 0.0011048*(x5*x8 - qd_2*x9) - 0.0008952000000000001*x9*x11;
-    const double x15 = tau_2 - x12;
-    const double x16 = 1/(0.0066048 - 0.0011048*x3*x3)*(tau_0 - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(x12 + x12 + x15) + 0.0024*x2*9.81*(0.19617469496901108*x0 + 0.9396926207859084*x1));
-    qdd[0] = x16;
-    qdd[1] = 322.0819376449369*(tau_1 - x5*x13 - x4*x14 + 0.006596240066423136*x2 + 0.0024*x3*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1));
-    qdd[2] = 500*x15 - x3*x16;
+    const double x15 = 1/(0.0066048 - 0.0011048*x3*x3)*(tau_0 - x2*(x4*x13 - x5*x14 - 0.0015*x8 - 0.0005*x8) - x3*(tau_2 + x12) + 0.0024*x2*(1.9244737576459987*x0 + 9.218384609909762*x1));
+    qdd[0] = x15;
+    qdd[1] = 322.0819376449369*(tau_1 - x5*x13 - x4*x14 + 0.0065962400664231376*x2 + 0.0024*x3*(9.218384609909762*x0 - 1.9244737576459987*x1));
+    qdd[2] = 500*(tau_2 - x12) - x3*x15;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)

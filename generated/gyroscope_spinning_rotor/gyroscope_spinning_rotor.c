@@ -198,7 +198,7 @@ void gyroscope_spinning_rotor_bias(const double *q, const double *qd, const doub
 }
 
 /* g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)
- * operations: 20 mul, 7 add, 0 div, 3 call */
+ * operations: 18 mul, 7 add, 0 div, 3 call */
 void gyroscope_spinning_rotor_gravity(const double *q, const double *t, const double *p, double *g)
 {
     const double q_0 = q[0];
@@ -212,8 +212,8 @@ void gyroscope_spinning_rotor_gravity(const double *q, const double *t, const do
     aggsym_sincos2(x0, q_0, &x2, &x1, &x4, &x3);
     double x6, x5;
     aggsym_sincos(q_1, &x6, &x5);
-    const double x7 = 9.81*(0.19617469496901108*x3 + 0.9396926207859084*x4);
-    const double x8 = 2.7484333610096403*x5 + x6*9.81*(0.9396926207859084*x3 - 0.19617469496901108*x4);
+    const double x7 = 1.9244737576459987*x3 + 9.218384609909762*x4;
+    const double x8 = 2.7484333610096408*x5 + x6*(9.218384609909762*x3 - 1.9244737576459987*x4);
     const double x9 = 0.0024*(x2*x8 + x1*x7);
     const double x10 = 0.0024*(x2*x7 - x1*x8);
     g[1] = x1*x10 - x2*x9;
@@ -221,7 +221,7 @@ void gyroscope_spinning_rotor_gravity(const double *q, const double *t, const do
 }
 
 /* d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)
- * operations: 39 mul, 18 add, 0 div, 3 call */
+ * operations: 37 mul, 18 add, 0 div, 3 call */
 void gyroscope_spinning_rotor_nonlinear_effects(const double *q, const double *qd, const double *t, const double *p, double *d)
 {
     const double q_0 = q[0];
@@ -246,12 +246,12 @@ void gyroscope_spinning_rotor_nonlinear_effects(const double *q, const double *q
     const double x13 = 0.002*qd_1*x7;
     const double x14 = 0.0011048*(p_0*x11 - x1*x9) + 0.0008952000000000001*x11*x12;
     const double x15 = 0.0011048*(x2*x9 - p_0*x10) - 0.0008952000000000001*x10*x12;
-    d[1] = x2*x14 + x1*x15 - 0.006596240066423136*x5 - 0.0024*x6*9.81*(0.9396926207859084*x3 - 0.19617469496901108*x4);
-    d[0] = x5*(x1*x14 - x2*x15 - 0.0015*x9 - 0.0005*x9) + x6*(x13 + x13) - 0.0024*x5*9.81*(0.19617469496901108*x3 + 0.9396926207859084*x4);
+    d[1] = x2*x14 + x1*x15 - 0.0065962400664231376*x5 - 0.0024*x6*(9.218384609909762*x3 - 1.9244737576459987*x4);
+    d[0] = x5*(x1*x14 - x2*x15 - 0.0015*x9 - 0.0005*x9) + x6*(x13 + x13) - 0.0024*x5*(1.9244737576459987*x3 + 9.218384609909762*x4);
 }
 
 /* tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)
- * operations: 47 mul, 25 add, 0 div, 3 call */
+ * operations: 45 mul, 25 add, 0 div, 3 call */
 void gyroscope_spinning_rotor_inverse_dynamics(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *tau)
 {
     const double q_0 = q[0];
@@ -280,8 +280,8 @@ void gyroscope_spinning_rotor_inverse_dynamics(const double *q, const double *qd
     const double x15 = x10 + qdd_0*x6;
     const double x16 = 0.0008952000000000001*x12*x13 + 0.0011048*(p_0*x12 + x1*x14 + x2*qdd_1);
     const double x17 = 0.0011048*(x1*qdd_1 - x2*x14 - p_0*x11) - 0.0008952000000000001*x11*x13;
-    tau[1] = 0.002*qdd_1 + x2*x16 + x1*x17 - 0.006596240066423136*x5 - 0.0024*x6*9.81*(0.9396926207859084*x3 - 0.19617469496901108*x4);
-    tau[0] = 0.004*qdd_0 + x5*(0.0015*x14 - 0.0005*x9 + x1*x16 - x2*x17) + x6*(0.0015*x15 + 0.0005*x10 + 0.002*x15) - 0.0024*x5*9.81*(0.19617469496901108*x3 + 0.9396926207859084*x4);
+    tau[1] = 0.002*qdd_1 + x2*x16 + x1*x17 - 0.0065962400664231376*x5 - 0.0024*x6*(9.218384609909762*x3 - 1.9244737576459987*x4);
+    tau[0] = 0.004*qdd_0 + x5*(0.0015*x14 - 0.0005*x9 + x1*x16 - x2*x17) + x6*(0.0015*x15 + 0.0005*x10 + 0.002*x15) - 0.0024*x5*(1.9244737576459987*x3 + 9.218384609909762*x4);
 }
 
 /* T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins
@@ -307,7 +307,7 @@ void gyroscope_spinning_rotor_kinetic_energy(const double *q, const double *qd, 
 }
 
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs
- * operations: 6 mul, 2 add, 0 div, 2 call */
+ * operations: 5 mul, 2 add, 0 div, 2 call */
 void gyroscope_spinning_rotor_potential_energy(const double *q, const double *t, const double *p, double *U)
 {
     const double q_0 = q[0];
@@ -316,7 +316,7 @@ void gyroscope_spinning_rotor_potential_energy(const double *q, const double *t,
     (void)p;
     double x1, x0, x3, x2;
     aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
-    U[0] = 0.0024*(x2*9.81*(0.9396926207859084*x0 - 0.19617469496901108*x1) - 2.7484333610096403*x3);
+    U[0] = 0.0024*(x2*(9.218384609909762*x0 - 1.9244737576459987*x1) - 2.7484333610096408*x3);
 }
 
 /* h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)
@@ -371,11 +371,11 @@ void gyroscope_spinning_rotor_momentum(const double *q, const double *qd, const 
     h[2] = x20*x35 - x21*x36;
     h[3] = 0.003079004525280229*qd_0 + x17*x25 + x5*x18 + x19*x26 + x22*x31 + x23*x32 + x24*x26;
     h[4] = 0.002294305745404184*qd_0 + x17*x27 + x7*x18 + x19*x28 + x22*x33 + x23*x34 + x24*x28;
-    h[5] = x9*x18 - x17*x29 + x19*x30 - 0.001120665998372942*qd_0 + x22*x35 + x23*x36 + x24*x30;
+    h[5] = x9*x18 - x17*x29 + x19*x30 - 0.0011206659983729421*qd_0 + x22*x35 + x23*x36 + x24*x30;
 }
 
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)
- * operations: 75 mul, 45 add, 0 div, 3 call */
+ * operations: 73 mul, 45 add, 0 div, 3 call */
 void gyroscope_spinning_rotor_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *W)
 {
     const double q_0 = q[0];
@@ -391,55 +391,53 @@ void gyroscope_spinning_rotor_joint_wrenches(const double *q, const double *qd, 
     const double x0 = p_0*t_0;
     double x2, x1, x4, x3;
     aggsym_sincos2(x0, q_0, &x2, &x1, &x4, &x3);
-    const double x5 = 0.19617469496901108*x3 + 0.9396926207859084*x4;
-    const double x6 = 0.9396926207859084*x3 - 0.19617469496901108*x4;
-    double x8, x7;
-    aggsym_sincos(q_1, &x8, &x7);
-    const double x9 = qd_0*x7;
-    const double x10 = qd_0*x8;
-    const double x11 = qd_1*x10;
-    const double x12 = qd_1*x9;
-    const double x13 = x1*x9 + x2*qd_1;
-    const double x14 = x1*qd_1 - x2*x9;
-    const double x15 = p_0 + x10;
-    const double x16 = x13*x15;
-    const double x17 = x14*x15;
-    const double x18 = 9.81*x5;
-    const double x19 = 9.81*x6;
-    const double x20 = 2.7484333610096403*x7 + x8*x19;
-    const double x21 = x7*x19 - 2.7484333610096403*x8;
-    const double x22 = x2*x18 - x1*x20;
-    const double x23 = x2*x20 + x1*x18;
-    const double x24 = qdd_0*x7 - x11;
-    const double x25 = x12 + qdd_0*x8;
-    const double x26 = p_0*x14 + x1*x24 + x2*qdd_1;
-    const double x27 = x1*qdd_1 - x2*x24 - p_0*x13;
-    const double x28 = 0.0015*x25 + 0.0005*x12 + 0.002*x25;
-    W[11] = x28;
-    const double x29 = 1.2*x22 + 0.0024*(x16 + x27);
-    const double x30 = 1.2*x23 + 0.0024*(x17 - x26);
-    const double x31 = 0.0008952000000000001*x17 + 0.0011048*x26 - 0.0024*x23;
-    const double x32 = 0.0024*x22 + 0.0011048*x27 - 0.0008952000000000001*x16;
-    const double x33 = x1*x29 - x2*x30 - 0.4*x20;
-    W[6] = x33;
-    const double x34 = 3.9240000000000004*x5 + x2*x29 + x1*x30;
-    W[7] = x34;
-    const double x35 = 0.4*x21 + 1.2*x21 - 0.0024*(x13*x13 + x14*x14);
-    W[8] = x35;
-    const double x36 = 0.0015*x24 - 0.0005*x11 + x1*x31 - x2*x32;
-    W[9] = x36;
-    const double x37 = 0.002*qdd_1 + x2*x31 + x1*x32;
-    W[4] = x37;
-    W[10] = x37;
-    W[5] = x7*x28 - x8*x36;
-    W[0] = x7*x33 + x8*x35 - 1.649060016605784;
-    W[1] = 5.886*x5 + x34;
-    W[2] = 5.886*x6 + x7*x35 - x8*x33;
-    W[3] = 0.004*qdd_0 + x8*x28 + x7*x36;
+    double x6, x5;
+    aggsym_sincos(q_1, &x6, &x5);
+    const double x7 = qd_0*x5;
+    const double x8 = qd_0*x6;
+    const double x9 = qd_1*x8;
+    const double x10 = qd_1*x7;
+    const double x11 = x1*x7 + x2*qd_1;
+    const double x12 = x1*qd_1 - x2*x7;
+    const double x13 = p_0 + x8;
+    const double x14 = x11*x13;
+    const double x15 = x12*x13;
+    const double x16 = 1.9244737576459987*x3 + 9.218384609909762*x4;
+    const double x17 = 9.218384609909762*x3 - 1.9244737576459987*x4;
+    const double x18 = 2.7484333610096408*x5 + x6*x17;
+    const double x19 = x5*x17 - 2.7484333610096408*x6;
+    const double x20 = x2*x16 - x1*x18;
+    const double x21 = x2*x18 + x1*x16;
+    const double x22 = qdd_0*x5 - x9;
+    const double x23 = x10 + qdd_0*x6;
+    const double x24 = p_0*x12 + x1*x22 + x2*qdd_1;
+    const double x25 = x1*qdd_1 - x2*x22 - p_0*x11;
+    const double x26 = 0.0015*x23 + 0.0005*x10 + 0.002*x23;
+    W[11] = x26;
+    const double x27 = 1.2*x20 + 0.0024*(x14 + x25);
+    const double x28 = 1.2*x21 + 0.0024*(x15 - x24);
+    const double x29 = 0.0008952000000000001*x15 + 0.0011048*x24 - 0.0024*x21;
+    const double x30 = 0.0024*x20 + 0.0011048*x25 - 0.0008952000000000001*x14;
+    const double x31 = x1*x27 - x2*x28 - 0.4*x18;
+    W[6] = x31;
+    const double x32 = 0.4*x16 + x2*x27 + x1*x28;
+    W[7] = x32;
+    const double x33 = 0.4*x19 + 1.2*x19 - 0.0024*(x11*x11 + x12*x12);
+    W[8] = x33;
+    const double x34 = 0.0015*x22 - 0.0005*x9 + x1*x29 - x2*x30;
+    W[9] = x34;
+    const double x35 = 0.002*qdd_1 + x2*x29 + x1*x30;
+    W[4] = x35;
+    W[10] = x35;
+    W[5] = x5*x26 - x6*x34;
+    W[0] = x5*x31 + x6*x33 - 1.6490600166057845;
+    W[1] = 0.6*x16 + x32;
+    W[2] = 0.6*x17 + x5*x33 - x6*x31;
+    W[3] = 0.004*qdd_0 + x6*x26 + x5*x34;
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 47 mul, 26 add, 2 div, 3 call */
+ * operations: 45 mul, 26 add, 2 div, 3 call */
 void gyroscope_spinning_rotor_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd)
 {
     const double q_0 = q[0];
@@ -468,8 +466,8 @@ void gyroscope_spinning_rotor_forward_dynamics(const double *q, const double *qd
     const double x15 = 0.002*qd_1*x9;
     const double x16 = 0.0011048*(p_0*x13 - x1*x11) + 0.0008952000000000001*x13*x14;
     const double x17 = 0.0011048*(x2*x11 - p_0*x12) - 0.0008952000000000001*x12*x14;
-    qdd[0] = 1/(0.004 + x8 + x6*x6*(0.0035 - x8))*(tau_0 - x5*(x1*x16 - x2*x17 - 0.0015*x11 - 0.0005*x11) - x6*(x15 + x15) + 0.0024*x5*9.81*(0.19617469496901108*x3 + 0.9396926207859084*x4));
-    qdd[1] = 1/(0.002 + x7)*(tau_1 - x2*x16 - x1*x17 + 0.006596240066423136*x5 + 0.0024*x6*9.81*(0.9396926207859084*x3 - 0.19617469496901108*x4));
+    qdd[0] = 1/(0.004 + x8 + x6*x6*(0.0035 - x8))*(tau_0 - x5*(x1*x16 - x2*x17 - 0.0015*x11 - 0.0005*x11) - x6*(x15 + x15) + 0.0024*x5*(1.9244737576459987*x3 + 9.218384609909762*x4));
+    qdd[1] = 1/(0.002 + x7)*(tau_1 - x2*x16 - x1*x17 + 0.0065962400664231376*x5 + 0.0024*x6*(9.218384609909762*x3 - 1.9244737576459987*x4));
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)

@@ -428,7 +428,7 @@ void planar_2link_joint_wrenches(const double *q, const double *qd, const double
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 39 mul, 18 add, 2 div, 2 call */
+ * operations: 39 mul, 16 add, 2 div, 2 call */
 void planar_2link_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_0 = q[0];
@@ -451,18 +451,17 @@ void planar_2link_forward_dynamics(const double *q, const double *qd, const doub
     const double x6 = p_4*x1;
     const double x7 = p_4*x2 - p_2*qd_0*qd_0;
     const double x8 = x3*x6 - x4*x7;
-    const double x9 = x0*x8;
-    const double x10 = 1/(p_3*p_3*0.3333333333333333*p_1);
+    const double x9 = 1/(p_3*p_3*0.3333333333333333*p_1);
+    const double x10 = x0*x9;
     const double x11 = x0*x10;
-    const double x12 = p_1 - x0*x11;
-    const double x13 = tau_1 - x9;
-    const double x14 = 1/(p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x12 + x4*x4*(p_1 - x12)))*(tau_0 - p_0*0.5*p_2*x6 - x9 - x13 - p_2*(x4*(p_1*(x4*x6 + x3*x7) - x0*x5*x5) + x3*(p_1*x8 + x11*x13)));
-    qdd[0] = x14;
-    qdd[1] = x10*x13 - x14 - x11*x3*p_2*x14;
+    const double x12 = tau_1 - x0*x8;
+    const double x13 = 1/(p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(p_1 - x11 + x4*x4*x11))*(tau_0 - p_0*0.5*p_2*x6 - tau_1 - p_2*(x4*(p_1*(x4*x6 + x3*x7) - x0*x5*x5) + x3*(p_1*x8 + x10*x12)));
+    qdd[0] = x13;
+    qdd[1] = x9*x12 - x13 - x10*x3*p_2*x13;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 18 mul, 6 add, 2 div, 1 call */
+ * operations: 18 mul, 5 add, 2 div, 1 call */
 AGGSYM_SCALAR_STORES void planar_2link_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_1 = q[1];
@@ -477,8 +476,8 @@ AGGSYM_SCALAR_STORES void planar_2link_inertia_inverse(const double *q, const do
     aggsym_sincos(q_1, &x2, &x1);
     const double x3 = 1/(p_3*p_3*0.3333333333333333*p_1);
     const double x4 = x0*x3;
-    const double x5 = p_1 - x0*x4;
-    const double x6 = 1/(p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x5 + x2*x2*(p_1 - x5)));
+    const double x5 = x0*x4;
+    const double x6 = 1/(p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(p_1 - x5 + x2*x2*x5));
     Ainv[0] = x6;
     const double x7 = 1 + p_2*x1*x4;
     const double x8 = x6*x7;
@@ -489,7 +488,7 @@ AGGSYM_SCALAR_STORES void planar_2link_inertia_inverse(const double *q, const do
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 16 mul, 5 add, 1 div, 1 call */
+ * operations: 16 mul, 4 add, 1 div, 1 call */
 void planar_2link_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_1 = q[1];
@@ -505,8 +504,8 @@ void planar_2link_transvective_factors(const double *q, const double *p, double 
     double x3, x2;
     aggsym_sincos(q_1, &x3, &x2);
     const double x4 = x0*1/x1;
-    const double x5 = p_1 - x0*x4;
-    diag[0] = p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(x5 + x3*x3*(p_1 - x5));
+    const double x5 = x0*x4;
+    diag[0] = p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(p_1 - x5 + x3*x3*x5);
     targs[0] = 1 + p_2*x2*x4;
 }
 
@@ -611,7 +610,7 @@ void planar_2link_center_of_mass(const double *q, const double *p, double *c)
 }
 
 /* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
- * operations: 20 mul, 9 add, 1 div, 2 call */
+ * operations: 20 mul, 7 add, 1 div, 2 call */
 void planar_2link_com_jacobian(const double *q, const double *p, double *Jc)
 {
     const double q_0 = q[0];
@@ -627,13 +626,11 @@ void planar_2link_com_jacobian(const double *q, const double *p, double *Jc)
     const double x1 = p_1*0.5*p_3;
     double x3, x2, x5, x4;
     aggsym_sincos2(q_0, q_1, &x3, &x2, &x5, &x4);
-    const double x6 = p_1*p_2*x2;
-    const double x7 = p_1*p_2*x3;
-    const double x8 = x1*(x2*x4 - x3*x5) + x6;
-    const double x9 = x1*(x2*x5 + x3*x4) + x7;
-    const double x10 = 1/(p_0 + p_1);
-    Jc[2] = (x0*x2 + x8)*x10;
-    Jc[0] = -(x0*x3 + x9)*x10;
-    Jc[1] = x10*(x7 - x9);
-    Jc[3] = x10*(x8 - x6);
+    const double x6 = x1*(x2*x4 - x3*x5);
+    const double x7 = x1*(x2*x5 + x3*x4);
+    const double x8 = 1/(p_0 + p_1);
+    Jc[2] = (x0*x2 + x6 + p_1*p_2*x2)*x8;
+    Jc[0] = -(x0*x3 + x7 + p_1*p_2*x3)*x8;
+    Jc[1] = -x7*x8;
+    Jc[3] = x6*x8;
 }

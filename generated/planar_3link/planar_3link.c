@@ -605,7 +605,7 @@ void planar_3link_joint_wrenches(const double *q, const double *qd, const double
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 82 mul, 51 add, 3 div, 3 call */
+ * operations: 82 mul, 48 add, 3 div, 3 call */
 void planar_3link_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
     const double q_0 = q[0];
@@ -642,40 +642,37 @@ void planar_3link_forward_dynamics(const double *q, const double *qd, const doub
     const double x15 = x13 - p_4*x9;
     const double x16 = x6*x14 - x7*x15;
     const double x17 = p_2*(x6*x15 + x7*x14) - x1*x10*x10;
-    const double x18 = x1*x16;
-    const double x19 = 1/(p_5*p_5*0.3333333333333333*p_2);
+    const double x18 = 1/(p_5*p_5*0.3333333333333333*p_2);
+    const double x19 = x1*x18;
     const double x20 = x1*x19;
-    const double x21 = p_2 - x1*x20;
-    const double x22 = p_2 - x21;
-    const double x23 = x7*x7*x22;
-    const double x24 = x6*x7*x22;
-    const double x25 = x21 + x23;
-    const double x26 = p_4*x24;
-    const double x27 = p_4*x25;
-    const double x28 = x0 + x27;
-    const double x29 = 1/(p_4*p_4*0.3333333333333333*p_1 + p_4*x27);
-    const double x30 = x26*x29;
-    const double x31 = x28*x29;
-    const double x32 = x24 - x26*x31;
-    const double x33 = p_1 + x25 - x28*x31;
-    const double x34 = tau_2 - x18;
-    const double x35 = p_2*x16 + x20*x34;
-    const double x36 = x7*x17 + x6*x35;
-    const double x37 = x0*x14 + x18 + x34 + p_4*x36;
-    const double x38 = tau_1 - x37;
-    const double x39 = 1/(p_3*p_3*0.3333333333333333*p_0 + p_3*p_3*(x33 + x5*x5*(p_1 + p_2 - x23 - x26*x30 - x33) + x4*x5*(x32 + x32)))*(tau_0 - p_0*0.5*p_3*x11 - x37 - x38 - p_3*(x5*(p_1*x13 + x6*x17 - x7*x35 - x0*x9 + x30*x38) + x4*(p_1*x14 + x36 + x31*x38)));
-    qdd[0] = x39;
-    const double x40 = p_3*x39;
-    const double x41 = x5*x40;
-    const double x42 = x4*x40;
-    const double x43 = x29*x38 - x39 - x30*x41 - x31*x42;
-    qdd[1] = x43;
-    const double x44 = x39 + x43;
-    qdd[2] = x19*x34 - x44 - x20*(x6*(x42 + p_4*x44) - x7*x41);
+    const double x21 = x7*x7*x20;
+    const double x22 = x6*x7*x20;
+    const double x23 = p_2 - x20 + x21;
+    const double x24 = p_4*x22;
+    const double x25 = p_4*x23;
+    const double x26 = x0 + x25;
+    const double x27 = 1/(p_4*p_4*0.3333333333333333*p_1 + p_4*x25);
+    const double x28 = x24*x27;
+    const double x29 = x26*x27;
+    const double x30 = x22 - x24*x29;
+    const double x31 = p_1 + x23 - x26*x29;
+    const double x32 = tau_2 - x1*x16;
+    const double x33 = p_2*x16 + x19*x32;
+    const double x34 = x7*x17 + x6*x33;
+    const double x35 = tau_1 - x0*x14 - tau_2 - p_4*x34;
+    const double x36 = 1/(p_3*p_3*0.3333333333333333*p_0 + p_3*p_3*(x31 + x5*x5*(p_1 + p_2 - x21 - x24*x28 - x31) + x4*x5*(x30 + x30)))*(tau_0 - p_0*0.5*p_3*x11 - tau_1 - p_3*(x5*(p_1*x13 + x6*x17 - x7*x33 - x0*x9 + x28*x35) + x4*(p_1*x14 + x34 + x29*x35)));
+    qdd[0] = x36;
+    const double x37 = p_3*x36;
+    const double x38 = x5*x37;
+    const double x39 = x4*x37;
+    const double x40 = x27*x35 - x36 - x28*x38 - x29*x39;
+    qdd[1] = x40;
+    const double x41 = x36 + x40;
+    qdd[2] = x18*x32 - x41 - x19*(x6*(x39 + p_4*x41) - x7*x38);
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 50 mul, 26 add, 3 div, 2 call */
+ * operations: 50 mul, 25 add, 3 div, 2 call */
 AGGSYM_SCALAR_STORES void planar_3link_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
     const double q_1 = q[1];
@@ -693,42 +690,41 @@ AGGSYM_SCALAR_STORES void planar_3link_inertia_inverse(const double *q, const do
     aggsym_sincos2(q_1, q_2, &x2, &x1, &x4, &x3);
     const double x5 = 1/(p_5*p_5*0.3333333333333333*p_2);
     const double x6 = x0*x5;
-    const double x7 = p_2 - x0*x6;
-    const double x8 = p_2 - x7;
-    const double x9 = x4*x4*x8;
-    const double x10 = x3*x4*x8;
-    const double x11 = x7 + x9;
+    const double x7 = x0*x6;
+    const double x8 = x4*x4*x7;
+    const double x9 = x3*x4*x7;
+    const double x10 = p_2 - x7 + x8;
+    const double x11 = p_4*x9;
     const double x12 = p_4*x10;
-    const double x13 = p_4*x11;
-    const double x14 = p_1*0.5*p_4 + x13;
-    const double x15 = 1/(p_4*p_4*0.3333333333333333*p_1 + p_4*x13);
-    const double x16 = x12*x15;
-    const double x17 = x14*x15;
-    const double x18 = x10 - x12*x17;
-    const double x19 = p_1 + x11 - x14*x17;
-    const double x20 = 1/(p_3*p_3*0.3333333333333333*p_0 + p_3*p_3*(x19 + x2*x2*(p_1 + p_2 - x9 - x12*x16 - x19) + x1*x2*(x18 + x18)));
-    Ainv[0] = x20;
-    const double x21 = x3*x6;
-    const double x22 = 1 + p_4*x21;
-    const double x23 = 1 + p_3*(x2*x16 + x1*x17);
-    const double x24 = x22*x23 - x22 - p_3*(x1*x21 - x2*x4*x6);
-    const double x25 = x20*x23;
-    const double x26 = -x25;
-    Ainv[1] = x26;
-    Ainv[3] = x26;
-    const double x27 = x20*x24;
-    Ainv[2] = x27;
-    Ainv[6] = x27;
-    Ainv[4] = x15 + x23*x25;
-    const double x28 = x15*x22;
-    const double x29 = -(x28 + x24*x25);
-    Ainv[5] = x29;
-    Ainv[7] = x29;
-    Ainv[8] = x5 + x24*x27 + x22*x28;
+    const double x13 = p_1*0.5*p_4 + x12;
+    const double x14 = 1/(p_4*p_4*0.3333333333333333*p_1 + p_4*x12);
+    const double x15 = x11*x14;
+    const double x16 = x13*x14;
+    const double x17 = x9 - x11*x16;
+    const double x18 = p_1 + x10 - x13*x16;
+    const double x19 = 1/(p_3*p_3*0.3333333333333333*p_0 + p_3*p_3*(x18 + x2*x2*(p_1 + p_2 - x8 - x11*x15 - x18) + x1*x2*(x17 + x17)));
+    Ainv[0] = x19;
+    const double x20 = x3*x6;
+    const double x21 = 1 + p_4*x20;
+    const double x22 = 1 + p_3*(x2*x15 + x1*x16);
+    const double x23 = x21*x22 - x21 - p_3*(x1*x20 - x2*x4*x6);
+    const double x24 = x19*x22;
+    const double x25 = -x24;
+    Ainv[1] = x25;
+    Ainv[3] = x25;
+    const double x26 = x19*x23;
+    Ainv[2] = x26;
+    Ainv[6] = x26;
+    Ainv[4] = x14 + x22*x24;
+    const double x27 = x14*x21;
+    const double x28 = -(x27 + x23*x24);
+    Ainv[5] = x28;
+    Ainv[7] = x28;
+    Ainv[8] = x5 + x23*x26 + x21*x27;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 42 mul, 21 add, 2 div, 2 call */
+ * operations: 42 mul, 20 add, 2 div, 2 call */
 void planar_3link_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
     const double q_1 = q[1];
@@ -747,27 +743,26 @@ void planar_3link_transvective_factors(const double *q, const double *p, double 
     double x3, x2, x5, x4;
     aggsym_sincos2(q_1, q_2, &x3, &x2, &x5, &x4);
     const double x6 = x0*1/x1;
-    const double x7 = p_2 - x0*x6;
-    const double x8 = p_2 - x7;
-    const double x9 = x5*x5*x8;
-    const double x10 = x4*x5*x8;
-    const double x11 = x7 + x9;
+    const double x7 = x0*x6;
+    const double x8 = x5*x5*x7;
+    const double x9 = x4*x5*x7;
+    const double x10 = p_2 - x7 + x8;
+    const double x11 = p_4*x9;
     const double x12 = p_4*x10;
-    const double x13 = p_4*x11;
-    const double x14 = p_1*0.5*p_4 + x13;
-    const double x15 = p_4*p_4*0.3333333333333333*p_1 + p_4*x13;
-    diag[1] = x15;
-    const double x16 = 1/x15;
-    const double x17 = x12*x16;
-    const double x18 = x14*x16;
-    const double x19 = x10 - x12*x18;
-    const double x20 = p_1 + x11 - x14*x18;
-    diag[0] = p_3*p_3*0.3333333333333333*p_0 + p_3*p_3*(x20 + x3*x3*(p_1 + p_2 - x9 - x12*x17 - x20) + x2*x3*(x19 + x19));
-    const double x21 = x4*x6;
-    const double x22 = 1 + p_4*x21;
-    targs[2] = x22;
-    targs[1] = x22 + p_3*(x2*x21 - x3*x5*x6);
-    targs[0] = 1 + p_3*(x3*x17 + x2*x18);
+    const double x13 = p_1*0.5*p_4 + x12;
+    const double x14 = p_4*p_4*0.3333333333333333*p_1 + p_4*x12;
+    diag[1] = x14;
+    const double x15 = 1/x14;
+    const double x16 = x11*x15;
+    const double x17 = x13*x15;
+    const double x18 = x9 - x11*x17;
+    const double x19 = p_1 + x10 - x13*x17;
+    diag[0] = p_3*p_3*0.3333333333333333*p_0 + p_3*p_3*(x19 + x3*x3*(p_1 + p_2 - x8 - x11*x16 - x19) + x2*x3*(x18 + x18));
+    const double x20 = x4*x6;
+    const double x21 = 1 + p_4*x20;
+    targs[2] = x21;
+    targs[1] = x21 + p_3*(x2*x20 - x3*x5*x6);
+    targs[0] = 1 + p_3*(x3*x16 + x2*x17);
 }
 
 /* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)
@@ -803,7 +798,7 @@ void planar_3link_frame_poses(const double *q, const double *p, double *X)
 }
 
 /* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin
- * operations: 8 mul, 6 add, 0 div, 2 call */
+ * operations: 8 mul, 4 add, 0 div, 2 call */
 void planar_3link_frame_jacobians(const double *q, const double *p, double *J)
 {
     const double q_0 = q[0];
@@ -823,14 +818,12 @@ void planar_3link_frame_jacobians(const double *q, const double *p, double *J)
     J[17] = 1;
     double x1, x0, x3, x2;
     aggsym_sincos2(q_0, q_1, &x1, &x0, &x3, &x2);
-    const double x4 = p_3*x0;
-    const double x5 = p_3*x1;
-    const double x6 = x4 + p_4*(x0*x2 - x1*x3);
-    J[3] = x6;
-    const double x7 = x5 + p_4*(x0*x3 + x1*x2);
-    J[0] = -x7;
-    J[4] = x6 - x4;
-    J[1] = x5 - x7;
+    const double x4 = p_4*(x0*x2 - x1*x3);
+    J[4] = x4;
+    const double x5 = p_4*(x0*x3 + x1*x2);
+    J[3] = p_3*x0 + x4;
+    J[0] = -(p_3*x1 + x5);
+    J[1] = -x5;
 }
 
 /* per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd
@@ -912,7 +905,7 @@ void planar_3link_center_of_mass(const double *q, const double *p, double *c)
 }
 
 /* the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)
- * operations: 36 mul, 20 add, 1 div, 3 call */
+ * operations: 36 mul, 18 add, 1 div, 3 call */
 void planar_3link_com_jacobian(const double *q, const double *p, double *Jc)
 {
     const double q_0 = q[0];
@@ -940,17 +933,15 @@ void planar_3link_com_jacobian(const double *q, const double *p, double *Jc)
     const double x11 = x3*x6 + x4*x5;
     const double x12 = p_3*x3;
     const double x13 = p_3*x4;
-    const double x14 = p_2*(x12 + p_4*x10);
-    const double x15 = p_2*(x13 + p_4*x11);
-    const double x16 = x2*(x7*x10 - x8*x11) + x14;
-    const double x17 = x2*(x8*x10 + x7*x11) + x15;
-    const double x18 = x1*x10 + p_1*x12 + x16;
-    const double x19 = x1*x11 + p_1*x13 + x17;
-    const double x20 = 1/(p_0 + x9);
-    Jc[3] = (x0*x3 + x18)*x20;
-    Jc[0] = -(x0*x4 + x19)*x20;
-    Jc[1] = x20*(x9*x13 - x19);
-    Jc[4] = x20*(x18 - x9*x12);
-    Jc[2] = x20*(x15 - x17);
-    Jc[5] = x20*(x16 - x14);
+    const double x14 = x2*(x7*x10 - x8*x11);
+    const double x15 = x2*(x8*x10 + x7*x11);
+    const double x16 = x1*x10 + p_1*x12 + x14 + p_2*(x12 + p_4*x10);
+    const double x17 = x1*x11 + p_1*x13 + x15 + p_2*(x13 + p_4*x11);
+    const double x18 = 1/(p_0 + x9);
+    Jc[3] = (x0*x3 + x16)*x18;
+    Jc[0] = -(x0*x4 + x17)*x18;
+    Jc[1] = x18*(x9*x13 - x17);
+    Jc[4] = x18*(x16 - x9*x12);
+    Jc[2] = -x15*x18;
+    Jc[5] = x14*x18;
 }
