@@ -216,4 +216,4 @@ def test_a_huge_integer_default_is_an_error(tmp_path):
     err = io.StringIO()
     with redirect_stderr(err), redirect_stdout(io.StringIO()):
         code = cli.main(["generate", str(path), "-o", str(tmp_path / "out"), "-q"])
-    assert code == 2 and "parameters.m" in err.getvalue() and "not finite" in err.getvalue(), err.getvalue()
+    assert code == 2 and "parameters.m" in err.getvalue() and "larger than any finite double" in err.getvalue(), err.getvalue()
