@@ -14,6 +14,8 @@ made the exact 0), without building a ``Matrix`` per link: reading a 2000-link c
 """
 from __future__ import annotations
 
+import functools
+
 import sympy as sp
 
 from .sympy_numbers import double, float_number
@@ -25,9 +27,11 @@ IDENTITY = ((ONE, ZERO, ZERO), (ZERO, ONE, ZERO), (ZERO, ZERO, ONE))
 ORIGIN = (ZERO, ZERO, ZERO)
 
 
+@functools.lru_cache(maxsize=4096)
 def exact(value: float) -> sp.Expr:
     """A float from the file as a SymPy number, integers exact (so structural zeros fold) while a double holds
-    them exactly (below 2^53; larger ones stay floats, not huge exact integers)."""
+    them exactly (below 2^53; larger ones stay floats, not huge exact integers).  Cached: files repeat their
+    numbers, an inertia tensor its products (SymPy numbers are immutable)."""
     value = float(value)
     return sp.Integer(int(value)) if value.is_integer() and abs(value) < 2 ** 53 else float_number(value)
 
@@ -112,6 +116,11 @@ ROUND_OFF = 1e-14  # an entry of a translation, centre of mass or inertia tensor
 # with milligram links keeps every digit of its own.
 
 
+def _is_zero(x: sp.Expr) -> bool:
+    """x.is_zero, for a number without SymPy's assumption system (tens of microseconds for each new Float)."""
+    return not x if isinstance(x, (sp.Float, sp.Integer)) else bool(x.is_zero)
+
+
 def _expanded(x: sp.Expr) -> sp.Expr:
     return x if isinstance(x, sp.Number) else sp.expand(x)  # (a number is its own expansion)
 
@@ -137,13 +146,13 @@ def combine(parts) -> Inertial | None:
     if len(parts) == 1:  # nothing to move
         mass, com, J = parts[0]
         com, J = round_off(com), round_off(J)
-        if mass.is_zero:
+        if _is_zero(mass):
             com = ORIGIN
-            if all(x.is_zero for row in J for x in row):
+            if all(_is_zero(x) for row in J for x in row):
                 return None
         return Inertial(mass, com, J)
     mass = sum((m for m, _, _ in parts), sp.Integer(0))
-    if mass.is_zero:
+    if _is_zero(mass):
         com = sp.zeros(3, 1)
     else:
         com = sum((m * sp.Matrix(c) for m, c, _ in parts), sp.zeros(3, 1)) / mass
@@ -153,6 +162,6 @@ def combine(parts) -> Inertial | None:
         J += sp.Matrix(Jk) + m * (d.dot(d) * sp.eye(3) - d * d.T)
     J = round_off(tuple(tuple(J[i, j] for j in range(3)) for i in range(3)))
     com = round_off(tuple(com))
-    if mass.is_zero and all(x.is_zero for row in J for x in row):
+    if _is_zero(mass) and all(_is_zero(x) for row in J for x in row):
         return None
     return Inertial(mass, com, J)

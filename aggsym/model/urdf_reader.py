@@ -407,7 +407,8 @@ class _Reader:
                 if k is not None and _right_angle(value, 0.0) is None:
                     self.snapped.append({"where": f"{_where(o)}, line {o.line}", "angle": name, "value": value,
                                          "taken_as": f"{k}*pi/2"})
-        return xyz, _rpy(rpy, self.snap_angles)
+        return xyz, _rpy(rpy, self.snap_angles) if any(rpy) else []  # (no rotation: most origins; _rpy's SymPy
+        # work is per angle)
 
     # the document ---------------------------------------------------------------------------------------
     def read(self) -> Model:
