@@ -118,27 +118,39 @@ def chain_urdf(n: int) -> str:
     about the centre of mass (the tensor's entries as URDF's ixx ... izz) as :func:`link` gives the YAML."""
     if n < 1:
         raise ValueError("a chain has at least one link")
-    lines = ['<?xml version="1.0"?>', f'<!-- {n}-link spatial serial arm (benchmarks/chain.py). Generated. -->',
-             f'<robot name="chain{n}">', '  <link name="world"/>']
+    lines = urdf_head(n)
     for k in range(1, n + 1):
-        d = link(k)
-        i = d["inertia"]
-        lines += [f'  <link name="link{k}">',
+        link_lines, joint_lines = urdf_lines(k)
+        lines += link_lines + joint_lines
+    return "\n".join(lines + ["</robot>"]) + "\n"
+
+
+def urdf_head(n: int) -> list:
+    """The first lines of the URDF of the n-link chain, up to its root link ``world``."""
+    return ['<?xml version="1.0"?>', f'<!-- {n}-link spatial serial arm (benchmarks/chain.py). Generated. -->',
+            f'<robot name="chain{n}">', '  <link name="world"/>']
+
+
+def urdf_lines(k: int) -> tuple:
+    """(the ``<link>`` lines, the ``<joint>`` lines) of link k (its numbers from :func:`link`) in the URDF."""
+    d = link(k)
+    i = d["inertia"]
+    link_lines = [f'  <link name="link{k}">',
                   '    <inertial>',
                   f'      <origin xyz="{" ".join(repr(float(x)) for x in d["com"])}" rpy="0 0 0"/>',
                   f'      <mass value="{d["mass"]!r}"/>',
                   f'      <inertia ixx="{i["xx"]!r}" ixy="{i["xy"]!r}" ixz="{i["xz"]!r}" iyy="{i["yy"]!r}" '
                   f'iyz="{i["yz"]!r}" izz="{i["zz"]!r}"/>',
                   '    </inertial>',
-                  '  </link>',
-                  f'  <joint name="joint{k}" type="revolute">',
-                  f'    <parent link="{"world" if k == 1 else f"link{k - 1}"}"/>',
-                  f'    <child link="link{k}"/>',
-                  f'    <origin xyz="{" ".join(repr(float(x)) for x in d["offset"])}" rpy="0 0 0"/>',
-                  f'    <axis xyz="{_URDF_AXES[d["axis"]]}"/>',
-                  '    <limit lower="-3.1416" upper="3.1416" effort="100" velocity="10"/>',
-                  '  </joint>']
-    return "\n".join(lines + ["</robot>"]) + "\n"
+                  '  </link>']
+    joint_lines = [f'  <joint name="joint{k}" type="revolute">',
+                   f'    <parent link="{"world" if k == 1 else f"link{k - 1}"}"/>',
+                   f'    <child link="link{k}"/>',
+                   f'    <origin xyz="{" ".join(repr(float(x)) for x in d["offset"])}" rpy="0 0 0"/>',
+                   f'    <axis xyz="{_URDF_AXES[d["axis"]]}"/>',
+                   '    <limit lower="-3.1416" upper="3.1416" effort="100" velocity="10"/>',
+                   '  </joint>']
+    return link_lines, joint_lines
 
 
 def write_chain_urdf(n: int, folder) -> Path:

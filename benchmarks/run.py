@@ -27,7 +27,7 @@ the chains, with KanesMethod on the chains (generation.json, kane.json); 2. oper
 manifests (opcounts.json); 3. runtime of the generated C against Pinocchio C++ (runtime.json; the four robots generated again, untimed, with
 the routines on request: derivatives, regressor; with solo12
 standing on its four feet, constrained forward dynamics against constraintDynamics, :mod:`benchmarks.constrained`);
-4. reading and ordering a 2000-body YAML and URDF chain (inputs.json, :mod:`benchmarks.inputs`); opsn: the
+4. parsing a 2000-link YAML and URDF chain (inputs.json, :mod:`benchmarks.inputs`); opsn: the
 operations per coordinate of inverse_dynamics and forward_dynamics from the manifests of four arms (opsn.json).
 
 Section 3 also times, for the robots of AGGSYM_BENCH_PEER_ROBOTS (solo12 with the 6-coordinate Euler root, the
@@ -423,7 +423,8 @@ def main() -> int:
         inputs = inputs_section(BUILD / "inputs")
         _save("inputs", inputs)
         for row in inputs["rows"]:
-            log(f"load {row['file']} of {row['bodies']} bodies: {row['seconds']:.3f} s")
+            log(f"load {row['file']} of {row['bodies']} bodies: {row['seconds']:.3f} s (median of 3; target "
+                f"{row['target_seconds']:g} s)")
     else:
         inputs = _load("inputs")
 

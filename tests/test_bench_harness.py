@@ -39,6 +39,30 @@ def test_chain_models_are_valid_and_prefixes_of_each_other(tmp_path):
     assert np.linalg.eigvalsh(twin.inertia(np.array([0.3, -1.0, 2.0, 0.5]))).min() > 0
 
 
+def test_input_chains_are_the_benchmark_arm_listed_from_the_tip(tmp_path):
+    """The inputs section's chains (benchmarks/inputs.py): the 3-D arm of benchmarks/chain.py, its bodies (YAML) and
+    joints (URDF) listed from the tip, load as the same model as the arm listed from the root; the section's rows
+    carry the targets (no timing asserted)."""
+    import dataclasses
+
+    from benchmarks import inputs
+
+    def bodies(model):  # (where: the body's place in its file, which differs)
+        return [dataclasses.replace(b, where="") for b in model.bodies]
+
+    forward = aggsym.load(chain.write_chain(7, tmp_path))
+    reversed_yaml = aggsym.load(inputs.yaml_chain(7, tmp_path / "reversed.yaml"))
+    assert bodies(reversed_yaml) == bodies(forward) and reversed_yaml.gravity == forward.gravity
+    forward_urdf = aggsym.load(chain.write_chain_urdf(7, tmp_path))
+    reversed_urdf = aggsym.load(inputs.urdf_chain(7, tmp_path / "reversed.urdf"))
+    assert bodies(reversed_urdf) == bodies(forward_urdf) and len(reversed_urdf.bodies) == 8  # the root link "world"
+    rows = inputs.section(tmp_path / "inputs", n=5)["rows"]
+    assert [(r["file"], r["links"], r["bodies"], r["target_seconds"]) for r in rows] == \
+        [("YAML chain", 5, 5, 1.0), ("URDF chain", 5, 6, 2.0)]
+    targets = {what: ok for what, _, ok in report.targets({"inputs": {"rows": rows}})}
+    assert "parse a 5-link YAML chain (3-D, full inertias; aggsym.load in process) ≤ 1 s" in targets
+
+
 def test_chain_generated_c_matches_the_numeric_twin(tmp_path):
     model = chain.chain_model(3, tmp_path)
     gen = generate(model, latex=False)

@@ -33,6 +33,8 @@ from fractions import Fraction
 
 import sympy as sp
 
+from .sympy_numbers import double, float_number
+
 MAX_LENGTH = 100_000  # characters of one expression
 MAX_CALLS = 1_000  # function calls in one expression (SymPy takes up to a millisecond for each)
 MAX_NESTING = 100  # parentheses and function calls inside each other
@@ -79,7 +81,7 @@ def check_identifier(name) -> str | None:
 def _float_expr(value: float) -> sp.Expr:
     """A finite float as a SymPy number (an Integer where it is one); cached: a model repeats its numbers (SymPy
     numbers are immutable), and a file of distinct numbers only misses the bounded cache."""
-    return sp.Integer(int(value)) if value.is_integer() and abs(value) < 1e15 else sp.Float(value)
+    return sp.Integer(int(value)) if value.is_integer() and abs(value) < 1e15 else float_number(value)
 
 
 def parse_value(value, symbols: dict) -> sp.Expr:
@@ -393,7 +395,7 @@ def evaluate(expr, values: dict) -> float:
     if isinstance(expr, (int, float)) and not isinstance(expr, bool):
         return float(expr)
     if expr.is_Number:  # the common case: a plain number of the model
-        out = float(expr)
+        out = double(expr)
         if not math.isfinite(out):
             raise ValueError(f"{_short(str(expr))} is not finite")
         return out

@@ -19,8 +19,13 @@ from .types import Frame, Model
 MAX_FRAMES = 10_000  # frames of a YAML model's frames: list, and names given to --frames (as MAX_LINKS)
 
 
+_IDENTITY = ((sp.S.One, sp.S.Zero, sp.S.Zero), (sp.S.Zero, sp.S.One, sp.S.Zero), (sp.S.Zero, sp.S.Zero, sp.S.One))
+
+
 def _link_frame(link: str, body: str, R, t) -> Frame:
-    axes = None if R is None or sp.Matrix(R) == sp.eye(3) else tuple(tuple(row) for row in R)
+    axes = None if R is None else tuple(tuple(row) for row in R)
+    if axes == _IDENTITY:  # (exactly: a float 1.0 or 0.0 is not the exact identity, as for a Matrix)
+        axes = None
     point = (sp.Integer(0),) * 3 if t is None else tuple(t)
     return Frame(name=link, body=body, point=point, axes=axes)
 

@@ -98,9 +98,11 @@ import sympy as sp
 from ..errors import ModelError, ModelWarning
 from .expressions import check_identifier
 from .frames import default_frames
-from .types import _snap as snap
-from .types import (WORLD, Body, Coordinate, Coupling, Inertial, JointDynamics, JointLimits, Model, Pair, Parameter,
-                    elementary_rotation)
+from .types import WORLD, Body, Coordinate, Coupling, JointDynamics, JointLimits, Model, Pair, Parameter
+from .link_numbers import (IDENTITY, ORIGIN, ROUND_OFF, add, combine, exact, matvec, product, round_off, snapped,  # noqa: F401
+                           transpose, turn)
+from .link_numbers import rotation_matrix as _matrix
+from .sympy_numbers import double
 from .validate import kinetic_energy_problem, motion_space, principal_problem
 from .xml_source import MAX_ELEMENTS, MAX_JOINTS, MAX_LINKS, NUMBER as _NUMBER, _Element, _parse, _where  # noqa: F401
 
@@ -126,31 +128,6 @@ MAX_BYTES = 64 * 2 ** 20  # the largest URDF read (example-robot-data's largest 
 MAX_ROTATIONS = 9  # elementary rotations a chain of fixed joints may pile up before they are folded into one rpy
 
 
-def _exact(value: float) -> sp.Expr:
-    """A float from the file as a SymPy number, integers exact (so structural zeros fold) while a double holds
-    them exactly (below 2^53; larger ones stay floats, not huge exact integers)."""
-    value = float(value)
-    return sp.Integer(int(value)) if value.is_integer() and abs(value) < 2 ** 53 else sp.Float(value)
-
-
-def _product(a, b) -> sp.Matrix:
-    """a b for 3x3 matrices of numbers, skipping the zero terms (much faster than SymPy's general product)."""
-    rows = [[a[i, k] for k in range(3)] for i in range(3)]
-    cols = [[b[k, j] for k in range(3)] for j in range(3)]
-    zero = sp.S.Zero  # exact zeros are this singleton (asking .is_zero of every Float is slow)
-    return sp.Matrix([[sp.Add(*[x * y for x, y in zip(row, col) if x is not zero and y is not zero])
-                       for col in cols] for row in rows])
-
-
-def _matrix(rotation) -> sp.Matrix:
-    """The product of elementary rotations [(axis, angle), ...] (Prop. 1.17)."""
-    c = None
-    for axis, angle in rotation:
-        e = elementary_rotation(axis, angle)
-        c = e if c is None else _product(c, e)
-    return sp.eye(3) if c is None else c.applyfunc(snap)
-
-
 def _inverse(rotation) -> list:
     return [(axis, -angle) for axis, angle in reversed(rotation)]
 
@@ -170,20 +147,6 @@ ANGLE_ROUND_OFF = 1e-15  # rad (times k for k pi/2): an angle of the file this c
 # multiple written to double precision (1.5707963267948966, 1.570796326794897, 3.141592653589793; a few units in the
 # last place): it is taken as the exact multiple, the change being round-off.  Nothing farther is moved: 1.57079632679 (5e-12 off) or 1.5708 stay what they are, unless
 # the user asks for it (``snap_angles``, recorded in the manifest).
-
-
-ROUND_OFF = 1e-14  # an entry of a translation, centre of mass or inertia tensor computed here (through rotations)
-# below this times the largest entry of its vector or tensor is round-off: 0.  Relative, so that a millimetre robot
-# with milligram links keeps every digit of its own.
-
-
-def _round_off(M: sp.Matrix) -> sp.Matrix:
-    """``M`` (a vector or tensor of numbers, expanded) with the entries below :data:`ROUND_OFF` of its largest set to
-    0."""
-    M = M.applyfunc(sp.expand)
-    sizes = [abs(float(x)) for x in M if x.is_Number]
-    tiny = ROUND_OFF * max(sizes, default=0.0)
-    return M.applyfunc(lambda x: sp.Integer(0) if x.is_Number and abs(float(x)) < tiny else x)
 
 
 def _right_angle(value: float, tolerance: float):
@@ -344,8 +307,8 @@ class _Place:
 
     body: int
     rotation: list
-    R: sp.Matrix
-    t: sp.Matrix
+    R: tuple  # 3x3, rows
+    t: tuple
 
 
 class _Reader:
@@ -444,7 +407,8 @@ class _Reader:
                 if k is not None and _right_angle(value, 0.0) is None:
                     self.snapped.append({"where": f"{_where(o)}, line {o.line}", "angle": name, "value": value,
                                          "taken_as": f"{k}*pi/2"})
-        return xyz, _rpy(rpy, self.snap_angles)
+        return xyz, _rpy(rpy, self.snap_angles) if any(rpy) else []  # (no rotation: most origins; _rpy's SymPy
+        # work is per angle)
 
     # the document ---------------------------------------------------------------------------------------
     def read(self) -> Model:
@@ -657,12 +621,11 @@ class _Reader:
             if data is None:
                 return
             R = _matrix(where.rotation + data.rotation) if data.rotation else where.R
-            offset = sp.Matrix(3, 3, lambda i, j: _exact(data.com[i]) if j == 0 else 0)  # (a column, for _product)
-            com = where.t + _product(where.R, offset)[:, 0]
-            J = sp.Matrix(3, 3, lambda i, j: _exact(data.inertia[i][j]))
+            com = add(where.t, turn(where.R, tuple(exact(x) for x in data.com)))
+            J = tuple(tuple(exact(x) for x in row) for row in data.inertia)
             if data.rotation or where.rotation:
-                J = _product(_product(R, J), R.T)
-            rows[where.body]["parts"].append((_exact(data.mass), com, _round_off(J)))
+                J = product(product(R, J), transpose(R))
+            rows[where.body]["parts"].append((exact(data.mass), com, round_off(J)))
             link_parts[link] = rows[where.body]["parts"][-1]
 
         root_pair_name = _identifier(ROOT_PAIR, pair_names, "joint")
@@ -678,21 +641,21 @@ class _Reader:
         rows.append({"name": bodies_names.claim(root, link_el[root]), "parent": WORLD, "link": root,
                      "pair": Pair(root_pair_name, zero, (), coords, positions=positions), "link_rotation": None,
                      "parts": []})
-        place[root] = _Place(0, [], sp.eye(3), sp.zeros(3, 1))
+        place[root] = _Place(0, [], IDENTITY, ORIGIN)
         add_inertial(root, place[root])
         stack = list(reversed(children[root]))  # depth first, siblings in order (Pinocchio's order)
         while stack:
             joint = stack.pop()
             here = place[joint.parent]
-            t = here.t + here.R * sp.Matrix([_exact(x) for x in joint.xyz])
+            t = add(here.t, matvec(here.R, tuple(exact(x) for x in joint.xyz)))
             if joint.type == "fixed":
                 rotation = _tidy(here.rotation + joint.rotation)
                 if len(rotation) > MAX_ROTATIONS:
                     rotation = _fold(rotation)
                     R = _matrix(rotation)
                 else:  # R_here times the joint's own rotation: O(1) whatever the chain's length
-                    R = _product(here.R, _matrix(joint.rotation)).applyfunc(snap) if joint.rotation else here.R
-                place[joint.child] = _Place(here.body, rotation, R, _round_off(t))
+                    R = snapped(product(here.R, _matrix(joint.rotation))) if joint.rotation else here.R
+                place[joint.child] = _Place(here.body, rotation, R, round_off(t))
             else:
                 align, i = _align(joint.axis)
                 code = CODES[MOVABLE[joint.type]][i]
@@ -701,14 +664,14 @@ class _Reader:
                             (Coordinate(name, code, joint.name, joint.dynamics, joint.limits),))
                 back = _inverse(align)
                 R = _matrix(back)
-                link_rotation = tuple(tuple(R[r, c] for c in range(3)) for r in range(3)) if align else None
+                link_rotation = R if align else None
                 rows.append({"name": bodies_names.claim(joint.child, link_el[joint.child]),
                              "parent": rows[here.body]["name"], "link": joint.child, "pair": pair,
                              "link_rotation": link_rotation, "parts": []})
-                place[joint.child] = _Place(len(rows) - 1, back, R, sp.zeros(3, 1))
+                place[joint.child] = _Place(len(rows) - 1, back, R, ORIGIN)
             add_inertial(joint.child, place[joint.child])
             stack.extend(reversed(children[joint.child]))
-        bodies = tuple(Body(name=row["name"], parent=row["parent"], pair=row["pair"], inertial=_combine(row["parts"]),
+        bodies = tuple(Body(name=row["name"], parent=row["parent"], pair=row["pair"], inertial=combine(row["parts"]),
                             where=_where(link_el[row["link"]]), link_rotation=row["link_rotation"])
                        for row in rows)
         self.judge(bodies, rows, place, links, link_el)
@@ -723,9 +686,7 @@ class _Reader:
                       meta={"mimic": [{k: j.mimic[k] for k in ("joint", "master", "multiplier", "offset")}
                                       for j in joints.values() if j.mimic is not None],
                             "links": {link: rows[p.body]["name"] for link, p in place.items()},
-                            "link_frames": {link: (rows[p.body]["name"], tuple(tuple(p.R[i, j] for j in range(3))
-                                                                              for i in range(3)), tuple(p.t))
-                                            for link, p in place.items()},
+                            "link_frames": {link: (rows[p.body]["name"], p.R, p.t) for link, p in place.items()},
                             "leaf_links": [link for link in place if not children[link]],
                             "link_parts": link_parts,
                             "floating_base": self.floating_base, "warnings": list(self.warnings),
@@ -768,9 +729,9 @@ class _Reader:
             if body.inertial is None:
                 verdict.append(f"its {of} is massless")
                 continue
-            mass = float(body.inertial.mass)
-            com = [float(x) for x in body.inertial.com]
-            J = np.array([[float(x) for x in row] for row in body.inertial.inertia])
+            mass = double(body.inertial.mass)
+            com = [double(x) for x in body.inertial.com]
+            J = np.array([[double(x) for x in row] for row in body.inertial.inertia])
             if not (math.isfinite(mass) and all(math.isfinite(x) for x in com) and np.all(np.isfinite(J))):
                 self.fail(link_el[rows[k]["link"]], f"the merged mass, centre of mass or inertia of {of} overflows "
                                                     f"a double (mass {mass:g}); the numbers are too large")
@@ -802,33 +763,6 @@ class _Reader:
             data = links[link]
             self.warn(data.el, f"non-physical inertia accepted (as Pinocchio does): {data.problem}; the link is used "
                                f"as given, since {verdict[owner[link]]}")
-
-
-def _combine(parts) -> Inertial | None:
-    """One rigid body from several (mass, centre of mass, inertia about it), all in body axes."""
-    if not parts:
-        return None
-    if len(parts) == 1:  # nothing to move
-        mass, com, J = parts[0]
-        com, J = _round_off(com), _round_off(J)
-        if mass.is_zero:
-            com = sp.zeros(3, 1)
-            if all(x.is_zero for x in J):
-                return None
-        return Inertial(mass, tuple(com), tuple(tuple(J[i, j] for j in range(3)) for i in range(3)))
-    mass = sum((m for m, _, _ in parts), sp.Integer(0))
-    if mass.is_zero:
-        com = sp.zeros(3, 1)
-    else:
-        com = sum((m * c for m, c, _ in parts), sp.zeros(3, 1)) / mass
-    J = sp.zeros(3, 3)
-    for m, c, Jk in parts:
-        d = c - com
-        J += Jk + m * (d.dot(d) * sp.eye(3) - d * d.T)
-    J, com = _round_off(J), _round_off(com)
-    if mass.is_zero and all(x.is_zero for x in J):
-        return None
-    return Inertial(mass, tuple(com), tuple(tuple(J[i, j] for j in range(3)) for i in range(3)))
 
 
 def friction_parameters(coordinates) -> tuple:

@@ -56,8 +56,14 @@ def _inertia_problem(entries: tuple, triangle: bool, tol: float) -> str | None:
 
 def principal_problem(inertia, tol: float = PHYSICAL_TOL) -> str | None:
     """Why a symmetric 3x3 inertia tensor about the centre of mass is not physical, judged relative to its largest
-    principal moment: negative moments or a violated triangle inequality by more than ``tol`` of it."""
-    J = np.asarray(inertia, dtype=float)
+    principal moment: negative moments or a violated triangle inequality by more than ``tol`` of it.  (Cached on
+    the numbers: a URDF reader asks it of a link's tensor and again of the body that is that link alone.)"""
+    return _principal_problem(tuple(np.asarray(inertia, dtype=float).ravel().tolist()), tol)
+
+
+@functools.lru_cache(maxsize=4096)
+def _principal_problem(entries: tuple, tol: float) -> str | None:
+    J = np.array(entries, dtype=float).reshape(3, 3)
     if not np.all(np.isfinite(J)):
         return "inertia has non-finite entries"
     moments = np.linalg.eigvalsh((J + J.T) / 2)
