@@ -26,7 +26,7 @@ from aggsym.contract import ROUTINES, run
 from aggsym.core.backend import Numeric
 from aggsym.mechanics.bound import bind
 from aggsym.model.reframe import reframe
-from helpers import ROBOTS, pinocchio_q, relative_error, robots_directory
+from helpers import ROBOTS, pinocchio_model, pinocchio_q, relative_error, robots_directory
 from random_trees import random_urdf
 
 pytestmark = pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")
@@ -178,6 +178,33 @@ def test_arms_at_the_ends_of_the_scales(length, mass, tmp_path):
         path = tmp_path / f"{robot}.urdf"
         path.write_text(perturbed((robots_directory() / FILES[robot]).read_text(), rng, length=length, mass=mass))
         assert_exact(path, rng, states=1)
+
+
+@pytest.mark.parametrize("base", [True, "quaternion"])
+def test_floating_bases_tilted(base, tmp_path):
+    """HyQ with a free root (the Euler pair, Pinocchio's free-flyer), every axis and origin tilted: A, b + g, inverse
+    and forward dynamics of the internal model against Pinocchio's model with that root."""
+    rng = np.random.default_rng(5)
+    path = tmp_path / "hyq.urdf"
+    path.write_text(perturbed((robots_directory() / FILES["hyq"]).read_text(), rng))
+    model = aggsym.load(path, floating_base=base)
+    inner = reframe(model)
+    assert inner is not model
+    if base is True:
+        pm = pinocchio_model(path, floating_base=True)
+        q = rng.uniform(-1, 1, model.nq)
+        Q = pinocchio_q(pm, q)
+    else:
+        pm = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+        Q = q = pin.randomConfiguration(pm, -np.ones(pm.nq), np.ones(pm.nq))
+    data = pm.createData()
+    qd, qdd, tau = rng.normal(size=(3, model.nv))
+    M = pin.crba(pm, data, Q)
+    ref = {"inertia": np.triu(M) + np.triu(M, 1).T, "nonlinear_effects": pin.nonLinearEffects(pm, data, Q, qd),
+           "inverse_dynamics": pin.rnea(pm, data, Q, qd, qdd), "forward_dynamics": pin.aba(pm, data, Q, qd, tau)}
+    x = {"q": list(q), "qd": list(qd), "qdd": list(qdd), "tau": list(tau)}
+    for role, value in ref.items():
+        assert relative_error(ours(inner, role, x).reshape(np.shape(value)), value) <= EXACT, role
 
 
 def test_the_perturbation_reaches_the_file(tmp_path):
