@@ -29,7 +29,7 @@ from aggsym.codegen.slicing import SLICE_SIZE, SLICE_THRESHOLD
 from aggsym.contract import select_routines
 
 from .environment import load_average
-from .run import ROBOT_FILES, robots_directory
+from .robots import ROBOT_FILES, robots_directory
 
 VARIANTS = (("one function per routine", None), ("sliced", (SLICE_THRESHOLD, SLICE_SIZE)))
 

@@ -100,9 +100,18 @@ def git_commit() -> str | None:
     return rev.stdout.strip() + (" (aggsym/ or templates/ modified)" if dirty.stdout.strip() else "")
 
 
-def environment() -> dict:
-    from .runtime import compiler_versions
+def compiler_versions() -> dict:
+    """The first line of `$CC --version` and `$CXX --version` (cc and g++ by default), or "unknown"."""
+    out = {}
+    for name, exe in (("cc", os.environ.get("CC", "cc")), ("c++", os.environ.get("CXX", "g++"))):
+        try:
+            out[name] = subprocess.run([exe, "--version"], capture_output=True, text=True).stdout.splitlines()[0]
+        except (OSError, IndexError):
+            out[name] = "unknown"
+    return out
 
+
+def environment() -> dict:
     return {
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "cpu": cpu_model(),

@@ -47,19 +47,13 @@ from pathlib import Path
 from . import report
 from .chain import write_chain
 from .environment import cpu_line, environment, load_average
+from .robots import FIVE, ROBOT_FILES, robot_paths, robots_directory  # noqa: F401  (the sections' names)
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 BUILD = HERE / "build"
 
-# example-robot-data files (as in tests/pinocchio_reference.py; talos is the reduced 32-DOF model)
 FREE_FLYER_SUFFIX = report.FREE_FLYER_SUFFIX  # the label of a robot generated with --floating-base quaternion
-ROBOT_FILES = {
-    "ur5": "ur_description/urdf/ur5_robot.urdf",
-    "panda": "panda_description/urdf/panda.urdf",
-    "hyq": "hyq_description/robots/hyq_no_sensors.urdf",
-    "talos": "talos_data/robots/talos_reduced.urdf",
-}
 # Section 3's robots beyond ROBOT_FILES, generated with the routines FIVE alone: label -> (example-robot-data
 # file or chain length, aggsym options, Pinocchio root for the CasADi peer)
 SOLO12 = "solo_description/robots/solo12.urdf"
@@ -69,10 +63,6 @@ EXTRA_RUNTIME_ROBOTS = {
     "chain48": (48, (), None),
 }
 PEER_ROBOTS = "ur5,panda,solo12_euler,talos,chain24,chain48"
-# the routines the peers have: EXTRA_RUNTIME_ROBOTS are generated with these alone, and the -O3 build of a robot of
-# ROBOT_FILES is compiled from a copy generated with these alone (its full file with the derivatives and the
-# regressor takes minutes to compile at -O3: talos' is 3.4 MB)
-FIVE = "inertia,nonlinear_effects,inverse_dynamics,forward_dynamics,inertia_inverse"
 # item 7 of issue 18: operations per coordinate of these arms' inverse and forward dynamics (section opsn)
 OPSN_ROBOTS = {
     "ur5": "ur_description/urdf/ur5_robot.urdf",
@@ -102,22 +92,6 @@ def config() -> dict:
 
 def chain_lengths(cfg) -> list:
     return sorted({int(x) for x in str(cfg["AGGSYM_BENCH_CHAINS"]).split(",") if x.strip()})
-
-
-def robots_directory() -> Path:
-    """``share/example-robot-data/robots`` of the installed example-robot-data (it has no Python loader)."""
-    from importlib import metadata
-
-    dist = metadata.distribution("example-robot-data")
-    for f in dist.files or ():
-        if f.as_posix().endswith("share/example-robot-data/package.xml"):
-            return Path(dist.locate_file(f)).parent / "robots"
-    raise FileNotFoundError("example-robot-data lists no share/example-robot-data/package.xml")
-
-
-def robot_paths() -> dict:
-    root = robots_directory()
-    return {name: root / rel for name, rel in ROBOT_FILES.items()}
 
 
 def log(msg: str):

@@ -23,6 +23,8 @@ import subprocess
 import time
 from pathlib import Path
 
+from .environment import load_average
+
 HERE = Path(__file__).resolve().parent
 HARNESS = HERE / "harness"
 C_STD = ["-std=c99", "-O2", "-fPIC", "-Wall", "-Wextra", "-Wpedantic"]
@@ -135,16 +137,6 @@ def _stamp(path: Path, key: str) -> bool:
 
 def _write_stamp(path: Path, key: str):
     path.with_suffix(path.suffix + ".key").write_text(key)
-
-
-def compiler_versions() -> dict:
-    out = {}
-    for name, exe in (("cc", os.environ.get("CC", "cc")), ("c++", os.environ.get("CXX", "g++"))):
-        try:
-            out[name] = subprocess.run([exe, "--version"], capture_output=True, text=True).stdout.splitlines()[0]
-        except (OSError, IndexError):
-            out[name] = "unknown"
-    return out
 
 
 def build_pinocchio_object(build: Path, log=print) -> tuple:
@@ -390,7 +382,6 @@ def run_harness(exe: Path, robots: dict, out_json: Path, seconds: float = 0.5, s
     """Run the harness on ``robots`` (name -> URDF path) and the ``constrained`` models (name -> (URDF path,
     contact frames), floating base), pinned to ``cpu`` (os.sched_setaffinity in the child) when given; returns its
     JSON with ``pinned_cpu`` and ``load_average_before`` added."""
-    from .environment import load_average
     cmd = [exe, str(seconds), str(states), str(calls), out_json]
     for name, path in robots.items():
         cmd += [name, path]

@@ -29,7 +29,7 @@ from aggsym.contract import select_routines
 
 from .chain import write_chain
 from .environment import load_average
-from .run import FIVE, ROBOT_FILES, robots_directory
+from .robots import FIVE, ROBOT_FILES, robots_directory
 
 ROBOTS = {"talos": FIVE + ",coriolis,bias,gravity", "chain24": FIVE, "chain48": FIVE}
 # label, slicing, extra flags: the unsliced file, the sliced file with every function at -O2, the sliced file as

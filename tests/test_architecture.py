@@ -1,11 +1,14 @@
 """The package's layers: imports only run downward, no module imports one that imports it back, and the mechanics
-never load the code generator.
+never load the code generator; the same for the benchmark (``benchmarks/``), which sits above the package.
 
-Layers, bottom to top (DESIGN.md's module table, grouped): ``errors`` and ``collector`` (the garbage
+Layers, bottom to top (docs/architecture.md, "Layers"): ``errors`` and ``collector`` (the garbage
 collector paused); ``model`` (readers, the immutable model)
 and ``core`` (straight-line programs, backends), which do not know each other; ``mechanics`` (the book's
 recursions); ``contract`` (the routines, signatures, manifest); ``twin`` and ``symbolic`` (floats, SymPy);
 ``codegen`` (printers, templates, compiling); ``cli``.
+
+The benchmark's layers: what the sections share (measuring a child process, the chains, the host, the robots);
+the sections; the report, which reads back some sections' JSON; ``run``, which runs them all.
 """
 import ast
 import subprocess
@@ -15,6 +18,7 @@ from pathlib import Path
 import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "aggsym"
+BENCHMARKS = PACKAGE.parent / "benchmarks"
 LAYERS = {"errors": 0, "collector": 0, "model": 1, "core": 1, "mechanics": 2, "contract": 3, "twin": 4, "symbolic": 4,
           "codegen": 5, "cli": 6, "__main__": 7}
 # modules whose import must not bring the code generator (or jinja2) along
@@ -29,13 +33,15 @@ def module_name(path: Path, root: Path = PACKAGE) -> str:
 
 
 def imports(path: Path, root: Path = PACKAGE) -> set:
-    """The aggsym modules a file imports, at any depth of its code (function-level imports included)."""
+    """The modules of ``root``'s package (aggsym unless told) a file imports, at any depth of its code
+    (function-level imports included)."""
+    top = root.name
     name = module_name(path, root)
     package = name if path.stem == "__init__" else name.rsplit(".", 1)[0]
     out = set()
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
-            out |= {a.name for a in node.names if a.name.startswith("aggsym")}
+            out |= {a.name for a in node.names if a.name.split(".")[0] == top}
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package.split(".")
@@ -43,15 +49,25 @@ def imports(path: Path, root: Path = PACKAGE) -> set:
                 target = ".".join(base + ([node.module] if node.module else []))
             else:
                 target = node.module or ""
-            if target.startswith("aggsym"):
+            if target.split(".")[0] == top:
                 out.add(target)
                 out |= {f"{target}.{a.name}" for a in node.names}
     return out
 
 
-GRAPH = {module_name(p): imports(p) for p in PACKAGE.rglob("*.py")}
-for name in GRAPH:  # keep only edges to modules (not to names inside them), and never a module to itself
-    GRAPH[name] = {m for m in GRAPH[name] if m in GRAPH and m != name}
+def graph(root: Path) -> dict:
+    """module -> the modules of the same package it imports (not names inside them, never itself)."""
+    out = {module_name(p, root): imports(p, root) for p in root.rglob("*.py")}
+    return {name: {m for m in targets if m in out and m != name} for name, targets in out.items()}
+
+
+GRAPH = graph(PACKAGE)
+BENCH_GRAPH = graph(BENCHMARKS)
+# the benchmark, bottom to top: shared pieces (0), the sections (1), the report (2), the runner (3)
+BENCH_LAYERS = {"measure": 0, "chain": 0, "environment": 0, "robots": 0, "generation": 0,
+                "casadi_peer": 1, "compile_split": 1, "constrained": 1, "inputs": 1, "kane": 1, "opcounts": 1,
+                "runtime": 1, "scaling": 1, "slicing_runtime": 1, "trig": 1,
+                "report": 2, "run": 3}
 
 
 def layer(name: str) -> int:
@@ -70,19 +86,52 @@ def test_imports_run_downward():
     assert not upward, upward
 
 
-def test_no_import_cycles():
-    """No module imports a module that (directly or not) imports it back."""
+def cycles(graph: dict, package: str) -> list:
+    """The modules of ``graph`` that import (directly or not) a module that imports them back."""
     def reach(start):
         seen, stack = set(), [start]
         while stack:
-            for t in GRAPH[stack.pop()]:
-                if t not in seen and t != "aggsym":  # the package itself: every module's parent, imported lazily
+            for t in graph[stack.pop()]:
+                if t not in seen and t != package:  # the package itself: every module's parent, imported lazily
                     seen.add(t)
                     stack.append(t)
         return seen
 
-    cycles = [m for m in GRAPH if m != "aggsym" and m in reach(m)]
-    assert not cycles, cycles
+    return [m for m in graph if m != package and m in reach(m)]
+
+
+@pytest.mark.parametrize("package", ["aggsym", "benchmarks"])
+def test_no_import_cycles(package):
+    """No module imports a module that (directly or not) imports it back, in the package nor in the benchmark."""
+    found = cycles(GRAPH if package == "aggsym" else BENCH_GRAPH, package)
+    assert not found, found
+
+
+def test_the_cycle_check_sees_a_cycle():
+    """A two-module loop, and a longer one through a function-level import, are both reported."""
+    assert sorted(cycles({"p": set(), "p.a": {"p.b"}, "p.b": {"p.a"}, "p.c": set()}, "p")) == ["p.a", "p.b"]
+    assert sorted(cycles({"p": set(), "p.run": {"p.report"}, "p.report": {"p.split"}, "p.split": {"p.run"}},
+                         "p")) == ["p.report", "p.run", "p.split"]
+
+
+def test_every_benchmark_module_has_a_layer():
+    assert sorted(m.split(".", 1)[1] for m in BENCH_GRAPH if m != "benchmarks") == sorted(BENCH_LAYERS)
+
+
+def test_benchmark_imports_run_downward():
+    """A benchmark module imports only benchmark modules of its own layer or below."""
+    def level(name):
+        return BENCH_LAYERS[name.split(".", 1)[1]]
+
+    upward = [(m, t) for m, targets in BENCH_GRAPH.items() if m != "benchmarks" for t in targets
+              if t != "benchmarks" and level(t) > level(m)]
+    assert not upward, upward
+
+
+def test_the_package_does_not_import_the_benchmark():
+    """aggsym is below the benchmark: none of its modules imports ``benchmarks``."""
+    bad = sorted(module_name(p) for p in PACKAGE.rglob("*.py") if imports(p, BENCHMARKS))
+    assert not bad, bad
 
 
 def test_the_checks_see_a_bad_import(tmp_path):

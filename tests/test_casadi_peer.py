@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from benchmarks import casadi_peer, chain  # noqa: E402
-from benchmarks.run import robots_directory  # noqa: E402
+from benchmarks.robots import robots_directory  # noqa: E402
 
 TOL = 1e-9
 
