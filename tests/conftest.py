@@ -29,7 +29,8 @@ def robot_code(request, tmp_path_factory):
 
     import aggsym
     from aggsym.errors import ModelWarning
-    from helpers import generated_code, pinocchio_model, robot_path
+    from helpers import generated_code, robot_path
+    from pinocchio_reference import pinocchio_model
 
     name = request.param
     with warnings.catch_warnings():

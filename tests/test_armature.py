@@ -8,16 +8,16 @@ import re
 import warnings
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
 from aggsym import cli
 from aggsym.contract import omitted_routines
 from aggsym.errors import ModelWarning
-from helpers import (
-    TOLERANCE, crba, generated_code, pinocchio_model, pinocchio_q, relative_error, robot_path, robots_directory,
-)
+from helpers import TOLERANCE, generated_code, relative_error, robot_path, robots_directory
+from pinocchio_reference import pin, crba, pinocchio_model, pinocchio_q
+
+pytestmark = pytest.mark.pinocchio
 
 HAND = """<?xml version="1.0"?>
 <robot name="hand">

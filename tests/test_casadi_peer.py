@@ -10,7 +10,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -18,6 +17,9 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks import casadi_peer, chain  # noqa: E402
 from benchmarks.robots import robots_directory  # noqa: E402
+from pinocchio_reference import pin  # noqa: E402
+
+pytestmark = pytest.mark.pinocchio
 
 TOL = 1e-9
 

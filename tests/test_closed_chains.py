@@ -16,7 +16,6 @@ Tolerances: 1e-9 relative (the issue's), measured errors are 1e-13 to 1e-11.
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -25,8 +24,11 @@ from aggsym.model.yaml_reader import load_constraints
 from aggsym.twin import NumericTwin
 from conftest import model_path
 from constraint_reference import Constraint
-from helpers import generated_code, pinocchio_q, pinocchio_tree, relative_error, rk4_step
+from helpers import generated_code, relative_error, rk4_step
+from pinocchio_reference import pin, pinocchio_q, pinocchio_tree
 from random_trees import random_urdf
+
+pytestmark = pytest.mark.pinocchio
 
 DATA = model_path("four_bar").parent.parent / "tests" / "data"
 TOLERANCE = 1e-9

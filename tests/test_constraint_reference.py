@@ -8,12 +8,14 @@ import dataclasses
 from functools import lru_cache
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import constraint_reference as cr
 from constraint_reference import Constraint
-from helpers import pinocchio_model, pinocchio_q, robot_path
+from helpers import robot_path
+from pinocchio_reference import pin, pinocchio_model, pinocchio_q
+
+pytestmark = pytest.mark.pinocchio
 
 FEET = ["FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"]
 SOLES = ["left_sole_link", "right_sole_link"]

@@ -13,7 +13,6 @@ from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -21,7 +20,10 @@ from aggsym import cli
 from aggsym.model.yaml_reader import load_constraints
 from aggsym.twin import NumericTwin
 from conftest import model_path
-from helpers import crba, generated_code, pinocchio_model, pinocchio_q, relative_error, rk4_step, robot_path
+from helpers import generated_code, relative_error, rk4_step, robot_path
+from pinocchio_reference import pin, crba, pinocchio_model, pinocchio_q
+
+pytestmark = pytest.mark.pinocchio
 
 DATA = Path(__file__).parent / "data"
 

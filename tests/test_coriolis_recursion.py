@@ -11,7 +11,6 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -20,12 +19,14 @@ from aggsym.core.backend import Numeric, Symbolic
 from aggsym.mechanics import bias
 from aggsym.mechanics.bound import bind
 from aggsym.mechanics.kinematics import TreeKinematics
-from helpers import (crba, generated_code, inertia_rate, pinocchio_model, pinocchio_q, pinocchio_tree,
-                     relative_error, robot_path)
+from helpers import generated_code, relative_error, robot_path
+from pinocchio_reference import pin, crba, inertia_rate, pinocchio_model, pinocchio_q, pinocchio_tree
 from random_trees import random_urdf
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks.chain import chain_model  # noqa: E402
+
+pytestmark = pytest.mark.pinocchio
 
 TOL = 1e-9
 SEEDS = (1, 4, 9, 17, 25, 34)

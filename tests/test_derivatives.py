@@ -9,7 +9,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -17,10 +16,11 @@ from aggsym.contract import select_routines
 from aggsym.errors import ModelWarning
 from aggsym.twin import NumericTwin
 from conftest import model_path
-from helpers import (
-    coupled_gripper, generated_code, pinocchio_model, pinocchio_q, pinocchio_tree, reduction, relative_error, robot_path,
-)
+from helpers import coupled_gripper, generated_code, reduction, relative_error, robot_path
+from pinocchio_reference import pin, pinocchio_model, pinocchio_q, pinocchio_tree
 from random_trees import random_urdf
+
+pytestmark = pytest.mark.pinocchio
 
 TOLERANCE = 1e-9
 ROLES = ["inverse_dynamics_derivatives", "forward_dynamics_derivatives"]

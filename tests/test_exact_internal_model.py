@@ -18,7 +18,6 @@ import xml.etree.ElementTree as ET
 
 import mpmath
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -26,10 +25,11 @@ from aggsym.contract import ROUTINES, run
 from aggsym.core.backend import Numeric
 from aggsym.mechanics.bound import bind
 from aggsym.model.reframe import reframe
-from helpers import ROBOTS, pinocchio_model, pinocchio_q, relative_error, robots_directory
+from helpers import ROBOTS, relative_error, robots_directory
+from pinocchio_reference import pin, pinocchio_model, pinocchio_q
 from random_trees import random_urdf
 
-pytestmark = pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")
+pytestmark = [pytest.mark.pinocchio, pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")]
 
 EXACT = 1e-12
 FILES = {**ROBOTS, "so100": "so_arm_description/urdf/so100.urdf", "xarm7": "xarm_description/urdf/xarm7.urdf",

@@ -13,7 +13,6 @@ import sys
 import warnings
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -21,10 +20,11 @@ from aggsym.errors import AggsymError, ModelWarning
 from aggsym.model.frames import catalog, select_frames
 from aggsym.twin import NumericTwin
 from conftest import model_path
-from helpers import (
-    coupled_gripper, generated_code, pinocchio_model, pinocchio_q, pinocchio_tree, reduction, relative_error, robot_path,
-)
+from helpers import coupled_gripper, generated_code, reduction, relative_error, robot_path
+from pinocchio_reference import pin, pinocchio_model, pinocchio_q, pinocchio_tree
 from random_trees import random_urdf
+
+pytestmark = pytest.mark.pinocchio
 
 TOLERANCE = 1e-9
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED

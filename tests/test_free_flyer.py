@@ -15,7 +15,6 @@ import json
 import warnings
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -24,7 +23,10 @@ from aggsym.contract import ROUTINES, massless_coordinates, sample_configuration
 from aggsym.errors import ModelWarning
 from aggsym.twin import NumericTwin
 from helpers import ROBOTS, generated_code, relative_error, robot_path
+from pinocchio_reference import pin
 from random_trees import random_urdf
+
+pytestmark = pytest.mark.pinocchio
 
 TOLERANCE = 1e-9
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED

@@ -10,7 +10,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -19,11 +18,14 @@ from aggsym.core.backend import Numeric, Symbolic
 from aggsym.mechanics import transvective
 from aggsym.mechanics.bound import bind
 from aggsym.mechanics.kinematics import TreeKinematics
-from helpers import generated_code, pinocchio_model, pinocchio_q, pinocchio_tree, relative_error
+from helpers import generated_code, relative_error
+from pinocchio_reference import pin, pinocchio_model, pinocchio_q, pinocchio_tree
 from random_trees import random_urdf
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from benchmarks.chain import chain_model  # noqa: E402
+
+pytestmark = pytest.mark.pinocchio
 
 TOL = 1e-9
 SEEDS = (1, 4, 9, 17, 25, 34)  # regular trees of tests/test_transvective_pinocchio.py

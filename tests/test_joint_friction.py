@@ -6,7 +6,10 @@ import numpy as np
 import pytest
 
 import aggsym
-from helpers import generated_code, pinocchio_model, robot_path
+from helpers import generated_code, robot_path
+from pinocchio_reference import pinocchio_model
+
+pytestmark = pytest.mark.pinocchio
 
 URDF = """<?xml version="1.0"?>
 <robot name="rubbing">

@@ -6,7 +6,6 @@ import json
 import xml.etree.ElementTree as ET
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -14,8 +13,11 @@ from aggsym import cli
 from aggsym.codegen.compile import CLibrary, compile_shared, import_module
 from aggsym.codegen.generate import generate, write
 from aggsym.errors import ModelError
-from helpers import GRIPPER, inertia_rate, pinocchio_q, reduction, relative_error
+from helpers import GRIPPER, reduction, relative_error
+from pinocchio_reference import pin, inertia_rate, pinocchio_q
 from random_trees import random_urdf
+
+pytestmark = pytest.mark.pinocchio
 
 TOLERANCE = 1e-9
 

@@ -6,12 +6,14 @@ flight of the spacecraft (no gravity, tau = 0: RK4 step 1e-3 s for 1 s keeps h t
 change under gravity alone for a floating robot (dp/dt = m g, dL/dt = c x m g).
 """
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
 from conftest import model_path
-from helpers import generated_code, pinocchio_model, pinocchio_q, rk4_step, robot_path
+from helpers import generated_code, rk4_step, robot_path
+from pinocchio_reference import pin, pinocchio_model, pinocchio_q
+
+pytestmark = pytest.mark.pinocchio
 
 CASES = [("ur5", False), ("solo12", True), ("talos", True), ("panda", False)]
 

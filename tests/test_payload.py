@@ -8,7 +8,6 @@ import subprocess
 import sys
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -18,7 +17,10 @@ from aggsym.model.inertials import NAMES, with_inertial_parameters
 from aggsym.mechanics.regressor import standard_parameters
 from aggsym.twin import NumericTwin
 from conftest import model_path
-from helpers import generated_code, pinocchio_model, pinocchio_q, relative_error, robot_path
+from helpers import generated_code, relative_error, robot_path
+from pinocchio_reference import pin, pinocchio_model, pinocchio_q
+
+pytestmark = pytest.mark.pinocchio
 
 TOLERANCE = 1e-9
 

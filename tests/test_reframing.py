@@ -9,7 +9,6 @@ from the model as read (their Pinocchio comparisons live in test_robots_generate
 operation counts per coordinate of the four arms are a property of the generated program (deterministic).
 """
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -19,10 +18,11 @@ from aggsym.core.backend import Numeric
 from aggsym.mechanics.bound import bind
 from aggsym.model.inertials import with_inertial_parameters
 from aggsym.model.reframe import eligible, reframe
-from helpers import TOLERANCE, generated_code, pinocchio_model, pinocchio_q, relative_error, robots_directory
+from helpers import TOLERANCE, generated_code, relative_error, robots_directory
+from pinocchio_reference import pin, pinocchio_model, pinocchio_q
 from random_trees import random_urdf
 
-pytestmark = pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")
+pytestmark = [pytest.mark.pinocchio, pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")]
 
 ARMS = {  # example-robot-data files (benchmarks/run.py OPSN_ROBOTS)
     "ur5": "ur_description/urdf/ur5_robot.urdf",

@@ -7,14 +7,14 @@ computeCoriolisMatrix; relative error <= 1e-9.  The code comes from conftest's `
 shared with test_transvective_pinocchio).
 """
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
-from helpers import TOLERANCE, inertia_rate, pinocchio_model, pinocchio_q, relative_error
+from helpers import TOLERANCE, relative_error
+from pinocchio_reference import pin, inertia_rate, pinocchio_model, pinocchio_q
 from random_trees import random_urdf
 
-pytestmark = pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")
+pytestmark = [pytest.mark.pinocchio, pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")]
 
 
 def both(lib, module, role, *args):

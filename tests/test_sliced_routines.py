@@ -25,7 +25,6 @@ import sys
 import warnings
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -36,7 +35,10 @@ from aggsym.contract import ROUTINES, select_routines, signature
 from aggsym.errors import ModelWarning
 from aggsym.twin import NumericTwin
 from conftest import ROOT, model_path
-from helpers import crba, inertia_rate, pinocchio_model, pinocchio_q, relative_error, robot_path
+from helpers import relative_error, robot_path
+from pinocchio_reference import pin, crba, inertia_rate, pinocchio_model, pinocchio_q
+
+pytestmark = pytest.mark.pinocchio
 
 SMALL = (150, 60)  # (threshold, size): every routine of more than 150 work, in slices of about 60
 TINY = (40, 20)  # for the smallest models

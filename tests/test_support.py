@@ -13,13 +13,15 @@ import io
 from contextlib import redirect_stderr, redirect_stdout
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
 from aggsym import cli
 from conftest import model_path
-from helpers import generated_code, pinocchio_model, pinocchio_q, rk4_step, robot_path
+from helpers import generated_code, rk4_step, robot_path
+from pinocchio_reference import pin, pinocchio_model, pinocchio_q
+
+pytestmark = pytest.mark.pinocchio
 
 
 def run_cli(args):

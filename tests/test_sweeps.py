@@ -6,7 +6,6 @@ knows nothing of aggsym's spatial algebra), and Pinocchio's rnea and data.f on m
 import dataclasses
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -23,8 +22,11 @@ from aggsym.mechanics.sweeps import (
     keeps_origin, origin_sweep, pair_bodies, transmitted_wrenches,
 )
 from conftest import MODELS, ROOT, model_path
-from helpers import inverse_dynamics_by_equations, pinocchio_tree, states as random_states
+from helpers import inverse_dynamics_by_equations, states as random_states
+from pinocchio_reference import pin, pinocchio_tree
 from reference import NumericModel, newton_euler_full, pair_wrenches, rot
+
+pytestmark = pytest.mark.pinocchio
 
 DATA = ROOT / "tests" / "data"
 ALL_MODELS = MODELS + [DATA / "branching_tree.yaml", DATA / "shared_origins.yaml"]

@@ -9,7 +9,6 @@ import json
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 import pytest
 import sympy as sp
 
@@ -28,8 +27,11 @@ from aggsym.mechanics.transvective import (
 from aggsym.contract import transvective_layout as layout
 from aggsym.symbolic import factored_form
 from conftest import MODELS, model_path
-from helpers import pinocchio_tree, routine_program, routine_sympy
+from helpers import routine_program, routine_sympy
+from pinocchio_reference import pin, pinocchio_tree
 from test_variants import chain_of_elementary_frames
+
+pytestmark = pytest.mark.pinocchio
 
 DATA = Path(__file__).resolve().parent / "data"
 ALL = MODELS + [DATA / "five_body.yaml", DATA / "branching_tree.yaml"]

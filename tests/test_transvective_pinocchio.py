@@ -8,15 +8,15 @@ mirrored.  The C is compiled with -O0 (the warning flags stay; -O2 is exercised 
 talos' compile to seconds.
 """
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
 from aggsym.model.tree import Tree
-from helpers import ROBOTS, TOLERANCE, pinocchio_model, pinocchio_q, relative_error, robot_path
+from helpers import ROBOTS, TOLERANCE, relative_error, robot_path
+from pinocchio_reference import pin, pinocchio_model, pinocchio_q
 from random_trees import random_urdf
 
-pytestmark = pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")
+pytestmark = [pytest.mark.pinocchio, pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")]
 
 # The first 22 seeds whose trees are regular (see moves_mass); the others, e.g. 0, 2, 3, 5, have a massless bud on a
 # joint (or only a massless, spinning body beyond a prismatic joint): A(q) is singular there for every q.

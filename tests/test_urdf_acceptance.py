@@ -9,14 +9,16 @@ import math
 import warnings
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
 from aggsym.errors import ModelError, ModelWarning
 from aggsym.model.types import JointDynamics, JointLimits
 from aggsym.model.urdf_reader import MAX_ROTATIONS
-from helpers import compare, joint_names, pinocchio_model, robots_directory
+from helpers import robots_directory
+from pinocchio_reference import pin, compare, joint_names, pinocchio_model
+
+pytestmark = pytest.mark.pinocchio
 
 ALL_URDFS = sorted(str(p.relative_to(robots_directory())) for p in robots_directory().rglob("*.urdf"))
 # Pinocchio's fixed-base model of these has no joint (nv = 0): no equations of motion until the base is free.

@@ -10,14 +10,16 @@ import re
 import warnings
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
 from aggsym.errors import ModelWarning
 from aggsym.model.types import elementary_rotation
-from helpers import ROBOTS, compare, joint_names, pinocchio_model, pinocchio_q, robot_path
+from helpers import ROBOTS, robot_path
+from pinocchio_reference import pin, compare, joint_names, pinocchio_model, pinocchio_q
 from random_trees import random_urdf
+
+pytestmark = pytest.mark.pinocchio
 
 RANDOM_SEEDS = range(25)
 FLOATING_SEEDS = range(0, 25, 3)

@@ -27,7 +27,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import aggsym
@@ -37,7 +36,10 @@ from aggsym.contract import select_routines
 from aggsym.model.yaml_reader import load_constraints
 from aggsym.twin import NumericTwin
 from constraint_reference import Constraint
-from helpers import generated_code, pinocchio_q, relative_error, robots_directory
+from helpers import generated_code, relative_error, robots_directory
+from pinocchio_reference import pin, pinocchio_q
+
+pytestmark = pytest.mark.pinocchio
 
 ROBOT = "tiago_description/robots/tiago_no_hand.urdf"
 TOOL = "arm_tool_link"

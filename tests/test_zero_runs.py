@@ -20,7 +20,10 @@ from aggsym.codegen.printing import count_ops
 from aggsym.contract import select_routines
 from aggsym.core.program import Node
 from aggsym.errors import ModelWarning
-from helpers import crba, pinocchio_model, pinocchio_q, relative_error, robot_path
+from helpers import relative_error, robot_path
+from pinocchio_reference import crba, pinocchio_model, pinocchio_q
+
+pytestmark = pytest.mark.pinocchio
 
 ZEROS = re.compile(r"^AGGSYM_ZEROS\((\w+) \+ (\d+)\);$")
 
