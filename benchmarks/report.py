@@ -21,7 +21,8 @@ RUNTIME_LABELS = {"inertia": "A(q) ↔ crba", "nonlinear_effects": "b+g ↔ nonL
                   "regressor": "regressor Y ↔ computeJointTorqueRegressor"}
 FREE_FLYER_SUFFIX = "_ff"  # the robots generated with --floating-base quaternion (benchmarks/run.py)
 FREE_FLYER_TARGET_ROLES = ("inertia", "inverse_dynamics", "forward_dynamics")
-# Pinocchio 4.1 figures quoted in DESIGN.md ("Performance"), ns per call: crba / nonLinearEffects / aba
+# Pinocchio 4.1 figures quoted in the design brief (its "Performance"; the brief is not part of this repository,
+# the figures are copied here), ns per call: crba / nonLinearEffects / aba
 DESIGN_PINOCCHIO_NS = {"ur5": {"inertia": 300, "nonlinear_effects": 660, "forward_dynamics": 1360},
                        "panda": {"inertia": 480, "nonlinear_effects": 970, "forward_dynamics": 2050},
                        "talos": {"inertia": 1800, "nonlinear_effects": 3600, "forward_dynamics": 7500}}
@@ -658,13 +659,13 @@ def _runtime(results) -> str:
                              f"{p['pinocchio_ns'] / design:.1f}", f"{p['generated_ns']:.0f}",
                              f"{p['generated_ns'] / design:.2f}"))
     if rows:
-        lines += ["### Against the Pinocchio figures quoted in DESIGN.md", "",
-                  "DESIGN.md quotes Pinocchio 4.1 times \"measured on this kind of machine\".  The Pinocchio times "
+        lines += ["### Against the Pinocchio figures quoted in the design brief", "",
+                  "The design brief quotes Pinocchio 4.1 times \"measured on this kind of machine\".  The Pinocchio times "
                   "measured here are higher by the factor shown; the last column is what the generated code's ratio "
-                  "would be against the DESIGN.md figures instead (a pessimistic reading, if those figures hold for "
+                  "would be against the design brief's figures instead (a pessimistic reading, if those figures hold for "
                   "some machine of this kind).", "",
-                  table(("robot", "pair", "Pinocchio here ns", "DESIGN.md ns", "here / DESIGN.md", "generated ns",
-                         "generated / DESIGN.md"), rows), ""]
+                  table(("robot", "pair", "Pinocchio here ns", "design ns", "here / design", "generated ns",
+                         "generated / design"), rows), ""]
     lines += ["![runtime ratios](runtime.png)", ""]
     return "\n".join(lines)
 
