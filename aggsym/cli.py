@@ -91,6 +91,9 @@ def _parser() -> argparse.ArgumentParser:
     g.add_argument("--split", action="store_true",
                    help="one C file per routine (NAME_ROUTINE.c), the shared helpers in NAME_helpers.h, and a "
                         "Makefile building libNAME.a (make -j2; CC, CFLAGS default -O2 -std=c99) instead of NAME.c")
+    g.add_argument("--targets", metavar="A,B,...",
+                   help="write only these targets' files: c (NAME.h, NAME.c or the --split files), numpy (NAME.py), "
+                        "manifest (NAME.json), latex (NAME.tex); default: all four")
     g.add_argument("--list-routines", action="store_true",
                    help="print the routines this model gets, one line each (what each computes), and write nothing")
     command("latex", "print the LaTeX document of the equations of motion")
@@ -105,6 +108,8 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--split", action="store_true",
                    help="check the --split layout: its Makefile builds libNAME.a (make -j2, the same warnings as "
                         "errors and --opt), and that library is what runs")
+    c.add_argument("--targets", metavar="A,B,...",
+                   help="check only these targets (default: every target with something to run here: c, numpy)")
     command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
     return parser
 
@@ -195,8 +200,18 @@ def _progress(quiet: bool, name: str):
     return lambda msg: print(f"aggsym: {name}: {msg}", file=sys.stderr, flush=True)
 
 
+def _targets(args):
+    """The targets named by --targets (None: the default set), before any work: an unknown one is exit 2."""
+    if args.targets is None:
+        return None
+    from .codegen.targets import select
+
+    return [t.name for t in select(args.targets)]
+
+
 def cmd_generate(args) -> int:
     t0 = time.perf_counter()
+    targets = _targets(args)
     model = _load(args)
     if args.list_routines:
         from .contract import ROUTINES, c_symbol, omitted_routines, routines_for
@@ -218,7 +233,8 @@ def cmd_generate(args) -> int:
     outdir = Path(args.output) if args.output else Path("generated") / model.name
     origin = "the option --name" if args.name is not None else None  # (else the model file: name_origin)
     check_file_names(outdir, [f"{model.name}.json"], model, origin)  # (before the work: write checks every file)
-    gen = generate(model, progress=_progress(args.quiet, model.name), scalar=args.scalar, split=args.split)
+    gen = generate(model, progress=_progress(args.quiet, model.name), scalar=args.scalar, split=args.split,
+                   targets=targets)
     paths = write(gen, outdir, origin)
     if not args.quiet:
         print(f"aggsym: {model.name}: wrote {len(paths)} files to {outdir} in {time.perf_counter() - t0:.2f} s",
@@ -238,31 +254,51 @@ def cmd_latex(args) -> int:
 
 
 def cmd_check(args) -> int:
-    from .codegen.compile import check_generated
+    from .codegen.compile import check_generated, checked_targets
     from .codegen.generate import generate
+    from .codegen.targets import TARGETS
 
+    targets = _targets(args)
     model = _load(args)
-    gen = generate(model, latex=False, scalar=args.scalar, split=args.split)
-    results = check_generated(model, gen.files, trials=args.trials, seed=args.seed, opt=args.opt)
+    generated = [n for n in (targets or TARGETS) if n != "latex"]  # (the manifest: always, check reads it)
+    gen = generate(model, latex=False, scalar=args.scalar, split=args.split,
+                   targets=sorted(set(generated) | {"manifest"}))
+    checked, skipped = checked_targets(model, gen.files, targets)
+    for name, why in skipped.items():
+        print(f"aggsym: {model.name}: target {name} not checked: {why}", file=sys.stderr)
+    if not checked:
+        raise AggsymError(f"{model.name}: nothing to check: "
+                          + ("; ".join(f"{n}: {why}" for n, why in skipped.items()) or
+                             "none of the targets named has something to run (known: "
+                             + ", ".join(n for n, t in TARGETS.items() if t.column) + ")"))
+    results = check_generated(model, gen.files, trials=args.trials, seed=args.seed, opt=args.opt,
+                              targets=[t.name for t in checked])
     width = max(len(r.role) for r in results)
     single = args.scalar == "float"
+    bounded = {t.name for t in checked if single and t.name == "c"}  # the float C, held to its own bound
     print(f"{model.name}: {args.trials} random states per routine; worst error against the numeric twin, relative "
           f"to the largest value the routine returns" + ("; the C in float, held to its bound" if single else ""))
-    print(f"{'routine'.ljust(width)}  {'C':>9}  " + (f"{'C bound':>9}  " if single else "") + f"{'NumPy':>9}")
+    print(f"{'routine'.ljust(width)}  " + "  ".join(f"{t.column:>9}" + (f"  {t.column + ' bound':>9}"
+                                                                        if t.name in bounded else "")
+                                                    for t in checked))
     bad = []
     for r in results:
-        c_tol = r.c_tolerance if r.c_tolerance is not None else args.tol
-        flag = "" if r.c_error <= c_tol and r.py_error <= args.tol else "  MISMATCH"
-        print(f"{r.role.ljust(width)}  {r.c_error:9.2e}  " + (f"{c_tol:9.0e}  " if single else "")
-              + f"{r.py_error:9.2e}{flag}")
+        cells, ok = [], True
+        for t in checked:
+            tol = r.tolerances.get(t.name, args.tol) if t.name in bounded else args.tol
+            cells.append(f"{r.errors[t.name]:9.2e}" + (f"  {tol:9.0e}" if t.name in bounded else ""))
+            ok = ok and r.errors[t.name] <= tol
+        flag = "" if ok else "  MISMATCH"
+        print(f"{r.role.ljust(width)}  " + "  ".join(cells) + flag)
         if flag:
             bad.append(r.role)
+    others = " or ".join(t.column for t in checked if t.name not in bounded)
     if bad:
-        print(f"mismatch ({'C beyond its bound or NumPy ' if single else ''}> {args.tol:g}) in: {', '.join(bad)}",
-              file=sys.stderr)
+        print(f"mismatch ({'C beyond its bound or ' + others + ' ' if bounded and others else ''}"
+              f"> {args.tol:g}) in: {', '.join(bad)}", file=sys.stderr)
         return 1
-    print(f"ok: every routine within {'its float bound (C) and ' if single else ''}{args.tol:g}"
-          + (" (NumPy)" if single else ""))
+    print(f"ok: every routine within {'its float bound (C) and ' if bounded else ''}{args.tol:g}"
+          + (f" ({others})" if bounded and others else ""))
     return 0
 
 

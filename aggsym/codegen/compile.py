@@ -12,7 +12,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -137,10 +137,24 @@ def import_module(py_file: Path):
 
 @dataclass
 class CheckResult:
+    """One routine's worst errors against the numeric twin, per target checked (its name: ``c``, ``numpy``,
+    ...), and the targets' own bounds where they have one (float C: the manifest's float_tolerance)."""
+
     role: str
-    c_error: float
-    py_error: float
-    c_tolerance: float | None = None  # the float C's bound (the manifest's float_tolerance); None: the --tol
+    errors: dict  # target name -> worst relative error
+    tolerances: dict = field(default_factory=dict)  # target name -> its bound; absent: the --tol
+
+    @property
+    def c_error(self) -> float:
+        return self.errors["c"]
+
+    @property
+    def py_error(self) -> float:
+        return self.errors["numpy"]
+
+    @property
+    def c_tolerance(self) -> float | None:
+        return self.tolerances.get("c")
 
 
 def random_inputs(model, role, rng):
@@ -198,9 +212,31 @@ def _fails(call) -> bool:
     return False
 
 
-def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir=None, opt: str = "-O2"):
-    """Compile the C (with ``opt``; a ``--split`` output by its Makefile, with the same flags), import the NumPy
-    module, compare both with the numeric twin on random states.
+def checked_targets(model, files: dict, targets=None) -> tuple:
+    """(targets to check, {name: why not}): those of ``targets`` (names; None: every registered one) whose files
+    are among ``files`` and that have something to run, less those that cannot run here (no compiler)."""
+    from .targets import TARGETS
+
+    tools = sys.modules[__name__]
+    chosen, skipped = [], {}
+    for name, target in TARGETS.items():
+        main = target.main_file(model.name)
+        if (targets is not None and name not in targets) or main is None or main not in files:
+            continue
+        why = target.unavailable(tools)
+        if why:
+            skipped[name] = why
+        else:
+            chosen.append(target)
+    return chosen, skipped
+
+
+def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir=None, opt: str = "-O2",
+                    targets=None):
+    """Run every target generated in ``files`` that has something to run (:func:`checked_targets`; ``targets``:
+    only these names) and compare each with the numeric twin on random states: the C compiled (with ``opt``; a
+    ``--split`` output by its Makefile, with the same flags), the NumPy module imported, ... (each target's
+    :meth:`~aggsym.codegen.targets.base.Target.runner`).
 
     Errors are relative to the largest value a routine returns, and for the constrained forward dynamics also to
     the condition number of J A^-1 J^T at the state (the solve's rounding grows with it).  Float C (the manifest's
@@ -208,48 +244,42 @@ def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir
     ``float_tolerance``; the float errors of the routines that solve with A are also divided by cond(A) at the
     state (the manifest's ``float_tolerance_per_condition``)."""
     manifest = json.loads(files[f"{model.name}.json"])
-    scalar = manifest.get("scalar", "double")
-    bounds = manifest.get("float_tolerance", {})
+    dtype = CTYPES[manifest.get("scalar", "double")][1]
+    checked, _ = checked_targets(model, files, targets)
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
         tmp = Path(tmp)
         for name, text in files.items():
             (tmp / name).write_text(text, encoding="utf-8")
-        shared = tmp / f"lib{model.name}.so"
-        if "split" in manifest:  # --split: the Makefile's build of libNAME.a is what runs
-            flags = [f for f in CFLAGS if f != "-shared"] + (FLOAT_CFLAGS if scalar == "float" else []) + [opt]
-            flags += shlex.split(os.environ.get("CFLAGS", ""))
-            shared = shared_from_archive(build_split(tmp, cflags=shlex.join(flags)), shared)
-        else:
-            shared = compile_shared(tmp / f"{model.name}.c", shared, extra=(opt,), scalar=scalar)
-        lib = CLibrary(shared, manifest)
-        module = import_module(tmp / f"{model.name}.py")
+        tools = sys.modules[__name__]
+        runners = {t.name: t.runner(model, tmp, manifest, opt, tools) for t in checked}
+        runners = {name: r for name, r in runners.items() if r is not None}
         twin = NumericTwin(model)
         rng = np.random.default_rng(seed)
         results = []
         for role in manifest["functions"]:
-            worst_c = worst_py = 0.0
+            worst = dict.fromkeys(runners, 0.0)
             for _ in range(trials):
-                args = _rounded(random_inputs(model, role, rng), lib.dtype)
+                args = _rounded(random_inputs(model, role, rng), dtype)
                 try:
                     ref = twin.call(role, *args)
-                except np.linalg.LinAlgError:  # a state without a solution: C and NumPy must say so too
-                    said = [_fails(lambda: lib.call(role, *args)), _fails(lambda: getattr(module, role)(*args))]
-                    worst_c, worst_py = (max(w, 0.0 if s else math.inf) for w, s in zip((worst_c, worst_py), said))
+                except np.linalg.LinAlgError:  # a state without a solution: every target must say so too
+                    for name, runner in runners.items():
+                        said = _fails(lambda: runner.call(role, *args))
+                        worst[name] = max(worst[name], 0.0 if said else math.inf)
                     continue
-                got_c = lib.call(role, *args)
-                got_py = getattr(module, role)(*args)
+                got = {name: runner.call(role, *args) for name, runner in runners.items()}
                 refs = ref if isinstance(ref, tuple) else (ref,)
-                cs = got_c if isinstance(got_c, tuple) else (got_c,)
-                pys = got_py if isinstance(got_py, tuple) else (got_py,)
                 scale = max(float(np.max(np.abs(r))) if np.size(r) else 0.0 for r in refs)
                 if role in CONDITIONING:  # a solve: its rounding grows with the condition number of its matrix
                     scale *= CONDITIONING[role](twin, role, args)
-                c_scale = scale * (_inertia_condition(twin, role, args)  # float: solving with A loses cond(A)
-                                   if role in manifest.get("float_tolerance_per_condition", ()) else 1.0)
-                for r, c, p in zip(refs, cs, pys):  # relative to the largest value the routine returns
-                    worst_c = max(worst_c, relative_error(c, r, c_scale))
-                    worst_py = max(worst_py, relative_error(p, r, scale))
-            results.append(CheckResult(role, worst_c, worst_py, bounds.get(role)))
+                for name, runner in runners.items():
+                    own = scale * (_inertia_condition(twin, role, args)  # float: solving with A loses cond(A)
+                                   if role in runner.per_condition else 1.0)
+                    outs = got[name] if isinstance(got[name], tuple) else (got[name],)
+                    for r, x in zip(refs, outs):  # relative to the largest value the routine returns
+                        worst[name] = max(worst[name], relative_error(x, r, own))
+            results.append(CheckResult(role, worst, {name: r.bounds[role] for name, r in runners.items()
+                                                     if role in r.bounds}))
         return results
 
 

@@ -1,9 +1,11 @@
-"""``aggsym generate``: every routine of the contract as C, NumPy and LaTeX, plus the JSON manifest.
+"""``aggsym generate``: every routine of the contract into each chosen target (C, NumPy, LaTeX, the JSON manifest,
+...: :mod:`.targets`, one registry).
 
 The recursions run once on the symbolic backend into one shared straight-line program (kinematics shared by
 all routines); each routine's outputs are then cut out of it (:func:`aggsym.core.program.straight_line`),
-printed through the SymPy printer subclasses of :mod:`.printing`, and laid out by the Jinja templates (layout
-only; the package data ``aggsym.templates``, the project's top-level ``templates/``).  What a routine is called,
+printed as C (always: the operation counts are the C's) and by every chosen target
+(:meth:`~.targets.base.Target.print_routine`), and the targets render their files from the Jinja templates
+(layout only; the package data ``aggsym.templates``, the project's top-level ``templates/``).  What a routine is called,
 takes and returns comes from :mod:`aggsym.contract`.  Files are written only after everything has been
 generated, through a temporary folder, so a failure leaves the output folder as it was.
 """
@@ -12,15 +14,11 @@ from __future__ import annotations
 import errno
 import json
 import os
-import re
 import shutil
 import tempfile
 import time
 import warnings
-from collections import deque
 from dataclasses import dataclass, field
-from itertools import islice
-from importlib.resources import files
 from types import SimpleNamespace
 from pathlib import Path
 
@@ -28,42 +26,25 @@ import jinja2
 
 from .. import __version__
 from ..contract import (
-    INPUT_KINDS, ROUTINES, Routine, c_prototype, c_symbol, header_macros, input_length, manifest, omitted_routines,
-    redundant_constraints,
-    python_parameters, routines_for,
-    run, signature,
+    INPUT_KINDS, ROUTINES, header_macros, input_length, omitted_routines, redundant_constraints, routines_for, run,
+    signature,
 )
 from ..core.backend import Symbolic
-from ..core.program import COS, SIN, Node, straight_line
+from ..core.program import straight_line
 from ..mechanics.bound import bind, program_operations
 from ..mechanics.kinematics import TreeKinematics
 from ..model.reframe import reframe
 from ..model.tree import Tree
 from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
-from .escape import FILTERS, check_c_identifier, check_module_name
-from .printing import SCALARS, CPrinter, Converter, CText, LiteralError, NumPyPrinter, _number
-from .slicing import SLICE_SIZE, SLICE_THRESHOLD, Sliced, Statement, slice_routine, work
-
-
-@dataclass
-class EmittedRoutine:
-    routine: Routine
-    inputs: tuple  # the input names in argument order for this model (contract.signature)
-    symbol: str  # C function name
-    prototype: str  # C prototype, without the semicolon
-    py_parameters: str  # the NumPy function's parameter list
-    c_body: list  # C statements
-    py_body: list  # Python statements
-    ops: dict
-    temps: int
-    work: int = 0  # the C's size as slicing.work measures it (operations + statements)
-    sliced: Sliced | None = None  # the C as several functions (slicing.py), for a routine above the threshold
-
-    @property
-    def zeros(self) -> bool:
-        """Whether its C writes a chunk of zero entries with AGGSYM_ZEROS (templates/attributes.c.j2)."""
-        return any(line.startswith("AGGSYM_ZEROS(") for line in self.c_body)
+from .escape import check_c_identifier, check_module_name
+from .printing import SCALARS, _number
+from .slicing import SLICE_SIZE, SLICE_THRESHOLD
+from .targets import TARGETS, Job, select
+from .targets.base import environment
+from .targets.c import (  # noqa: F401  (their home is the C target; imported from here before targets)
+    SCALAR_BYTES, ZERO_BYTES, EmittedRoutine, _zero_chunks, emit_routine, split_files, split_layout, split_names,
+)
 
 
 @dataclass
@@ -71,23 +52,14 @@ class Generated:
     model: object
     routines: list
     files: dict = field(default_factory=dict)  # file name -> text
+    targets: tuple = ("c", "numpy", "manifest", "latex")  # the names of the targets generated
     timings: list = field(default_factory=list)  # (stage, seconds)
 
 
 def templates() -> jinja2.Environment:
     """The Jinja environment over the package data ``aggsym.templates`` (``templates/`` of the project, mapped
     into the package by pyproject.toml, in editable and in wheel installs alike)."""
-    root = files("aggsym.templates")
-    env = jinja2.Environment(
-        loader=jinja2.FunctionLoader(lambda name: (root / name).read_text(encoding="utf-8")),
-        undefined=jinja2.StrictUndefined,
-        keep_trailing_newline=True,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        autoescape=False,
-    )
-    env.filters.update(FILTERS)  # user text reaches a template only through these (aggsym.codegen.escape)
-    return env
+    return environment()
 
 
 class _Stages:
@@ -176,244 +148,6 @@ def symbolic_routines(model, tree=None, roles=None, omitted=()):
     return prog, outputs
 
 
-def _input_symbols(sl):
-    return {sl.program.inputs[(kind, index)].id: f"{kind}_{index}" for kind, index in sl.inputs}
-
-
-def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double", slicing=None,
-                 sl=None) -> EmittedRoutine:
-    """C and Python statements of one routine, and the operation count of the C (its arrays, temporaries and
-    literals of the C type ``scalar``, double or float).  ``slicing``: (threshold, size), the C of a routine of
-    more work than the threshold also as slices of about that size (:mod:`.slicing`); None: never.  ``sl``: the
-    outputs' :func:`~aggsym.core.program.straight_line` when already formed."""
-    try:
-        return _emit_routine(model, prog, routine, outputs, scalar, slicing, sl)
-    except LiteralError as exc:
-        raise AggsymError(f"{model.source or model.name}: routine {routine.role}: {exc}"
-                          + ("; generate with --scalar double, or choose units in which the model's numbers fit"
-                             if scalar == "float" else "")) from None
-
-
-def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, sl=None) -> EmittedRoutine:
-    sl = sl or straight_line(prog, outputs)
-    inputs = signature(routine, model)
-    allowed = set(inputs)
-    for kind, _ in sl.inputs:
-        if kind not in allowed:
-            raise RuntimeError(f"routine {routine.role} depends on input {kind!r} outside its signature")
-    cp, pp = CPrinter(scalar), NumPyPrinter()
-    temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
-    names = {**_input_symbols(sl), **temp_names}
-    conv = Converter(prog, names)  # the expression trees of the statements printed as NumPy apart from the C
-    py_conv = Converter(prog, names)  # (its own list of names used: the C's are conv.refs)
-    ctext = CText(prog, names, cp.counts, conv.refs, scalar)  # the C text without a tree
-
-    def both(x, top=True):
-        """(C, NumPy) text of a right-hand side; one text for both when it holds no function call and the C is
-        double (the printers differ only in function names and in float literals)."""
-        calls = ctext.calls
-        c = ctext(x, top)
-        if scalar == "double" and ctext.calls == calls:
-            return c, c
-        py = pp._print(py_conv(x, top))
-        py_conv.refs.clear()
-        return c, py
-    py_body = []
-    stmts = []  # the C body as statements (slicing.Statement): what each defines, uses, reads or writes
-
-    def emit(lines, defines=(), arrays=(), ops=0, entry=""):
-        stmts.append(Statement(lines, tuple(defines), tuple(conv.refs), tuple(arrays), ops, entry))
-        conv.refs.clear()
-
-    def ops_so_far():
-        return sum(cp.counts.values())
-    status = routine.status
-    if status is not None:
-        emit([f"{scalar} {status.name}[1];"], entry="head")
-    for kind in inputs:  # every input is read before any output is written: outputs may alias inputs
-        used = [i for k, i in sl.inputs if k == kind]
-        if not used:
-            emit([f"(void){kind};"], entry="head")
-        elif kind == "p":  # p == NULL means the defaults, as in the NumPy module
-            defaults = ", ".join(_number(float(x.value), scalar) for x in model.parameters)
-            emit([f"static const {scalar} p_defaults[{len(model.parameters)}] = {{{defaults}}};",
-                  "if (!p) p = p_defaults;"], arrays=("p",))
-        for i in used:
-            emit([f"const {scalar} {kind}_{i} = {kind}[{i}];"], defines=(f"{kind}_{i}",), arrays=(kind,))
-            py_body.append(f"{kind}_{i} = {kind}[..., {i}]")
-    for out, flat in zip(routine.outputs, outputs):
-        if not flat:
-            emit([f"(void){out.name};"], entry="head")
-    conv.refs.clear()
-    trig = _trig_pairs(prog, sl.temps)
-    done = set()
-    defined = set(names) - set(temp_names)  # node ids with a C name already defined: the inputs, then temps
-    pending = _pending_pairs(sl.steps, trig)
-    hoisted = {}  # temps emitted early for a sincos pair: their NumPy right-hand side, appended at their step
-    shapes = [out.shape(model) for out in routine.outputs]
-    zeros = _zero_chunks(sl.steps, outputs, ZERO_BYTES // SCALAR_BYTES[scalar])
-    for s, step in enumerate(sl.steps):
-        before = ops_so_far()
-        if step[0] == "out":
-            _, o, k = step
-            x = outputs[o][k]
-            name = routine.outputs[o].name
-            idx = ", ".join(str(j) for j in _unravel(k, shapes[o]))
-            if s in zeros:  # one of a chunk of zero entries: the first writes them all (AGGSYM_ZEROS)
-                if zeros[s]:
-                    emit([f"AGGSYM_ZEROS({name} + {k});"], arrays=(name,))
-                py_body.append(f"{routine.outputs[o].py}[..., {idx}] = 0")
-                continue
-            rhs_c, rhs_py = both(x, top=not (isinstance(x, Node) and x.id in names))
-            emit([f"{name}[{k}] = {rhs_c};"], arrays=(name,), ops=ops_so_far() - before)
-            py_body.append(f"{routine.outputs[o].py}[..., {idx}] = {rhs_py}")
-            continue
-        i = step[1]
-        if i in hoisted:  # its C was emitted before a sincos pair that needed it
-            py_body.append(f"{names[i]} = {hoisted.pop(i)}")
-            continue
-        if i not in trig:
-            rhs_c, rhs_py = both(prog.nodes[i])
-            py_body.append(f"{names[i]} = {rhs_py}")
-            emit([f"const {scalar} {names[i]} = {rhs_c};"], defines=(names[i],), ops=ops_so_far() - before)
-            defined.add(i)
-            continue
-        tree = conv(prog.nodes[i])
-        py_body.append(f"{names[i]} = {pp._print(tree)}")
-        pair = trig[i]
-        if pair[:2] in done:
-            conv.refs.clear()
-            continue
-        conv.refs.clear()  # (the sin or cos tree above was built for NumPy; the arguments' names again below)
-        # a second angle whose argument is already computable shares the call (aggsym_sincos2: two in one vector)
-        partner, early = _ready_partner(prog, names, trig, pending, done, defined, pair)
-        for h in early:  # a temp the partner's angle is made of (q + offset), emitted now; NumPy keeps its place
-            rhs_c, hoisted[h] = both(prog.nodes[h])
-            emit([f"const {scalar} {names[h]} = {rhs_c};"], defines=(names[h],), ops=ops_so_far() - before)
-            before = ops_so_far()
-            defined.add(h)
-        c_names, arguments = [], []
-        for sin_id, cos_id, arg in (pair,) if partner is None else (pair, partner):
-            done.add((sin_id, cos_id))
-            defined.update(j for j in (sin_id, cos_id) if j is not None)
-            c_names += [names[sin_id] if sin_id is not None else names[cos_id] + "_sin",
-                        names[cos_id] if cos_id is not None else names[sin_id] + "_cos"]
-            arguments.append(cp._print(conv(arg, top=False)))
-            cp.counts["call"] += 1
-        pointers = ", ".join(f"&{n}" for n in c_names)
-        emit([f"{scalar} {', '.join(c_names)};",
-              f"aggsym_sincos{'' if partner is None else '2'}({', '.join(arguments)}, {pointers});"],
-             defines=c_names, ops=ops_so_far() - before)
-    if status is not None:
-        emit([f"return {status.name}[0] != {_number(0.0, scalar)};"], entry="tail")
-    # what count_ops reads from the C, counted while printing (the other statements hold none); the C printer
-    # prints only what is emitted, the sincos pair's discarded sin/cos trees were never printed
-    ops = dict(cp.counts)
-    sliced, size = None, sum(work(st) for st in stmts)
-    if slicing is not None and size > slicing[0]:
-        arrays = {k: f"const {scalar} *{k}" for k in inputs}
-        arrays.update({o.name: f"{scalar} *{o.name}" for o in routine.outputs})
-        pieces = min(slicing[1], routine.slice_size or slicing[1])
-        sliced = slice_routine(c_symbol(model, routine), arrays, stmts, scalar, pieces)
-    c_body = [line for st in stmts for line in st.lines]
-    return EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine, scalar),
-                          python_parameters(model, routine), c_body, py_body, ops, len(sl.temps), size, sliced)
-
-
-# The bytes AGGSYM_ZEROS writes at once (templates/attributes.c.j2): 2 doubles, 4 floats
-ZERO_BYTES = 16
-SCALAR_BYTES = {"double": 8, "float": 4}
-
-
-def _zero_chunks(steps, outputs, width: int) -> dict:
-    """{index of a step: 1 or 0}: the steps storing a constant 0 that fall in chunks of ``width`` consecutive
-    zero entries of one output (each run of zeros cut into chunks from its start; what is left over is stored
-    entry by entry), 1 for a chunk's first step, 0 for the others.  (The constant outputs' steps come first, in
-    the order of their entries: :func:`aggsym.core.program.straight_line`.)"""
-    chunks, run = {}, []
-
-    def close():
-        for c in range(0, len(run) - width + 1, width):
-            chunks.update((s, int(j == 0)) for j, s in enumerate(run[c:c + width]))
-        run.clear()
-    for s, step in enumerate(steps):
-        x = outputs[step[1]][step[2]] if step[0] == "out" else None
-        zero = step[0] == "out" and not isinstance(x, Node) and float(x) == 0.0
-        if run and not (zero and steps[run[-1]][1] == step[1] and steps[run[-1]][2] + 1 == step[2]):
-            close()
-        if zero:
-            run.append(s)
-    close()
-    return chunks
-
-
-def _trig_pairs(prog, temps) -> dict:
-    """For every sin or cos temp: (sin id or None, cos id or None, argument), so that C computes both at once."""
-    by_arg = {}
-    for i in temps:
-        entry = prog.ops[i]
-        if entry[0] in (SIN, COS):
-            arg = entry[1]
-            pair = by_arg.setdefault(("n", arg.id) if isinstance(arg, Node) else ("c", repr(arg)), [None, None, arg])
-            pair[0 if entry[0] == SIN else 1] = i
-    return {i: tuple(pair) for pair in by_arg.values() for i in pair[:2] if i is not None}
-
-
-def _pending_pairs(steps, trig) -> deque:
-    """The sin-and-cos pairs in the order of their first step (the order aggsym_sincos is called in)."""
-    order = {}
-    for step in steps:
-        if step[0] != "out" and step[1] in trig:
-            order.setdefault(trig[step[1]][:2], trig[step[1]])
-    return deque(order.values())
-
-
-PARTNER_LOOKAHEAD = 8  # the pairs not yet emitted that are tried as the partner of a sincos call
-
-
-def _ready_partner(prog, names, trig, pending, done, defined, pair):
-    """(partner, temps): the first pair other than ``pair`` among the next :data:`PARTNER_LOOKAHEAD` not yet emitted
-    whose argument is computable now, and the named temps to emit first for it (:func:`_computable`); (None, ())
-    if there is none.  ``pending`` (in order) loses its emitted pairs from the front, so that a call costs O(1)."""
-    while pending and pending[0][:2] in done:
-        pending.popleft()
-    for candidate in islice(pending, PARTNER_LOOKAHEAD):
-        if candidate[:2] != pair[:2] and candidate[:2] not in done:
-            early = _computable(prog, names, trig, candidate[2], defined)
-            if early is not None:
-                return candidate, early
-    return None, ()
-
-
-def _computable(prog, names, trig, arg, defined):
-    """The named temps (in order) to emit before an expression can be, or None if it cannot be yet: it may need
-    constants, the ``defined`` nodes (inputs and temps already emitted), the unnamed nodes that the printer
-    inlines, and named temps (not sin or cos) whose own operands are all of those (one level: the angle
-    ``q + offset`` of a joint whose zero the internal frames moved)."""
-    early = []
-    stack = [(arg, True)]
-    while stack:
-        x, may_hoist = stack.pop()
-        if not isinstance(x, Node) or x.id in defined or x.id in early:
-            continue
-        if x.id in names:  # a named node not emitted yet
-            if not may_hoist or x.id in trig or not prog.operands(x.id):
-                return None
-            early.append(x.id)
-            stack.extend((a, False) for a in prog.operands(x.id))
-            continue
-        stack.extend((a, may_hoist) for a in prog.operands(x.id))
-    return early[::-1]
-
-
-def _unravel(k, shape):
-    out = []
-    for n in reversed(shape):
-        out.append(k % n)
-        k //= n
-    return tuple(reversed(out))
-
-
 def check_constraints(model) -> None:
     """Redundant constraint rows make J A^-1 J^T singular everywhere: an error naming them, with a hint."""
     from ..errors import ModelError
@@ -430,15 +164,18 @@ def check_constraints(model) -> None:
 
 @collector_paused()
 def generate(model, progress=None, latex: bool = True, scalar: str = "double", split: bool = False,
-             slicing=(SLICE_THRESHOLD, SLICE_SIZE)) -> Generated:
+             slicing=(SLICE_THRESHOLD, SLICE_SIZE), targets=None) -> Generated:
     """Generate all files of a model in memory; ``scalar`` is the C type (``float``: single-precision C, its
     bounds against the twin in the manifest's ``float_tolerance``; the NumPy module stays double).  ``split``:
     one .c per routine instead of NAME.c, the helpers in NAME_helpers.h and a Makefile (:func:`split_files`).
     ``slicing``: (threshold, size): the C of a routine of more work (operations plus statements) than the
     threshold is emitted as static functions of about that size each behind the public one (:mod:`.slicing`: one
-    huge function takes GCC minutes); None: every routine as one function."""
-    from .latex import LATEX_ROLES, latex_document
-
+    huge function takes GCC minutes); None: every routine as one function.  ``targets``: the targets' names (a
+    comma-separated string or a list, :func:`.targets.select`; None: the default set, less ``latex`` when
+    ``latex`` is False): only their files are generated."""
+    chosen = select(targets)
+    if not latex:
+        chosen = [t for t in chosen if t.name != "latex"]
     check_names(model)
     stages = _Stages(progress)
     tree = Tree(model)
@@ -453,13 +190,14 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
     stages.done("recursions")
     if scalar not in SCALARS:
         raise AggsymError(f"--scalar: {scalar!r} is not one of {', '.join(SCALARS)}")
-    lines = {}  # the straight lines of A, b and g, which the LaTeX prints too (latex.intermediate_form)
+    lines = {}  # the straight lines the targets render from (the LaTeX's A, b and g: latex.intermediate_form)
+    wanted = set().union(*(t.lines for t in chosen))
     emitted = []
     for role, outs in outputs.items():
         sl = straight_line(prog, outs)
-        if latex and role in LATEX_ROLES:
+        if role in wanted:
             lines[role] = sl
-        emitted.append(emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing, sl))
+        emitted.append(emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing, sl, chosen))
         del sl
     stages.done("printing")
     env = templates()
@@ -492,70 +230,18 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         "time": model.time_dependent,
         "elastic": any(b.pair.elastic for b in model.bodies),
     }
-    gen = Generated(model, emitted)
-    gen.files[f"{model.name}.h"] = env.get_template("model.h.j2").render(ctx)
-    if split:
-        gen.files.update(split_files(env, ctx, emitted))
-    else:
-        gen.files[f"{model.name}.c"] = env.get_template("model.c.j2").render(ctx)
-    gen.files[f"{model.name}.py"] = env.get_template("model.py.j2").render(ctx)
-    names = list(gen.files) + [f"{model.name}.json"] + ([f"{model.name}.tex"] if latex else [])
-    gen.files[f"{model.name}.json"] = json.dumps(
-        manifest(model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted}, omitted, scalar,
-                 layout=split_layout(model.name, emitted, names) if split else None),
-        indent=2) + "\n"
-    stages.done("templates")
-    if latex:
-        gen.files[f"{model.name}.tex"] = latex_document(model, env, prog, outputs, lines)
-        stages.done("latex")
+    gen = Generated(model, emitted, targets=tuple(t.name for t in chosen))
+    job = Job(model, env, ctx, emitted, prog, outputs, lines, split, scalar, omitted, chosen)
+    job.names = [name for t in chosen for name in t.file_names(job)]
+    for k, target in enumerate(chosen):
+        gen.files.update(target.render(job))
+        if k + 1 == len(chosen) or chosen[k + 1].stage != target.stage:
+            stages.done(target.stage)
+    if list(gen.files) != job.names:
+        raise RuntimeError(f"the targets wrote {list(gen.files)}, not the files they name: {job.names}")
     gen.timings = stages.timings
     return gen
 
-
-HELPERS = ("aggsym_sincos(", "aggsym_sincos2(", "aggsym_sign(")  # the calls of the helpers that helpers.c.j2 defines
-
-
-def _helpers_used(r: EmittedRoutine) -> bool:
-    return any(h in line for line in r.c_body for h in HELPERS)
-
-
-def split_names(name: str, emitted) -> dict:
-    """The files of ``--split``: {"sources": {role: NAME_role.c}, "helpers": NAME_helpers.h or None (no routine
-    calls a helper), "makefile", "library"}."""
-    return {"sources": {r.routine.role: f"{name}_{r.routine.role}.c" for r in emitted},
-            "helpers": f"{name}_helpers.h" if any(_helpers_used(r) for r in emitted) else None,
-            "makefile": "Makefile",
-            "library": f"lib{name}.a"}
-
-
-def split_layout(name: str, emitted, files) -> dict:
-    """The manifest's ``split`` entry: every file written (``files``), and which holds what."""
-    names = split_names(name, emitted)
-    return {"files": list(files), "header": f"{name}.h", **names}
-
-
-def split_files(env, ctx, emitted) -> dict:
-    """``--split``: NAME_ROLE.c per routine (including NAME_helpers.h only if it calls a helper), NAME_helpers.h
-    with aggsym_sincos and aggsym_sign as static inline (each routine's object inlines them: a separate
-    NAME_common.c would make every sin/cos a call across objects), and a Makefile building libNAME.a with
-    $(CC) $(CFLAGS) (default -O2 -std=c99), one object per routine, so that make -j builds in parallel and a
-    controller links only the routines it calls."""
-    name = ctx["name"]
-    names = split_names(name, emitted)
-    files = {}
-    helpers = names["helpers"]
-    if helpers:
-        files[helpers] = env.get_template("helpers.h.j2").render(
-            {**ctx, "guard": name.upper() + "_HELPERS_H", "sign_storage": "static inline"})
-    rules = []
-    for r in emitted:
-        source = names["sources"][r.routine.role]
-        uses = helpers if _helpers_used(r) else None
-        files[source] = env.get_template("routine.c.j2").render({**ctx, "r": r, "helpers": uses})
-        rules.append((source, source[:-2] + ".o", [f"{name}.h"] + ([uses] if uses else [])))
-    files[names["makefile"]] = env.get_template("Makefile.j2").render(
-        {**ctx, "objects": [o for _, o, _ in rules], "rules": rules})
-    return files
 
 
 def write(gen: Generated, outdir, origin: str | None = None) -> list:
@@ -699,7 +385,8 @@ def stale_files(outdir: Path, gen: Generated) -> list:
     fewer routines): they would be compiled beside the new ones.  Known from the earlier manifest NAME.json
     (its ``split.files``, or the one-file layout), only when it is an aggsym manifest of this name, and only
     names of the forms this generator writes (NAME.h/.c/.py/.json/.tex, NAME_WORD.c/.h, Makefile): a manifest
-    is a file in a user's folder, never a list of paths to delete."""
+    is a file in a user's folder, never a list of paths to delete.  Only files of the targets generated now are
+    stale (``--targets c`` leaves an earlier NAME.py alone), each target saying which forms are its own."""
     name = gen.model.name
     try:
         old = json.loads((outdir / f"{name}.json").read_text(encoding="utf-8"))
@@ -712,8 +399,9 @@ def stale_files(outdir: Path, gen: Generated) -> list:
     previous = split.get("files") if isinstance(split, dict) else one_file
     if not isinstance(previous, list):
         return []
-    ours = re.compile(rf"{re.escape(name)}(\.(h|c|py|json|tex)|_[A-Za-z0-9_]+\.[ch])|Makefile")
-    return sorted({f for f in previous if isinstance(f, str) and ours.fullmatch(f) and f not in gen.files})
+    targets = [TARGETS[t] for t in gen.targets if t in TARGETS]
+    return sorted({f for f in previous if isinstance(f, str) and f not in gen.files
+                   and any(t.owns(name, f) for t in targets)})
 
 
 def _umask() -> int:

@@ -1,0 +1,63 @@
+"""The registry of targets: every output of ``aggsym generate`` is one (:class:`~.base.Target`), one module each.
+
+``TARGETS`` maps a name to its target, in the order their files are written; :func:`register` adds one (a new
+target is one module, its templates and one line below, or a call from outside), :func:`select` turns
+``--targets a,b`` into targets (an unknown name: an AggsymError, exit 2, listing the known ones).
+"""
+from __future__ import annotations
+
+from ...errors import AggsymError
+from .base import Job, RoutineLines, Runner, Target
+from .c import CTarget
+from .latex import LatexTarget
+from .manifest import ManifestTarget
+from .numpy import NumPyTarget
+
+TARGETS: dict = {}
+
+
+def register(target: Target, replace: bool = False) -> Target:
+    """Add ``target`` to the registry (after those there); an existing name only with ``replace``."""
+    if not target.name or not target.name.isidentifier():
+        raise ValueError(f"a target's name must be an identifier, not {target.name!r}")
+    if target.name in TARGETS and not replace:
+        raise ValueError(f"a target named {target.name!r} is registered already")
+    TARGETS[target.name] = target
+    return target
+
+
+def unregister(name: str) -> None:
+    """Remove a target (a test's, say) from the registry."""
+    TARGETS.pop(name, None)
+
+
+def known() -> str:
+    return ", ".join(TARGETS)
+
+
+def default_targets() -> list:
+    return [t for t in TARGETS.values() if t.default]
+
+
+def select(names=None) -> list:
+    """The targets named (a comma-separated string or an iterable of names or targets), in registry order; None:
+    the default set.  An unknown or missing name is an AggsymError naming the known targets."""
+    if names is None:
+        return default_targets()
+    if isinstance(names, str):
+        names = [n.strip() for n in names.split(",") if n.strip()]
+    names = [n.name if isinstance(n, Target) else n for n in names]
+    unknown = [n for n in names if n not in TARGETS]
+    if unknown:
+        raise AggsymError(f"--targets: unknown target{'s' if len(unknown) > 1 else ''} "
+                          f"{', '.join(repr(n) for n in unknown)}; the known targets are: {known()}")
+    if not names:
+        raise AggsymError(f"--targets: no target named; the known targets are: {known()}")
+    return [t for name, t in TARGETS.items() if name in names]
+
+
+for _target in (CTarget(), NumPyTarget(), ManifestTarget(), LatexTarget()):  # one line per target
+    register(_target)
+
+__all__ = ["Job", "RoutineLines", "Runner", "Target", "TARGETS", "register", "unregister", "select", "known",
+           "default_targets"]

@@ -1,0 +1,373 @@
+"""The C target: NAME.h and NAME.c (``--split``: NAME_ROUTINE.c per routine, NAME_helpers.h, a Makefile).
+
+How a routine's straight-line program is printed as C (:func:`emit_routine`): inputs read first, each named
+temporary a ``const`` assignment, sin and cos of one angle in one ``aggsym_sincos`` call (two angles in one
+``aggsym_sincos2``), runs of zero entries by ``AGGSYM_ZEROS``, a large routine as slices (:mod:`..slicing`).
+The C is printed for every generation, whatever the targets: the operation counts (the manifest's ``ops``,
+``aggsym ops``) are those of the emitted C.  Checked by compiling it and calling it against the numeric twin.
+"""
+from __future__ import annotations
+
+import os
+import re
+import shlex
+from collections import deque
+from dataclasses import dataclass, field
+from itertools import islice
+
+from ...contract import Routine, c_prototype, c_symbol, python_parameters, signature
+from ...core.program import COS, SIN, Node, straight_line
+from ...errors import AggsymError
+from ..printing import CPrinter, Converter, CText, LiteralError, _number
+from ..slicing import Sliced, Statement, slice_routine, work
+from .base import RoutineLines, Runner, Target, file_pattern
+
+
+@dataclass
+class EmittedRoutine:
+    routine: Routine
+    inputs: tuple  # the input names in argument order for this model (contract.signature)
+    symbol: str  # C function name
+    prototype: str  # C prototype, without the semicolon
+    py_parameters: str  # the NumPy function's parameter list
+    c_body: list  # C statements
+    py_body: list  # Python statements (the NumPy target's; empty when it is not chosen)
+    ops: dict
+    temps: int
+    work: int = 0  # the C's size as slicing.work measures it (operations + statements)
+    sliced: Sliced | None = None  # the C as several functions (slicing.py), for a routine above the threshold
+    bodies: dict = field(default_factory=dict)  # target name -> what its print_routine kept (other targets)
+
+    @property
+    def zeros(self) -> bool:
+        """Whether its C writes a chunk of zero entries with AGGSYM_ZEROS (templates/attributes.c.j2)."""
+        return any(line.startswith("AGGSYM_ZEROS(") for line in self.c_body)
+
+
+def _input_symbols(sl):
+    return {sl.program.inputs[(kind, index)].id: f"{kind}_{index}" for kind, index in sl.inputs}
+
+
+def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double", slicing=None,
+                 sl=None, targets=None) -> EmittedRoutine:
+    """C statements of one routine, the operation count of the C (its arrays, temporaries and literals of the C
+    type ``scalar``, double or float), and the routine printed by each of ``targets`` (their
+    :meth:`~.base.Target.print_routine`; None: the NumPy target, as before targets).  ``slicing``: (threshold,
+    size), the C of a routine of more work than the threshold also as slices of about that size
+    (:mod:`..slicing`); None: never.  ``sl``: the outputs' :func:`~aggsym.core.program.straight_line` when
+    already formed."""
+    if targets is None:
+        from .numpy import NumPyTarget
+        targets = [NumPyTarget()]
+    try:
+        sl = sl or straight_line(prog, outputs)
+        emitted, lines = _emit_routine(model, prog, routine, outputs, scalar, slicing, sl)
+        for target in targets:
+            target.print_routine(model, prog, lines, emitted)
+        return emitted
+    except LiteralError as exc:
+        raise AggsymError(f"{model.source or model.name}: routine {routine.role}: {exc}"
+                          + ("; generate with --scalar double, or choose units in which the model's numbers fit"
+                             if scalar == "float" else "")) from None
+
+
+def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, sl):
+    """(EmittedRoutine without the other targets' text, RoutineLines for them)."""
+    inputs = signature(routine, model)
+    allowed = set(inputs)
+    for kind, _ in sl.inputs:
+        if kind not in allowed:
+            raise RuntimeError(f"routine {routine.role} depends on input {kind!r} outside its signature")
+    cp = CPrinter(scalar)
+    temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
+    names = {**_input_symbols(sl), **temp_names}
+    conv = Converter(prog, names)  # the trees of the sincos arguments (the names used: conv.refs)
+    ctext = CText(prog, names, cp.counts, conv.refs, scalar)  # the C text without a tree
+    shared = {}  # key -> the C text that an infix target prints alike (RoutineLines.shared)
+
+    def c_text(x, key, top=True):
+        """The C text of a right-hand side, kept in ``shared`` under ``key`` when it holds no function call and
+        the C is double (the C and NumPy printers differ only in function names and in float literals)."""
+        calls = ctext.calls
+        c = ctext(x, top)
+        if scalar == "double" and ctext.calls == calls:
+            shared[key] = c
+        return c
+    stmts = []  # the C body as statements (slicing.Statement): what each defines, uses, reads or writes
+
+    def emit(lines, defines=(), arrays=(), ops=0, entry=""):
+        stmts.append(Statement(lines, tuple(defines), tuple(conv.refs), tuple(arrays), ops, entry))
+        conv.refs.clear()
+
+    def ops_so_far():
+        return sum(cp.counts.values())
+    status = routine.status
+    if status is not None:
+        emit([f"{scalar} {status.name}[1];"], entry="head")
+    for kind in inputs:  # every input is read before any output is written: outputs may alias inputs
+        used = [i for k, i in sl.inputs if k == kind]
+        if not used:
+            emit([f"(void){kind};"], entry="head")
+        elif kind == "p":  # p == NULL means the defaults, as in the NumPy module
+            defaults = ", ".join(_number(float(x.value), scalar) for x in model.parameters)
+            emit([f"static const {scalar} p_defaults[{len(model.parameters)}] = {{{defaults}}};",
+                  "if (!p) p = p_defaults;"], arrays=("p",))
+        for i in used:
+            emit([f"const {scalar} {kind}_{i} = {kind}[{i}];"], defines=(f"{kind}_{i}",), arrays=(kind,))
+    for out, flat in zip(routine.outputs, outputs):
+        if not flat:
+            emit([f"(void){out.name};"], entry="head")
+    conv.refs.clear()
+    trig = _trig_pairs(prog, sl.temps)
+    done = set()
+    defined = set(names) - set(temp_names)  # node ids with a C name already defined: the inputs, then temps
+    pending = _pending_pairs(sl.steps, trig)
+    hoisted = set()  # temps emitted early for a sincos pair
+    zeros = _zero_chunks(sl.steps, outputs, ZERO_BYTES // SCALAR_BYTES[scalar])
+    for s, step in enumerate(sl.steps):
+        before = ops_so_far()
+        if step[0] == "out":
+            _, o, k = step
+            x = outputs[o][k]
+            name = routine.outputs[o].name
+            if s in zeros:  # one of a chunk of zero entries: the first writes them all (AGGSYM_ZEROS)
+                if zeros[s]:
+                    emit([f"AGGSYM_ZEROS({name} + {k});"], arrays=(name,))
+                continue
+            rhs_c = c_text(x, (o, k), top=not (isinstance(x, Node) and x.id in names))
+            emit([f"{name}[{k}] = {rhs_c};"], arrays=(name,), ops=ops_so_far() - before)
+            continue
+        i = step[1]
+        if i in hoisted:  # its C was emitted before a sincos pair that needed it
+            continue
+        if i not in trig:
+            rhs_c = c_text(prog.nodes[i], i)
+            emit([f"const {scalar} {names[i]} = {rhs_c};"], defines=(names[i],), ops=ops_so_far() - before)
+            defined.add(i)
+            continue
+        pair = trig[i]
+        if pair[:2] in done:
+            continue
+        # a second angle whose argument is already computable shares the call (aggsym_sincos2: two in one vector)
+        partner, early = _ready_partner(prog, names, trig, pending, done, defined, pair)
+        for h in early:  # a temp the partner's angle is made of (q + offset), emitted now; NumPy keeps its place
+            rhs_c = c_text(prog.nodes[h], h)
+            hoisted.add(h)
+            emit([f"const {scalar} {names[h]} = {rhs_c};"], defines=(names[h],), ops=ops_so_far() - before)
+            before = ops_so_far()
+            defined.add(h)
+        c_names, arguments = [], []
+        for sin_id, cos_id, arg in (pair,) if partner is None else (pair, partner):
+            done.add((sin_id, cos_id))
+            defined.update(j for j in (sin_id, cos_id) if j is not None)
+            c_names += [names[sin_id] if sin_id is not None else names[cos_id] + "_sin",
+                        names[cos_id] if cos_id is not None else names[sin_id] + "_cos"]
+            arguments.append(cp._print(conv(arg, top=False)))
+            cp.counts["call"] += 1
+        pointers = ", ".join(f"&{n}" for n in c_names)
+        emit([f"{scalar} {', '.join(c_names)};",
+              f"aggsym_sincos{'' if partner is None else '2'}({', '.join(arguments)}, {pointers});"],
+             defines=c_names, ops=ops_so_far() - before)
+    if status is not None:
+        emit([f"return {status.name}[0] != {_number(0.0, scalar)};"], entry="tail")
+    # what count_ops reads from the C, counted while printing (the other statements hold none); the C printer
+    # prints only what is emitted, the sincos pair's discarded sin/cos trees were never printed
+    ops = dict(cp.counts)
+    sliced, size = None, sum(work(st) for st in stmts)
+    if slicing is not None and size > slicing[0]:
+        arrays = {k: f"const {scalar} *{k}" for k in inputs}
+        arrays.update({o.name: f"{scalar} *{o.name}" for o in routine.outputs})
+        pieces = min(slicing[1], routine.slice_size or slicing[1])
+        sliced = slice_routine(c_symbol(model, routine), arrays, stmts, scalar, pieces)
+    c_body = [line for st in stmts for line in st.lines]
+    emitted = EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine, scalar),
+                             python_parameters(model, routine), c_body, [], ops, len(sl.temps), size, sliced)
+    return emitted, RoutineLines(sl, names, outputs, zeros, trig, shared, scalar == "double")
+
+
+# The bytes AGGSYM_ZEROS writes at once (templates/attributes.c.j2): 2 doubles, 4 floats
+ZERO_BYTES = 16
+SCALAR_BYTES = {"double": 8, "float": 4}
+
+
+def _zero_chunks(steps, outputs, width: int) -> dict:
+    """{index of a step: 1 or 0}: the steps storing a constant 0 that fall in chunks of ``width`` consecutive
+    zero entries of one output (each run of zeros cut into chunks from its start; what is left over is stored
+    entry by entry), 1 for a chunk's first step, 0 for the others.  (The constant outputs' steps come first, in
+    the order of their entries: :func:`aggsym.core.program.straight_line`.)"""
+    chunks, run = {}, []
+
+    def close():
+        for c in range(0, len(run) - width + 1, width):
+            chunks.update((s, int(j == 0)) for j, s in enumerate(run[c:c + width]))
+        run.clear()
+    for s, step in enumerate(steps):
+        x = outputs[step[1]][step[2]] if step[0] == "out" else None
+        zero = step[0] == "out" and not isinstance(x, Node) and float(x) == 0.0
+        if run and not (zero and steps[run[-1]][1] == step[1] and steps[run[-1]][2] + 1 == step[2]):
+            close()
+        if zero:
+            run.append(s)
+    close()
+    return chunks
+
+
+def _trig_pairs(prog, temps) -> dict:
+    """For every sin or cos temp: (sin id or None, cos id or None, argument), so that C computes both at once."""
+    by_arg = {}
+    for i in temps:
+        entry = prog.ops[i]
+        if entry[0] in (SIN, COS):
+            arg = entry[1]
+            pair = by_arg.setdefault(("n", arg.id) if isinstance(arg, Node) else ("c", repr(arg)), [None, None, arg])
+            pair[0 if entry[0] == SIN else 1] = i
+    return {i: tuple(pair) for pair in by_arg.values() for i in pair[:2] if i is not None}
+
+
+def _pending_pairs(steps, trig) -> deque:
+    """The sin-and-cos pairs in the order of their first step (the order aggsym_sincos is called in)."""
+    order = {}
+    for step in steps:
+        if step[0] != "out" and step[1] in trig:
+            order.setdefault(trig[step[1]][:2], trig[step[1]])
+    return deque(order.values())
+
+
+PARTNER_LOOKAHEAD = 8  # the pairs not yet emitted that are tried as the partner of a sincos call
+
+
+def _ready_partner(prog, names, trig, pending, done, defined, pair):
+    """(partner, temps): the first pair other than ``pair`` among the next :data:`PARTNER_LOOKAHEAD` not yet emitted
+    whose argument is computable now, and the named temps to emit first for it (:func:`_computable`); (None, ())
+    if there is none.  ``pending`` (in order) loses its emitted pairs from the front, so that a call costs O(1)."""
+    while pending and pending[0][:2] in done:
+        pending.popleft()
+    for candidate in islice(pending, PARTNER_LOOKAHEAD):
+        if candidate[:2] != pair[:2] and candidate[:2] not in done:
+            early = _computable(prog, names, trig, candidate[2], defined)
+            if early is not None:
+                return candidate, early
+    return None, ()
+
+
+def _computable(prog, names, trig, arg, defined):
+    """The named temps (in order) to emit before an expression can be, or None if it cannot be yet: it may need
+    constants, the ``defined`` nodes (inputs and temps already emitted), the unnamed nodes that the printer
+    inlines, and named temps (not sin or cos) whose own operands are all of those (one level: the angle
+    ``q + offset`` of a joint whose zero the internal frames moved)."""
+    early = []
+    stack = [(arg, True)]
+    while stack:
+        x, may_hoist = stack.pop()
+        if not isinstance(x, Node) or x.id in defined or x.id in early:
+            continue
+        if x.id in names:  # a named node not emitted yet
+            if not may_hoist or x.id in trig or not prog.operands(x.id):
+                return None
+            early.append(x.id)
+            stack.extend((a, False) for a in prog.operands(x.id))
+            continue
+        stack.extend((a, may_hoist) for a in prog.operands(x.id))
+    return early[::-1]
+
+
+
+HELPERS = ("aggsym_sincos(", "aggsym_sincos2(", "aggsym_sign(")  # the calls of the helpers that helpers.c.j2 defines
+
+
+def _helpers_used(r: EmittedRoutine) -> bool:
+    return any(h in line for line in r.c_body for h in HELPERS)
+
+
+def split_names(name: str, emitted) -> dict:
+    """The files of ``--split``: {"sources": {role: NAME_role.c}, "helpers": NAME_helpers.h or None (no routine
+    calls a helper), "makefile", "library"}."""
+    return {"sources": {r.routine.role: f"{name}_{r.routine.role}.c" for r in emitted},
+            "helpers": f"{name}_helpers.h" if any(_helpers_used(r) for r in emitted) else None,
+            "makefile": "Makefile",
+            "library": f"lib{name}.a"}
+
+
+def split_layout(name: str, emitted, files) -> dict:
+    """The manifest's ``split`` entry: every file written (``files``), and which holds what."""
+    names = split_names(name, emitted)
+    return {"files": list(files), "header": f"{name}.h", **names}
+
+
+def split_files(env, ctx, emitted) -> dict:
+    """``--split``: NAME_ROLE.c per routine (including NAME_helpers.h only if it calls a helper), NAME_helpers.h
+    with aggsym_sincos and aggsym_sign as static inline (each routine's object inlines them: a separate
+    NAME_common.c would make every sin/cos a call across objects), and a Makefile building libNAME.a with
+    $(CC) $(CFLAGS) (default -O2 -std=c99), one object per routine, so that make -j builds in parallel and a
+    controller links only the routines it calls."""
+    name = ctx["name"]
+    names = split_names(name, emitted)
+    files = {}
+    helpers = names["helpers"]
+    if helpers:
+        files[helpers] = env.get_template("helpers.h.j2").render(
+            {**ctx, "guard": name.upper() + "_HELPERS_H", "sign_storage": "static inline"})
+    rules = []
+    for r in emitted:
+        source = names["sources"][r.routine.role]
+        uses = helpers if _helpers_used(r) else None
+        files[source] = env.get_template("routine.c.j2").render({**ctx, "r": r, "helpers": uses})
+        rules.append((source, source[:-2] + ".o", [f"{name}.h"] + ([uses] if uses else [])))
+    files[names["makefile"]] = env.get_template("Makefile.j2").render(
+        {**ctx, "objects": [o for _, o, _ in rules], "rules": rules})
+    return files
+
+
+class CTarget(Target):
+    """NAME.h and NAME.c, or with ``--split`` NAME.h, NAME_helpers.h (when a routine calls a helper),
+    NAME_ROUTINE.c per routine and a Makefile; checked by compiling (a split layout by its Makefile) and calling
+    the functions through ctypes."""
+
+    name = "c"
+    default = True
+    column = "C"
+    templates = ("model.h.j2", "model.c.j2", "function.c.j2", "attributes.c.j2", "helpers.c.j2", "helpers.h.j2",
+                 "routine.c.j2", "Makefile.j2")
+
+    def file_names(self, job):
+        name = job.model.name
+        if not job.split:
+            return [f"{name}.h", f"{name}.c"]
+        names = split_names(name, job.emitted)
+        return ([f"{name}.h"] + ([names["helpers"]] if names["helpers"] else []) + list(names["sources"].values())
+                + [names["makefile"]])
+
+    def owns(self, name, file):
+        return bool(file_pattern(name, ("h", "c")).fullmatch(file) or file == "Makefile"
+                    or re.fullmatch(rf"{re.escape(name)}_[A-Za-z0-9_]+\.[ch]", file))
+
+    def render(self, job):
+        files = {f"{job.model.name}.h": job.env.get_template("model.h.j2").render(job.ctx)}
+        if job.split:
+            files.update(split_files(job.env, job.ctx, job.emitted))
+        else:
+            files[f"{job.model.name}.c"] = job.env.get_template("model.c.j2").render(job.ctx)
+        return files
+
+    def main_file(self, name):
+        return f"{name}.h"
+
+    def unavailable(self, tools):
+        try:
+            tools.compiler()
+        except AggsymError as exc:
+            return str(exc)
+        return None
+
+    def runner(self, model, folder, manifest, opt, tools):
+        scalar = manifest.get("scalar", "double")
+        shared = folder / f"lib{model.name}.so"
+        if "split" in manifest:  # --split: the Makefile's build of libNAME.a is what runs
+            flags = [f for f in tools.CFLAGS if f != "-shared"] + (tools.FLOAT_CFLAGS if scalar == "float" else [])
+            flags += [opt] + shlex.split(os.environ.get("CFLAGS", ""))
+            shared = tools.shared_from_archive(tools.build_split(folder, cflags=shlex.join(flags)), shared)
+        else:
+            shared = tools.compile_shared(folder / f"{model.name}.c", shared, extra=(opt,), scalar=scalar)
+        lib = tools.CLibrary(shared, manifest)
+        return Runner(lib.call, manifest.get("float_tolerance", {}),
+                      tuple(manifest.get("float_tolerance_per_condition", ())))

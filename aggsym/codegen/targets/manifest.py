@@ -1,0 +1,28 @@
+"""The manifest target: NAME.json (:func:`aggsym.contract.manifest`): coordinates, parameters, functions, the
+operation counts of the emitted C (computed whatever the targets), the files of a ``--split`` layout.  Nothing
+to run; ``aggsym check`` reads it, and a later generation reads its file list for the stale files."""
+from __future__ import annotations
+
+import json
+
+from ...contract import manifest
+from .base import Target, file_pattern
+from .c import split_layout
+
+
+class ManifestTarget(Target):
+    name = "manifest"
+    default = True
+
+    def file_names(self, job):
+        return [f"{job.model.name}.json"]
+
+    def owns(self, name, file):
+        return bool(file_pattern(name, ("json",)).fullmatch(file))
+
+    def render(self, job):
+        emitted = job.emitted
+        layout = split_layout(job.model.name, emitted, job.names) if job.split and job.chosen("c") else None
+        data = manifest(job.model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted},
+                        job.omitted, job.scalar, layout=layout)
+        return {f"{job.model.name}.json": json.dumps(data, indent=2) + "\n"}

@@ -1,0 +1,93 @@
+"""The NumPy target: NAME.py, the routines as NumPy functions over any leading batch dimensions.
+
+A routine is printed from its straight line in program order: inputs unpacked, each named temporary one
+assignment, each output entry stored; a right-hand side without a function call is the C's text when the C is
+double (:attr:`~.base.RoutineLines.shared`: the two printers differ only in function names and float literals),
+otherwise printed by :class:`~aggsym.codegen.printing.NumPyPrinter` from its expression tree.  Checked by
+importing the module and calling it against the numeric twin.
+"""
+from __future__ import annotations
+
+from ...core.program import Node
+from ..printing import Converter, CText, NumPyPrinter
+from .base import Runner, Target, file_pattern
+
+
+def _unravel(k, shape):
+    out = []
+    for n in reversed(shape):
+        out.append(k % n)
+        k //= n
+    return tuple(reversed(out))
+
+
+def numpy_body(model, prog, lines, routine, inputs) -> list:
+    """The Python statements of one routine (the function's body, before its returns)."""
+    sl, names, outputs, zeros, shared = lines.sl, lines.names, lines.outputs, lines.zeros, lines.shared
+    pp = NumPyPrinter()
+    conv = Converter(prog, names)
+    counts = {"mul": 0, "add": 0, "div": 0, "call": 0}  # (counted for the C only; discarded here)
+    ctext = CText(prog, names, counts, [], "double")
+
+    def text(x, key, top=True):
+        done = shared.get(key)
+        if done is not None:
+            return done
+        if not lines.complete:  # the C was not double: the call-free text is the double C's
+            calls = ctext.calls
+            c = ctext(x, top)
+            ctext.refs.clear()
+            if ctext.calls == calls:
+                return c
+        py = pp._print(conv(x, top))
+        conv.refs.clear()
+        return py
+    body = []
+    for kind in inputs:
+        body.extend(f"{kind}_{i} = {kind}[..., {i}]" for k, i in sl.inputs if k == kind)
+    shapes = [out.shape(model) for out in routine.outputs]
+    for s, step in enumerate(sl.steps):
+        if step[0] == "out":
+            _, o, k = step
+            x = outputs[o][k]
+            target = f"{routine.outputs[o].py}[..., {', '.join(str(j) for j in _unravel(k, shapes[o]))}]"
+            if s in zeros:
+                body.append(f"{target} = 0")
+                continue
+            body.append(f"{target} = {text(x, (o, k), top=not (isinstance(x, Node) and x.id in names))}")
+            continue
+        i = step[1]
+        if i in lines.trig:  # (the C computes sin and cos together; NumPy each where it stands)
+            body.append(f"{names[i]} = {pp._print(conv(prog.nodes[i]))}")
+            conv.refs.clear()
+            continue
+        body.append(f"{names[i]} = {text(prog.nodes[i], i)}")
+    return body
+
+
+class NumPyTarget(Target):
+    """NAME.py: the same functions without the prefix, outputs returned, ``p`` defaulting to PARAMETERS."""
+
+    name = "numpy"
+    default = True
+    column = "NumPy"
+    templates = ("model.py.j2",)
+
+    def file_names(self, job):
+        return [f"{job.model.name}.py"]
+
+    def owns(self, name, file):
+        return bool(file_pattern(name, ("py",)).fullmatch(file))
+
+    def print_routine(self, model, prog, lines, emitted):
+        emitted.py_body = numpy_body(model, prog, lines, emitted.routine, emitted.inputs)
+
+    def render(self, job):
+        return {f"{job.model.name}.py": job.env.get_template("model.py.j2").render(job.ctx)}
+
+    def main_file(self, name):
+        return f"{name}.py"
+
+    def runner(self, model, folder, manifest, opt, tools):
+        module = tools.import_module(folder / f"{model.name}.py")
+        return Runner(lambda role, *args: getattr(module, role)(*args))
