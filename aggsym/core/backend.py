@@ -2,6 +2,7 @@
 
 * :class:`Symbolic` records a straight-line program (:mod:`aggsym.core.program`).
 * :class:`Numeric` computes with floats or NumPy arrays (the numeric twin).
+* :class:`Backend` names what the mechanics may ask of either (and of :class:`~aggsym.core.dual.DualBackend`).
 
 Both offer ``call(name, *args)`` for the functions of :data:`aggsym.core.program.FUNCTIONS` and the shortcuts
 ``sin``, ``cos``, ``sqrt``; :func:`to_scalar` turns a SymPy expression (a mass, a constructive angle, a
@@ -10,6 +11,7 @@ parameter expression) into a scalar of either.
 from __future__ import annotations
 
 from fractions import Fraction
+from typing import Protocol
 
 import numpy as np
 import sympy as sp
@@ -17,8 +19,29 @@ import sympy as sp
 from .program import FUNCTIONS, Program, normalize_const
 
 
+class Backend(Protocol):
+    """What the mechanics may ask of a backend; they probe no other attribute.
+
+    ``symbolic``: its scalars are exact (program nodes, Fractions for the constants), so that the mechanics may
+    choose a form by counting operations; False for floats.  ``program``: the :class:`Program` its scalars are
+    nodes of, or None where they are not one program's nodes (floats; duals, which pair a value with tangents)."""
+
+    symbolic: bool
+    program: Program | None
+
+    def call(self, name: str, *args): ...
+
+    def sin(self, x): ...
+
+    def cos(self, x): ...
+
+    def sqrt(self, x): ...
+
+    def rational(self, num: int, den: int): ...
+
+
 class Symbolic:
-    """Record operations into a :class:`Program`."""
+    """Record operations into a :class:`Program` (a :class:`Backend`)."""
 
     symbolic = True
 
@@ -41,9 +64,10 @@ _NUMPY = {"abs": np.abs, "asin": np.arcsin, "acos": np.arccos, "atan": np.arctan
 
 
 class Numeric:
-    """Compute with floats (or NumPy arrays, element-wise over a batch)."""
+    """Compute with floats (or NumPy arrays, element-wise over a batch); a :class:`Backend`."""
 
     symbolic = False
+    program = None
     sin = staticmethod(np.sin)
     cos = staticmethod(np.cos)
     sqrt = staticmethod(np.sqrt)

@@ -113,7 +113,10 @@ def tangent(x, k):
 
 
 class DualBackend:
-    """A backend whose functions take duals: the chain rule over the wrapped backend's functions."""
+    """A backend whose functions take duals: the chain rule over the wrapped backend's functions (a
+    :class:`~aggsym.core.backend.Backend`; its scalars are duals, not one program's nodes: ``program`` is None)."""
+
+    program = None
 
     def __init__(self, base):
         self.base = base

@@ -83,7 +83,7 @@ def coriolis_matrix(bound, kin, qd, skew=False):
     tree = kin.tree
     if sum(len(tree.subtrees[tree.body_of[j]]) for j in range(tree.nv)) > COLUMNS_DEPTH * tree.nv:
         return coriolis_by_recursion(bound, kin, qd, skew)
-    if getattr(bound.backend, "symbolic", False):
+    if bound.backend.symbolic:
         by_recursion = scratch_operations(bound, kin, lambda b, k, u: coriolis_by_recursion(b, k, u, skew))
         by_columns = scratch_operations(bound, kin, lambda b, k, u: coriolis_columns(b, k, u, skew), by_recursion)
         if by_columns < by_recursion:

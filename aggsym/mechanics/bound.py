@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-from ..core.backend import to_scalar
+from ..core.backend import Backend, to_scalar
 from ..core.program import fold
 from ..model.tree import Tree
 from ..model.types import TIME, Model, code_index
@@ -48,7 +48,7 @@ class Bound:
 
     model: Model
     tree: Tree
-    backend: object
+    backend: Backend
     bodies: list
     gravity: tuple  # in the world frame
     params: list  # the backend scalars of p

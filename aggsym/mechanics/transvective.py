@@ -755,8 +755,7 @@ def inertia_inverse(bound, kin):
     Operation counts of the emitted C on the benchmark chains (``benchmarks/chain.py``), mul + add + div + call:
     n = 6: 1087 (factors), 12: 4205 (factors), 24: 17660, 48: 55748, 96: about 17 n^2 + 360 n (generators),
     against 710297 for the factors at n = 96."""
-    program = getattr(bound.backend, "program", None)
-    if not getattr(bound.backend, "symbolic", False) or program is None:
+    if not bound.backend.symbolic or bound.backend.program is None:  # floats, duals: nothing to count on
         return inverse_by_generators(bound, kin)
     fast = scratch_operations(bound, kin, lambda b, k, _: inverse_by_generators(b, k))
     if _factor_product_floor(kin.tree) >= fast:
