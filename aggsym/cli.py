@@ -214,7 +214,8 @@ def cmd_generate(args) -> int:
     targets = _targets(args)
     model = _load(args)
     if args.list_routines:
-        from .contract import ROUTINES, c_symbol, omitted_routines, routines_for
+        from .codegen.names import c_symbol
+        from .contract import ROUTINES, omitted_routines, routines_for
 
         omitted = omitted_routines(model)
         routines = routines_for(model, omitted=omitted)

@@ -4,7 +4,7 @@ never load the code generator; the same for the benchmark (``benchmarks/``), whi
 Layers, bottom to top (docs/architecture.md, "Layers"): ``errors`` and ``collector`` (the garbage
 collector paused); ``model`` (readers, the immutable model)
 and ``core`` (straight-line programs, backends), which do not know each other; ``mechanics`` (the book's
-recursions); ``contract`` (the routines, signatures, manifest); ``twin`` and ``symbolic`` (floats, SymPy);
+recursions); ``contract`` (a package: the registry, the routines by domain, shapes, analyses, manifest); ``twin`` and ``symbolic`` (floats, SymPy);
 ``codegen`` (printers, templates, compiling); ``cli``.
 
 The benchmark's layers: what the sections share (measuring a child process, the chains, the host, the robots);
@@ -23,7 +23,7 @@ LAYERS = {"errors": 0, "collector": 0, "model": 1, "core": 1, "mechanics": 2, "c
           "codegen": 5, "cli": 6, "__main__": 7}
 # modules whose import must not bring the code generator (or jinja2) along
 LIGHT = ["aggsym", "aggsym.errors", "aggsym.contract", "aggsym.twin", "aggsym.symbolic"] + sorted(
-    f"aggsym.{p.parent.name}.{p.stem}" for folder in ("core", "mechanics", "model")
+    f"aggsym.{p.parent.name}.{p.stem}" for folder in ("core", "mechanics", "model", "contract")
     for p in (PACKAGE / folder).glob("*.py") if p.stem != "__init__")
 
 

@@ -26,8 +26,7 @@ import jinja2
 
 from .. import __version__
 from ..contract import (
-    INPUT_KINDS, ROUTINES, header_macros, input_length, omitted_routines, redundant_constraints, routines_for, run,
-    signature,
+    INPUT_KINDS, ROUTINES, input_length, omitted_routines, redundant_constraints, routines_for, run, signature,
 )
 from ..core.backend import Symbolic
 from ..core.program import straight_line
@@ -38,6 +37,7 @@ from ..model.tree import Tree
 from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import check_c_identifier, check_module_name
+from .names import header_macros
 from .printing import SCALARS, _number
 from .slicing import SLICE_SIZE, SLICE_THRESHOLD
 from .targets import TARGETS, Job, select

@@ -15,9 +15,10 @@ from collections import deque
 from dataclasses import dataclass, field
 from itertools import islice
 
-from ...contract import Routine, c_prototype, c_symbol, python_parameters, signature
+from ...contract import Routine, signature
 from ...core.program import COS, SIN, Node, straight_line
 from ...errors import AggsymError
+from ..names import c_prototype, c_symbol, python_parameters
 from ..printing import CPrinter, Converter, CText, LiteralError, _number
 from ..slicing import Sliced, Statement, slice_routine, work
 from .base import RoutineLines, Runner, Target, file_pattern

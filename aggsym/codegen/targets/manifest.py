@@ -1,11 +1,13 @@
-"""The manifest target: NAME.json (:func:`aggsym.contract.manifest`): coordinates, parameters, functions, the
-operation counts of the emitted C (computed whatever the targets), the files of a ``--split`` layout.  Nothing
-to run; ``aggsym check`` reads it, and a later generation reads its file list for the stale files."""
+"""The manifest target: NAME.json (:func:`aggsym.contract.manifest`): coordinates, parameters, functions (their C
+names, :func:`aggsym.codegen.names.c_symbol`), the operation counts of the emitted C (computed whatever the
+targets), the files of a ``--split`` layout.  Nothing to run; ``aggsym check`` reads it, and a later generation
+reads its file list for the stale files."""
 from __future__ import annotations
 
 import json
 
 from ...contract import manifest
+from ..names import c_symbol
 from .base import Target, file_pattern
 from .c import split_layout
 
@@ -24,5 +26,6 @@ class ManifestTarget(Target):
         emitted = job.emitted
         layout = split_layout(job.model.name, emitted, job.names) if job.split and job.chosen("c") else None
         data = manifest(job.model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted},
-                        job.omitted, job.scalar, layout=layout)
+                        job.omitted, job.scalar, layout=layout,
+                        functions={e.routine.role: c_symbol(job.model, e.routine) for e in emitted})
         return {f"{job.model.name}.json": json.dumps(data, indent=2) + "\n"}

@@ -1,0 +1,162 @@
+"""Numerical analyses of a model at generation, on the numeric twin: random configurations, the coordinates that
+move no mass (A(q) singular), structurally redundant constraint rows, why the regressor does not hold, and the
+base-parameter reduction of the regressor."""
+from __future__ import annotations
+
+import functools
+
+from ..mechanics import elastic
+from ..model.tree import Tree
+from .registry import ROUTINES, run
+from .shapes import regressor_shape
+
+
+def sample_configurations(model, rng, size=None):
+    """Random configurations q (shape (nq,), or (nq, size)): each coordinate uniform in [-pi, pi]; a free-flyer's
+    position uniform in [-pi, pi]^3 and its quaternion a random unit quaternion (the samples of the checks, the
+    base parameters and the redundancy tests)."""
+    import numpy as np
+
+    shape = (model.nq,) if size is None else (model.nq, size)
+    q = rng.uniform(-np.pi, np.pi, shape)
+    for idx, b in zip(Tree(model).positions, model.bodies):
+        if b.pair.quaternion:
+            quat = rng.normal(size=(4,) + shape[1:])
+            q[idx[3]:idx[3] + 4] = quat / np.linalg.norm(quat, axis=0)
+    return q
+
+
+def massless_coordinates(model, samples: int = 2, tolerance: float = 1e-12) -> tuple:
+    """(coordinate indices with A_ii = 0, whether A(q) is singular), at the default parameters and a few fixed
+    random configurations: A_ii = psi_i^T A+ psi_i is the kinetic energy of a unit rate of coordinate i alone,
+    zero exactly when its joint moves no mass.  Zero and singular are judged relative to the largest entry."""
+    import numpy as np
+
+    from ..core.backend import Numeric
+    from ..mechanics.bound import bind
+
+    n = model.nv
+    if n == 0:
+        return (), False
+    bound = bind(model, Numeric())
+    rng = np.random.default_rng(0)
+    zero, singular = set(range(n)), False
+    for _ in range(samples):
+        q = [float(x) for x in sample_configurations(model, rng)]
+        A = np.array(run(ROUTINES["inertia"], bound, {"q": q})[0], dtype=float).reshape(n, n)
+        scale = max(float(np.abs(A).max()), 1e-300)
+        zero &= {i for i in range(n) if abs(A[i, i]) <= tolerance * scale}
+        singular = singular or float(np.linalg.eigvalsh(A)[0]) <= tolerance * scale
+    return tuple(sorted(zero)), singular
+
+
+def redundant_constraints(model, samples: int = 2, tolerance: float = 1e-9) -> list:
+    """The constraints with rows that depend on other rows when J is rank-deficient at q = 0 and at ``samples``
+    fixed random configurations, all of them (a structural redundancy, such as a planar four-bar closed by a point
+    constraint, and not a singular configuration): [(constraint, [codes])].  Which rows are named is a choice
+    (any row of a dependent set could go): those a greedy scan in row order finds dependent at the last sample.
+    A model whose J has full rank at any one of the samples has no structural redundancy: []."""
+    import numpy as np
+
+    from ..core.backend import Numeric
+    from ..mechanics.bound import bind
+
+    if not model.constraints:
+        return []
+    bound = bind(model, Numeric())
+    rng = np.random.default_rng(0)
+    dependent = set()
+    for q in [bound.tree.neutral] + [sample_configurations(model, rng) for _ in range(samples)]:
+        J = np.array(run(ROUTINES["constraint_jacobian"], bound, {"q": [float(x) for x in q]})[0], dtype=float)
+        J = J.reshape(model.constraint_rows, model.nv)
+        scale = max(float(np.abs(J).max()), 1e-300)
+        dependent, kept = set(), []
+        for r in range(J.shape[0]):
+            trial = kept + [J[r]]
+            if np.linalg.matrix_rank(np.array(trial), tol=tolerance * scale) > len(kept):
+                kept.append(J[r])
+            else:
+                dependent.add(r)
+        if not dependent:
+            return []
+    out, start = [], 0
+    for c in model.constraints:
+        codes = [code for r, code in enumerate(c.rows, start) if r in dependent]
+        if codes:
+            out.append((c, codes))
+        start += len(c.rows)
+    return out
+
+
+def regressor_problem(model) -> str | None:
+    """Why tau = Y pi does not hold for a model (the regressor is then omitted), or None."""
+    if elastic.is_elastic(model):
+        return "the elastic force C (q - q0) of (2.27) is in tau and not linear in the inertial parameters"
+    if any(b.added_mass is not None for b in model.bodies):
+        return "added masses (Prop. 2.8) act in tau and are not among the inertial parameters"
+    return None
+
+
+BASE_SEED = 0  # the random states of the base-parameter reduction
+BASE_RANK_TOLERANCE = "max(rows, columns) * 2.2e-16 * the largest singular value (numpy.linalg.matrix_rank's)"
+
+
+@functools.lru_cache(maxsize=8)
+def base_parameters(model) -> tuple:
+    """The base-parameter reduction at the default parameters: (independent columns of Y, beta, samples) such that
+    ``Y[:, dependent] = Y[:, independent] beta`` on every state, so that tau = Y_b pi_b with ``Y_b = Y[:, independent]``
+    and ``pi_b = pi[independent] + beta pi[dependent]``.  Found numerically as identification practice does: Y at
+    ``samples`` random states (seed :data:`BASE_SEED`: q uniform in [-pi, pi], qd and qdd standard normal) stacked,
+    its rank r with the tolerance of :data:`BASE_RANK_TOLERANCE`, and the first r pivots of a QR factorization
+    with column pivoting (Householder, largest remaining column first: Gautier's choice), listed in column
+    order; beta by least squares, entries below 1e-10 of the largest set to 0, the others rounded to 12 digits."""
+    import numpy as np
+
+    from ..core.backend import Numeric
+    from ..mechanics.bound import bind
+
+    n, P = regressor_shape(model)
+    samples = max(8, -(-4 * P // max(n, 1)))
+    rng = np.random.default_rng(BASE_SEED)
+    bound = bind(model, Numeric())
+    x = {"q": list(sample_configurations(model, rng, samples)), "qd": list(rng.normal(size=(n, samples))),
+         "qdd": list(rng.normal(size=(n, samples)))}
+    flat = run(ROUTINES["regressor"], bound, x)[0]
+    Y = np.stack([np.broadcast_to(np.asarray(v, dtype=float), (samples,)) for v in flat]).reshape(n, P, samples)
+    Y = Y.transpose(2, 0, 1).reshape(samples * n, P)
+    sv = np.linalg.svd(Y, compute_uv=False)
+    tol = sv[0] * max(Y.shape) * np.finfo(float).eps if sv.size else 0.0
+    rank = int((sv > tol).sum())
+    independent = sorted(pivoted_columns(Y)[:rank])
+    dependent = [j for j in range(P) if j not in set(independent)]
+    if rank and dependent:
+        beta = np.linalg.lstsq(Y[:, independent], Y[:, dependent], rcond=None)[0]
+    else:  # nothing to express, or nothing identifiable (a tree whose moving bodies do no work)
+        beta = np.zeros((rank, len(dependent)))
+    scale = max(float(np.abs(beta).max()), 1.0) if beta.size else 1.0
+    beta[np.abs(beta) < 1e-10 * scale] = 0.0
+    beta = np.vectorize(lambda v: float(f"{v:.12g}"))(beta) if beta.size else beta  # least squares' last digits
+    return tuple(independent), tuple(dependent), beta, samples
+
+
+def pivoted_columns(Y) -> list:
+    """The column order of a Householder QR factorization of Y with column pivoting (at each step the column of
+    largest norm in the remaining rows first): its first r entries are r well-conditioned independent columns."""
+    import numpy as np
+
+    R = np.array(Y, dtype=float, copy=True)
+    rows, cols = R.shape
+    order = list(range(cols))
+    for k in range(min(rows, cols)):
+        norms = np.einsum("ij,ij->j", R[k:, k:], R[k:, k:])
+        j = k + int(np.argmax(norms))
+        R[:, [k, j]] = R[:, [j, k]]
+        order[k], order[j] = order[j], order[k]
+        x = R[k:, k]
+        alpha = -np.copysign(np.linalg.norm(x), x[0]) if x[0] != 0 else -np.linalg.norm(x)
+        v = x.copy()
+        v[0] -= alpha
+        vv = v @ v
+        if vv > 0:
+            R[k:, k:] -= np.outer(v, (2.0 / vv) * (v @ R[k:, k:]))
+    return order

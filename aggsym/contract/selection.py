@@ -1,0 +1,65 @@
+"""Which routines a model emits: those left out and why (:func:`omitted_routines`: the regressor where tau = Y pi
+does not hold, the routines that need a regular A(q) where it is singular) and the ``--routines`` choice
+(:func:`select_routines`)."""
+from __future__ import annotations
+
+from .analyses import massless_coordinates, regressor_problem
+from .registry import ROUTINES, routines_for
+
+
+def omitted_routines(model) -> dict:
+    """{role: reason} of the routines left out: the regressor where tau = Y pi does not hold
+    (:func:`regressor_problem`), and, when A(q) is singular at the default parameters (a coordinate that moves no
+    mass, e.g. a massless finger joint), forward dynamics, A^-1 and the factors, undefined there (A, b, g, inverse
+    dynamics and the joint wrenches stay defined and are emitted)."""
+    out = {}
+    wanted = {r.role for r in routines_for(model)}
+    problem = regressor_problem(model)
+    if problem:
+        out.update({role: f"tau = Y pi does not hold: {problem}" for role in ("regressor", "base_regressor")
+                    if role in wanted})
+    if not any(ROUTINES[role].regular for role in wanted):
+        return out
+    zero, singular = massless_coordinates(model)
+    if not singular:
+        return out
+    names = ", ".join(f"{model.coordinates[i].name} (joint {model.coordinates[i].joint!r})" for i in zero)
+    reason = (f"A(q) is singular at the default parameters: {'coordinate(s) ' + names + ' move(s) no mass' if zero else 'its smallest eigenvalue is zero'}; "
+              f"--armature VALUE adds a rotor inertia on every coordinate")
+    return {**out, **{role: reason for role in wanted if ROUTINES[role].regular}}
+
+
+def select_routines(model, names):
+    """The model emitting the named routines (``--routines``: names of the contract, ``default`` for the routines
+    emitted when none are named, ``all`` for every routine that applies); an unknown name, or one that does not
+    apply to the model, is an error that lists the choices."""
+    import dataclasses
+
+    from ..errors import AggsymError
+
+    chosen = []
+    for name in names:
+        if name == "all":
+            picked = [r.role for r in ROUTINES.values() if r.exists_for(model)]
+        elif name == "default":
+            picked = [r.role for r in ROUTINES.values() if r.exists_for(model) and not r.on_request]
+        elif name not in ROUTINES:
+            shown = name if len(name) <= 80 else name[:80] + "..."
+            raise AggsymError(f"{model.source}: --routines: no routine named {shown!r} (the routines are "
+                              f"{', '.join(ROUTINES)}; or 'default', 'all')")
+        elif not ROUTINES[name].exists_for(model):
+            raise AggsymError(f"{model.source}: --routines: {name!r} does not apply to this model (the ones that do: "
+                              f"{', '.join(r.role for r in ROUTINES.values() if r.exists_for(model))})")
+        else:
+            picked = [name]
+        chosen.extend(role for role in picked if role not in chosen)
+    if not chosen:
+        raise AggsymError(f"{model.source}: --routines: no routine named")
+    selected = dataclasses.replace(model, routines=tuple(chosen))
+    named = [name for name in names if name in ROUTINES]  # named one by one, not through 'all' or 'default'
+    if named:
+        omitted = omitted_routines(selected)
+        for name in named:
+            if name in omitted:
+                raise AggsymError(f"{model.source}: --routines: {name!r} is left out for this model: {omitted[name]}")
+    return selected
