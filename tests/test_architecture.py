@@ -56,8 +56,10 @@ def imports(path: Path, root: Path = PACKAGE) -> set:
 
 
 def graph(root: Path) -> dict:
-    """module -> the modules of the same package it imports (not names inside them, never itself)."""
-    out = {module_name(p, root): imports(p, root) for p in root.rglob("*.py")}
+    """module -> the modules of the same package it imports (not names inside them, never itself); what the
+    benchmark writes under ``build/`` (generated modules, git-ignored) is not part of the package."""
+    out = {module_name(p, root): imports(p, root) for p in root.rglob("*.py")
+           if "build" not in p.relative_to(root).parts}
     return {name: {m for m in targets if m in out and m != name} for name, targets in out.items()}
 
 
