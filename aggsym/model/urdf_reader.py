@@ -53,12 +53,12 @@ The mapping
   identifier are an error naming both.  The model name is the robot's.  Gravity is (0, 0, -9.81) in the root
   frame.  No parameters: every number is folded.  Visuals, collisions, meshes, transmissions and gazebo tags are
   skipped unread.
-* ``model.meta``: ``mimic`` (above), ``links`` (each URDF link's body, merged links included), ``link_frames``
-  (each link's body and placement there, (body, R, t) with x_body = R x_link + t, for constraints on links and
-  for the frame routines), ``leaf_links`` (the links without a child link: the frames emitted by default),
-  ``link_parts`` (each link's own mass, centre of mass and inertia about it, in its body's axes, for
-  :mod:`aggsym.model.inertials`),
-  ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`;
+* ``model.links`` (:class:`~aggsym.model.types.Links`, kind ``"link"``): each URDF link, merged links included,
+  as a :class:`~aggsym.model.types.LinkFrame`: its body and placement there (x_body = R x_link + t, for
+  constraints on links and for the frame routines) and its own mass, centre of mass and inertia about it in its
+  body's axes (for :mod:`aggsym.model.inertials`); its ``leaves`` are the links without a child link (the frames
+  emitted by default).
+* ``model.meta``: ``mimic`` (above), ``links`` (each URDF link's body, merged links included), ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`;
   ``snapped_angles`` (only when ``snap_angles`` moved an angle of the file: the tolerance and each angle moved,
   where, its value and the multiple of pi/2 taken; the manifest repeats it).
 
@@ -98,7 +98,8 @@ import sympy as sp
 from ..errors import ModelError, ModelWarning
 from .expressions import check_identifier
 from .frames import default_frames
-from .types import WORLD, Body, Coordinate, Coupling, JointDynamics, JointLimits, Model, Pair, Parameter
+from .types import (WORLD, Body, Coordinate, Coupling, JointDynamics, JointLimits, LinkFrame, Links, Model, Pair,
+                    Parameter)
 from .link_numbers import (IDENTITY, ORIGIN, ROUND_OFF, add, combine, exact, matvec, product, round_off, snapped,  # noqa: F401
                            transpose, turn)
 from .link_numbers import rotation_matrix as _matrix
@@ -680,15 +681,15 @@ class _Reader:
         couplings = tuple(Coupling(coordinate_of[j.name], coordinate_of[j.mimic["master"]],
                                    float(j.mimic["multiplier"]), float(j.mimic["offset"]))
                           for j in joints.values() if j.mimic is not None) if self.mimic == "couple" else ()
-        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY,
+        links = Links("link", tuple(LinkFrame(link, rows[p.body]["name"], p.R, p.t, link_parts.get(link))
+                                    for link, p in place.items()),
+                      tuple(link for link in place if not children[link]))
+        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY, links=links,
                       parameters=friction_parameters(c for row in rows for c in row["pair"].coordinates),
                       source=str(self.file), description=f"URDF robot {robot_name!r}",
                       meta={"mimic": [{k: j.mimic[k] for k in ("joint", "master", "multiplier", "offset")}
                                       for j in joints.values() if j.mimic is not None],
                             "links": {link: rows[p.body]["name"] for link, p in place.items()},
-                            "link_frames": {link: (rows[p.body]["name"], p.R, p.t) for link, p in place.items()},
-                            "leaf_links": [link for link in place if not children[link]],
-                            "link_parts": link_parts,
                             "floating_base": self.floating_base, "warnings": list(self.warnings),
                             **({"snapped_angles": {"tolerance": self.snap_angles, "angles": list(self.snapped)}}
                                if self.snapped else {})})
