@@ -54,8 +54,8 @@ import yaml
 from ..errors import ModelError
 from .expressions import ExpressionError, check_identifier, check_supported, evaluate, parse_value
 from .frames import MAX_FRAMES, default_frames
-from .types import (CONSTRAINT_KINDS, COORDINATE_CODES, TIME, WORLD, Body, Constraint, Coordinate, Frame, Inertial, Links,
-                    Model, Parameter, Pair)
+from .types import (CONSTRAINT_KINDS, COORDINATE_CODES, TIME, WORLD, Body, Constraint, Coordinate, Frame, Inertial,
+                    Links, Model, Parameter, Pair)
 from .validate import inertia_problem, mass_problem, order_tree, support_problem
 
 TOP_KEYS = {"name", "description", "source", "notes", "gravity", "parameters", "bodies", "contacts", "loops",
