@@ -116,6 +116,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def _load(args):
     from .model import load
+    from .model.readers import check_cli_options
 
     path = Path(args.model)
     options = {"floating_base": args.floating_base} if args.floating_base else {}
@@ -123,10 +124,12 @@ def _load(args):
         options["mimic"] = args.mimic
     if args.snap_angles:
         options["snap_angles"] = args.snap_angles
-    if (options or args.constraints or args.support) and path.suffix.lower() != ".urdf":
-        raise AggsymError(f"{path}: --floating-base, --mimic, --snap-angles, --constraints and --support apply to URDF "
-                          f"models only "
-                          f"(a YAML model lists its constraints and support itself)")
+    given = [flag for flag, value in (("--floating-base", args.floating_base), ("--mimic", "mimic" in options),
+                                      ("--snap-angles", args.snap_angles), ("--constraints", args.constraints),
+                                      ("--support", args.support),
+                                      ("--inertial-parameters", args.inertial_parameters is not None),
+                                      ("--payload", args.payload is not None)) if value]
+    check_cli_options(path, given)  # the reader's name and the option it does not accept
     if args.support and not args.floating_base:
         raise AggsymError(f"{path}: --support needs --floating-base (the support is the free root)")
     if args.support and args.floating_base == "quaternion":

@@ -107,7 +107,7 @@ def test_every_link_of_random_trees_equals_pinocchio(seed, floating, tmp_path):
     path.write_text(random_urdf(seed))
     model = aggsym.load(path, floating_base=floating)
     model = select_frames(model, list(catalog(model)))  # every link, merged ones included
-    assert len(model.frames) == len(model.meta["link_frames"])
+    assert len(model.frames) == len(model.links.frames)
     pm = pinocchio_model(path, floating_base=floating)
     worst = worst_error(model, NumericTwin(model), pm, np.random.default_rng(seed), states=2)
     assert max(worst.values()) < TOLERANCE, (seed, floating, worst)

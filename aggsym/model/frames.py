@@ -31,11 +31,9 @@ def _link_frame(link: str, body: str, R, t) -> Frame:
 
 
 def catalog(model: Model) -> dict:
-    """{name: Frame}: every frame the model offers (URDF: its links; YAML: its bodies, then its ``frames:``)."""
-    links = model.meta.get("link_frames")
-    if links is not None:
-        return {link: _link_frame(link, body, R, t) for link, (body, R, t) in links.items()}
-    out = {b.name: _link_frame(b.name, b.name, None, None) for b in model.bodies}
+    """{name: Frame}: every frame the model offers: its links (URDF: the file's links; YAML: its bodies), then a
+    YAML model's ``frames:``."""
+    out = {f.name: _link_frame(f.name, f.body, f.rotation, f.translation) for f in model.link_table.frames}
     for f in model.meta.get("declared_frames", ()):
         out[f.name] = f
     return out
@@ -45,11 +43,7 @@ def default_frames(model: Model) -> tuple:
     """The frames emitted when none are named: the childless links (URDF), or the childless bodies and then the
     ``frames:`` list (YAML), in tree order."""
     offered = catalog(model)
-    leaves = model.meta.get("leaf_links")
-    if leaves is None:
-        parents = {b.parent for b in model.bodies}
-        leaves = [b.name for b in model.bodies if b.name not in parents]
-        leaves += [f.name for f in model.meta.get("declared_frames", ())]
+    leaves = list(model.link_table.leaves) + [f.name for f in model.meta.get("declared_frames", ())]
     return tuple(offered[name] for name in leaves)
 
 
@@ -65,7 +59,7 @@ def select_frames(model: Model, names) -> Model:
         if name not in offered:
             some = ", ".join(repr(n) for n in list(offered)[:8]) + (", ..." if len(offered) > 8 else "")
             shown = name if len(name) <= 80 else name[:80] + "..."
-            kind = "link" if "link_frames" in model.meta else "body or frame"
+            kind = "link" if model.link_table.from_file else "body or frame"
             raise AggsymError(f"{model.source}: --frames: no {kind} named {shown!r} (the model has {some})")
         if name in seen:
             raise AggsymError(f"{model.source}: --frames: {name!r} is named twice")

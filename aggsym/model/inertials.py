@@ -82,10 +82,11 @@ def mises_in_frame(m, h, theta, R, o) -> tuple:
 
 def _values(model: Model, link: str) -> list:
     """The link's own ten parameters at their URDF values (about its frame's origin, link axes)."""
-    part = model.meta["link_parts"].get(link)
+    frame = model.link_table.by_name[link]
+    part = frame.part
     if part is None:
         return [0.0] * 10
-    _, R, t = model.meta["link_frames"][link]
+    R, t = frame.rotation, frame.translation
     R, t = sp.Matrix(R), sp.Matrix(t)
     m, h_link, I_link = mises_in_frame(*_origin_form(*part), R, t)  # from the body origin back to the link frame
     return [float(m)] + [float(h_link[i]) for i in range(3)] + [float(I_link[i, j]) for i, j in _ENTRIES]
@@ -94,13 +95,14 @@ def _values(model: Model, link: str) -> list:
 def with_inertial_parameters(model: Model, links=(), payload: str | None = None) -> Model:
     """The model with the named links' inertial data (``links``: names, or ``["all"]`` for every link with an
     ``<inertial>``) and a payload on ``payload`` as runtime parameters (see the module's text)."""
-    frames = model.meta.get("link_frames")
-    if frames is None:
+    table = model.link_table
+    if not table.from_file:
         raise AggsymError(f"{model.source}: --inertial-parameters and --payload apply to URDF robots (a YAML model "
                           f"writes its masses and inertias as expressions in its parameters)")
     links = list(links)
     if links == ["all"]:
-        links = [link for link in frames if link in model.meta["link_parts"]]
+        links = [f.name for f in table.frames if f.part is not None]
+    frames = {f.name: (f.body, f.rotation, f.translation) for f in table.frames}
     for name in links + ([payload] if payload is not None else []):
         if name not in frames:
             shown = name if len(name) <= 80 else name[:80] + "..."
@@ -148,7 +150,7 @@ def with_inertial_parameters(model: Model, links=(), payload: str | None = None)
 
     for link in links:
         k, part = parametrized(link, symbols(lambda n, link=link: f"{n}_{_identifier(link)}", _values(model, link)))
-        own = model.meta["link_parts"].get(link)
+        own = table.by_name[link].part
         if own is not None:
             add(k, _origin_form(*own), -1)
         add(k, part)

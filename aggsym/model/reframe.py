@@ -68,7 +68,7 @@ __all__ = ["reframe", "eligible"]
 def eligible(model: Model) -> bool:
     """Whether :func:`reframe` applies: a URDF model (its pairs hold one coordinate each below the root), numeric
     constant configurations, no constraints, support, couplings, prescribed motions or added masses."""
-    if "link_frames" not in model.meta or model.constraints or model.support or model.couplings:
+    if not model.link_table.from_file or model.constraints or model.support or model.couplings:
         return False
     for k, b in enumerate(model.bodies):
         if b.pair.prescribed or b.added_mass is not None:

@@ -291,6 +291,57 @@ class Frame:
 
 
 @dataclass(frozen=True)
+class LinkFrame:
+    """A link of the file (a URDF ``<link>``; for a YAML model a body) as a frame fixed on the body it belongs to.
+
+    Conventions: a point with coordinates x_link in the link frame has the coordinates x_body = R x_link + t in its
+    body's frame, R = ``rotation`` (3x3, rows, exact or float numbers; None: the body's axes, R = E) and
+    t = ``translation`` (3 numbers, body axes; None: the body's origin).  ``part`` is the link's own inertial
+    contribution ``(mass, com, inertia about com)`` with com and inertia in the body's axes (what a reader adds to
+    the body for this link), None when the link has no inertial data of its own (or, YAML, when the body's are
+    expressions of the parameters)."""
+
+    name: str  # the link's name in its file (a URDF link name; a YAML body's name)
+    body: str  # the body it was merged into
+    rotation: tuple | None = None  # R: x_body = R x_link + t
+    translation: tuple | None = None  # t
+    part: tuple | None = None  # (mass, com, inertia about com), body axes
+
+
+@dataclass(frozen=True)
+class Links:
+    """The links a model offers to the options that name links (``--frames``, ``--constraints``,
+    ``--inertial-parameters``, ``--payload``) and to reframing.
+
+    ``kind``: ``"link"`` when the file has links of its own that need not be bodies (URDF: fixed joints merge
+    links into one body; reframing, inertial parameters and payloads apply), ``"body"`` when each body is its own
+    link at its origin, in its axes (YAML, and models built without a reader: :meth:`of_bodies`).  ``frames``:
+    one :class:`LinkFrame` per link in tree order (parents first); ``leaves``: the names of the links without a
+    child link, in tree order (the frames emitted by default)."""
+
+    kind: str
+    frames: tuple = ()  # LinkFrame, in tree order
+    leaves: tuple = ()  # names
+
+    @functools.cached_property
+    def by_name(self) -> dict:
+        """{name: LinkFrame}, in tree order."""
+        return {f.name: f for f in self.frames}
+
+    @property
+    def from_file(self) -> bool:
+        """Whether the links are the file's own (URDF), not the bodies."""
+        return self.kind == "link"
+
+    @classmethod
+    def of_bodies(cls, bodies) -> "Links":
+        """Each body its own link, at its origin in its axes; the leaves are the bodies without a child body."""
+        parents = {b.parent for b in bodies}
+        return cls("body", tuple(LinkFrame(b.name, b.name) for b in bodies),
+                   tuple(b.name for b in bodies if b.name not in parents))
+
+
+@dataclass(frozen=True)
 class Model:
     """A tree of bodies, parents listed before children.
 
@@ -314,6 +365,12 @@ class Model:
     frames: tuple = ()  # Frame: the frames of the frame routines, in output order (see aggsym.model.frames)
     routines: tuple | None = None  # the routines to emit (--routines), None: the contract's default set
     regularization: object = 0  # epsilon: constrained forward dynamics solves (J A^-1 J^T + epsilon E) lambda = ...
+    links: Links | None = None  # the file's links (see Links); None: each body is its own link (see link_table)
+
+    @property
+    def link_table(self) -> Links:
+        """The model's :class:`Links`: those its reader set, or each body its own link."""
+        return self.links if self.links is not None else Links.of_bodies(self.bodies)
 
     @property
     def constraint_rows(self) -> int:

@@ -53,12 +53,12 @@ The mapping
   identifier are an error naming both.  The model name is the robot's.  Gravity is (0, 0, -9.81) in the root
   frame.  No parameters: every number is folded.  Visuals, collisions, meshes, transmissions and gazebo tags are
   skipped unread.
-* ``model.meta``: ``mimic`` (above), ``links`` (each URDF link's body, merged links included), ``link_frames``
-  (each link's body and placement there, (body, R, t) with x_body = R x_link + t, for constraints on links and
-  for the frame routines), ``leaf_links`` (the links without a child link: the frames emitted by default),
-  ``link_parts`` (each link's own mass, centre of mass and inertia about it, in its body's axes, for
-  :mod:`aggsym.model.inertials`),
-  ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`;
+* ``model.links`` (:class:`~aggsym.model.types.Links`, kind ``"link"``): each URDF link, merged links included,
+  as a :class:`~aggsym.model.types.LinkFrame`: its body and placement there (x_body = R x_link + t, for
+  constraints on links and for the frame routines) and its own mass, centre of mass and inertia about it in its
+  body's axes (for :mod:`aggsym.model.inertials`); its ``leaves`` are the links without a child link (the frames
+  emitted by default).
+* ``model.meta``: ``mimic`` (above), ``links`` (each URDF link's body, merged links included), ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`;
   ``snapped_angles`` (only when ``snap_angles`` moved an angle of the file: the tolerance and each angle moved,
   where, its value and the multiple of pi/2 taken; the manifest repeats it).
 
@@ -96,7 +96,12 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ModelError, ModelWarning
-from .expressions import check_identifier
+from .builder import (ANGLE_ROUND_OFF, FLOATING, FREE_FLYER, FREE_FLYER_POSITIONS, MAX_ROTATIONS, Names,  # noqa: F401
+                      floating_root, link_table)
+from .builder import Place as _Place, align as _align, angle as _angle, fold as _fold  # noqa: F401
+from .builder import identifier as _identifier, inverse as _inverse, mangle as _mangle  # noqa: F401
+from .builder import quaternion_rotations as _quaternion_rotations, right_angle as _right_angle  # noqa: F401
+from .builder import rotations as _rotations, rpy as _rpy, tidy as _tidy  # noqa: F401
 from .frames import default_frames
 from .types import WORLD, Body, Coordinate, Coupling, JointDynamics, JointLimits, Model, Pair, Parameter
 from .link_numbers import (IDENTITY, ORIGIN, ROUND_OFF, add, combine, exact, matvec, product, round_off, snapped,  # noqa: F401
@@ -114,164 +119,13 @@ UNSUPPORTED = {
     "floating": ("floating joints inside the tree are not supported (revolute, continuous, prismatic and fixed "
                  "are); for a free root use floating_base=True"),
 }
-FLOATING = (("base_x", "o1"), ("base_y", "o2"), ("base_z", "o3"), ("base_rx", "theta4"), ("base_ry", "theta5"),
-            ("base_rz", "theta6"))
-FREE_FLYER = (("base_vx", "o1"), ("base_vy", "o2"), ("base_vz", "o3"), ("base_wx", "theta4"), ("base_wy", "theta5"),
-              ("base_wz", "theta6"))  # velocities of the quaternion base
-FREE_FLYER_POSITIONS = ("base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
 FLOATING_BASES = (False, True, "euler", "quaternion")
 MIMIC_OPTIONS = ("independent", "couple")
 ROOT_PAIR = "root_joint"
 _AXIS_TOL = 1e-12
 
 MAX_BYTES = 64 * 2 ** 20  # the largest URDF read (example-robot-data's largest is under 1 MiB)
-MAX_ROTATIONS = 9  # elementary rotations a chain of fixed joints may pile up before they are folded into one rpy
 
-
-def _inverse(rotation) -> list:
-    return [(axis, -angle) for axis, angle in reversed(rotation)]
-
-
-def _tidy(rotation) -> list:
-    """Merge neighbouring rotations about one axis and drop rotations by multiples of 2 pi."""
-    out: list = []
-    for axis, angle in rotation:
-        if out and out[-1][0] == axis:
-            angle = out.pop()[1] + angle
-        if not (angle.is_zero or (not isinstance(angle, sp.Float) and (angle / (2 * sp.pi)).is_integer)):
-            out.append((axis, angle))  # (a float from the file is never a non-zero multiple of 2 pi)
-    return out
-
-
-ANGLE_ROUND_OFF = 1e-15  # rad (times k for k pi/2): an angle of the file this close to a multiple of pi/2 is that
-# multiple written to double precision (1.5707963267948966, 1.570796326794897, 3.141592653589793; a few units in the
-# last place): it is taken as the exact multiple, the change being round-off.  Nothing farther is moved: 1.57079632679 (5e-12 off) or 1.5708 stay what they are, unless
-# the user asks for it (``snap_angles``, recorded in the manifest).
-
-
-def _right_angle(value: float, tolerance: float):
-    """k when ``value`` is within ``tolerance`` (at least the round-off) of k pi/2, else None."""
-    k = round(float(value) / (math.pi / 2))
-    return k if abs(float(value) - k * math.pi / 2) <= max(tolerance, ANGLE_ROUND_OFF * max(1, abs(k))) else None
-
-
-def _angle(value: float, snap: float = 0.0) -> sp.Expr:
-    """An angle from the file: the exact multiple of pi/2 within round-off of it (or within ``snap`` when the user
-    asked for :func:`load_urdf`'s ``snap_angles``), so that the zeros and ones of the right-angle rotation fold in
-    the generated code; otherwise the file's float, as Pinocchio reads it."""
-    k = _right_angle(value, snap)
-    if k is not None:
-        return sp.Integer(k) * sp.pi / 2
-    return sp.Float(value)  # (an integer angle kept exact would leave sin(7) unevaluated, growing along chains)
-
-
-def _rpy(rpy, snap: float = 0.0) -> list:
-    """URDF roll-pitch-yaw as elementary rotations: R = Rz(y) Ry(p) Rx(r)."""
-    r, p, y = rpy
-    return _tidy([(3, _angle(y, snap)), (2, _angle(p, snap)), (1, _angle(r, snap))])
-
-
-def _matrix_rpy(R) -> tuple:
-    """roll, pitch, yaw of a rotation matrix, R = Rz(yaw) Ry(pitch) Rx(roll) (ill-conditioned near pitch = +-pi/2:
-    :func:`_rotations` avoids that)."""
-    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
-    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
-
-
-# right-angle turns P (exact) with P e1 = e_j, as elementary rotations, and their matrices
-_TURNS = ((), ((3, sp.pi / 2),), ((2, -sp.pi / 2),))
-_TURN_MATRICES = (np.eye(3), np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]), np.array([[0.0, 0, -1], [0, 1, 0], [1, 0, 0]]))
-
-
-def _rotations(R) -> list:
-    """A rotation matrix (floats) as elementary rotations, exactly to round-off: roll-pitch-yaw of R P and then
-    P^T, where the right-angle turn P (exact) takes e1 to the axis e_j whose entry of R's last row is the smallest,
-    so that |sin(pitch)| <= 1/sqrt(3), far from the gimbal lock where roll and yaw lose their digits (P = I unless
-    |sin(pitch)| would exceed 0.99)."""
-    j = int(np.argmin(np.abs(R[2]))) if abs(R[2, 0]) > 0.99 else 0
-    rpy = _rpy(_matrix_rpy(R @ _TURN_MATRICES[j]))
-    return _tidy(rpy + [(axis, -angle) for axis, angle in reversed(_TURNS[j])])
-
-
-def _quaternion_rotations(x, y, z, w) -> list:
-    """A unit quaternion (x, y, z, w) as elementary rotations (:func:`_rotations`)."""
-    return _rotations(np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ]))
-
-
-def _fold(rotation: list) -> list:
-    """A product of elementary rotations folded into one roll-pitch-yaw (3 rotations, in floats; for a long chain of
-    fixed joints, whose rotations would otherwise pile up)."""
-    R = np.eye(3)
-    for axis, angle in rotation:
-        c, s = math.cos(float(angle)), math.sin(float(angle))
-        E = {1: [[1, 0, 0], [0, c, -s], [0, s, c]], 2: [[c, 0, s], [0, 1, 0], [-s, 0, c]],
-             3: [[c, -s, 0], [s, c, 0], [0, 0, 1]]}[axis]
-        R = R @ np.array(E)
-    return _rotations(R)
-
-
-def _align(axis) -> tuple:
-    """(R_a as elementary rotations, 0-based index i) with R_a e_i = axis, exact for +-x, +-y, +-z."""
-    nonzero = [i for i in range(3) if axis[i] != 0.0]
-    if len(nonzero) == 1:
-        i = nonzero[0]
-        if axis[i] > 0:
-            return [], i
-        return [(3 if i == 0 else 1, sp.pi)], i  # a half turn about an axis orthogonal to e_i
-    theta = math.atan2(math.hypot(axis[0], axis[1]), axis[2])
-    phi = math.atan2(axis[1], axis[0])
-    return _tidy([(3, sp.Float(phi)), (2, sp.Float(theta))]), 2
-
-
-def _mangle(name: str, prefix: str) -> str:
-    """``name`` made an identifier (letters, digits, _, not reserved), deterministically: every other character
-    becomes ``_``, a name not starting with a letter gets ``prefix_``, a reserved word a trailing ``_``."""
-    s = re.sub(r"[^A-Za-z0-9_]", "_", name)
-    if not s or not s[0].isalpha():
-        s = f"{prefix}_{s}" if s else prefix
-    if check_identifier(s) is not None:
-        s += "_"
-    return s
-
-
-def _identifier(name: str, used: set, prefix: str) -> str:
-    """``name`` made a unique identifier: :func:`_mangle`, then ``_2``, ``_3``, ... while taken (for the names the
-    reader makes itself)."""
-    s = _mangle(name, prefix)
-    base, k = s, 2
-    while s in used:
-        s, k = f"{base}_{k}", k + 1
-    used.add(s)
-    return s
-
-
-class _Names:
-    """Identifiers made from a file's names: two distinct names never become one identifier (an error names both)."""
-
-    def __init__(self, reader: "_Reader", kind: str, prefix: str):
-        self.reader, self.kind, self.prefix = reader, kind, prefix
-        self.taken: dict[str, tuple] = {}  # identifier -> (original name, element or None for the reader's own)
-
-    def own(self, name: str) -> str:
-        """A name the reader makes (the floating base's coordinates): taken as is."""
-        self.taken[name] = (name, None)
-        return name
-
-    def claim(self, name: str, el: _Element) -> str:
-        s = _mangle(name, self.prefix)
-        if s in self.taken:
-            first, first_el = self.taken[s]
-            if first_el is None:
-                self.reader.fail(el, f"{self.kind} name {name!r} becomes the identifier {s!r}, which the floating "
-                                     f"base's coordinate {first!r} has; rename the {self.kind}")
-            self.reader.fail(el, f"{self.kind} names {first!r} (line {first_el.line}) and {name!r} both become the "
-                                 f"identifier {s!r} in the generated code; rename one of them")
-        self.taken[s] = (name, el)
-        return s
 
 
 @dataclass
@@ -299,16 +153,6 @@ class _Joint:
     mimic: dict | None
     dynamics: JointDynamics = JointDynamics()
     limits: JointLimits = JointLimits()
-
-
-@dataclass
-class _Place:
-    """Where a link sits in its body: x_body = R x_link + t, R given as elementary rotations."""
-
-    body: int
-    rotation: list
-    R: tuple  # 3x3, rows
-    t: tuple
 
 
 class _Reader:
@@ -609,8 +453,8 @@ class _Reader:
 
     # the model ------------------------------------------------------------------------------------------
     def build(self, robot_name, root, links, link_el, joints, children) -> Model:
-        bodies_names = _Names(self, "link", "link")
-        coordinate_names = _Names(self, "joint", "q")
+        bodies_names = Names(self.fail, "link", "link")
+        coordinate_names = Names(self.fail, "joint", "q")
         pair_names = set(joints)
         rows = []  # per body: dict with name, parent, pair, link, rotation, parts (inertial contributions)
         place: dict[str, _Place] = {}
@@ -629,17 +473,9 @@ class _Reader:
             link_parts[link] = rows[where.body]["parts"][-1]
 
         root_pair_name = _identifier(ROOT_PAIR, pair_names, "joint")
-        positions = ()
-        if self.floating_base == "quaternion":
-            coords = tuple(Coordinate(coordinate_names.own(n), code, root_pair_name) for n, code in FREE_FLYER)
-            positions = tuple(coordinate_names.own(n) for n in FREE_FLYER_POSITIONS)
-        elif self.floating_base:
-            coords = tuple(Coordinate(coordinate_names.own(n), code, root_pair_name) for n, code in FLOATING)
-        else:
-            coords = ()
-        zero = (sp.Integer(0),) * 3
+        root_pair = floating_root(self.floating_base, coordinate_names, root_pair_name)
         rows.append({"name": bodies_names.claim(root, link_el[root]), "parent": WORLD, "link": root,
-                     "pair": Pair(root_pair_name, zero, (), coords, positions=positions), "link_rotation": None,
+                     "pair": root_pair, "link_rotation": None,
                      "parts": []})
         place[root] = _Place(0, [], IDENTITY, ORIGIN)
         add_inertial(root, place[root])
@@ -680,15 +516,14 @@ class _Reader:
         couplings = tuple(Coupling(coordinate_of[j.name], coordinate_of[j.mimic["master"]],
                                    float(j.mimic["multiplier"]), float(j.mimic["offset"]))
                           for j in joints.values() if j.mimic is not None) if self.mimic == "couple" else ()
-        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY,
+        links = link_table(place, [row["name"] for row in rows], link_parts,
+                           (link for link in place if not children[link]))
+        model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY, links=links,
                       parameters=friction_parameters(c for row in rows for c in row["pair"].coordinates),
                       source=str(self.file), description=f"URDF robot {robot_name!r}",
                       meta={"mimic": [{k: j.mimic[k] for k in ("joint", "master", "multiplier", "offset")}
                                       for j in joints.values() if j.mimic is not None],
                             "links": {link: rows[p.body]["name"] for link, p in place.items()},
-                            "link_frames": {link: (rows[p.body]["name"], p.R, p.t) for link, p in place.items()},
-                            "leaf_links": [link for link in place if not children[link]],
-                            "link_parts": link_parts,
                             "floating_base": self.floating_base, "warnings": list(self.warnings),
                             **({"snapped_angles": {"tolerance": self.snap_angles, "angles": list(self.snapped)}}
                                if self.snapped else {})})

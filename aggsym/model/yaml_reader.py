@@ -55,7 +55,7 @@ from ..errors import ModelError
 from .expressions import ExpressionError, check_identifier, check_supported, evaluate, parse_value
 from .frames import MAX_FRAMES, default_frames
 from .types import (CONSTRAINT_KINDS, COORDINATE_CODES, TIME, WORLD, Body, Constraint, Coordinate, Frame, Inertial,
-                    Model, Parameter, Pair)
+                    Links, Model, Parameter, Pair)
 from .validate import inertia_problem, mass_problem, order_tree, support_problem
 
 TOP_KEYS = {"name", "description", "source", "notes", "gravity", "parameters", "bodies", "contacts", "loops",
@@ -331,13 +331,14 @@ class _Reader:
         for i, g in enumerate(gravity):
             self.number(g, ("gravity", i))
         bodies = self.bodies(top["bodies"])
-        frames = {b.name: (b.name, None, None) for b in bodies}
+        links = Links.of_bodies(bodies)  # each body is its own link, at its origin in its axes
+        frames = {f.name: (f.body, f.rotation, f.translation) for f in links.frames}
         time_dependent = any(b.pair.prescribed for b in bodies)
         constraints = self.constraints(top.get("constraints", []), frames, time_dependent)
         stabilization = self.stabilization(top.get("stabilization"), constraints)
         model = Model(name=name, bodies=bodies, gravity=gravity, parameters=parameters, source=str(self.file),
                       description=description.strip(), constraints=constraints, stabilization=stabilization,
-                      regularization=self.regularization(top.get("regularization"), constraints),
+                      regularization=self.regularization(top.get("regularization"), constraints), links=links,
                       meta={"declared_frames": self.frames(top.get("frames", []), bodies)})
         model = dataclasses.replace(model, frames=default_frames(model))
         if "support" in top:
@@ -879,9 +880,7 @@ def load_constraints(path, model: Model) -> Model:
     top = reader.mapping(reader.doc.root, (), SIDE_FILE_KEYS, required=("constraints",))
     if model.couplings:
         reader.fail(("constraints",), "constraints on a model with coupled (mimic) coordinates are not supported yet")
-    frames = model.meta.get("link_frames")
-    if frames is None:
-        frames = {b.name: (b.name, None, None) for b in model.bodies}
+    frames = {f.name: (f.body, f.rotation, f.translation) for f in model.link_table.frames}
     constraints = reader.constraints(top["constraints"], frames, model.time_dependent)
     stabilization = reader.stabilization(top.get("stabilization"), constraints)
     return dataclasses.replace(model, constraints=constraints, stabilization=stabilization,

@@ -1,0 +1,219 @@
+"""The format-neutral tree builder under the readers: what a reader of a tree of links and joints (URDF; MJCF,
+SDF later) needs beside parsing its file.
+
+* Rotations as elementary rotations (axis 1..3, angle) in order of application: :func:`tidy` (merge neighbours about
+  one axis, drop multiples of 2 pi), :func:`inverse`, :func:`rpy` (roll-pitch-yaw, R = Rz(yaw) Ry(pitch) Rx(roll),
+  angles within round-off of a multiple of pi/2 taken as that multiple: :func:`angle`), :func:`rotations` (a
+  rotation matrix of floats, away from the gimbal lock), :func:`quaternion_rotations`, :func:`fold` (a long product
+  folded into one roll-pitch-yaw: chains of merged fixed joints, beyond :data:`MAX_ROTATIONS`).
+* Axes: :func:`align` gives the constant rotation R_a with R_a e_i = axis (exact for +-x, +-y, +-z), so that a joint
+  about or along any axis is the book's elementary motion theta_(4+i) or o_(1+i) after it (1.24)-(1.27).
+* Merging fixed joints: a merged link's :class:`Place` in its body (x_body = R x_link + t).
+* Names: :func:`mangle`, :func:`identifier` and :class:`Names` make a file's names C identifiers, two names never
+  becoming one.
+* Floating bases: :func:`floating_root` (the Euler pair :data:`FLOATING`, or the free-flyer :data:`FREE_FLYER` with
+  the positions :data:`FREE_FLYER_POSITIONS`), and :func:`link_table`: the model's :class:`~.types.Links`.
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+import sympy as sp
+
+from .expressions import check_identifier
+from .types import Coordinate, LinkFrame, Links, Pair
+
+FLOATING = (("base_x", "o1"), ("base_y", "o2"), ("base_z", "o3"), ("base_rx", "theta4"), ("base_ry", "theta5"),
+            ("base_rz", "theta6"))
+FREE_FLYER = (("base_vx", "o1"), ("base_vy", "o2"), ("base_vz", "o3"), ("base_wx", "theta4"), ("base_wy", "theta5"),
+              ("base_wz", "theta6"))  # velocities of the quaternion base
+FREE_FLYER_POSITIONS = ("base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
+MAX_ROTATIONS = 9  # elementary rotations a chain of fixed joints may pile up before they are folded into one rpy
+
+
+def inverse(rotation) -> list:
+    return [(axis, -angle) for axis, angle in reversed(rotation)]
+
+
+def tidy(rotation) -> list:
+    """Merge neighbouring rotations about one axis and drop rotations by multiples of 2 pi."""
+    out: list = []
+    for axis, angle in rotation:
+        if out and out[-1][0] == axis:
+            angle = out.pop()[1] + angle
+        if not (angle.is_zero or (not isinstance(angle, sp.Float) and (angle / (2 * sp.pi)).is_integer)):
+            out.append((axis, angle))  # (a float from the file is never a non-zero multiple of 2 pi)
+    return out
+
+
+ANGLE_ROUND_OFF = 1e-15  # rad (times k for k pi/2): an angle of the file this close to a multiple of pi/2 is that
+# multiple written to double precision (1.5707963267948966, 1.570796326794897, 3.141592653589793; a few units in the
+# last place): it is taken as the exact multiple, the change being round-off.  Nothing farther is moved: 1.57079632679 (5e-12 off) or 1.5708 stay what they are, unless
+# the user asks for it (``snap_angles``, recorded in the manifest).
+
+
+def right_angle(value: float, tolerance: float):
+    """k when ``value`` is within ``tolerance`` (at least the round-off) of k pi/2, else None."""
+    k = round(float(value) / (math.pi / 2))
+    return k if abs(float(value) - k * math.pi / 2) <= max(tolerance, ANGLE_ROUND_OFF * max(1, abs(k))) else None
+
+
+def angle(value: float, snap: float = 0.0) -> sp.Expr:
+    """An angle from the file: the exact multiple of pi/2 within round-off of it (or within ``snap`` when the user
+    asked for :func:`load_urdf`'s ``snap_angles``), so that the zeros and ones of the right-angle rotation fold in
+    the generated code; otherwise the file's float, as Pinocchio reads it."""
+    k = right_angle(value, snap)
+    if k is not None:
+        return sp.Integer(k) * sp.pi / 2
+    return sp.Float(value)  # (an integer angle kept exact would leave sin(7) unevaluated, growing along chains)
+
+
+def rpy(angles, snap: float = 0.0) -> list:
+    """URDF roll-pitch-yaw as elementary rotations: R = Rz(y) Ry(p) Rx(r)."""
+    r, p, y = angles
+    return tidy([(3, angle(y, snap)), (2, angle(p, snap)), (1, angle(r, snap))])
+
+
+def matrix_rpy(R) -> tuple:
+    """roll, pitch, yaw of a rotation matrix, R = Rz(yaw) Ry(pitch) Rx(roll) (ill-conditioned near pitch = +-pi/2:
+    :func:`rotations` avoids that)."""
+    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
+    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
+
+
+# right-angle turns P (exact) with P e1 = e_j, as elementary rotations, and their matrices
+_TURNS = ((), ((3, sp.pi / 2),), ((2, -sp.pi / 2),))
+_TURN_MATRICES = (np.eye(3), np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]), np.array([[0.0, 0, -1], [0, 1, 0], [1, 0, 0]]))
+
+
+def rotations(R) -> list:
+    """A rotation matrix (floats) as elementary rotations, exactly to round-off: roll-pitch-yaw of R P and then
+    P^T, where the right-angle turn P (exact) takes e1 to the axis e_j whose entry of R's last row is the smallest,
+    so that |sin(pitch)| <= 1/sqrt(3), far from the gimbal lock where roll and yaw lose their digits (P = I unless
+    |sin(pitch)| would exceed 0.99)."""
+    j = int(np.argmin(np.abs(R[2]))) if abs(R[2, 0]) > 0.99 else 0
+    turned = rpy(matrix_rpy(R @ _TURN_MATRICES[j]))
+    return tidy(turned + [(axis, -angle) for axis, angle in reversed(_TURNS[j])])
+
+
+def quaternion_rotations(x, y, z, w) -> list:
+    """A unit quaternion (x, y, z, w) as elementary rotations (:func:`rotations`)."""
+    return rotations(np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ]))
+
+
+def fold(rotation: list) -> list:
+    """A product of elementary rotations folded into one roll-pitch-yaw (3 rotations, in floats; for a long chain of
+    fixed joints, whose rotations would otherwise pile up)."""
+    R = np.eye(3)
+    for axis, angle in rotation:
+        c, s = math.cos(float(angle)), math.sin(float(angle))
+        E = {1: [[1, 0, 0], [0, c, -s], [0, s, c]], 2: [[c, 0, s], [0, 1, 0], [-s, 0, c]],
+             3: [[c, -s, 0], [s, c, 0], [0, 0, 1]]}[axis]
+        R = R @ np.array(E)
+    return rotations(R)
+
+
+def align(axis) -> tuple:
+    """(R_a as elementary rotations, 0-based index i) with R_a e_i = axis, exact for +-x, +-y, +-z."""
+    nonzero = [i for i in range(3) if axis[i] != 0.0]
+    if len(nonzero) == 1:
+        i = nonzero[0]
+        if axis[i] > 0:
+            return [], i
+        return [(3 if i == 0 else 1, sp.pi)], i  # a half turn about an axis orthogonal to e_i
+    theta = math.atan2(math.hypot(axis[0], axis[1]), axis[2])
+    phi = math.atan2(axis[1], axis[0])
+    return tidy([(3, sp.Float(phi)), (2, sp.Float(theta))]), 2
+
+
+def mangle(name: str, prefix: str) -> str:
+    """``name`` made an identifier (letters, digits, _, not reserved), deterministically: every other character
+    becomes ``_``, a name not starting with a letter gets ``prefix_``, a reserved word a trailing ``_``."""
+    s = re.sub(r"[^A-Za-z0-9_]", "_", name)
+    if not s or not s[0].isalpha():
+        s = f"{prefix}_{s}" if s else prefix
+    if check_identifier(s) is not None:
+        s += "_"
+    return s
+
+
+def identifier(name: str, used: set, prefix: str) -> str:
+    """``name`` made a unique identifier: :func:`mangle`, then ``_2``, ``_3``, ... while taken (for the names the
+    reader makes itself)."""
+    s = mangle(name, prefix)
+    base, k = s, 2
+    while s in used:
+        s, k = f"{base}_{k}", k + 1
+    used.add(s)
+    return s
+
+
+class Names:
+    """Identifiers made from a file's names: two distinct names never become one identifier (an error names both,
+    through ``fail(where, message)``; ``where`` is the reader's place of a name, with its ``line``)."""
+
+    def __init__(self, fail, kind: str, prefix: str):
+        self.fail, self.kind, self.prefix = fail, kind, prefix  # fail(where, message) raises the reader's error
+        self.taken: dict[str, tuple] = {}  # identifier -> (original name, element or None for the reader's own)
+
+    def own(self, name: str) -> str:
+        """A name the reader makes (the floating base's coordinates): taken as is."""
+        self.taken[name] = (name, None)
+        return name
+
+    def claim(self, name: str, el) -> str:
+        s = mangle(name, self.prefix)
+        if s in self.taken:
+            first, first_el = self.taken[s]
+            if first_el is None:
+                self.fail(el, f"{self.kind} name {name!r} becomes the identifier {s!r}, which the floating "
+                                     f"base's coordinate {first!r} has; rename the {self.kind}")
+            self.fail(el, f"{self.kind} names {first!r} (line {first_el.line}) and {name!r} both become the "
+                                 f"identifier {s!r} in the generated code; rename one of them")
+        self.taken[s] = (name, el)
+        return s
+
+
+@dataclass
+class Place:
+    """Where a link sits in its body: x_body = R x_link + t, R given as elementary rotations."""
+
+    body: int
+    rotation: list
+    R: tuple  # 3x3, rows
+    t: tuple
+
+
+def floating_root(kind, names: Names, pair_name: str) -> Pair:
+    """The pair of a tree's root with the world: none (``kind`` False: fixed base), the Euler pair o1 o2 o3 theta4
+    theta5 theta6 (True), or the free-flyer (``"quaternion"``: q holds the position and a unit quaternion, the
+    velocities the root's own (v, w)); its coordinates named by ``names`` (:data:`FLOATING`, :data:`FREE_FLYER`)."""
+    positions = ()
+    if kind == "quaternion":
+        coords = tuple(Coordinate(names.own(n), code, pair_name) for n, code in FREE_FLYER)
+        positions = tuple(names.own(n) for n in FREE_FLYER_POSITIONS)
+    elif kind:
+        coords = tuple(Coordinate(names.own(n), code, pair_name) for n, code in FLOATING)
+    else:
+        coords = ()
+    zero = (sp.Integer(0),) * 3
+    return Pair(pair_name, zero, (), coords, positions=positions)
+
+
+def link_table(place: dict, body_names: list, parts: dict, leaves) -> Links:
+    """The model's links (kind ``"link"``) from each link's :class:`Place` (in tree order), the bodies' names (by
+    index), each link's own inertial part and the links without a child link."""
+    return Links("link", tuple(LinkFrame(link, body_names[p.body], p.R, p.t, parts.get(link))
+                               for link, p in place.items()), tuple(leaves))
+
+
+__all__ = ["FLOATING", "FREE_FLYER", "FREE_FLYER_POSITIONS", "MAX_ROTATIONS", "ANGLE_ROUND_OFF", "Names", "Place",
+           "align", "angle", "floating_root", "fold", "identifier", "inverse", "link_table", "mangle", "matrix_rpy",
+           "quaternion_rotations", "right_angle", "rotations", "rpy", "tidy"]

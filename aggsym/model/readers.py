@@ -1,0 +1,121 @@
+"""The model readers, one registry: which reader takes a file, and which options it accepts.
+
+A reader is one module with a ``load(path, **options) -> Model`` and one :class:`Reader` entry in :data:`READERS`
+(or :func:`register`): its name, the suffixes it claims, the keyword options of its ``load`` and the command-line
+options it accepts beyond those every model takes (``--armature``, ``--frames``, ``--routines``, ``--name``).
+A suffix that several formats share (``.xml``: URDF, MJCF) is listed in ``sniffed``: the reader takes such a file
+only when its ``sniff`` accepts the file's first :data:`SNIFF_BYTES` bytes.  :func:`reader_for` chooses;
+:func:`aggsym.model.load` and the command line (``aggsym/cli.py``) consult it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from ..errors import ModelError
+
+SNIFF_BYTES = 4096  # what sniff sees of a file whose suffix is shared
+
+
+@dataclass(frozen=True)
+class Reader:
+    """One model format."""
+
+    name: str  # as messages name it: "URDF", "YAML"
+    suffixes: tuple  # lower-case suffixes with the dot that this reader claims by the suffix alone
+    load: Callable  # load(path, **options) -> Model
+    options: tuple = ()  # the keyword options of load (floating_base, ...)
+    cli_options: tuple = ()  # command-line options it accepts beyond those every model takes ("--floating-base", ...)
+    sniffed: tuple = ()  # suffixes shared with other formats: taken only when sniff(head) says so
+    sniff: Callable | None = None  # sniff(first bytes of the file) -> bool
+    note: str = ""  # said after an option the reader does not accept (what to do instead)
+
+
+def _load_yaml(path, **options):
+    from .yaml_reader import load_yaml
+
+    return load_yaml(path, **options)
+
+
+def _load_urdf(path, **options):
+    from .urdf_reader import load_urdf
+
+    return load_urdf(path, **options)
+
+
+def _is_urdf(head: bytes) -> bool:
+    return b"<robot" in head
+
+
+URDF_CLI_OPTIONS = ("--floating-base", "--mimic", "--snap-angles", "--constraints", "--support",
+                    "--inertial-parameters", "--payload")
+
+READERS: list = [
+    Reader("YAML", (".yaml", ".yml"), _load_yaml,
+           note="a YAML model lists its constraints and support itself, and writes its masses and inertias as "
+                "expressions in its parameters"),
+    Reader("URDF", (".urdf",), _load_urdf, options=("floating_base", "mimic", "snap_angles"),
+           cli_options=URDF_CLI_OPTIONS, sniffed=(".xml",), sniff=_is_urdf),
+]
+
+
+def register(reader: Reader) -> Reader:
+    """Add a reader (a new format); a suffix it claims outright must not be claimed already."""
+    taken = {s for r in READERS for s in r.suffixes}
+    clash = sorted(taken & set(reader.suffixes))
+    if clash:
+        raise ValueError(f"reader {reader.name!r}: the suffixes {clash} are taken (list shared suffixes in sniffed)")
+    READERS.append(reader)
+    return reader
+
+
+def known_suffixes() -> list:
+    """Every suffix some reader claims, in registry order (claimed outright first, then shared ones)."""
+    out = [s for r in READERS for s in r.suffixes]
+    return out + [s for r in READERS for s in r.sniffed if s not in out]
+
+
+def reader_for(path) -> Reader:
+    """The reader of the file, by its suffix, and for a shared suffix by its content; a :class:`ModelError` when
+    none takes it."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    for r in READERS:
+        if suffix in r.suffixes:
+            return r
+    candidates = [r for r in READERS if suffix in r.sniffed]
+    if candidates:
+        try:
+            with open(path, "rb") as f:
+                head = f.read(SNIFF_BYTES)
+        except OSError as exc:
+            raise ModelError(path, "", f"cannot read the file: {exc.strerror}") from None
+        for r in candidates:
+            if r.sniff is not None and r.sniff(head):
+                return r
+        raise ModelError(path, "", f"a {suffix} file that no reader recognizes (tried "
+                                   f"{', '.join(r.name for r in candidates)})")
+    expected = [s for r in READERS for s in r.suffixes]
+    listed = ", ".join(expected[:-1]) + " or " + expected[-1] if len(expected) > 1 else expected[0]
+    raise ModelError(path, "", f"unknown model type {suffix!r}: expected {listed}")
+
+
+def check_cli_options(path, given) -> Reader:
+    """The file's reader; an error naming the reader and the option when it does not accept one of ``given``
+    (the command-line options the user gave that not every model takes)."""
+    from ..errors import AggsymError
+
+    reader = reader_for(path)
+    refused = [o for o in given if o not in reader.cli_options]
+    if refused:
+        which = " and ".join(refused) if len(refused) <= 2 else ", ".join(refused[:-1]) + " and " + refused[-1]
+        takers = [r.name for r in READERS if all(o in r.cli_options for o in refused)]
+        why = [f"{' and '.join(takers)} models only"] if takers else []
+        why += [reader.note] if reader.note else []
+        raise AggsymError(f"{path}: the {reader.name} reader does not accept {which}"
+                          + (f" ({'; '.join(why)})" if why else ""))
+    return reader
+
+
+__all__ = ["Reader", "READERS", "register", "reader_for", "check_cli_options", "known_suffixes"]

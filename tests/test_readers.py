@@ -1,0 +1,80 @@
+"""The reader registry (aggsym/model/readers.py) and the typed links of a model (Model.links)."""
+from __future__ import annotations
+
+import dataclasses
+import subprocess
+import sys
+
+import pytest
+
+import aggsym
+from aggsym.errors import AggsymError, ModelError
+from aggsym.model import readers
+from aggsym.model.readers import Reader, check_cli_options, reader_for, register
+from aggsym.model.types import LinkFrame, Links
+
+from conftest import model_path
+from helpers import robot_path
+
+
+def test_suffixes_choose_the_reader(tmp_path):
+    assert reader_for(model_path("double_pendulum")).name == "YAML"
+    assert reader_for(tmp_path / "a.YML").name == "YAML"
+    assert reader_for(robot_path("ur5")).name == "URDF"
+    with pytest.raises(ModelError, match=r"unknown model type '\.foo': expected \.yaml, \.yml or \.urdf"):
+        reader_for(tmp_path / "a.foo")
+
+
+def test_a_shared_suffix_is_decided_by_the_content(tmp_path):
+    urdf = tmp_path / "ur5.xml"
+    urdf.write_bytes(robot_path("ur5").read_bytes())
+    assert reader_for(urdf).name == "URDF"
+    assert aggsym.load(urdf) == dataclasses.replace(aggsym.load(robot_path("ur5")), source=str(urdf))
+    other = tmp_path / "scene.xml"
+    other.write_text("<mujoco/>\n")
+    with pytest.raises(ModelError, match="no reader recognizes"):
+        aggsym.load(other)
+
+
+def test_a_new_format_is_one_reader(tmp_path, monkeypatch):
+    monkeypatch.setattr(readers, "READERS", list(readers.READERS))
+    base = aggsym.load(model_path("double_pendulum"))
+    seen = []
+
+    def load(path, **options):
+        seen.append(options)
+        return base
+
+    register(Reader("Toy", (".toy",), load, options=("scale",), cli_options=("--floating-base",),
+                    sniffed=(".xml",), sniff=lambda head: b"<toy" in head))
+    (tmp_path / "m.toy").write_text("")
+    (tmp_path / "m.xml").write_text("<toy/>")
+    assert aggsym.load(tmp_path / "m.toy", scale=2) is base and seen == [{"scale": 2}]
+    assert reader_for(tmp_path / "m.xml").name == "Toy"
+    assert check_cli_options(tmp_path / "m.toy", ["--floating-base"]).name == "Toy"
+    with pytest.raises(AggsymError, match="the Toy reader does not accept --payload"):
+        check_cli_options(tmp_path / "m.toy", ["--floating-base", "--payload"])
+    with pytest.raises(ValueError, match="taken"):
+        register(Reader("Other", (".yaml",), load))
+
+
+def test_options_a_reader_does_not_accept_name_the_reader_and_the_option(tmp_path):
+    with pytest.raises(TypeError, match="YAML models take no options"):
+        aggsym.load(model_path("double_pendulum"), floating_base=True)
+    run = subprocess.run([sys.executable, "-m", "aggsym", "ops", str(model_path("double_pendulum")), "--mimic",
+                          "couple", "--payload", "x"], capture_output=True, text=True)
+    assert run.returncode == 2 and "the YAML reader does not accept --mimic and --payload" in run.stderr
+    assert "Traceback" not in run.stderr
+
+
+def test_links_are_typed_fields():
+    ur5 = aggsym.load(robot_path("ur5"))
+    assert ur5.links.kind == "link" and ur5.links.from_file and "tool0" in ur5.links.leaves
+    tool = ur5.links.by_name["tool0"]
+    assert isinstance(tool, LinkFrame) and tool.body == "wrist_3_link"
+    assert [f.name for f in ur5.frames] == list(ur5.links.leaves)
+    pendulum = aggsym.load(model_path("double_pendulum"))
+    assert pendulum.links == Links.of_bodies(pendulum.bodies) and not pendulum.links.from_file
+    assert all(f.name == f.body and f.rotation is None and f.part is None for f in pendulum.links.frames)
+    assert dataclasses.replace(pendulum, links=None).link_table == pendulum.links
+    hash(ur5)
