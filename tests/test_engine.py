@@ -161,7 +161,8 @@ def test_deep_programs_print_and_evaluate_without_deep_recursion():
     recurses no deeper than that; evaluation is iterative.  The interpreter's recursion limit is never raised."""
     import sys
 
-    from aggsym.codegen.printing import CPrinter, Converter
+    from aggsym.codegen.printing import Infix
+    from aggsym.codegen.targets.c import c_spelling
     from aggsym.core.program import INLINE_DEPTH, Program, straight_line
 
     limit = sys.getrecursionlimit()
@@ -174,8 +175,8 @@ def test_deep_programs_print_and_evaluate_without_deep_recursion():
     assert 200_000 // INLINE_DEPTH - 2 <= len(sl.temps) <= 200_000 // (INLINE_DEPTH // 2)
     names = {prog.inputs[key].id: f"p_{key[1]}" for key in sl.inputs}
     names.update({i: f"x{k}" for k, i in enumerate(sl.temps)})
-    conv, printer = Converter(prog, names), CPrinter()
-    lines = [printer._print(conv(prog.nodes[i])) for i in sl.temps]
+    printer = Infix(prog, names, c_spelling())
+    lines = [printer(prog.nodes[i]) for i in sl.temps]
     assert lines[-1].count("+") <= INLINE_DEPTH
     values = {("p", i): 1.0 + (i % 7) for i in range(200_000)}
     (total,) = prog.evaluate([acc], values)
@@ -183,14 +184,20 @@ def test_deep_programs_print_and_evaluate_without_deep_recursion():
     assert sys.getrecursionlimit() == limit
 
 
-def test_c_text_prints_what_the_c_printer_prints_of_the_tree():
-    """CText (the C of a statement straight from the program) is CPrinter's text of Converter's tree, with the same
-    operation counts and the same names used, in order: on the statements of a robot-like model's routines and on a
-    program of divisions, calls, negative and fractional constants and several constants in one sum."""
+def test_the_infix_printer_prints_the_program_value_counts_and_names():
+    """The infix printer's text of every statement, in NumPy's spelling, evaluates (as Python) to the program's
+    value; its operation counts are what count_ops reads from the C spelling's text (double and float), and the
+    names it reports used are the names in the text, in order: on the statements of a robot-like model's routines
+    and on a program of divisions, calls, negative and fractional constants and several constants in one sum."""
+    import re
     from fractions import Fraction
 
+    import numpy as np
+
     from aggsym.codegen.generate import symbolic_routines
-    from aggsym.codegen.printing import CPrinter, CText, Converter
+    from aggsym.codegen.printing import Infix, count_ops
+    from aggsym.codegen.targets.c import C_FUNCTIONS, c_spelling
+    from aggsym.codegen.targets.numpy import NUMPY
     from aggsym.core.program import straight_line
     from aggsym.model import load
 
@@ -198,19 +205,26 @@ def test_c_text_prints_what_the_c_printer_prints_of_the_tree():
         sl = straight_line(prog, outputs)
         names = {prog.inputs[key].id: f"{key[0]}_{key[1]}" for key in sl.inputs}
         names.update({i: f"x{k}" for k, i in enumerate(sl.temps)})
-        conv, printer = Converter(prog, names), CPrinter(scalar)
-        counts = {"mul": 0, "add": 0, "div": 0, "call": 0}
-        refs = []
-        text = CText(prog, names, counts, refs, scalar)
+        values = {key: 0.3 + 0.17 * k for k, key in enumerate(sorted(sl.inputs))}
+        env = {"np": np, **{f"{kind}_{i}": v for (kind, i), v in values.items()}}
+        c, py = Infix(prog, names, c_spelling(scalar)), Infix(prog, names, NUMPY)
         rhs = [(prog.nodes[i], True) for i in sl.temps]
         rhs += [(x, not (isinstance(x, Node) and x.id in names)) for out in outputs for x in out]
+        texts = []
         for x, top in rhs:
-            expected = printer._print(conv(x, top))
-            assert text(x, top) == expected
-            assert refs == conv.refs
-            refs.clear()
-            conv.refs.clear()
-        assert counts == printer.counts
+            text = py(x, top)
+            texts.append(c(x, top))
+            expected = prog.evaluate([x], values, np)[0]
+            assert np.isclose(float(eval(text, env)), float(expected), rtol=1e-12, atol=1e-12), text  # noqa: S307
+            if isinstance(x, Node) and x.id in names:
+                env[names[x.id]] = eval(text, env)  # noqa: S307
+            used = [n for n in re.findall(r"[A-Za-z_]\w*", text) if n != "np" and not hasattr(np, n)]
+            assert py.refs == used == c.refs
+            py.refs.clear()
+            c.refs.clear()
+        assert c.counts == count_ops(";\n".join(texts)), scalar
+        assert all(name in C_FUNCTIONS.values() or name.rstrip("f") in C_FUNCTIONS.values()
+                   for name in re.findall(r"([A-Za-z_]\w*)\(", ";".join(texts)))
         return len(rhs)
 
     prog = Program()
@@ -261,3 +275,38 @@ def test_a_sealed_program_keeps_its_nodes_and_generation_is_unchanged(monkeypatc
     sealed = generate(model).files
     monkeypatch.setattr(Program, "seal", lambda self: None)
     assert generate(model).files == sealed
+
+
+def test_the_function_table_agrees_with_itself():
+    """Each function of the one table: its float value, NumPy and SymPy forms agree, the grammar offers all but
+    sign, and its derivative rule (dual numbers over floats) matches a central difference."""
+    import math
+
+    import numpy as np
+    import sympy as sp
+
+    from aggsym.core.backend import Numeric
+    from aggsym.core.dual import Dual, DualBackend
+    from aggsym.core.functions import FUNCTIONS, GRAMMAR
+    from aggsym.model.expressions import parse_value
+
+    assert set(FUNCTIONS) - set(GRAMMAR) == {"sign"}
+    dual = DualBackend(Numeric())
+    for name, f in FUNCTIONS.items():
+        args = (0.4, 0.7)[:f.arity]
+        value = f.value(*args)
+        assert math.isclose(f.numpy(*args), value, rel_tol=1e-14)
+        assert math.isclose(float(f.sympy(*(sp.Float(a) for a in args))), value, rel_tol=1e-14)
+        if name in GRAMMAR:
+            parsed = parse_value(f"{name}({', '.join(map(str, args))})", {})
+            assert math.isclose(float(parsed), value, rel_tol=1e-14)
+        if f.derivative is None:
+            continue
+        for k in range(f.arity):
+            seeded = [Dual(a, {0: 1.0}) if j == k else a for j, a in enumerate(args)]
+            out = dual.call(name, *seeded)
+            got = out.d.get(0, 0.0) if isinstance(out, Dual) else 0.0
+            h = 1e-6
+            up = [a + (h if j == k else 0) for j, a in enumerate(args)]
+            down = [a - (h if j == k else 0) for j, a in enumerate(args)]
+            assert math.isclose(got, (f.value(*up) - f.value(*down)) / (2 * h), rel_tol=1e-7, abs_tol=1e-9), name

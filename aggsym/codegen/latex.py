@@ -15,7 +15,7 @@ from sympy.printing.latex import LatexPrinter
 from ..core.program import expanded_terms, straight_line, to_sympy
 from ..model.types import TIME
 from ..symbolic import Equations, coordinate_symbols
-from .printing import Converter, LinComb, Num, Prod, _Common
+from .printing import _TREE, Converter, LinComb, Num, Prod, Ref
 
 CLOSED_FORM_MAX_NQ = 4
 CLOSED_FORM_MAX_NODES = 300  # and at most this many program nodes in A, b, g (SymPy's simplification of the
@@ -162,13 +162,43 @@ def cauchy_form(model):
     return rows, product
 
 
-class IntermediatePrinter(_Common, LatexPrinter):
+class _TreePrinter:
+    """The dispatch, names and sums of the LaTeX printer of aggsym's expression trees (:mod:`.printing`)."""
+
+    def _print(self, expr, **kwargs):
+        """The ``_print_<Class>`` method of an expression tree node, looked up once per printer and class (SymPy's
+        own dispatch walks the class's MRO by name on every call); anything else goes to SymPy's dispatch."""
+        methods = self.__dict__.get("_tree_methods")
+        if methods is None:
+            methods = self._tree_methods = {cls: getattr(self, "_print_" + cls.__name__) for cls in _TREE}
+        method = methods.get(expr.__class__)
+        if method is None or kwargs:
+            return super()._print(expr, **kwargs)
+        return method(expr)
+
+    def _print_Ref(self, e):
+        return str(e.symbol)
+
+    def _print_LinComb(self, e):
+        parts = []
+        for k, (sign, term) in enumerate(e.terms):
+            cls = term.__class__
+            text = str(term.symbol) if cls is Ref else self._print(term)
+            if cls is LinComb and (sign < 0 or len(term.terms) > 1 and k > 0):
+                text = f"({text})"
+            if k == 0:
+                parts.append(f"-{text}" if sign < 0 else text)
+            else:
+                parts.append(f" - {text}" if sign < 0 else f" + {text}")
+        return "".join(parts)
+
+
+class IntermediatePrinter(_TreePrinter, LatexPrinter):
     """LaTeX of aggsym's expression trees (a SymPy LaTeX printer subclass); names are LaTeX already."""
 
     functions = {"sin": "\\sin", "cos": "\\cos", "tan": "\\tan", "exp": "\\exp", "log": "\\log",
                  "asin": "\\arcsin", "acos": "\\arccos", "atan": "\\arctan", "atan2": "\\operatorname{atan2}",
                  "sign": "\\operatorname{sign}"}
-    times = " "
 
     def _print_Num(self, e):
         # SymPy's LaTeX of a number costs tens of microseconds; a large model repeats its constants many times

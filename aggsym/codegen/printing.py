@@ -1,12 +1,13 @@
-"""From a straight-line program to printed assignments: expression trees, SymPy printers, operation counts.
+"""From a straight-line program to printed assignments: the one infix printer, expression trees, operation counts.
 
-:func:`aggsym.core.program.straight_line` decides which nodes of a routine's program get a name.  Each named
-right-hand side becomes a small expression tree here (:class:`LinComb`, :class:`Prod`, :class:`Ratio`,
-:class:`Call`, :class:`Ref`, :class:`Num`), printed exactly as built (no reordering, no distribution of
-``2*(a+b)``) by :class:`CPrinter` or :class:`NumPyPrinter`: SymPy code-printer subclasses with a
-``_print_<Class>`` method per node type, which SymPy's printer dispatch calls.  The trees are shallow: the
-naming bounds the depth of what is inlined (:data:`aggsym.core.program.INLINE_DEPTH`), so printing needs no
-raised recursion limit whatever the program.
+:func:`aggsym.core.program.straight_line` decides which nodes of a routine's program get a name.  :class:`Infix`
+prints each named right-hand side straight from the program, exactly as built (no reordering, no distribution
+of ``2*(a+b)``), spelled by a target's :class:`Spelling` (its function names and literals: the C target's
+``c_spelling``, the NumPy target's ``NUMPY``).  The LaTeX document has its own printer (:mod:`.latex`), of the
+small expression trees built here by :class:`Converter` (:class:`LinComb`, :class:`Prod`, :class:`Ratio`,
+:class:`Call`, :class:`Ref`, :class:`Num`).  The printed expressions are shallow: the naming bounds the depth of
+what is inlined (:data:`aggsym.core.program.INLINE_DEPTH`), so printing needs no raised recursion limit whatever
+the program.
 
 :func:`count_ops` counts the operations of emitted C text: ``*`` multiplications, ``/`` divisions, binary ``+``
 and ``-`` additions (subtractions count as additions), and function calls; unary minus is not counted.
@@ -15,10 +16,8 @@ from __future__ import annotations
 
 import re
 import struct
+from dataclasses import dataclass
 from fractions import Fraction
-
-from sympy.printing.c import C99CodePrinter
-from sympy.printing.numpy import NumPyPrinter as _SympyNumPyPrinter
 
 from ..core.program import ADD, DIV, FUNCTIONS, INPUT, MUL, NEG, SUB, Node, is_zero, normalize_const
 
@@ -69,7 +68,7 @@ class Ratio:
 
 
 class Call:
-    """A function of :data:`aggsym.core.program.FUNCTIONS` applied to its arguments."""
+    """A function of :data:`aggsym.core.functions.FUNCTIONS` applied to its arguments."""
 
     __slots__ = ("name", "args")
 
@@ -226,115 +225,6 @@ def _number(value, scalar: str = "double") -> str:
     return _float_literal(value, scalar)
 
 
-class _Common:
-    """Printing of aggsym's expression trees; subclasses name the functions (C99's <math.h> names here)."""
-
-    functions = {name: name for name in FUNCTIONS} | {"abs": "fabs"}
-    times = "*"
-
-    def _print(self, expr, **kwargs):
-        """The ``_print_<Class>`` method of an expression tree node, looked up once per printer and class (SymPy's
-        own dispatch walks the class's MRO by name on every call); anything else goes to SymPy's dispatch."""
-        methods = self.__dict__.get("_tree_methods")
-        if methods is None:
-            methods = self._tree_methods = {cls: getattr(self, "_print_" + cls.__name__) for cls in _TREE}
-        method = methods.get(expr.__class__)
-        if method is None or kwargs:
-            return super()._print(expr, **kwargs)
-        return method(expr)
-
-    def _print_Num(self, e):
-        return _number(e.value)
-
-    def _print_Ref(self, e):
-        return str(e.symbol)
-
-    def _print_Call(self, e):
-        return f"{self.functions[e.name]}({', '.join(self._print(a) for a in e.args)})"
-
-    def _operand(self, e):
-        cls = e.__class__
-        if cls is Ref:  # the commonest operand, printed without a dispatch
-            return str(e.symbol)
-        text = self._print(e)
-        if cls is LinComb or (cls is Prod and e.sign < 0) or \
-                (cls is Num and not isinstance(e.value, Fraction) and e.value < 0):
-            return f"({text})"
-        return text
-
-    def _print_Prod(self, e):
-        body = self.times.join([self._operand(f) for f in e.factors])
-        return f"-{body}" if e.sign < 0 else body
-
-    def _print_LinComb(self, e):
-        parts = []
-        for k, (sign, term) in enumerate(e.terms):
-            cls = term.__class__
-            text = str(term.symbol) if cls is Ref else self._print(term)
-            if cls is LinComb and (sign < 0 or len(term.terms) > 1 and k > 0):
-                text = f"({text})"
-            if k == 0:
-                parts.append(f"-{text}" if sign < 0 else text)
-            else:
-                parts.append(f" - {text}" if sign < 0 else f" + {text}")
-        return "".join(parts)
-
-    def _print_Ratio(self, e):
-        num = self._operand(e.num)
-        den = self._print(e.den)
-        if not isinstance(e.den, (Ref, Num, Call)):
-            den = f"({den})"
-        return f"{num}/{den}"
-
-
-class CPrinter(_Common, C99CodePrinter):
-    """C99 for aggsym: round-trip float literals, sin/cos/sqrt from <math.h>; sign(x) is the emitted
-    ``aggsym_sign``: (x > 0) - (x < 0), and NaN for NaN as NumPy's sign (a returned status then stays nonzero when
-    a solve meets a NaN).  ``scalar="float"``: literals with the suffix f and <math.h>'s float functions (sinf,
-    fabsf, ...), so that nothing is promoted to double."""
-
-    def __init__(self, scalar: str = "double"):
-        super().__init__({"order": "none", "strict": False})
-        self.scalar = scalar
-        if scalar == "float":
-            self.functions = {name: c_name + "f" for name, c_name in _Common.functions.items()}
-        self.counts = {"mul": 0, "add": 0, "div": 0, "call": 0}
-
-    # The operations of everything printed, counted as it is printed (what :func:`count_ops` reads back from the
-    # text: one binary ``*``, ``+``/``-`` or ``/`` between every two factors, terms or operands, one call per
-    # function; signs of first terms and of negative constants are unary).
-    def _print_Num(self, e):
-        return _number(e.value, self.scalar)
-
-    def _print_Prod(self, e):
-        self.counts["mul"] += len(e.factors) - 1
-        return _Common._print_Prod(self, e)
-
-    def _print_LinComb(self, e):
-        self.counts["add"] += len(e.terms) - 1
-        return _Common._print_LinComb(self, e)
-
-    def _print_Ratio(self, e):
-        self.counts["div"] += 1
-        return _Common._print_Ratio(self, e)
-
-    def _print_Call(self, e):
-        self.counts["call"] += 1
-        if e.name == "sign":
-            return f"aggsym_sign({self._print(e.args[0])})"
-        return _Common._print_Call(self, e)
-
-
-class NumPyPrinter(_Common, _SympyNumPyPrinter):
-    """NumPy for aggsym: np.sin etc., element-wise so that inputs may carry a leading batch dimension."""
-
-    functions = {name: f"np.{name}" for name in FUNCTIONS} | {"asin": "np.arcsin", "acos": "np.arccos",
-                                                               "atan": "np.arctan", "atan2": "np.arctan2"}
-
-    def __init__(self):
-        super().__init__({"order": "none", "fully_qualified_modules": False})
-
-
 _COMMENT = re.compile(r"/\*.*?\*/", re.S)
 # a chunk of an output's zero entries (generate._zero_chunks): a store, no operation
 _ZEROS = re.compile(r"\bAGGSYM_ZEROS\([^;]*\);")
@@ -361,38 +251,49 @@ def count_ops(c_code: str) -> dict:
     return {"mul": code.count("*"), "add": len(_BINARY.findall(code)), "div": code.count("/"), "call": calls}
 
 
-# the operand kinds of :class:`CText` (what the tree printers decide parentheses by)
+# the operand kinds of :class:`Infix` (what it decides parentheses by)
 _K_REF, _K_NUM, _K_NEGNUM, _K_LIN, _K_PROD, _K_NEGPROD, _K_RATIO, _K_CALL = range(8)
 
 
-class CText:
-    """The C text of an assignment's right-hand side straight from the program: exactly what :class:`CPrinter`
-    prints of :class:`Converter`'s tree (same flattening, merged constants, parentheses and operation counts,
-    the names used appended to ``refs`` in the same order), without building the tree.  The common statement of
-    a large routine is printed this way; one holding a function call also needs its NumPy text, which differs
-    (``np.sin``): :attr:`calls` tells the caller to print that one from the tree.
+@dataclass(frozen=True)
+class Spelling:
+    """How a target writes an expression: ``functions`` the callee of each function of
+    :data:`aggsym.core.functions.FUNCTIONS` by name, ``number`` a constant's literal (int, Fraction or float ->
+    text).  The operators (``+ - * /``, parentheses) are the same in every infix target."""
 
-    ``counts`` is the C printer's own dict of counts (the routine's operations), ``refs`` the converter's list."""
+    functions: dict
+    number: object
 
-    def __init__(self, program, names: dict, counts: dict, refs: list, scalar: str = "double"):
+
+class Infix:
+    """The infix text of an assignment's right-hand side straight from the program, spelled by a target's
+    :class:`Spelling`: chains of inlined additions and multiplications flattened (no reordering, no distribution
+    of ``2*(a+b)``), several constants of one sum merged, parentheses only where the grammar needs them, the names
+    used appended to ``refs`` in the order printed, the operations printed counted into ``counts`` (one binary
+    ``*``, ``+``/``-`` or ``/`` between every two factors, terms or operands, one call per function: what
+    :func:`count_ops` reads back from C text; signs of first terms and of negative constants are unary).
+    :attr:`calls` counts the function calls printed (a text without one is the same in every target whose
+    literals agree)."""
+
+    def __init__(self, program, names: dict, spelling: Spelling, counts: dict | None = None,
+                 refs: list | None = None):
         self.ops = program.ops
         self.names = names
-        self.counts = counts
-        self.refs = refs
-        self.scalar = scalar
-        self.functions = _Common.functions if scalar == "double" else \
-            {name: c_name + "f" for name, c_name in _Common.functions.items()}
+        self.counts = counts if counts is not None else {"mul": 0, "add": 0, "div": 0, "call": 0}
+        self.refs = refs if refs is not None else []
+        self.functions = spelling.functions
+        self.number = spelling.number
         self.calls = 0  # the function calls printed so far
 
     def __call__(self, x, top: bool = True) -> str:
         return self._expr(x, top)[0]
 
     def _number(self, value):
-        return (_number(value, self.scalar),
+        return (self.number(value),
                 _K_NEGNUM if not isinstance(value, Fraction) and value < 0 else _K_NUM)
 
     def _expr(self, x, top):
-        """(text, kind) of ``Converter(x, top)`` printed."""
+        """(text, kind) of ``x`` (``top``: print its definition even when it has a name)."""
         if x.__class__ is not Node:
             return self._number(x)
         ident = x.id
@@ -437,13 +338,12 @@ class CText:
             self.calls += 1
             args = [self._expr(a, False)[0] for a in entry[1:]]
             self.counts["call"] += 1
-            if code == "sign":
-                return f"aggsym_sign({args[0]})", _K_CALL
             return f"{self.functions[code]}({', '.join(args)})", _K_CALL
         raise ValueError(code)
 
     def _terms(self, x, top, sign, out):
-        """:meth:`Converter._terms`: (sign, text, kind, constant) per term, the constant for a Num term."""
+        """The signed terms of a chain of inlined additions, subtractions and negations appended to ``out``:
+        (sign, text, kind, constant) per term, the constant for a constant term (text None)."""
         if x.__class__ is not Node:
             out.append((sign, None, _K_NUM, x))
             return
@@ -470,7 +370,7 @@ class CText:
             out.append((sign, text, kind, None))
 
     def _factors(self, x, top, sign, out):
-        """:meth:`Converter._factors`: the factors' operand texts appended to ``out``; returns the sign."""
+        """The operand texts of a chain of inlined products (and negations) appended to ``out``; returns the sign."""
         if x.__class__ is not Node:
             text, kind = self._number(x)
             out.append(f"({text})" if kind == _K_NEGNUM else text)
@@ -500,7 +400,7 @@ class CText:
 
     def _lincomb(self, terms):
         constants = [k for k, term in enumerate(terms) if term[3] is not None]
-        if len(constants) >= 2:  # _merge_constants
+        if len(constants) >= 2:  # as _merge_constants
             total = normalize_const(sum(terms[k][0] * terms[k][3] for k in constants))
             merged = []
             for k, term in enumerate(terms):
@@ -515,7 +415,7 @@ class CText:
         first = True
         for sign, text, kind, value in terms:
             if text is None:
-                text = _number(value, self.scalar)
+                text = self.number(value)
             elif kind == _K_LIN:
                 text = f"({text})"  # (a LinComb term is always parenthesized where the tree printer would:
                 # it is the one negated term of a negation, so it comes first with a minus)

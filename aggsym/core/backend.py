@@ -4,7 +4,7 @@
 * :class:`Numeric` computes with floats or NumPy arrays (the numeric twin).
 * :class:`Backend` names what the mechanics may ask of either (and of :class:`~aggsym.core.dual.DualBackend`).
 
-Both offer ``call(name, *args)`` for the functions of :data:`aggsym.core.program.FUNCTIONS` and the shortcuts
+Both offer ``call(name, *args)`` for the functions of :data:`aggsym.core.functions.FUNCTIONS` and the shortcuts
 ``sin``, ``cos``, ``sqrt``; :func:`to_scalar` turns a SymPy expression (a mass, a constructive angle, a
 parameter expression) into a scalar of either.
 """
@@ -16,7 +16,8 @@ from typing import Protocol
 import numpy as np
 import sympy as sp
 
-from .program import FUNCTIONS, Program, normalize_const
+from .functions import FUNCTIONS, by_sympy
+from .program import Program, normalize_const
 
 
 class Backend(Protocol):
@@ -60,9 +61,6 @@ class Symbolic:
         return Fraction(num, den)
 
 
-_NUMPY = {"abs": np.abs, "asin": np.arcsin, "acos": np.arccos, "atan": np.arctan, "atan2": np.arctan2}
-
-
 class Numeric:
     """Compute with floats (or NumPy arrays, element-wise over a batch); a :class:`Backend`."""
 
@@ -74,19 +72,15 @@ class Numeric:
 
     @staticmethod
     def call(name: str, *args):
-        if name not in FUNCTIONS:
-            raise KeyError(name)
-        return _NUMPY.get(name, getattr(np, name, None))(*args)
+        return FUNCTIONS[name].numpy(*args)
 
     @staticmethod
     def rational(num: int, den: int):
         return num / den
 
 
-# SymPy's functions that a model's expressions may hold, by the program's name for them
-_SYMPY_FUNCTIONS = {sp.sin: "sin", sp.cos: "cos", sp.tan: "tan", sp.exp: "exp", sp.log: "log", sp.Abs: "abs",
-                    sp.asin: "asin", sp.acos: "acos", sp.atan: "atan", sp.atan2: "atan2",
-                    sp.sign: "sign"}
+# SymPy's functions that a model's expressions may hold -> the table's functions
+_SYMPY_FUNCTIONS = by_sympy()
 
 
 def to_scalar(expr, values: dict, backend):
@@ -156,7 +150,7 @@ def _node(expr, args, backend):
             return 1 / out if n < 0 else out
         raise ValueError(f"unsupported power {expr}")
     if expr.func in _SYMPY_FUNCTIONS:
-        return backend.call(_SYMPY_FUNCTIONS[expr.func], *args)
+        return backend.call(_SYMPY_FUNCTIONS[expr.func].name, *args)
     raise ValueError(f"unsupported expression {expr}")
 
 

@@ -15,6 +15,7 @@ recorded into a program.
 """
 from __future__ import annotations
 
+from .functions import COS, FUNCTIONS, SIN, SQRT
 from .program import Node, is_zero
 
 
@@ -124,45 +125,31 @@ class DualBackend:
         self.rational = base.rational
 
     def sin(self, x):
-        if not isinstance(x, Dual):
-            return self.base.sin(x)
-        c = self.base.cos(x.v)
-        return lift(self.base.sin(x.v), {k: _mul(c, y) for k, y in x.d.items()})
+        return self.call(SIN, x)
 
     def cos(self, x):
-        if not isinstance(x, Dual):
-            return self.base.cos(x)
-        s = self.base.sin(x.v)
-        return lift(self.base.cos(x.v), {k: -_mul(s, y) for k, y in x.d.items()})
+        return self.call(COS, x)
 
     def sqrt(self, x):
-        if not isinstance(x, Dual):
-            return self.base.sqrt(x)
-        r = self.base.sqrt(x.v)
-        half = self.base.rational(1, 2) / r
-        return lift(r, {k: _mul(half, y) for k, y in x.d.items()})
+        return self.call(SQRT, x)
 
     def call(self, name, *args):
+        """``name`` of :data:`aggsym.core.functions.FUNCTIONS` on duals: the chain rule with its derivative rule."""
         if not any(isinstance(a, Dual) for a in args):
             return self.base.call(name, *args)
-        if name == "sin":
-            return self.sin(args[0])
-        if name == "cos":
-            return self.cos(args[0])
-        if name == "sqrt":
-            return self.sqrt(args[0])
-        if name == "sign":  # piecewise constant: no tangent
-            return self.base.call("sign", _parts(args[0])[0])
-        if name == "abs":
-            v, d = _parts(args[0])
-            s = self.base.call("sign", v)
-            return lift(self.base.call("abs", v), {k: _mul(s, y) for k, y in d.items()})
-        if name == "atan2":  # d atan2(y, x) = (x dy - y dx) / (x^2 + y^2)
-            (y, dy), (x, dx) = _parts(args[0]), _parts(args[1])
-            r = 1 / (x * x + y * y)
-            d = _combine({k: _mul(x, t) for k, t in dy.items()}, {k: _mul(y, t) for k, t in dx.items()}, -1)
-            return lift(self.base.call("atan2", y, x), {k: _mul(r, t) for k, t in d.items()})
-        raise NotImplementedError(f"no derivative of {name!r} for forward-mode differentiation")
+        rule = FUNCTIONS[name].derivative
+        if rule is None:
+            raise NotImplementedError(f"no derivative of {name!r} for forward-mode differentiation")
+        parts = [_parts(a) for a in args]
+        value, coefficients, common = rule(self.base, *(v for v, _ in parts))
+        d = {}
+        for (coefficient, sign), (_, tangent) in zip(coefficients, parts):
+            d = _combine(d, {k: _mul(coefficient, t) for k, t in tangent.items()}, sign)
+        if value is None:
+            value = self.base.call(name, *(v for v, _ in parts))
+        if common is not None:
+            d = {k: _mul(common, t) for k, t in d.items()}
+        return lift(value, d)
 
 
 __all__ = ["Dual", "DualBackend", "lift", "tangent"]

@@ -32,18 +32,13 @@ from collections import Counter
 from dataclasses import dataclass
 from fractions import Fraction
 
+from .functions import COS, FUNCTIONS, SIN, SQRT
+
 __all__ = ["Program", "Node", "is_zero", "is_one", "is_const", "normalize_const", "fold", "to_sympy",
            "expanded_terms", "straight_line", "StraightLine", "FUNCTIONS", "INLINE_DEPTH"]
 
 # operation codes
 INPUT, ADD, SUB, MUL, DIV, NEG = "in", "+", "-", "*", "/", "neg"
-SIN, COS, SQRT = "sin", "cos", "sqrt"
-# the functions a program can call, with their arity and their value on Python floats (constant folding)
-FUNCTIONS = {
-    SIN: (1, math.sin), COS: (1, math.cos), SQRT: (1, math.sqrt), "tan": (1, math.tan), "exp": (1, math.exp),
-    "log": (1, math.log), "abs": (1, abs), "asin": (1, math.asin), "acos": (1, math.acos), "atan": (1, math.atan),
-    "atan2": (2, math.atan2), "sign": (1, lambda x: (x > 0) - (x < 0)),
-}
 _COMMUTATIVE = (ADD, MUL)
 # the operation's part of the int key of an operation on two nodes (:meth:`Program._make`)
 _CODE_INDEX = {code: k for k, code in enumerate((ADD, SUB, MUL, DIV, NEG) + tuple(FUNCTIONS))}
@@ -198,12 +193,13 @@ class Program:
 
     def call(self, name: str, *args):
         """The function ``name`` of :data:`FUNCTIONS` applied to its arguments (folded on constants)."""
-        arity, value = FUNCTIONS[name]
+        function = FUNCTIONS[name]
+        arity = function.arity
         if len(args) != arity:
             raise TypeError(f"{name} takes {arity} argument(s)")
         args = tuple(fold(a) for a in args)
         if all(is_const(a) for a in args):
-            return normalize_const(value(*args))
+            return normalize_const(function.value(*args))
         return self._make(name, *args)
 
     def sin(self, x):
@@ -565,10 +561,9 @@ class Program:
         """Evaluate outputs numerically; ``values[(kind, index)]`` gives the inputs (floats or arrays), ``lib`` the
         functions (``math`` or ``numpy``)."""
         if lib is math:
-            function = lambda f: FUNCTIONS[f][1]  # noqa: E731
+            function = lambda f: FUNCTIONS[f].value  # noqa: E731
         else:
-            names = {"asin": "arcsin", "acos": "arccos", "atan": "arctan", "atan2": "arctan2"}
-            function = lambda f: getattr(lib, names.get(f, f))  # noqa: E731
+            function = lambda f: FUNCTIONS[f].numpy  # noqa: E731
         return self.interpret(outputs, lambda kind, i: values[(kind, i)], lambda code, *x: _arith(code, x, function))
 
 
@@ -591,9 +586,7 @@ def to_sympy(program, outputs, symbols: dict):
     """SymPy expressions of program outputs; ``symbols[(kind, i)]`` names the inputs."""
     import sympy as sp
 
-    functions = {"sin": sp.sin, "cos": sp.cos, "sqrt": sp.sqrt, "tan": sp.tan, "exp": sp.exp, "log": sp.log,
-                 "abs": sp.Abs, "asin": sp.asin, "acos": sp.acos, "atan": sp.atan, "atan2": sp.atan2,
-                 "sign": sp.sign}
+    functions = {name: f.sympy for name, f in FUNCTIONS.items()}
 
     def constant(x):
         if isinstance(x, Fraction):

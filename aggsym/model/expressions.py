@@ -33,6 +33,7 @@ from fractions import Fraction
 
 import sympy as sp
 
+from ..core.functions import GRAMMAR, by_sympy
 from .sympy_numbers import double, float_number
 
 MAX_LENGTH = 100_000  # characters of one expression
@@ -42,19 +43,11 @@ MAX_INTEGER_DIGITS = 30  # digits of an integer literal (larger: write it as a f
 MAX_EXPONENT = 64  # |exponent| of a power, constant integer or half-integer
 MAX_BITS = 2048  # numerator and denominator of an exact constant met while folding
 
-# the functions of the grammar: name -> (SymPy function, number of arguments)
-FUNCTIONS = {
-    "sin": (sp.sin, 1), "cos": (sp.cos, 1), "tan": (sp.tan, 1), "sqrt": (sp.sqrt, 1), "exp": (sp.exp, 1),
-    "log": (sp.log, 1), "abs": (sp.Abs, 1), "asin": (sp.asin, 1), "acos": (sp.acos, 1), "atan": (sp.atan, 1),
-    "atan2": (sp.atan2, 2),
-}
+# the functions of the grammar (a model file may call them): name -> Function (its SymPy form and arity)
+FUNCTIONS = GRAMMAR
 CONSTANTS = {"pi": sp.pi, "deg": sp.pi / 180}
-# SymPy's functions an accepted expression (or a derivative of one) may hold, and their double-valued meaning
-SYMPY_FUNCTIONS = {
-    sp.sin: math.sin, sp.cos: math.cos, sp.tan: math.tan, sp.exp: math.exp, sp.log: math.log, sp.Abs: abs,
-    sp.asin: math.asin, sp.acos: math.acos, sp.atan: math.atan, sp.atan2: math.atan2,
-    sp.sign: lambda x: float((x > 0) - (x < 0)),
-}
+# SymPy's functions an accepted expression (or a derivative of one) may hold -> Function (its value in doubles)
+SYMPY_FUNCTIONS = by_sympy()
 RESERVED = frozenset({"world", "t", "E", "I", "S", "N", "O", "Q", "oo", "nan"} | set(FUNCTIONS)
                      | set(CONSTANTS))
 
@@ -245,7 +238,7 @@ class _Parser:
                 self.calls += 1
                 if self.calls > MAX_CALLS:
                     raise self.error(f"too many function calls (at most {MAX_CALLS})", col)
-                func, arity = FUNCTIONS[text]
+                func, arity = FUNCTIONS[text].sympy, FUNCTIONS[text].arity
                 args = [self.expression()]
                 while len(args) < arity:
                     self.expect(",")
@@ -434,7 +427,7 @@ def _value(e, args) -> float:
                 raise ValueError(f"{_short(str(e))} has no real value")
             return x
         if e.func in SYMPY_FUNCTIONS:
-            return SYMPY_FUNCTIONS[e.func](*args)
+            return float(SYMPY_FUNCTIONS[e.func].value(*args))
     except OverflowError:
         return math.inf
     except ValueError:

@@ -16,12 +16,26 @@ from dataclasses import dataclass, field
 from itertools import islice
 
 from ...contract import Routine, signature
+from ...core.functions import FUNCTIONS
 from ...core.program import COS, SIN, Node, straight_line
 from ...errors import AggsymError
 from ..names import c_prototype, c_symbol, python_parameters
-from ..printing import CPrinter, Converter, CText, LiteralError, _number
+from ..printing import Infix, LiteralError, Spelling, _number
 from ..slicing import Sliced, Statement, slice_routine, work
 from .base import RoutineLines, Runner, Target, file_pattern
+
+
+# the C spelling of the functions: <math.h>'s names (fabs for abs), sign the emitted aggsym_sign: (x > 0) - (x < 0),
+# and NaN for NaN as NumPy's sign (a returned status then stays nonzero when a solve meets a NaN)
+C_FUNCTIONS = {name: name for name in FUNCTIONS} | {"abs": "fabs", "sign": "aggsym_sign"}
+
+
+def c_spelling(scalar: str = "double") -> Spelling:
+    """The C target's spelling table: round-trip literals of the C type ``scalar``; for ``float`` the suffix f on
+    literals and <math.h>'s float functions (sinf, fabsf, ...), so that nothing is promoted to double."""
+    functions = C_FUNCTIONS if scalar == "double" else \
+        {name: c + ("f" if name != "sign" else "") for name, c in C_FUNCTIONS.items()}
+    return Spelling(functions, lambda value: _number(value, scalar))
 
 
 @dataclass
@@ -79,11 +93,10 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     for kind, _ in sl.inputs:
         if kind not in allowed:
             raise RuntimeError(f"routine {routine.role} depends on input {kind!r} outside its signature")
-    cp = CPrinter(scalar)
     temp_names = {i: f"x{k}" for k, i in enumerate(sl.temps)}
     names = {**_input_symbols(sl), **temp_names}
-    conv = Converter(prog, names)  # the trees of the sincos arguments (the names used: conv.refs)
-    ctext = CText(prog, names, cp.counts, conv.refs, scalar)  # the C text without a tree
+    ctext = Infix(prog, names, c_spelling(scalar))  # the C text; the routine's operations counted as printed
+    counts, refs = ctext.counts, ctext.refs  # (refs: the names a statement uses; emit clears it)
     shared = {}  # key -> the C text that an infix target prints alike (RoutineLines.shared)
 
     def c_text(x, key, top=True):
@@ -97,11 +110,11 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     stmts = []  # the C body as statements (slicing.Statement): what each defines, uses, reads or writes
 
     def emit(lines, defines=(), arrays=(), ops=0, entry=""):
-        stmts.append(Statement(lines, tuple(defines), tuple(conv.refs), tuple(arrays), ops, entry))
-        conv.refs.clear()
+        stmts.append(Statement(lines, tuple(defines), tuple(refs), tuple(arrays), ops, entry))
+        refs.clear()
 
     def ops_so_far():
-        return sum(cp.counts.values())
+        return sum(counts.values())
     status = routine.status
     if status is not None:
         emit([f"{scalar} {status.name}[1];"], entry="head")
@@ -118,7 +131,7 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     for out, flat in zip(routine.outputs, outputs):
         if not flat:
             emit([f"(void){out.name};"], entry="head")
-    conv.refs.clear()
+    refs.clear()
     trig = _trig_pairs(prog, sl.temps)
     done = set()
     defined = set(names) - set(temp_names)  # node ids with a C name already defined: the inputs, then temps
@@ -163,17 +176,17 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
             defined.update(j for j in (sin_id, cos_id) if j is not None)
             c_names += [names[sin_id] if sin_id is not None else names[cos_id] + "_sin",
                         names[cos_id] if cos_id is not None else names[sin_id] + "_cos"]
-            arguments.append(cp._print(conv(arg, top=False)))
-            cp.counts["call"] += 1
+            arguments.append(ctext(arg, top=False))
+            counts["call"] += 1
         pointers = ", ".join(f"&{n}" for n in c_names)
         emit([f"{scalar} {', '.join(c_names)};",
               f"aggsym_sincos{'' if partner is None else '2'}({', '.join(arguments)}, {pointers});"],
              defines=c_names, ops=ops_so_far() - before)
     if status is not None:
         emit([f"return {status.name}[0] != {_number(0.0, scalar)};"], entry="tail")
-    # what count_ops reads from the C, counted while printing (the other statements hold none); the C printer
-    # prints only what is emitted, the sincos pair's discarded sin/cos trees were never printed
-    ops = dict(cp.counts)
+    # what count_ops reads from the C, counted while printing (the other statements hold none); the printer
+    # prints only what is emitted, the sincos pair's discarded sin/cos were never printed
+    ops = dict(counts)
     sliced, size = None, sum(work(st) for st in stmts)
     if slicing is not None and size > slicing[0]:
         arrays = {k: f"const {scalar} *{k}" for k in inputs}

@@ -3,14 +3,20 @@
 A routine is printed from its straight line in program order: inputs unpacked, each named temporary one
 assignment, each output entry stored; a right-hand side without a function call is the C's text when the C is
 double (:attr:`~.base.RoutineLines.shared`: the two printers differ only in function names and float literals),
-otherwise printed by :class:`~aggsym.codegen.printing.NumPyPrinter` from its expression tree.  Checked by
+otherwise printed by :class:`~aggsym.codegen.printing.Infix` with the spelling table :data:`NUMPY`.  Checked by
 importing the module and calling it against the numeric twin.
 """
 from __future__ import annotations
 
+from ...core.functions import FUNCTIONS
 from ...core.program import Node
-from ..printing import Converter, CText, NumPyPrinter
+from ..printing import Infix, Spelling, _number
 from .base import Runner, Target, file_pattern
+
+
+# the NumPy spelling: each function's NumPy form (element-wise, so that inputs may carry a leading batch
+# dimension), double literals as the C's
+NUMPY = Spelling({name: f"np.{f.numpy_name}" for name, f in FUNCTIONS.items()}, _number)
 
 
 def _unravel(k, shape):
@@ -24,24 +30,16 @@ def _unravel(k, shape):
 def numpy_body(model, prog, lines, routine, inputs) -> list:
     """The Python statements of one routine (the function's body, before its returns)."""
     sl, names, outputs, zeros, shared = lines.sl, lines.names, lines.outputs, lines.zeros, lines.shared
-    pp = NumPyPrinter()
-    conv = Converter(prog, names)
-    counts = {"mul": 0, "add": 0, "div": 0, "call": 0}  # (counted for the C only; discarded here)
-    ctext = CText(prog, names, counts, [], "double")
+    printer = Infix(prog, names, NUMPY)  # (its operation counts are the C's concern; discarded here)
+
+    def printed(x, top=True):
+        py = printer(x, top)
+        printer.refs.clear()
+        return py
 
     def text(x, key, top=True):
         done = shared.get(key)
-        if done is not None:
-            return done
-        if not lines.complete:  # the C was not double: the call-free text is the double C's
-            calls = ctext.calls
-            c = ctext(x, top)
-            ctext.refs.clear()
-            if ctext.calls == calls:
-                return c
-        py = pp._print(conv(x, top))
-        conv.refs.clear()
-        return py
+        return done if done is not None else printed(x, top)
     body = []
     for kind in inputs:
         body.extend(f"{kind}_{i} = {kind}[..., {i}]" for k, i in sl.inputs if k == kind)
@@ -58,8 +56,7 @@ def numpy_body(model, prog, lines, routine, inputs) -> list:
             continue
         i = step[1]
         if i in lines.trig:  # (the C computes sin and cos together; NumPy each where it stands)
-            body.append(f"{names[i]} = {pp._print(conv(prog.nodes[i]))}")
-            conv.refs.clear()
+            body.append(f"{names[i]} = {printed(prog.nodes[i])}")
             continue
         body.append(f"{names[i]} = {text(prog.nodes[i], i)}")
     return body
