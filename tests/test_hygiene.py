@@ -56,11 +56,19 @@ CITED = re.compile(r"(?<![\w/.-])((?:[\w-]+/)*[\w-]+\.(?:md|py))(?!\.?\w)")
 PACKAGE_FOLDERS = {"aggsym", "tests", "benchmarks", "docs", "core", "model", "mechanics", "codegen"}
 
 
+SKIPPED_FOLDERS = {".git", ".venv", "build", "generated", "__pycache__", ".pytest_cache", ".hypothesis"}
+
+
 def repository_files() -> list:
+    """The project's files (relative paths), generated/ left out: git's list in a checkout, else the tree less the
+    folders that tools write (.venv, build, caches)."""
     proc = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True)
-    if proc.returncode:
-        pytest.skip("not a git checkout")
-    return [Path(line) for line in proc.stdout.splitlines() if not line.startswith("generated/") and (ROOT / line).is_file()]
+    if proc.returncode == 0:
+        lines = proc.stdout.splitlines()
+    else:
+        lines = [p.relative_to(ROOT).as_posix() for p in ROOT.rglob("*")
+                 if not SKIPPED_FOLDERS & set(p.relative_to(ROOT).parts) and not p.name.endswith(".egg-info")]
+    return [Path(line) for line in lines if not line.startswith("generated/") and (ROOT / line).is_file()]
 
 
 def test_every_cited_document_exists():
