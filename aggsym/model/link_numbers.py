@@ -19,7 +19,7 @@ import functools
 import sympy as sp
 
 from .sympy_numbers import double, float_number
-from .types import Inertial
+from .types import Inertial, elementary_entries
 from .types import _snap as snap
 
 ZERO, ONE = sp.S.Zero, sp.S.One
@@ -92,21 +92,11 @@ def transpose(m) -> tuple:
     return tuple(zip(*m))
 
 
-def elementary(axis: int, angle: sp.Expr) -> tuple:
-    """c_axis(angle) of Prop. 1.17 (as :func:`~aggsym.model.types.elementary_rotation`)."""
-    c, s = snap(sp.cos(angle)), snap(sp.sin(angle))
-    if axis == 1:
-        return (ONE, ZERO, ZERO), (ZERO, c, -s), (ZERO, s, c)
-    if axis == 2:
-        return (c, ZERO, s), (ZERO, ONE, ZERO), (-s, ZERO, c)
-    return (c, -s, ZERO), (s, c, ZERO), (ZERO, ZERO, ONE)
-
-
 def rotation_matrix(rotation) -> tuple:
     """The product of elementary rotations [(axis, angle), ...] (Prop. 1.17), entries snapped."""
     c = None
     for axis, angle in rotation:
-        e = elementary(axis, angle)
+        e = elementary_entries(axis, angle)
         c = e if c is None else product(c, e)
     return IDENTITY if c is None else snapped(c)
 

@@ -49,14 +49,20 @@ def _snap(x: sp.Expr) -> sp.Expr:
     return x
 
 
+def elementary_entries(axis: int, angle: sp.Expr) -> tuple:
+    """c_axis(angle) of Prop. 1.17 as rows of exact SymPy numbers (cos and sin within 1e-14 of 0, +-1 snapped)."""
+    c, s = _snap(sp.cos(angle)), _snap(sp.sin(angle))
+    one, zero = sp.Integer(1), sp.Integer(0)
+    if axis == 1:
+        return (one, zero, zero), (zero, c, -s), (zero, s, c)
+    if axis == 2:
+        return (c, zero, s), (zero, one, zero), (-s, zero, c)
+    return (c, -s, zero), (s, c, zero), (zero, zero, one)
+
+
 def elementary_rotation(axis: int, angle: sp.Expr) -> sp.Matrix:
     """c_axis(angle) of Prop. 1.17 as an exact SymPy matrix."""
-    c, s = _snap(sp.cos(angle)), _snap(sp.sin(angle))
-    if axis == 1:
-        return sp.Matrix([[1, 0, 0], [0, c, -s], [0, s, c]])
-    if axis == 2:
-        return sp.Matrix([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-    return sp.Matrix([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    return sp.Matrix(elementary_entries(axis, angle))
 
 
 @dataclass(frozen=True)

@@ -96,15 +96,14 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ModelError, ModelWarning
-from .builder import (ANGLE_ROUND_OFF, FLOATING, FREE_FLYER, FREE_FLYER_POSITIONS, MAX_ROTATIONS, Names,  # noqa: F401
-                      floating_root, link_table)
-from .builder import Place as _Place, align as _align, angle as _angle, fold as _fold  # noqa: F401
-from .builder import identifier as _identifier, inverse as _inverse, mangle as _mangle  # noqa: F401
-from .builder import quaternion_rotations as _quaternion_rotations, right_angle as _right_angle  # noqa: F401
-from .builder import rotations as _rotations, rpy as _rpy, tidy as _tidy  # noqa: F401
+from .builder import MAX_ROTATIONS, Names, floating_root, link_table
+from .builder import Place as _Place, align as _align, fold as _fold
+from .builder import identifier as _identifier, inverse as _inverse
+from .builder import quaternion_rotations as _quaternion_rotations, right_angle as _right_angle
+from .builder import rpy as _rpy, tidy as _tidy
 from .frames import default_frames
 from .types import WORLD, Body, Coordinate, Coupling, JointDynamics, JointLimits, Model, Pair, Parameter
-from .link_numbers import (IDENTITY, ORIGIN, ROUND_OFF, add, combine, exact, matvec, product, round_off, snapped,  # noqa: F401
+from .link_numbers import (IDENTITY, ORIGIN, add, combine, exact, matvec, product, round_off, snapped,
                            transpose, turn)
 from .link_numbers import rotation_matrix as _matrix
 from .sympy_numbers import double
