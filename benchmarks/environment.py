@@ -91,13 +91,13 @@ def git_commit() -> str | None:
     root = Path(__file__).resolve().parents[1]
     try:
         rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True, text=True)
-        dirty = subprocess.run(["git", "status", "--porcelain", "--", "aggsym", "templates"], cwd=root,
+        dirty = subprocess.run(["git", "status", "--porcelain", "--", "aggsym"], cwd=root,
                                capture_output=True, text=True)
     except OSError:
         return None
     if rev.returncode:
         return None
-    return rev.stdout.strip() + (" (aggsym/ or templates/ modified)" if dirty.stdout.strip() else "")
+    return rev.stdout.strip() + (" (aggsym/ modified)" if dirty.stdout.strip() else "")
 
 
 def compiler_versions() -> dict:

@@ -210,8 +210,8 @@ def test_templates_ship_inside_the_wheel(tmp_path):
     import zipfile
 
     names = zipfile.ZipFile(wheel).namelist()
-    assert {"aggsym/templates/model.c.j2", "aggsym/templates/model.h.j2", "aggsym/templates/model.py.j2",
-            "aggsym/templates/model.tex.j2"} <= set(names)
+    assert {"aggsym/templates/c/model.c.j2", "aggsym/templates/c/model.h.j2", "aggsym/templates/numpy/model.py.j2",
+            "aggsym/templates/latex/model.tex.j2"} <= set(names)
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target), str(wheel)],
                    check=True, capture_output=True)

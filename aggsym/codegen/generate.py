@@ -5,7 +5,7 @@ The recursions run once on the symbolic backend into one shared straight-line pr
 all routines); each routine's outputs are then cut out of it (:func:`aggsym.core.program.straight_line`),
 printed as C (always: the operation counts are the C's) and by every chosen target
 (:meth:`~.targets.base.Target.print_routine`), and the targets render their files from the Jinja templates
-(layout only; the package data ``aggsym.templates``, the project's top-level ``templates/``).  What a routine is called,
+(layout only; a folder per target in the package data ``aggsym.templates``, ``aggsym/templates/``).  What a routine is called,
 takes and returns comes from :mod:`aggsym.contract`.  Files are written only after everything has been
 generated, through a temporary folder, so a failure leaves the output folder as it was.
 """
@@ -22,7 +22,6 @@ from dataclasses import dataclass, field
 from types import SimpleNamespace
 from pathlib import Path
 
-import jinja2
 
 from .. import __version__
 from ..contract import (
@@ -41,7 +40,6 @@ from .names import header_macros
 from .printing import SCALARS, _number
 from .slicing import SLICE_SIZE, SLICE_THRESHOLD
 from .targets import TARGETS, Job, select
-from .targets.base import environment
 from .targets.c import (  # noqa: F401  (their home is the C target; imported from here before targets)
     SCALAR_BYTES, ZERO_BYTES, EmittedRoutine, _zero_chunks, emit_routine, split_files, split_layout, split_names,
 )
@@ -54,12 +52,6 @@ class Generated:
     files: dict = field(default_factory=dict)  # file name -> text
     targets: tuple = ("c", "numpy", "manifest", "latex")  # the names of the targets generated
     timings: list = field(default_factory=list)  # (stage, seconds)
-
-
-def templates() -> jinja2.Environment:
-    """The Jinja environment over the package data ``aggsym.templates`` (``templates/`` of the project, mapped
-    into the package by pyproject.toml, in editable and in wheel installs alike)."""
-    return environment()
 
 
 class _Stages:
@@ -200,7 +192,6 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         emitted.append(emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing, sl, chosen))
         del sl
     stages.done("printing")
-    env = templates()
     ctx = {
         "name": model.name,
         "guard": model.name.upper() + "_H",
@@ -231,7 +222,7 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         "elastic": any(b.pair.elastic for b in model.bodies),
     }
     gen = Generated(model, emitted, targets=tuple(t.name for t in chosen))
-    job = Job(model, env, ctx, emitted, prog, outputs, lines, split, scalar, omitted, chosen)
+    job = Job(model, ctx, emitted, prog, outputs, lines, split, scalar, omitted, chosen)
     job.names = [name for t in chosen for name in t.file_names(job)]
     for k, target in enumerate(chosen):
         gen.files.update(target.render(job))

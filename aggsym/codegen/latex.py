@@ -314,8 +314,8 @@ def constraint_section(model, prog, outputs, small: bool):
             "stabilization": [sp.latex(x) for x in model.stabilization]}
 
 
-def latex_document(model, env, prog, outputs, straight=None) -> str:
-    """The standalone LaTeX document (rendered through templates/model.tex.j2); ``straight``: {role: straight line}
+def latex_document(model, template, prog, outputs, straight=None) -> str:
+    """The standalone LaTeX document (rendered through ``template``, the LaTeX target's latex/model.tex.j2); ``straight``: {role: straight line}
     of routines already emitted, not formed again."""
     # the closed forms are sized by the programs of A, b and g: without all three emitted there is no measure of
     # what SymPy would be asked to simplify (a 4-link chain's derivatives alone once ran it for many minutes)
@@ -339,4 +339,4 @@ def latex_document(model, env, prog, outputs, straight=None) -> str:
         "nq": model.nq,
         "qdd": [names[s] for s in qdd],
     }
-    return env.get_template("model.tex.j2").render(ctx)
+    return template.render(ctx)

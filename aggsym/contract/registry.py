@@ -55,7 +55,7 @@ class Routine:
     # matrix: of the many C with C qd = b and A' - 2C skew, the one built from the bodies' B (2.17) depends on them
     slice_size: int | None = None  # the C's slices (aggsym.codegen.slicing) where smaller than the default's run faster
     scalar_stores: bool = False  # a symmetric matrix: its C compiled without GCC's basic-block vectorizer
-    # (AGGSYM_SCALAR_STORES, templates/attributes.c.j2), which packs the neighbouring stores into shuffled vectors
+    # (AGGSYM_SCALAR_STORES, aggsym/templates/c/attributes.c.j2), which packs the neighbouring stores into shuffled vectors
 
     @property
     def written(self) -> tuple:

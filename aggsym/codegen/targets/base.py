@@ -21,7 +21,7 @@ from ..escape import FILTERS
 class Job:
     """What the targets of one generation render from.
 
-    ``model``; ``env`` the Jinja environment (package templates); ``ctx`` the templates' common context;
+    ``model``; ``ctx`` the templates' common context;
     ``emitted`` the routines (:class:`~aggsym.codegen.targets.c.EmittedRoutine`, in order); ``prog`` and
     ``outputs`` the straight-line program and {role: flat outputs}; ``lines`` {role: straight line} of the roles
     a target asked for (:attr:`Target.lines`); ``split``, ``scalar``, ``omitted`` as given to
@@ -29,7 +29,6 @@ class Job:
     generation writes, in order."""
 
     model: object
-    env: object
     ctx: dict
     emitted: list
     prog: object
@@ -53,8 +52,16 @@ class Target:
     default: bool = False  # part of the default set of ``aggsym generate`` (the built-in four)
     stage: str = "templates"  # the progress line its rendering is timed under
     column: str = ""  # its heading in ``aggsym check``'s table (with a :meth:`runner`)
-    templates: tuple = ()  # the package templates it renders (documentation; layout only)
+    folder: str = ""  # its templates' folder in the package data aggsym.templates (aggsym/templates/FOLDER)
+    templates: tuple = ()  # the templates it renders from that folder (documentation; layout only)
     lines: frozenset = frozenset()  # the roles whose straight lines it needs at rendering (Job.lines)
+
+    def template(self, name: str) -> jinja2.Template:
+        """Its template ``name`` from its own folder (:attr:`folder`)."""
+        env = self.__dict__.get("_env")
+        if env is None:
+            env = self.__dict__["_env"] = environment(files("aggsym.templates") / self.folder)
+        return env.get_template(name)
 
     def file_names(self, job: Job) -> list:
         """The files it writes for this generation, in order."""
@@ -121,10 +128,10 @@ def file_pattern(name: str, suffixes) -> re.Pattern:
 
 
 def environment(root=None) -> jinja2.Environment:
-    """A Jinja environment over the folder ``root`` (default: the package data ``aggsym.templates``, the
-    project's ``templates/``), with StrictUndefined and the escaping filters of :mod:`aggsym.codegen.escape`
-    (user text reaches a template only through them).  A target with templates of its own renders them with
-    ``environment(its folder)``."""
+    """A Jinja environment over the folder ``root`` (default: the package data ``aggsym.templates``,
+    ``aggsym/templates/``), with StrictUndefined and the escaping filters of :mod:`aggsym.codegen.escape` (user
+    text reaches a template only through them).  A target's templates are in a folder of their own there
+    (:meth:`Target.template`)."""
     root = files("aggsym.templates") if root is None else root
     env = jinja2.Environment(
         loader=jinja2.FunctionLoader(lambda name: (root / name).read_text(encoding="utf-8")),

@@ -55,7 +55,7 @@ class EmittedRoutine:
 
     @property
     def zeros(self) -> bool:
-        """Whether its C writes a chunk of zero entries with AGGSYM_ZEROS (templates/attributes.c.j2)."""
+        """Whether its C writes a chunk of zero entries with AGGSYM_ZEROS (aggsym/templates/c/attributes.c.j2)."""
         return any(line.startswith("AGGSYM_ZEROS(") for line in self.c_body)
 
 
@@ -199,7 +199,7 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     return emitted, RoutineLines(sl, names, outputs, zeros, trig, shared, scalar == "double")
 
 
-# The bytes AGGSYM_ZEROS writes at once (templates/attributes.c.j2): 2 doubles, 4 floats
+# The bytes AGGSYM_ZEROS writes at once (aggsym/templates/c/attributes.c.j2): 2 doubles, 4 floats
 ZERO_BYTES = 16
 SCALAR_BYTES = {"double": 8, "float": 4}
 
@@ -308,7 +308,7 @@ def split_layout(name: str, emitted, files) -> dict:
     return {"files": list(files), "header": f"{name}.h", **names}
 
 
-def split_files(env, ctx, emitted) -> dict:
+def split_files(target, ctx, emitted) -> dict:
     """``--split``: NAME_ROLE.c per routine (including NAME_helpers.h only if it calls a helper), NAME_helpers.h
     with aggsym_sincos and aggsym_sign as static inline (each routine's object inlines them: a separate
     NAME_common.c would make every sin/cos a call across objects), and a Makefile building libNAME.a with
@@ -319,15 +319,15 @@ def split_files(env, ctx, emitted) -> dict:
     files = {}
     helpers = names["helpers"]
     if helpers:
-        files[helpers] = env.get_template("helpers.h.j2").render(
+        files[helpers] = target.template("helpers.h.j2").render(
             {**ctx, "guard": name.upper() + "_HELPERS_H", "sign_storage": "static inline"})
     rules = []
     for r in emitted:
         source = names["sources"][r.routine.role]
         uses = helpers if _helpers_used(r) else None
-        files[source] = env.get_template("routine.c.j2").render({**ctx, "r": r, "helpers": uses})
+        files[source] = target.template("routine.c.j2").render({**ctx, "r": r, "helpers": uses})
         rules.append((source, source[:-2] + ".o", [f"{name}.h"] + ([uses] if uses else [])))
-    files[names["makefile"]] = env.get_template("Makefile.j2").render(
+    files[names["makefile"]] = target.template("Makefile.j2").render(
         {**ctx, "objects": [o for _, o, _ in rules], "rules": rules})
     return files
 
@@ -340,6 +340,7 @@ class CTarget(Target):
     name = "c"
     default = True
     column = "C"
+    folder = "c"
     templates = ("model.h.j2", "model.c.j2", "function.c.j2", "attributes.c.j2", "helpers.c.j2", "helpers.h.j2",
                  "routine.c.j2", "Makefile.j2")
 
@@ -356,11 +357,11 @@ class CTarget(Target):
                     or re.fullmatch(rf"{re.escape(name)}_[A-Za-z0-9_]+\.[ch]", file))
 
     def render(self, job):
-        files = {f"{job.model.name}.h": job.env.get_template("model.h.j2").render(job.ctx)}
+        files = {f"{job.model.name}.h": self.template("model.h.j2").render(job.ctx)}
         if job.split:
-            files.update(split_files(job.env, job.ctx, job.emitted))
+            files.update(split_files(self, job.ctx, job.emitted))
         else:
-            files[f"{job.model.name}.c"] = job.env.get_template("model.c.j2").render(job.ctx)
+            files[f"{job.model.name}.c"] = self.template("model.c.j2").render(job.ctx)
         return files
 
     def main_file(self, name):

@@ -10,6 +10,7 @@ class LatexTarget(Target):
     name = "latex"
     default = True
     stage = "latex"
+    folder = "latex"
     templates = ("model.tex.j2",)
     lines = frozenset(LATEX_ROLES)  # the straight lines of A, b and g (latex.intermediate_form)
 
@@ -20,4 +21,4 @@ class LatexTarget(Target):
         return bool(file_pattern(name, ("tex",)).fullmatch(file))
 
     def render(self, job):
-        return {f"{job.model.name}.tex": latex_document(job.model, job.env, job.prog, job.outputs, job.lines)}
+        return {f"{job.model.name}.tex": latex_document(job.model, self.template("model.tex.j2"), job.prog, job.outputs, job.lines)}

@@ -68,6 +68,7 @@ class NumPyTarget(Target):
     name = "numpy"
     default = True
     column = "NumPy"
+    folder = "numpy"
     templates = ("model.py.j2",)
 
     def file_names(self, job):
@@ -80,7 +81,7 @@ class NumPyTarget(Target):
         emitted.py_body = numpy_body(model, prog, lines, emitted.routine, emitted.inputs)
 
     def render(self, job):
-        return {f"{job.model.name}.py": job.env.get_template("model.py.j2").render(job.ctx)}
+        return {f"{job.model.name}.py": self.template("model.py.j2").render(job.ctx)}
 
     def main_file(self, name):
         return f"{name}.py"
