@@ -27,38 +27,56 @@ def _unravel(k, shape):
     return tuple(reversed(out))
 
 
-def numpy_body(model, prog, lines, routine, inputs) -> list:
-    """The Python statements of one routine (the function's body, before its returns)."""
+def array_steps(model, prog, lines, routine, inputs, spelling):
+    """One routine's straight line for a target over arrays with leading batch dimensions (NumPy, JAX,
+    PyTorch, ...), in program order: ``("input", name, kind, index)`` an input entry unpacked,
+    ``("temp", name, text)`` a named temporary, ``("out", output, entry index, text)`` an output entry (text
+    None: written as a chunk of zeros).  ``spelling``: the target's :class:`~aggsym.codegen.printing.Spelling`;
+    a right-hand side without a function call is the C's text when the C is double (the same in every infix
+    target whose literals agree)."""
     sl, names, outputs, zeros, shared = lines.sl, lines.names, lines.outputs, lines.zeros, lines.shared
-    printer = Infix(prog, names, NUMPY)  # (its operation counts are the C's concern; discarded here)
+    printer = Infix(prog, names, spelling)  # (its operation counts are the C's concern; discarded here)
 
     def printed(x, top=True):
-        py = printer(x, top)
+        text = printer(x, top)
         printer.refs.clear()
-        return py
+        return text
 
     def text(x, key, top=True):
         done = shared.get(key)
         return done if done is not None else printed(x, top)
-    body = []
     for kind in inputs:
-        body.extend(f"{kind}_{i} = {kind}[..., {i}]" for k, i in sl.inputs if k == kind)
-    shapes = [out.shape(model) for out in routine.outputs]
+        for k, i in sl.inputs:
+            if k == kind:
+                yield ("input", f"{kind}_{i}", kind, i)
     for s, step in enumerate(sl.steps):
         if step[0] == "out":
             _, o, k = step
             x = outputs[o][k]
-            target = f"{routine.outputs[o].py}[..., {', '.join(str(j) for j in _unravel(k, shapes[o]))}]"
-            if s in zeros:
-                body.append(f"{target} = 0")
-                continue
-            body.append(f"{target} = {text(x, (o, k), top=not (isinstance(x, Node) and x.id in names))}")
+            yield ("out", o, k, None if s in zeros
+                   else text(x, (o, k), top=not (isinstance(x, Node) and x.id in names)))
             continue
         i = step[1]
-        if i in lines.trig:  # (the C computes sin and cos together; NumPy each where it stands)
-            body.append(f"{names[i]} = {printed(prog.nodes[i])}")
+        if i in lines.trig:  # (the C computes sin and cos together; an array target each where it stands)
+            yield ("temp", names[i], printed(prog.nodes[i]))
             continue
-        body.append(f"{names[i]} = {text(prog.nodes[i], i)}")
+        yield ("temp", names[i], text(prog.nodes[i], i))
+
+
+def numpy_body(model, prog, lines, routine, inputs) -> list:
+    """The Python statements of one routine (the function's body, before its returns): outputs filled in
+    place."""
+    shapes = [out.shape(model) for out in routine.outputs]
+    body = []
+    for step in array_steps(model, prog, lines, routine, inputs, NUMPY):
+        if step[0] == "input":
+            body.append(f"{step[1]} = {step[2]}[..., {step[3]}]")
+        elif step[0] == "temp":
+            body.append(f"{step[1]} = {step[2]}")
+        else:
+            _, o, k, rhs = step
+            target = f"{routine.outputs[o].py}[..., {', '.join(str(j) for j in _unravel(k, shapes[o]))}]"
+            body.append(f"{target} = {0 if rhs is None else rhs}")
     return body
 
 
