@@ -18,6 +18,21 @@ from .errors import AggsymError
 
 FLOATING_BASE_KINDS = ("euler", "quaternion")  # --floating-base KIND; bare --floating-base is euler
 
+
+def _formats() -> str:
+    """The readers and their suffixes, for the help (model.readers: one registry)."""
+    from .model.readers import READERS
+
+    return ", ".join(f"{r.name}: {' '.join(r.suffixes + r.sniffed)}" for r in READERS)
+
+
+def _only(option: str, then: str) -> str:
+    """The help's opening for an option that only some readers accept ("URDF only" and ``then``), from the
+    readers' declarations."""
+    from .model.readers import READERS
+
+    return f"{' and '.join(r.name for r in READERS if option in r.cli_options)} only{then}"
+
 EXAMPLES = {
     "generate": "example:\n  aggsym generate models/double_pendulum.yaml             # writes generated/double_pendulum/\n"
                 "  aggsym generate robot.urdf --floating-base -o build/robot",
@@ -43,32 +58,40 @@ def _parser() -> argparse.ArgumentParser:
     def command(name, help_text):
         p = sub.add_parser(name, help=help_text, description=help_text, epilog=EXAMPLES[name],
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-        p.add_argument("model", metavar="MODEL", help="a .yaml model or a .urdf robot")
+        p.add_argument("model", metavar="MODEL", help=f"a model file ({_formats()}; the reader is chosen by the "
+                                                      f"suffix, and by the content where formats share one)")
         p.add_argument("--floating-base", choices=FLOATING_BASE_KINDS, default=None,
-                       help="URDF only: a free root. euler (the default when no kind is given): the 6-coordinate "
+                       help=_only("--floating-base", ": ")
+                            + "a free root. euler (the default when no kind is given): the 6-coordinate "
                             "pair o1 o2 o3 theta4 theta5 theta6; quaternion: Pinocchio's free-flyer, q = (x, y, z, "
                             "qx, qy, qz, qw, joints) (nq = n + 7), velocities (v, w of the base in its own axes, "
                             "joint rates) (nv = n + 6)"),
         p.add_argument("--mimic", choices=["independent", "couple"], default="independent",
-                       help="URDF only: <mimic> joints keep their own coordinate (default) or follow their master")
+                       help=_only("--mimic", ": ")
+                            + "<mimic> joints keep their own coordinate (default) or follow their master")
         p.add_argument("--snap-angles", metavar="TOL", type=_snap_tolerance, default=0.0,
-                       help="URDF only, an approximation on request (off by default): take the rpy angles of the "
+                       help=_only("--snap-angles", ", ")
+                            + "an approximation on request (off by default): take the rpy angles of the "
                             "file's origins within TOL rad of a multiple of pi/2 as that multiple (1.5708 -> pi/2); "
                             "every angle it moves is listed in the manifest's 'snapped_angles'")
         p.add_argument("--armature", metavar="VALUE", type=_armature, default=0.0,
                        help="add a rotor inertia VALUE (kg m^2, or kg for a prismatic joint) on every coordinate, as "
                             "Pinocchio's armature: A(q) + VALUE E (makes A regular where a joint moves no mass)")
         p.add_argument("--constraints", metavar="FILE",
-                       help="URDF only: a YAML side file with the robot's 'constraints:' (contacts with the world, "
+                       help=_only("--constraints", ": ")
+                            + "a YAML side file with the robot's 'constraints:' (contacts with the world, "
                             "closed loops; bodies named by URDF link) and 'stabilization:'")
         p.add_argument("--support", action="store_true",
-                       help="URDF only, with --floating-base: the free root is the support of the support equation "
+                       help=_only("--support", ", ")
+                            + "with --floating-base: the free root is the support of the support equation "
                             "(3.1); its 6 coordinates are q, the joints gamma (support_* routines)")
         p.add_argument("--inertial-parameters", metavar="all|LINK,...",
-                       help="URDF only: the named links' inertial data (or every link's: all) become entries of p, "
+                       help=_only("--inertial-parameters", ": ")
+                            + "the named links' inertial data (or every link's: all) become entries of p, "
                             "ten per link (m, m c, inertia about the link origin in link axes; defaults from the file)")
         p.add_argument("--payload", metavar="LINK",
-                       help="URDF only: a payload fixed to LINK, its ten inertial parameters in p (zero by default)")
+                       help=_only("--payload", ": ")
+                            + "a payload fixed to LINK, its ten inertial parameters in p (zero by default)")
         p.add_argument("--frames", metavar="A,B,...",
                        help="the frames of the frame routines, in this order: URDF link names, or a YAML model's "
                             "bodies and 'frames:' (default: the links or bodies without a child, then 'frames:')")

@@ -117,7 +117,7 @@ def _declared_frame_pinocchio(model):
     """Pinocchio's tree of a YAML model with its declared frames added as OP frames."""
     pm, joint_of = pinocchio_tree(model)
     index = {b.name: k for k, b in enumerate(model.bodies)}
-    for f in model.meta["declared_frames"]:
+    for f in model.link_table.declared:
         k = index[f.body]
         body = pm.frames[pm.getFrameId(f.body, pin.FrameType.OP_FRAME)]
         R = np.eye(3)

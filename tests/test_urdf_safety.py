@@ -16,7 +16,7 @@ import pytest
 import aggsym
 from aggsym import cli
 from aggsym.errors import ModelError
-from aggsym.model import urdf_reader
+from aggsym.model import urdf_reader, xml_source
 from aggsym.model.validate import order_tree
 
 INERTIA = '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>'
@@ -98,11 +98,11 @@ CASES = {
     "external-dtd": ('<?xml version="1.0"?>\n<!DOCTYPE robot SYSTEM "file:///etc/passwd">\n' + arm(head=""),
                      ["<!DOCTYPE>", "external DTD", "'file:///etc/passwd'"]),
     "undefined-entity": (arm(name="&nbsp;"), ["not XML: undefined entity"]),
-    "too-many-links": (many("link", urdf_reader.MAX_LINKS + 1),
-                       [f'<link name="l{urdf_reader.MAX_LINKS}">', f":{urdf_reader.MAX_LINKS + 2}:", "10,000 <link>"]),
-    "too-many-joints": (many("joint", urdf_reader.MAX_JOINTS + 1),
-                        [f'<joint name="j{urdf_reader.MAX_JOINTS}">', "10,000 <joint>"]),
-    "too-many-elements": (many("g", urdf_reader.MAX_ELEMENTS), ["<g>", "1,000,000 XML elements"]),
+    "too-many-links": (many("link", xml_source.MAX_LINKS + 1),
+                       [f'<link name="l{xml_source.MAX_LINKS}">', f":{xml_source.MAX_LINKS + 2}:", "10,000 <link>"]),
+    "too-many-joints": (many("joint", xml_source.MAX_JOINTS + 1),
+                        [f'<joint name="j{xml_source.MAX_JOINTS}">', "10,000 <joint>"]),
+    "too-many-elements": (many("g", xml_source.MAX_ELEMENTS), ["<g>", "1,000,000 XML elements"]),
     # XML: malformed ---------------------------------------------------------------------------------------
     "mismatched-tag": (arm().replace('<child link="lower"/>', '<child link="lower">'), ["not XML", "mismatched tag"]),
     "unclosed-root": (arm().replace("</robot>\n", ""), ["not XML", "no element found"]),
@@ -389,7 +389,7 @@ def test_ordering_a_2000_link_chain(tmp_path):
     parts += [joint(f"j{i}", f"l{i - 1}", f"l{i}") for i in reversed(range(1, n))]
     path = tmp_path / "chain.urdf"
     path.write_text(robot(*parts))
-    reader = urdf_reader._Reader(path, urdf_reader._parse(path, path.read_bytes()), False, "independent")
+    reader = urdf_reader._Reader(path, xml_source._parse(path, path.read_bytes()), False, "independent")
     links, link_el = reader.links(reader.root)
     joints = reader.joints(reader.root, links, link_el)
     t0 = time.perf_counter()

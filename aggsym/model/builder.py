@@ -13,6 +13,10 @@ SDF later) needs beside parsing its file.
   becoming one.
 * Floating bases: :func:`floating_root` (the Euler pair :data:`FLOATING`, or the free-flyer :data:`FREE_FLYER` with
   the positions :data:`FREE_FLYER_POSITIONS`), and :func:`link_table`: the model's :class:`~.types.Links`.
+* :class:`TreeBuilder`: the tree itself, built a link or a body at a time (a root, a movable joint and the body it
+  moves, a fixed joint merged into its parent's body, a link's inertial part, or a body given whole as the YAML
+  reader has it); it gives the :class:`~.types.Body` list and the :class:`~.types.Links` of the model.  A reader
+  parses its format and calls it; the placement arithmetic, the axis alignment and the merging are here once.
 """
 from __future__ import annotations
 
@@ -24,7 +28,9 @@ import numpy as np
 import sympy as sp
 
 from .expressions import check_identifier
-from .types import Coordinate, LinkFrame, Links, Pair
+from .link_numbers import IDENTITY, ORIGIN, add, combine, exact, matvec, product, round_off, rotation_matrix, snapped
+from .link_numbers import transpose, turn
+from .types import WORLD, Body, Coordinate, LinkFrame, Links, Pair
 
 FLOATING = (("base_x", "o1"), ("base_y", "o2"), ("base_z", "o3"), ("base_rx", "theta4"), ("base_ry", "theta5"),
             ("base_rz", "theta6"))
@@ -214,6 +220,100 @@ def link_table(place: dict, body_names: list, parts: dict, leaves) -> Links:
                                for link, p in place.items()), tuple(leaves))
 
 
-__all__ = ["FLOATING", "FREE_FLYER", "FREE_FLYER_POSITIONS", "MAX_ROTATIONS", "ANGLE_ROUND_OFF", "Names", "Place",
+CODES = {"theta": ("theta4", "theta5", "theta6"), "o": ("o1", "o2", "o3")}  # a joint about / along e1, e2, e3
+
+
+class TreeBuilder:
+    """A tree of links (or bodies) built one at a time, parents first; format-neutral (URDF, YAML; MJCF next).
+
+    Links: :meth:`root` starts the tree at a link, :meth:`joint` adds a movable joint and the body its child link
+    becomes, :meth:`fixed` merges a link into its parent's body, :meth:`inertial` adds a link's mass to its body.
+    Bodies given whole (YAML: each body is its own link): :meth:`body`.  Then :meth:`bodies` and :meth:`links`.
+    ``rows`` (per body: name, parent, link, pair, link_rotation, parts) and ``place`` ({link: :class:`Place`}, in
+    tree order) stay readable for a reader's own checks (the URDF reader judges the merged inertias on them)."""
+
+    def __init__(self):
+        self.rows: list = []
+        self.place: dict = {}
+        self.parts: dict = {}  # each link's own (mass, com, inertia about it) in its body's axes
+        self.given: list = []  # bodies given whole (:meth:`body`)
+
+    def root(self, link: str, name: str, pair: Pair) -> None:
+        """The root link, the body ``name`` attached to the world by ``pair`` (:func:`floating_root`)."""
+        self.rows.append({"name": name, "parent": WORLD, "link": link, "pair": pair, "link_rotation": None,
+                          "parts": []})
+        self.place[link] = Place(0, [], IDENTITY, ORIGIN)
+
+    def _origin(self, parent: str, xyz) -> tuple:
+        here = self.place[parent]
+        return here, add(here.t, matvec(here.R, tuple(exact(x) for x in xyz)))
+
+    def fixed(self, parent: str, child: str, xyz, rotation: list) -> None:
+        """A fixed joint: ``child`` merged into the body of ``parent``, at ``xyz`` turned by ``rotation``
+        (elementary rotations) in the parent link's frame; long chains fold into one roll-pitch-yaw."""
+        here, t = self._origin(parent, xyz)
+        turned = tidy(here.rotation + rotation)
+        if len(turned) > MAX_ROTATIONS:
+            turned = fold(turned)
+            R = rotation_matrix(turned)
+        else:  # R_here times the joint's own rotation: O(1) whatever the chain's length
+            R = snapped(product(here.R, rotation_matrix(rotation))) if rotation else here.R
+        self.place[child] = Place(here.body, turned, R, round_off(t))
+
+    def joint(self, parent: str, child: str, body_name: str, joint_name: str, coordinate, xyz, rotation: list,
+              axis, kind: str) -> Pair:
+        """A movable joint ``joint_name`` from ``parent`` to ``child``, which becomes the body ``body_name``: its
+        origin ``xyz`` and ``rotation`` in the parent link's frame, then the constant rotation R_a bringing e1, e2
+        or e3 onto ``axis`` (:func:`align`), so that the joint is the elementary motion of ``kind`` (``"theta"``
+        about, ``"o"`` along) (1.24)-(1.27); ``coordinate(code)`` makes its :class:`Coordinate`.  The child's body
+        frame is its link frame turned by R_a (``link_rotation``)."""
+        here, t = self._origin(parent, xyz)
+        rotate, i = align(axis)
+        pair = Pair(joint_name, tuple(t), tuple(tidy(here.rotation + rotation + rotate)),
+                    (coordinate(CODES[kind][i]),))
+        back = inverse(rotate)
+        R = rotation_matrix(back)
+        self.rows.append({"name": body_name, "parent": self.rows[here.body]["name"], "link": child, "pair": pair,
+                          "link_rotation": R if rotate else None, "parts": []})
+        self.place[child] = Place(len(self.rows) - 1, back, R, ORIGIN)
+        return pair
+
+    def inertial(self, link: str, mass, com, inertia, rotation: list) -> None:
+        """A link's mass, centre of mass and inertia about it (numbers of the file) in the link frame turned by
+        ``rotation`` (its inertial frame), added to its body in the body's axes."""
+        where = self.place[link]
+        R = rotation_matrix(where.rotation + rotation) if rotation else where.R
+        c = add(where.t, turn(where.R, tuple(exact(x) for x in com)))
+        J = tuple(tuple(exact(x) for x in row) for row in inertia)
+        if rotation or where.rotation:
+            J = product(product(R, J), transpose(R))
+        self.rows[where.body]["parts"].append((exact(mass), c, round_off(J)))
+        self.parts[link] = self.rows[where.body]["parts"][-1]
+
+    def body(self, body: Body) -> None:
+        """A body given whole, its own link at its origin in its axes (YAML)."""
+        self.given.append(body)
+
+    def bodies(self, where=None) -> tuple:
+        """The :class:`Body` list: the given bodies, or one per body of the links with the merged inertial parts
+        (``where(link)``: the place in the file of the body's first link, for messages)."""
+        if self.given:
+            return tuple(self.given)
+        return tuple(Body(name=row["name"], parent=row["parent"], pair=row["pair"], inertial=combine(row["parts"]),
+                          where=where(row["link"]) if where else "", link_rotation=row["link_rotation"])
+                     for row in self.rows)
+
+    def links(self, leaves=None, declared=()) -> Links:
+        """The model's :class:`Links`: the links with their places (``leaves``: those without a child link, in
+        tree order), or for given bodies each body its own link; ``declared``: the frames the file names beside
+        (YAML ``frames:``)."""
+        if self.given:
+            table = Links.of_bodies(self.given)
+        else:
+            table = link_table(self.place, [row["name"] for row in self.rows], self.parts, leaves)
+        return Links(table.kind, table.frames, table.leaves, tuple(declared))
+
+
+__all__ = ["CODES", "FLOATING", "FREE_FLYER", "FREE_FLYER_POSITIONS", "MAX_ROTATIONS", "ANGLE_ROUND_OFF", "Names", "Place",
            "align", "angle", "floating_root", "fold", "identifier", "inverse", "link_table", "mangle", "matrix_rpy",
-           "quaternion_rotations", "right_angle", "rotations", "rpy", "tidy"]
+           "quaternion_rotations", "right_angle", "rotations", "rpy", "tidy", "TreeBuilder"]

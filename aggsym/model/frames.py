@@ -34,7 +34,7 @@ def catalog(model: Model) -> dict:
     """{name: Frame}: every frame the model offers: its links (URDF: the file's links; YAML: its bodies), then a
     YAML model's ``frames:``."""
     out = {f.name: _link_frame(f.name, f.body, f.rotation, f.translation) for f in model.link_table.frames}
-    for f in model.meta.get("declared_frames", ()):
+    for f in model.link_table.declared:
         out[f.name] = f
     return out
 
@@ -43,7 +43,7 @@ def default_frames(model: Model) -> tuple:
     """The frames emitted when none are named: the childless links (URDF), or the childless bodies and then the
     ``frames:`` list (YAML), in tree order."""
     offered = catalog(model)
-    leaves = list(model.link_table.leaves) + [f.name for f in model.meta.get("declared_frames", ())]
+    leaves = list(model.link_table.leaves) + [f.name for f in model.link_table.declared]
     return tuple(offered[name] for name in leaves)
 
 

@@ -323,11 +323,13 @@ class Links:
     links into one body; reframing, inertial parameters and payloads apply), ``"body"`` when each body is its own
     link at its origin, in its axes (YAML, and models built without a reader: :meth:`of_bodies`).  ``frames``:
     one :class:`LinkFrame` per link in tree order (parents first); ``leaves``: the names of the links without a
-    child link, in tree order (the frames emitted by default)."""
+    child link, in tree order (the frames emitted by default); ``declared``: the frames the file declares beside
+    its links (:class:`Frame`: YAML ``frames:``), emitted by default after the leaves."""
 
     kind: str
     frames: tuple = ()  # LinkFrame, in tree order
     leaves: tuple = ()  # names
+    declared: tuple = ()  # Frame
 
     @functools.cached_property
     def by_name(self) -> dict:

@@ -96,23 +96,18 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ModelError, ModelWarning
-from .builder import MAX_ROTATIONS, Names, floating_root, link_table
-from .builder import Place as _Place, align as _align, fold as _fold
-from .builder import identifier as _identifier, inverse as _inverse
+from .builder import Names, TreeBuilder, floating_root
+from .builder import identifier as _identifier
 from .builder import quaternion_rotations as _quaternion_rotations, right_angle as _right_angle
-from .builder import rpy as _rpy, tidy as _tidy
+from .builder import rpy as _rpy
 from .frames import default_frames
-from .types import WORLD, Body, Coordinate, Coupling, JointDynamics, JointLimits, Model, Pair, Parameter
-from .link_numbers import (IDENTITY, ORIGIN, add, combine, exact, matvec, product, round_off, snapped,
-                           transpose, turn)
-from .link_numbers import rotation_matrix as _matrix
+from .types import Coordinate, Coupling, JointDynamics, JointLimits, Model, Parameter
 from .sympy_numbers import double
 from .validate import kinetic_energy_problem, motion_space, principal_problem
-from .xml_source import MAX_ELEMENTS, MAX_JOINTS, MAX_LINKS, NUMBER as _NUMBER, _Element, _parse, _where  # noqa: F401
+from .xml_source import NUMBER as _NUMBER, _Element, _parse, _where
 
 GRAVITY = (sp.Integer(0), sp.Integer(0), sp.Float(-9.81))
 MOVABLE = {"revolute": "theta", "continuous": "theta", "prismatic": "o"}
-CODES = {"theta": ("theta4", "theta5", "theta6"), "o": ("o1", "o2", "o3")}
 UNSUPPORTED = {
     "planar": "planar joints are not supported (revolute, continuous, prismatic and fixed are)",
     "floating": ("floating joints inside the tree are not supported (revolute, continuous, prismatic and fixed "
@@ -454,69 +449,38 @@ class _Reader:
     def build(self, robot_name, root, links, link_el, joints, children) -> Model:
         bodies_names = Names(self.fail, "link", "link")
         coordinate_names = Names(self.fail, "joint", "q")
-        pair_names = set(joints)
-        rows = []  # per body: dict with name, parent, pair, link, rotation, parts (inertial contributions)
-        place: dict[str, _Place] = {}
-        link_parts: dict[str, tuple] = {}  # each link's own (mass, com, inertia about it) in its body's axes
+        tree = TreeBuilder()
 
-        def add_inertial(link, where: _Place):
+        def add_inertial(link):
             data = links[link]
-            if data is None:
-                return
-            R = _matrix(where.rotation + data.rotation) if data.rotation else where.R
-            com = add(where.t, turn(where.R, tuple(exact(x) for x in data.com)))
-            J = tuple(tuple(exact(x) for x in row) for row in data.inertia)
-            if data.rotation or where.rotation:
-                J = product(product(R, J), transpose(R))
-            rows[where.body]["parts"].append((exact(data.mass), com, round_off(J)))
-            link_parts[link] = rows[where.body]["parts"][-1]
+            if data is not None:
+                tree.inertial(link, data.mass, data.com, data.inertia, data.rotation)
 
-        root_pair_name = _identifier(ROOT_PAIR, pair_names, "joint")
-        root_pair = floating_root(self.floating_base, coordinate_names, root_pair_name)
-        rows.append({"name": bodies_names.claim(root, link_el[root]), "parent": WORLD, "link": root,
-                     "pair": root_pair, "link_rotation": None,
-                     "parts": []})
-        place[root] = _Place(0, [], IDENTITY, ORIGIN)
-        add_inertial(root, place[root])
+        root_pair_name = _identifier(ROOT_PAIR, set(joints), "joint")
+        tree.root(root, bodies_names.claim(root, link_el[root]),
+                  floating_root(self.floating_base, coordinate_names, root_pair_name))
+        add_inertial(root)
         stack = list(reversed(children[root]))  # depth first, siblings in order (Pinocchio's order)
         while stack:
             joint = stack.pop()
-            here = place[joint.parent]
-            t = add(here.t, matvec(here.R, tuple(exact(x) for x in joint.xyz)))
             if joint.type == "fixed":
-                rotation = _tidy(here.rotation + joint.rotation)
-                if len(rotation) > MAX_ROTATIONS:
-                    rotation = _fold(rotation)
-                    R = _matrix(rotation)
-                else:  # R_here times the joint's own rotation: O(1) whatever the chain's length
-                    R = snapped(product(here.R, _matrix(joint.rotation))) if joint.rotation else here.R
-                place[joint.child] = _Place(here.body, rotation, R, round_off(t))
+                tree.fixed(joint.parent, joint.child, joint.xyz, joint.rotation)
             else:
-                align, i = _align(joint.axis)
-                code = CODES[MOVABLE[joint.type]][i]
                 name = coordinate_names.claim(joint.name, joint.el)
-                pair = Pair(joint.name, tuple(t), tuple(_tidy(here.rotation + joint.rotation + align)),
-                            (Coordinate(name, code, joint.name, joint.dynamics, joint.limits),))
-                back = _inverse(align)
-                R = _matrix(back)
-                link_rotation = R if align else None
-                rows.append({"name": bodies_names.claim(joint.child, link_el[joint.child]),
-                             "parent": rows[here.body]["name"], "link": joint.child, "pair": pair,
-                             "link_rotation": link_rotation, "parts": []})
-                place[joint.child] = _Place(len(rows) - 1, back, R, ORIGIN)
-            add_inertial(joint.child, place[joint.child])
+                tree.joint(joint.parent, joint.child, bodies_names.claim(joint.child, link_el[joint.child]),
+                           joint.name, lambda code, j=joint, n=name: Coordinate(n, code, j.name, j.dynamics, j.limits),
+                           joint.xyz, joint.rotation, joint.axis, MOVABLE[joint.type])
+            add_inertial(joint.child)
             stack.extend(reversed(children[joint.child]))
-        bodies = tuple(Body(name=row["name"], parent=row["parent"], pair=row["pair"], inertial=combine(row["parts"]),
-                            where=_where(link_el[row["link"]]), link_rotation=row["link_rotation"])
-                       for row in rows)
+        bodies = tree.bodies(lambda link: _where(link_el[link]))
+        rows, place = tree.rows, tree.place
         self.judge(bodies, rows, place, links, link_el)
         name = _identifier(robot_name, set(), "robot")
         coordinate_of = {c.joint: c.name for row in rows for c in row["pair"].coordinates}
         couplings = tuple(Coupling(coordinate_of[j.name], coordinate_of[j.mimic["master"]],
                                    float(j.mimic["multiplier"]), float(j.mimic["offset"]))
                           for j in joints.values() if j.mimic is not None) if self.mimic == "couple" else ()
-        links = link_table(place, [row["name"] for row in rows], link_parts,
-                           (link for link in place if not children[link]))
+        links = tree.links(link for link in place if not children[link])
         model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY, links=links,
                       parameters=friction_parameters(c for row in rows for c in row["pair"].coordinates),
                       source=str(self.file), description=f"URDF robot {robot_name!r}",
