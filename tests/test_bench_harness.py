@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
@@ -63,6 +64,7 @@ def test_input_chains_are_the_benchmark_arm_listed_from_the_tip(tmp_path):
     assert "parse a 5-link YAML chain (3-D, full inertias; aggsym.load in process) ≤ 1 s" in targets
 
 
+@pytest.mark.compiler
 def test_chain_generated_c_matches_the_numeric_twin(tmp_path):
     model = chain.chain_model(3, tmp_path)
     gen = generate(model, latex=False)
@@ -72,6 +74,7 @@ def test_chain_generated_c_matches_the_numeric_twin(tmp_path):
         assert r.c_error <= 1e-12 and r.py_error <= 1e-12, r
 
 
+@pytest.mark.compiler
 def test_timing_harness_runs_on_a_tiny_model(tmp_path):
     """chain3 generated as the runtime section does (the routines on request too: every pair of runtime.PAIRS is
     timed), chain2 with the default routines alone (the five pairs and the frame Jacobians; the derivatives' and
@@ -145,6 +148,7 @@ def test_kane_peer_agrees_with_aggsym_on_a_short_chain(tmp_path):
     assert ops["mul"] > 0 and ops["add"] > 0
 
 
+@pytest.mark.compiler
 def test_pinocchio_build_flags_come_from_the_wheel():
     prefix = runtime.cmeel_prefix()
     flags = runtime.compile_definitions(prefix)

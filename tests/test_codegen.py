@@ -20,6 +20,7 @@ from conftest import MODELS, ROOT, model_path
 TOLERANCE = 1e-12
 
 
+@pytest.mark.compiler
 @pytest.mark.parametrize("cflags", ["", "-ffast-math"])
 @pytest.mark.parametrize("path", MODELS, ids=lambda p: p.stem)
 def test_model_compiles_warning_free_and_matches_twin(path, cflags, tmp_path, monkeypatch):
@@ -152,6 +153,7 @@ def test_numpy_module_accepts_a_batch_and_parameters(tmp_path, rng):
     assert isinstance(mod.kinetic_energy(q[0], qd[0]), float)
 
 
+@pytest.mark.compiler
 def test_check_exits_1_on_mismatch(monkeypatch, capsys):
     import aggsym.codegen.generate as g
 
@@ -229,6 +231,7 @@ def test_templates_ship_inside_the_wheel(tmp_path):
     assert (elsewhere / "generated" / "planar_2link" / "planar_2link.c").exists()
 
 
+@pytest.mark.compiler
 def test_emitted_sincos_is_accurate(tmp_path):
     """aggsym_sincos in the generated C (Cody-Waite reduction, minimax series) against libm through NumPy: within
     a few units in the last place over small, large, negative and quadrant-boundary angles; nan and inf as libm."""
@@ -256,6 +259,7 @@ void many(const double *x, double *s, double *c, int n) { for (int i = 0; i < n;
     assert np.all(np.isnan(s[:3])) and np.all(np.isnan(c[:3]))
 
 
+@pytest.mark.compiler
 def test_outputs_may_alias_inputs(tmp_path, rng):
     """Every input is read before any output is written, so a routine may write its result over an input
     (e.g. q'' over tau in place)."""
@@ -309,6 +313,7 @@ def test_check_opt_takes_the_level_with_or_without_its_dash():
     assert exc.value.code == 2
 
 
+@pytest.mark.compiler
 def test_readme_c_example_compiles_and_runs(tmp_path):
     """The complete C program of README.md, compiled against the committed generated/double_pendulum with -Werror,
     prints tau = A qdd + b + g and recovers qdd by forward dynamics, with the run-time parameter change applied."""

@@ -237,6 +237,7 @@ def test_bad_elastic_pair_is_reported_precisely(case, tmp_path):
     assert_model_error(path, where, words)
 
 
+@pytest.mark.compiler
 def test_all_coordinates_elastic_generates_empty_slow_blocks(tmp_path):
     """A body on a spring only (no slow coordinate): the slow blocks are empty, and the C still compiles
     warning-free (-Werror) and matches the twin."""

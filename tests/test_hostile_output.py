@@ -59,6 +59,7 @@ def xml_attribute(text: str) -> str:
             .replace("\n", "&#10;").replace("\r", "&#13;"))
 
 
+@pytest.mark.compiler
 @pytest.mark.parametrize("k", range(len(EVIL) - 1))  # the last one holds characters XML cannot carry
 def test_hostile_joint_names_compile_import_and_typeset_safely(k, tmp_path):
     """A joint and its link (a frame of the frame routines) named with C, Python or LaTeX syntax: the header
@@ -82,6 +83,7 @@ def test_hostile_joint_names_compile_import_and_typeset_safely(k, tmp_path):
     assert "\\input{" not in tex and "\\write18" not in tex
 
 
+@pytest.mark.compiler
 def test_hostile_description_in_a_yaml_model(tmp_path):
     text = model_path("planar_2link").read_text()
     lines = [line for line in text.splitlines() if not line.startswith("description:")]
@@ -128,6 +130,7 @@ def test_constants_print_as_exact_finite_doubles():
             _number(bad)
 
 
+@pytest.mark.compiler
 def test_null_p_means_the_defaults(tmp_path, rng):
     model = aggsym.load(model_path("double_pendulum"))
     lib, _, manifest = generated_code(model, tmp_path)
@@ -141,6 +144,7 @@ def test_null_p_means_the_defaults(tmp_path, rng):
     assert np.allclose(out, aggsym.NumericTwin(model).inverse_dynamics(q, qd, qdd), rtol=1e-13)
 
 
+@pytest.mark.compiler
 @pytest.mark.parametrize("name", ["manipulator6", "flywheel_on_body"])
 def test_fast_math_keeps_every_routine_within_1e12_at_large_angles(name, tmp_path, monkeypatch):
     """Compiled -O3 -ffast-math (CFLAGS, as `aggsym check` honours it), every routine agrees with the NumPy module to
@@ -160,6 +164,7 @@ def test_fast_math_keeps_every_routine_within_1e12_at_large_angles(name, tmp_pat
                 assert np.abs(g - r).max() <= 1e-12 * top, (role, scale)
 
 
+@pytest.mark.compiler
 def test_check_honours_cc_and_cflags(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("CFLAGS", "-fno-such-flag-for-aggsym")
     assert cli.main(["check", str(model_path("planar_2link")), "--trials", "1"]) == 2
@@ -191,6 +196,7 @@ def test_a_model_name_too_long_for_the_file_system_is_exit_2(tmp_path, capsys):
     assert str(out) in err and "Traceback" not in err and not out.exists()
 
 
+@pytest.mark.compiler
 def test_a_hostile_file_name_stays_in_its_docstring_and_comment(tmp_path):
     """The model's file name reaches the NumPy docstring and the C comments escaped."""
     folder = tmp_path / 'x"""; __import__("pathlib").Path("aggsym_pwned_marker").touch() #*'

@@ -31,6 +31,7 @@ def time_rate(module, q, t, h=1e-6):
     return (module.constraint_residual(q, t + h) - module.constraint_residual(q, t - h)) / (2 * h)
 
 
+@pytest.mark.compiler
 def test_every_routine_takes_the_time_and_the_manifest_says_why(platform):
     model, _, _, _, manifest = platform
     assert model.time_dependent and not model.has_prescribed_spins and model.conservative is False
@@ -40,6 +41,7 @@ def test_every_routine_takes_the_time_and_the_manifest_says_why(platform):
     assert "coriolis" in manifest["functions"]  # the tree itself does not depend on t
 
 
+@pytest.mark.compiler
 def test_gamma_holds_every_time_term(platform, rng):
     _, lib, module, _, _ = platform
     for _ in range(5):
@@ -65,6 +67,7 @@ def consistent(module, q, qd, t):
     return q, qd - np.linalg.lstsq(J, J @ qd + time_rate(module, q, t), rcond=None)[0]
 
 
+@pytest.mark.compiler
 def test_the_platform_works_on_the_cart(platform, rng):
     """dE/dt = (J^T lambda) . qd = -lambda . F(t) with tau = 0, at consistent states (central differences of E
     along (qd, qdd) of the generated constrained forward dynamics)."""
@@ -84,6 +87,7 @@ def test_the_platform_works_on_the_cart(platform, rng):
         assert abs(rate - expected) <= 1e-6 * max(abs(expected), 1.0), (rate, expected)
 
 
+@pytest.mark.compiler
 def test_the_cart_stays_on_the_moving_platform(platform):
     _, _, module, _, _ = platform
     t, dt = 0.3, 1e-3

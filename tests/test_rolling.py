@@ -61,6 +61,7 @@ def random_state(rng):
     return q, rng.normal(size=6)
 
 
+@pytest.mark.compiler
 def test_the_rows_are_the_contact_points_velocity(disc, rng):
     model, lib, module, _ = disc
     for _ in range(5):
@@ -90,6 +91,7 @@ def steady_spin(lean, omega):
     return (A_DIAMETER * omega ** 2 * s * c - M * G * R * s) / ((C_AXLE + M * R ** 2) * omega * c)
 
 
+@pytest.mark.compiler
 @pytest.mark.parametrize("lean, omega", [(0.3, 4.0), (-0.5, 2.5), (0.8, -6.0)])
 def test_steady_precession_matches_the_closed_form(disc, lean, omega):
     _, _, module, _ = disc
@@ -109,6 +111,7 @@ def test_steady_precession_matches_the_closed_form(disc, lean, omega):
     assert abs(qdd[4]) > 1e-3
 
 
+@pytest.mark.compiler
 def test_rolling_conserves_energy_and_stays_on_the_plane(disc, rng):
     model, _, module, stabilized = disc
     twin = NumericTwin(dataclasses.replace(model, stabilization=(0, 0)))

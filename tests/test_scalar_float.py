@@ -24,6 +24,7 @@ ISSUE_BOUND = 1e-4  # the issue's requirement on A, the inverse dynamics and the
 ISSUE_ROLES = ("inertia", "inverse_dynamics", "frame_poses")
 
 
+@pytest.mark.compiler
 @pytest.mark.parametrize("name", sorted(ROBOTS))
 def test_float_c_of_the_robots_is_within_its_bounds(name, tmp_path):
     model = aggsym.load(robot_path(name))
@@ -72,6 +73,7 @@ def test_float_literals_round_straight_to_the_nearest_float():
             _number(bad, "float")
 
 
+@pytest.mark.compiler
 def test_check_scalar_float_passes_and_prints_each_routine(capsys):
     assert cli.main(["check", str(model_path("double_pendulum")), "--scalar", "float", "--trials", "3",
                      "--opt", "O1"]) == 0
@@ -99,6 +101,7 @@ def test_a_constant_a_float_cannot_hold_is_an_error_naming_the_routine(value, tm
     assert cli.main(["generate", str(path), "-o", str(out), "-q"]) == 0  # the double build takes it
 
 
+@pytest.mark.compiler
 def test_generated_code_helper_compiles_float_with_the_strict_flags(tmp_path, rng):
     model = aggsym.load(model_path("planar_2link"))
     lib, module, manifest = generated_code(model, tmp_path, opt="-O1", scalar="float")

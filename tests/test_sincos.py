@@ -116,6 +116,7 @@ def test_ulp_distance_counts_doubles():
     assert ulps(np.array([5e-324]), np.array([-5e-324]))[0] == 2 and ulps(x, x).max() == 0
 
 
+@pytest.mark.compiler
 def test_within_2_ulp_of_libm_on_a_million_points(sincos, rng):
     """10^6 uniform in [-1e6, 1e6], 10^5 of small |x| (log-uniform down to 1e-300), and the doubles nearest and
     next to k pi/2 and k pi/4 (where the reduction cancels most and where the quadrants meet)."""
@@ -136,6 +137,7 @@ def test_within_2_ulp_of_libm_on_a_million_points(sincos, rng):
         assert worst <= BOUND_ULP, (name, worst, x[np.argmax(np.maximum(ulps(s, rs), ulps(c, rc)))])
 
 
+@pytest.mark.compiler
 def test_equal_to_libm_at_the_doubles_nearest_k_half_pi(sincos, rng):
     """sin and cos of the double nearest k pi/2 (|k| up to 636619, i.e. |x| < 1e6) equal libm's bit for bit: 0
     and +-1 exactly where libm gives them, and the tiny residual of the other one correctly rounded."""
@@ -148,6 +150,7 @@ def test_equal_to_libm_at_the_doubles_nearest_k_half_pi(sincos, rng):
     assert np.all(np.abs(np.where(ks % 2 == 0, c, s)) == 1.0)
 
 
+@pytest.mark.compiler
 @pytest.mark.parametrize("x", [1e6, -1e6, 1e6 + 0.5, 2.5e7, -1e300, 1.7e308, math.inf, -math.inf, math.nan])
 def test_outside_the_fast_range_it_is_libm(sincos, x):
     """|x| >= 1e6, inf and nan take libm's sin and cos (nan for inf and nan)."""
@@ -170,6 +173,7 @@ def test_the_helper_is_static_inline_and_has_no_quadrant_branch():
         aggsym.load(model_path("double_pendulum")), latex=False, scalar="float").files["double_pendulum.c"]
 
 
+@pytest.mark.compiler
 def test_the_pair_gives_the_single_angle_results_bit_for_bit(tmp_path, rng):
     """Without -ffast-math the two lanes of aggsym_sincos2 do aggsym_sincos's arithmetic: identical doubles, also
     where one of the pair is outside the fast range (both then go through aggsym_sincos)."""

@@ -29,6 +29,7 @@ def _generate(tmp_path, name, *options, folder="out"):
     return code, out
 
 
+@pytest.mark.compiler
 @pytest.mark.parametrize("name", ["manipulator6", "double_pendulum_sliding_friction"])
 def test_split_library_equals_the_one_file_c_and_the_twin(name, tmp_path, rng):
     """Every default routine: make -j2 CC=cc in the split folder, the library's functions against NAME.c compiled
@@ -214,6 +215,7 @@ def test_a_tampered_manifest_deletes_nothing_outside_what_aggsym_writes(listed, 
     assert (out / "double_pendulum.c").exists()
 
 
+@pytest.mark.compiler
 def test_check_split_runs_the_makefiles_library(tmp_path, capsys):
     """aggsym check --split builds the --split output with its Makefile and checks that library: the command
     passes on a model, and a routine file changed after generation (an entry of the gravity zeroed) is caught."""
