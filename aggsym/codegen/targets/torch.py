@@ -74,6 +74,28 @@ def torch_body(model, prog, lines, routine, inputs) -> dict:
     return {"statements": statements, "outputs": entries}
 
 
+def _wiring(e, derivative, matrix, quaternion: bool) -> dict:
+    """How the autograd.Function of routine ``e`` (inputs q, qd, qdd|tau, [t], p) takes its gradients: along
+    ``analytic`` inputs from the derivative routine (q unless the root is a quaternion free-flyer, qd) and the
+    matrix (the third input), along the ``plain`` ones (q with a quaternion, t, p) by a vjp (jvp) of the traced
+    routine; the names and the backward's tuple for the template."""
+    inputs = list(e.inputs)
+    plain = [i for k, i in enumerate(inputs) if (k == 0 and quaternion) or k >= 3]
+    pairs = ([] if quaternion else [(inputs[0], "d_q")]) + [(inputs[1], "d_qd"), (inputs[2], "m")]
+    backward = []
+    for k, i in enumerate(inputs):
+        if i in plain:
+            backward.append(f"grad_{i}")
+        else:
+            backward.append(f"(g @ {dict((x, d) for x, d in pairs)[i]}).squeeze(-2)")
+    return {"derivative": derivative.routine.role, "matrix": matrix.routine.role, "class": _class_name(e.routine.role),
+            "derivative_inputs": list(derivative.inputs), "matrix_inputs": list(matrix.inputs), "third": inputs[2],
+            "analytic": [x for x, _ in pairs[:-1]], "plain": plain, "plain_index": tuple(inputs.index(i) for i in plain),
+            "plain_grads": [f"grad_{i}" for i in plain], "plain_dots": [f"{i}_dot" for i in plain],
+            "plain_args": [f"{i}_" for i in plain], "plain_call": [f"{i}_" if i in plain else i for i in inputs],
+            "analytic_pairs": pairs, "backward": backward, "q_plain": quaternion}
+
+
 def _class_name(role: str) -> str:
     """The autograd.Function of a routine: ``forward_dynamics`` -> ``_ForwardDynamics``."""
     return "_" + "".join(w.title() for w in role.split("_"))
@@ -127,10 +149,7 @@ class TorchTarget(Target):
             wired = analytic.get(e.routine.role)
             if wired:
                 by_role = {x.routine.role: x for x in job.emitted}
-                wired = {"derivative": wired[0], "matrix": wired[1], "class": _class_name(e.routine.role),
-                         "derivative_inputs": list(by_role[wired[0]].inputs),
-                         "matrix_inputs": list(by_role[wired[1]].inputs),
-                         "third": e.inputs[2], "q_plain": model.nq != model.nv}
+                wired = _wiring(e, by_role[wired[0]], by_role[wired[1]], quaternion=model.nq != model.nv)
             routines.append({
                 "role": e.routine.role, "doc": e.routine.doc, "inputs": list(e.inputs), "arrays": arrays,
                 "scalars": scalars, "has_p": "p" in e.inputs, "py_parameters": e.py_parameters,
