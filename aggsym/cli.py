@@ -93,7 +93,7 @@ def _parser() -> argparse.ArgumentParser:
                         "Makefile building libNAME.a (make -j2; CC, CFLAGS default -O2 -std=c99) instead of NAME.c")
     g.add_argument("--targets", metavar="A,B,...",
                    help="write only these targets' files: c (NAME.h, NAME.c or the --split files), numpy (NAME.py), "
-                        "manifest (NAME.json), latex (NAME.tex); default: all four")
+                        "manifest (NAME.json), latex (NAME.tex), torch (NAME_torch.py); default: the first four")
     g.add_argument("--list-routines", action="store_true",
                    help="print the routines this model gets, one line each (what each computes), and write nothing")
     command("latex", "print the LaTeX document of the equations of motion")
@@ -109,7 +109,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="check the --split layout: its Makefile builds libNAME.a (make -j2, the same warnings as "
                         "errors and --opt), and that library is what runs")
     c.add_argument("--targets", metavar="A,B,...",
-                   help="check only these targets (default: every target with something to run here: c, numpy)")
+                   help="check only these targets (default: every target with something to run here: c, numpy, and torch "
+                        "where torch is installed)")
     command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
     return parser
 
