@@ -161,12 +161,18 @@ def test_analytic_derivatives_equal_plain_autograd(robot, tmp_path_factory, rng)
     a vjp of a batch, jacfwd (the Function's jvp) and the Hessian along q (the derivative routines differentiated
     in turn)."""
     path = model_path(robot) if robot == "double_pendulum" else robot_path(robot)
-    model, _, module = modules(tmp_path_factory, path, DERIVATIVES if robot == "double_pendulum" else
-                               "inertia,inverse_dynamics,forward_dynamics,inertia_inverse,"
-                               "inverse_dynamics_derivatives,forward_dynamics_derivatives")
+    model, np_module, module = modules(tmp_path_factory, path, DERIVATIVES if robot == "double_pendulum" else
+                                       "inertia,inverse_dynamics,forward_dynamics,inertia_inverse,"
+                                       "inverse_dynamics_derivatives,forward_dynamics_derivatives")
     n = model.nq
     q, qd, u = (torch.tensor(rng.uniform(-1.5, 1.5, size=(3, n))) for _ in range(3))
     p = module.PARAMETERS * torch.tensor(rng.uniform(0.5, 2.0, size=module.PARAMETERS.shape))
+    for role in ("inverse_dynamics", "forward_dynamics", "inverse_dynamics_derivatives",
+                 "forward_dynamics_derivatives"):  # the values: the NumPy module's
+        got = outputs(getattr(module, role)(q, qd, u, p))
+        want = outputs(getattr(np_module, role)(q.numpy(), qd.numpy(), u.numpy(), p.numpy()))
+        for a, b in zip(got, want):
+            assert relative_error(a.numpy(), b) < 1e-12, role
     for role in ("inverse_dynamics", "forward_dynamics"):
         fast, plain = (jacobians(module, role, (q, qd, u, p), a) for a in (True, False))
         for a, b in zip(fast, plain):
