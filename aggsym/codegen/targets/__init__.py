@@ -12,6 +12,7 @@ from .c import CTarget
 from .latex import LatexTarget
 from .manifest import ManifestTarget
 from .numpy import NumPyTarget
+from .torch import TorchTarget
 
 TARGETS: dict = {}
 
@@ -58,6 +59,7 @@ def select(names=None) -> list:
 
 for _target in (CTarget(), NumPyTarget(), ManifestTarget(), LatexTarget()):  # one line per target
     register(_target)
+register(TorchTarget())  # --targets torch (not in the default set)
 
 __all__ = ["Job", "RoutineLines", "Runner", "Target", "TARGETS", "register", "unregister", "select", "known",
            "default_targets"]

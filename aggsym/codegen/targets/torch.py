@@ -1,0 +1,205 @@
+"""The PyTorch target: NAME_torch.py, the NumPy module's routines as functions of tensors (``--targets torch``).
+
+Each routine is printed from its straight line by :func:`~.numpy.array_steps` with the spelling :data:`TORCH`
+(``torch.sin``, ...): inputs unpacked, each named temporary one assignment, and the output entries collected and
+stacked once at the end (no in-place write on a tensor that autograd tracks), so that autograd, ``torch.func``
+(``vmap``, ``jacrev``) and ``torch.compile`` go through every routine.  The functions take any leading batch
+dimensions (broadcast like the NumPy module's, ``p`` included), compute in the inputs' floating dtype on the
+inputs' device (the default ``p`` is made there), and import only torch.
+
+Where the module also has the derivative routines (``--routines default,inverse_dynamics_derivatives,
+forward_dynamics_derivatives``), ``inverse_dynamics`` and ``forward_dynamics`` carry them as a
+``torch.autograd.Function`` (:func:`analytic_routines`): their gradients along q, qd and qdd|tau are the generated
+derivative matrices (with A or A^-1), those along p (and t) go through plain autograd of the traced routine.  With
+a quaternion free-flyer (nq = nv + 1) the derivative routines are in Pinocchio's tangent space, not along the
+entries of q: there q's gradient, too, is plain autograd (exact, at the cost of tracing).
+
+A routine with a status (a singular system: constrained forward dynamics, the support problems) cannot raise
+under ``vmap`` or ``torch.compile``: its outputs hold NaN at the states of the batch where the status is nonzero
+(the NumPy module raises LinAlgError there).  Checked by ``aggsym check`` against the numeric twin when torch is
+installed: in float64, or in float32 under ``--scalar float`` against the float C's bounds (the manifest's
+``float_tolerance``).
+"""
+from __future__ import annotations
+
+from ...core.functions import FUNCTIONS
+from ...core.program import Node
+from ..printing import Spelling, _number
+from .base import Runner, Target
+from .numpy import _unravel, array_steps
+
+# torch's name of each function of aggsym/core/functions.py (element-wise, so that inputs carry batch dimensions)
+TORCH_NAMES = {"sin": "sin", "cos": "cos", "sqrt": "sqrt", "tan": "tan", "exp": "exp", "log": "log", "abs": "abs",
+               "asin": "asin", "acos": "acos", "atan": "atan", "atan2": "atan2", "sign": "sign"}
+_missing = set(FUNCTIONS) - set(TORCH_NAMES)
+if _missing:  # a function added to the table must be spelled here too
+    raise ImportError(f"the PyTorch target has no spelling for {sorted(_missing)}")
+# double literals as the C's (a Python float keeps a float32 tensor float32: torch's scalar promotion)
+TORCH = Spelling({name: f"torch.{TORCH_NAMES[name]}" for name in FUNCTIONS}, _number)
+
+# role -> (derivative routine, routine of the matrix along the third input, and how it acts): the routines whose
+# gradients the generated derivatives carry; d tau / d qdd = A, d qdd / d tau = A^-1 (both symmetric)
+ANALYTIC = {
+    "inverse_dynamics": ("inverse_dynamics_derivatives", "inertia"),
+    "forward_dynamics": ("forward_dynamics_derivatives", "inertia_inverse"),
+}
+
+
+def torch_body(model, prog, lines, routine, inputs) -> dict:
+    """One routine as PyTorch: ``statements`` (inputs unpacked, temporaries) and ``outputs``, per output its
+    entries' texts in row-major order (``zero`` for a zero, ``zero + c`` for another constant, so that every
+    entry is a tensor of the batch shape when stacked)."""
+    shapes = [out.shape(model) for out in routine.outputs]
+    entries = [[None] * _size(shape) for shape in shapes]
+    statements = []
+    for step in array_steps(model, prog, lines, routine, inputs, TORCH):
+        if step[0] == "input":
+            statements.append(f"{step[1]} = {step[2]}[..., {step[3]}]")
+        elif step[0] == "temp":
+            statements.append(f"{step[1]} = {step[2]}")
+        else:
+            _, o, k, rhs = step
+            x = lines.outputs[o][k]
+            if rhs is None or (not isinstance(x, Node) and float(x) == 0.0):
+                entries[o][k] = "zero"
+            elif not isinstance(x, Node):  # a constant
+                entries[o][k] = f"zero + {rhs}"
+            else:
+                entries[o][k] = rhs
+    for o, shape in enumerate(shapes):
+        for k, e in enumerate(entries[o]):
+            if e is None:
+                raise RuntimeError(f"{routine.role}: output {routine.outputs[o].name} entry {_unravel(k, shape)} "
+                                   f"was never written")
+    return {"statements": statements, "outputs": entries}
+
+
+def _wiring(e, derivative, matrix, quaternion: bool) -> dict:
+    """How the autograd.Function of routine ``e`` (inputs q, qd, qdd|tau, [t], p) takes its gradients: along
+    ``analytic`` inputs from the derivative routine (q unless the root is a quaternion free-flyer, qd) and the
+    matrix (the third input), along the ``plain`` ones (q with a quaternion, t, p) by a vjp (jvp) of the traced
+    routine; the names and the backward's tuple for the template."""
+    inputs = list(e.inputs)
+    plain = [i for k, i in enumerate(inputs) if (k == 0 and quaternion) or k >= 3]
+    pairs = ([] if quaternion else [(inputs[0], "d_q")]) + [(inputs[1], "d_qd"), (inputs[2], "m")]
+    backward = []
+    for k, i in enumerate(inputs):
+        if i in plain:
+            backward.append(f"grad_{i}")
+        else:
+            backward.append(f"(g @ {dict((x, d) for x, d in pairs)[i]}).squeeze(-2)")
+    return {"derivative": derivative.routine.role, "matrix": matrix.routine.role, "class": _class_name(e.routine.role),
+            "derivative_inputs": list(derivative.inputs), "matrix_inputs": list(matrix.inputs), "third": inputs[2],
+            "analytic": [x for x, _ in pairs[:-1]], "plain": plain, "plain_index": tuple(inputs.index(i) for i in plain),
+            "plain_grads": [f"grad_{i}" for i in plain], "plain_dots": [f"{i}_dot" for i in plain],
+            "plain_args": [f"{i}_" for i in plain], "plain_call": [f"{i}_" if i in plain else i for i in inputs],
+            "analytic_pairs": pairs, "backward": backward, "q_plain": quaternion}
+
+
+def _class_name(role: str) -> str:
+    """The autograd.Function of a routine: ``forward_dynamics`` -> ``_ForwardDynamics``."""
+    return "_" + "".join(w.title() for w in role.split("_"))
+
+
+def _size(shape) -> int:
+    n = 1
+    for s in shape:
+        n *= s
+    return n
+
+
+def analytic_routines(model, emitted) -> dict:
+    """{role: (derivative routine, matrix routine)} of the routines whose gradients the module carries by the
+    generated derivatives: each of :data:`ANALYTIC` whose two helpers are emitted with the same inputs."""
+    roles = {e.routine.role: e for e in emitted}
+    out = {}
+    for role, (derivative, matrix) in ANALYTIC.items():
+        if role in roles and derivative in roles and matrix in roles \
+                and roles[derivative].inputs == roles[role].inputs:
+            out[role] = (derivative, matrix)
+    return out
+
+
+class TorchTarget(Target):
+    """NAME_torch.py: the NumPy module's functions over tensors (any leading batch dimensions, the inputs' dtype
+    and device), autograd and ``torch.func`` through every routine, the generated derivatives wired in."""
+
+    name = "torch"
+    column = "PyTorch"
+    folder = "torch"
+    templates = ("model_torch.py.j2",)
+
+    def file_names(self, job):
+        return [f"{job.model.name}_torch.py"]
+
+    def owns(self, name, file):
+        return file == f"{name}_torch.py"
+
+    def print_routine(self, model, prog, lines, emitted):
+        emitted.bodies[self.name] = torch_body(model, prog, lines, emitted.routine, emitted.inputs)
+
+    def render(self, job):
+        model = job.model
+        analytic = analytic_routines(model, job.emitted)
+        routines = []
+        for e in job.emitted:
+            body = e.bodies[self.name]
+            arrays = [i for i in e.inputs if i not in ("p", "t", "dt")]
+            scalars = [i for i in e.inputs if i in ("t", "dt")]
+            wired = analytic.get(e.routine.role)
+            if wired:
+                by_role = {x.routine.role: x for x in job.emitted}
+                wired = _wiring(e, by_role[wired[0]], by_role[wired[1]], quaternion=model.nq != model.nv)
+            routines.append({
+                "role": e.routine.role, "doc": e.routine.doc, "inputs": list(e.inputs), "arrays": arrays,
+                "scalars": scalars, "has_p": "p" in e.inputs, "py_parameters": e.py_parameters,
+                "statements": body["statements"],
+                "zero": any(e == "zero" or e.startswith("zero + ") for out in body["outputs"] for e in out),
+                "outputs": [{"py": o.py, "shape": o.shape(model), "entries": body["outputs"][k],
+                             "returned": o.returned} for k, o in enumerate(e.routine.outputs)],
+                "written": [{"py": o.py, "scalar": o.shape(model) == (1,)} for o in e.routine.written],
+                "status": e.routine.status.py if e.routine.status else None,
+                "failure": e.routine.status.failure if e.routine.status else "",
+                "analytic": wired,
+            })
+        ctx = {**job.ctx, "torch_routines": routines, "quaternion": model.nq != model.nv,
+               "analytic": [r["role"] for r in routines if r["analytic"]],
+               "statuses": [r["role"] for r in routines if r["status"]]}
+        return {f"{model.name}_torch.py": self.template("model_torch.py.j2").render(ctx)}
+
+    def main_file(self, name):
+        return f"{name}_torch.py"
+
+    def unavailable(self, tools):
+        try:
+            import torch  # noqa: F401
+        except ImportError:
+            return "torch is not installed (pip install aggsym[torch])"
+        return None
+
+    def runner(self, model, folder, manifest, opt, tools):
+        """The module called on float64 tensors, or on float32 ones when the manifest's scalar is float (``aggsym
+        check --scalar float``), held then to the float C's bounds (the manifest's ``float_tolerance``, those of
+        ``float_tolerance_per_condition`` also relative to cond(A)).  NaN outputs of a routine with a status are
+        its failure: raised as numpy.linalg.LinAlgError, as the NumPy module does."""
+        import numpy as np
+        import torch
+
+        module = tools.import_module(folder / f"{model.name}_torch.py")
+        single = manifest.get("scalar", "double") == "float"
+        dtype = torch.float32 if single else torch.float64
+        statuses = {role for role, sig in manifest["signatures"].items() if sig.get("returns", "void") != "void"}
+
+        def call(role, *args):
+            tensors = [torch.as_tensor(np.asarray(a, dtype=float), dtype=dtype) for a in args]
+            with torch.no_grad():
+                got = getattr(module, role)(*tensors)
+            outs = tuple(x.double().numpy() for x in (got if isinstance(got, tuple) else (got,)))
+            if role in statuses and any(np.isnan(x).any() for x in outs):
+                raise np.linalg.LinAlgError(f"{role}: NaN outputs: the system is singular")
+            return outs[0] if len(outs) == 1 else outs
+
+        if not single:
+            return Runner(call)
+        return Runner(call, manifest.get("float_tolerance", {}),
+                      tuple(manifest.get("float_tolerance_per_condition", ())))
