@@ -11,6 +11,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from helpers import ROBOTS  # noqa: E402  (the tests folder is on the path from here on)
 
 
+def pytest_collection_modifyitems(items):
+    """A test on :func:`robot_code` compiles C (the fixture does, once per session and robot): it carries the
+    ``compiler`` marker whether or not it was the one that built the fixture."""
+    for item in items:
+        if "robot_code" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.compiler)
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(20261121)

@@ -47,6 +47,7 @@ def hand(tmp_path):
     return path
 
 
+@pytest.mark.compiler
 def test_massless_joints_leave_the_undefined_routines_out(hand, tmp_path, rng):
     model = aggsym.load(hand)
     omitted = omitted_routines(model)
@@ -76,6 +77,7 @@ def test_cli_lists_and_warns_about_the_left_out_routines(hand, tmp_path, capsys)
     assert "warning" in err and "finger_joint" in err and "--armature" in err
 
 
+@pytest.mark.compiler
 @pytest.mark.parametrize("case", ["hand", "ur5"])
 def test_armature_equals_pinocchios(case, hand, tmp_path, rng):
     """With --armature every routine is emitted and equals Pinocchio's model with the same armature: crba, rnea,

@@ -59,6 +59,7 @@ def reference_constraints(model, pm, q0):
 # the gripper holding a box
 
 
+@pytest.mark.compiler
 def test_gripper_holding_a_box_equals_pinocchio(tmp_path):
     model = plain(aggsym.load(DATA / "gripper_box.yaml"))
     assert (model.nq, model.constraint_rows) == (10, 6)
@@ -227,6 +228,7 @@ def test_delta_robot_is_closed_at_zero_with_three_degrees_of_freedom_and_a_plate
         assert np.abs(data.oMf[plate].rotation - np.eye(3)).max() < 1e-12
 
 
+@pytest.mark.compiler
 def test_delta_robot_dynamics_equal_the_pinocchio_kkt(delta, tmp_path):
     model, pm, cs = delta
     model = plain(model)

@@ -122,6 +122,7 @@ def test_identities_of_a_model_with_a_loop_a_rotated_reference_and_mixed_rows():
     assert np.abs(twin.constraint_residual(zero)[[0, 1, 2, 3, 4]]).max() < 1e-15  # default attachments
 
 
+@pytest.mark.compiler
 def test_the_generated_c_and_numpy_equal_the_twin(tmp_path):
     model = loop_model()
     lib, module, manifest = generated_code(model, tmp_path, opt="-O2")
@@ -153,6 +154,7 @@ def test_the_generated_c_and_numpy_equal_the_twin(tmp_path):
     assert relative_error(lam[2], twin.constrained_forward_dynamics(Q[2], QD[2], TAU[2])[1]) < 1e-12
 
 
+@pytest.mark.compiler
 def test_singular_constraints_return_nonzero_in_c_and_raise_in_numpy(tmp_path):
     """At q = 0 the four-bar is at a dead centre (every link along x): the pin's o1 row of J vanishes, J A^-1 J^T
     is singular there and only there."""

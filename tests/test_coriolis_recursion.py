@@ -121,6 +121,7 @@ def test_bundled_models_against_pinocchio(name, rng):
         check(numeric(model, q, v, True), pm, q, v, numeric(model, q, v, False))
 
 
+@pytest.mark.compiler
 def test_emitted_chain_is_quadratic_and_exact(rng, tmp_path):
     """The emitted coriolis of the benchmark's 24-link chain: within 20 n^2 + 600 n operations (the column form
     took about 100 n^2), and exact as C and as NumPy."""

@@ -88,6 +88,7 @@ def derivative_code(request, tmp_path_factory):
     return model, lib, module, pinocchio_model(robot_path(name))
 
 
+@pytest.mark.compiler
 def test_generated_c_and_numpy_derivatives_equal_pinocchio(derivative_code, rng):
     model, lib, module, pm = derivative_code
 

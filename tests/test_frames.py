@@ -77,6 +77,7 @@ def worst_error(model, code, pm, rng, states=3, frame_type=pin.FrameType.BODY) -
     return worst
 
 
+@pytest.mark.compiler
 def test_frames_of_the_generated_c_and_numpy_equal_pinocchio(robot_code, rng):
     """Every robot of the suite, fixed base, its default frames (the links without a child: tool flanges, feet,
     fingertips, sensors), through the compiled C and the NumPy module."""
@@ -280,6 +281,7 @@ def test_bad_frames_in_yaml_are_clear_errors(frames, where, words, tmp_path):
     assert_model_error(path, where, [words] if words else [])
 
 
+@pytest.mark.compiler
 def test_readme_controller_example_compiles_runs_and_tracks(tmp_path):
     """README's computed-torque controller of the UR5, compiled with -Werror against the UR5's generated code: it
     tracks its reference to 1e-4 rad in the second second, and the tool0 position it prints from frame_poses is

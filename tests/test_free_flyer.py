@@ -203,6 +203,7 @@ def solo_code(tmp_path_factory):
     return model, lib, module, manifest
 
 
+@pytest.mark.compiler
 def test_generated_c_and_numpy_equal_pinocchio(solo_code, rng):
     model, lib, module, manifest = solo_code
     pm = free_flyer(robot_path("solo12"))

@@ -124,6 +124,7 @@ def test_long_chain_against_pinocchio(rng, tmp_path):
         assert relative_error(generators_numeric(model, q), inv) <= TOL
 
 
+@pytest.mark.compiler
 def test_emitted_chain_is_quadratic_and_exact(rng, tmp_path):
     """The emitted inertia_inverse of the 24-link chain: the generators' program (its operations within
     20 n^2 + 400 n, where the explicit factors take about 33 n^2 at this n and grow as n^3), run as C and as

@@ -37,6 +37,7 @@ def rubbing(tmp_path):
     return path
 
 
+@pytest.mark.compiler
 def test_friction_parameters_and_routine(rubbing, tmp_path, rng):
     model = aggsym.load(rubbing)
     names = [p.name for p in model.parameters]

@@ -96,6 +96,7 @@ def test_gripper_equals_pinocchios_mimic_model(tmp_path):
         assert relative_error(twin.nonlinear_effects(q, qd), pin.nonLinearEffects(pm, pm.createData(), Q, qd)) <= TOLERANCE
 
 
+@pytest.mark.compiler
 def test_gripper_twin_c_and_numpy_equal_the_reduced_pinocchio_model(tmp_path):
     path = tmp_path / "gripper.urdf"
     path.write_text(GRIPPER)
@@ -139,6 +140,7 @@ def test_chained_mimic_is_refused(tmp_path):
         aggsym.load(path, mimic="couple")
 
 
+@pytest.mark.compiler
 def test_cli_couples_mimics(tmp_path, capsys):
     path = tmp_path / "gripper.urdf"
     path.write_text(GRIPPER)

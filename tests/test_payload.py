@@ -99,6 +99,7 @@ def payload_pinocchio(name, link, mass, com, inertia):
     return pm
 
 
+@pytest.mark.compiler
 @pytest.mark.parametrize("name, link", [("ur5", "tool0"), ("panda", "panda_hand")])
 def test_a_payload_through_p_is_pinocchios_robot_with_the_payload(name, link, tmp_path, rng):
     """The generated C with a 2.5 kg payload set at run time (centre 8 cm out, a full inertia tensor) against

@@ -57,6 +57,7 @@ def regressor_code(request, tmp_path_factory):
     return name, model, lib, module, pinocchio_model(robot_path(name))
 
 
+@pytest.mark.compiler
 def test_regressor_of_the_generated_c_and_numpy_equals_pinocchio(regressor_code, rng):
     name, model, lib, module, pm = regressor_code
     twin = NumericTwin(model)

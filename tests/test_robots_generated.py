@@ -22,6 +22,7 @@ def both(lib, module, role, *args):
     return lib.call(role, *args), getattr(module, role)(*args)
 
 
+@pytest.mark.compiler
 def test_generated_code_equals_pinocchio(robot_code, rng):
     name, model, lib, module, pm = robot_code
     data = pm.createData()

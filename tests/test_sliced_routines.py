@@ -69,6 +69,7 @@ def ur5(tmp_path_factory):
     return model, gen, _compile(model, folder)
 
 
+@pytest.mark.compiler
 def test_ur5_sliced_equals_its_program_and_pinocchio(ur5, rng):
     """Each sliced routine against its straight-line program evaluated on floats (1e-12 of the largest output), and
     A, b + g, g, inverse and forward dynamics, A^-1 and C (C qd = b, C + C^T = dM/dt) against Pinocchio (1e-9)."""
@@ -114,6 +115,7 @@ def test_ur5_sliced_equals_its_program_and_pinocchio(ur5, rng):
         assert relative_error(C + C.T, Mdot, floor=np.abs(M).max() * np.abs(x["qd"]).max()) <= tolerance
 
 
+@pytest.mark.compiler
 def test_ur5_sliced_under_fast_math(ur5, tmp_path, rng):
     """Compiled with -O2 -ffast-math, the sliced routines equal the -O2 ones to 1e-9 of the largest output."""
     model, gen, lib = ur5
@@ -132,6 +134,7 @@ def _gcc_on_x86() -> bool:
     return "gcc version" in version and "clang" not in version.lower() and platform.machine() in ("x86_64", "i686")
 
 
+@pytest.mark.compiler
 def test_the_gcc_attributes_give_the_same_bits(ur5, tmp_path, rng):
     """GCC on x86 compiles the slices for size (AGGSYM_SLICE: optimize("Os")) and A and A^-1 without its basic-block
     vectorizer (AGGSYM_SCALAR_STORES), which run faster than its -O2 code of them; defining AGGSYM_AS_COMPILED gives
@@ -208,6 +211,7 @@ def test_the_workspace_holds_what_each_slice_loads(ur5):
 
 @pytest.mark.parametrize("name, scalar", [("four_bar", "double"), ("gyroscope_spinning_rotor", "double"),
                                           ("manipulator6", "float")])
+@pytest.mark.compiler
 def test_sliced_equals_unsliced_and_the_twin(name, scalar, tmp_path, rng):
     """A returned status (four_bar's constrained dynamics), a time input (the spinning rotor), single precision
     (-Wdouble-promotion -Wfloat-conversion -Werror): every routine sliced against the same routine compiled as one
@@ -297,6 +301,7 @@ def test_sliced_output_is_deterministic(split, tmp_path):
     assert any(b"_slice0(" in text for text in a.values())
 
 
+@pytest.mark.compiler
 def test_split_make_builds_the_library_with_sliced_routines(tmp_path, rng):
     """--split with every routine sliced: make -j2 with -Werror builds libNAME.a, one object per routine; its
     global symbols are exactly the contract's functions (the slices are static, and not inlined back); the library

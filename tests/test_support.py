@@ -54,6 +54,7 @@ def support_forces(pm, q, qd, qdd, T):
     return pin.rnea(pm, data, Q, qd, qdd, pin.StdVec_Force(fext))[:6]
 
 
+@pytest.mark.compiler
 def test_direct_and_inverse_problems_against_pinocchio(solo, rng):
     lib, module, manifest = solo
     pm = pinocchio_model(robot_path("solo12"), True)

@@ -128,6 +128,7 @@ def test_singular_tree_is_refused(seed, tmp_path):
 # the generated C and NumPy module
 
 
+@pytest.mark.compiler
 def test_generated_code_against_pinocchio(robot_code, rng):
     name, model, lib, module, pm = robot_code
     data = pm.createData()

@@ -103,6 +103,7 @@ def test_constrained_models_are_built_as_read(arm):
     assert internal_model(model) is model
 
 
+@pytest.mark.compiler
 def test_welded_arm_equals_pinocchio_constraint_dynamics(arm):
     """q̈ and λ of the twin, the NumPy module and the C against constraintDynamics (CONTACT_6D, LOCAL: its λ is the
     world's wrench on the tool about its origin in world axes, ours), and J, γ, φ against the reference."""

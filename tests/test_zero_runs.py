@@ -55,6 +55,7 @@ def _hyq(folder, slicing, scalar):
     return model, gen, CLibrary(lib, manifest)
 
 
+@pytest.mark.compiler
 @pytest.mark.parametrize("scalar, width, tolerance", [("double", 2, 1e-9), ("float", 4, 1e-4)])
 def test_zero_blocks_are_written_and_right(scalar, width, tolerance, tmp_path, rng):
     """HyQ's A and A^-1, one function each and sliced, against Pinocchio from outputs filled with NaN by CLibrary:
