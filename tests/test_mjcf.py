@@ -1,7 +1,7 @@
 """The MJCF reader (issue 33, items 1, 2 hinge/slide/free, 3, 5): MuJoCo's compiled model onto the tree, checked
 against MuJoCo itself, and hostile or unsupported files refused with exit 2.
 
-The representative sample of the corpora (``benchmarks/mjcf_corpus.py`` walks all of them): a fixed-base arm with
+The representative sample of the corpora (``benchmarks/mjcf_corpus.py`` walks all of them, with the comparison of ``benchmarks/mujoco_reference.py``): a fixed-base arm with
 damping (acrobot), a cart with a slide (cartpole), a planar runner whose root is three joints in one body and whose
 joints have armature, damping and springs (cheetah), a hinge with qpos0 = pi/2 (finger), joints anchored off the
 body origin with a slide root at qpos0 = 1.25 (gymnasium's walker2d), free-root walkers (gymnasium's ant, dm_control's
@@ -26,7 +26,7 @@ from aggsym.twin import NumericTwin
 mujoco = pytest.importorskip("mujoco")
 pytestmark = pytest.mark.mujoco
 
-from mujoco_reference import compare, mujoco_model, states, to_aggsym  # noqa: E402
+from benchmarks.mujoco_reference import compare, mujoco_model, states, to_aggsym  # noqa: E402
 
 SITE = Path(mujoco.__file__).resolve().parent.parent
 SUITE = SITE / "dm_control" / "suite"
@@ -292,6 +292,66 @@ def test_fluid_is_a_warning(tmp_path):
     assert "this model has some" in model.meta["mjcf"]["not_in_the_equations"]
 
 
+def test_compiler_warnings_become_model_warnings(tmp_path, monkeypatch):
+    """MuJoCo's warnings (cheetah's deprecated settotalmass) are ModelWarnings, not text on stdout and a log file."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.warns(UserWarning, match="MuJoCo's compiler warns: compiler attribute 'settotalmass'"):
+        load(SUITE / "cheetah.xml")
+    assert not list(tmp_path.iterdir())
+
+
 def test_urdf_options_are_refused(scene, capsys, tmp_path):
     code = cli.main(["generate", str(scene), "-o", str(tmp_path / "o"), "-q", "--floating-base", "quaternion"])
     assert code == 2 and "the MJCF reader does not accept --floating-base" in capsys.readouterr().err
+
+
+def test_inertial_parameters_of_a_body_against_mujoco(scene):
+    """--inertial-parameters on an MJCF body: its mass set tenfold and to a hundredth through p equals MuJoCo with
+    that body_mass (inertia about the centre of mass kept, as MuJoCo keeps body_inertia).  (A hundredfold mass
+    makes A's condition number 3e4 and the test's own float arithmetic of the parameters, I about the origin from
+    I about the centre of mass, loses 1e-13: beyond 1e-9 in q''.)"""
+    from aggsym.model.inertials import with_inertial_parameters
+
+    model = with_inertial_parameters(load(scene), ["lid"])
+    twin = NumericTwin(model)
+    names = [p.name for p in model.parameters]
+    for scale in (10.0, 0.01):
+        values = dict(zip(names, model.parameter_values))
+        m0 = values["m_lid"]
+        c = np.array([values[f"mc{a}_lid"] for a in "xyz"]) / m0
+        I0 = np.array([[values["Ixx_lid"], values["Ixy_lid"], values["Ixz_lid"]],
+                       [values["Ixy_lid"], values["Iyy_lid"], values["Iyz_lid"]],
+                       [values["Ixz_lid"], values["Iyz_lid"], values["Izz_lid"]]])
+        shift = lambda mass: mass * (c @ c * np.eye(3) - np.outer(c, c))  # noqa: E731
+        m1 = scale * m0
+        I1 = I0 - shift(m0) + shift(m1)
+        values.update(m_lid=m1, mcx_lid=m1 * c[0], mcy_lid=m1 * c[1], mcz_lid=m1 * c[2], Ixx_lid=I1[0, 0],
+                      Ixy_lid=I1[0, 1], Ixz_lid=I1[0, 2], Iyy_lid=I1[1, 1], Iyz_lid=I1[1, 2], Izz_lid=I1[2, 2])
+        p = [values[n] for n in names]
+        mj = mujoco_model(scene)
+        mj.body_mass[mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_BODY, "lid")] = m1
+        data = mujoco.MjData(mj)
+        qpos, qvel, force = states(mj, np.random.default_rng(11))
+        data.qpos[:], data.qvel[:], data.qfrc_applied[:] = qpos, qvel, force
+        mujoco.mj_forward(mj, data)
+        M = np.zeros((mj.nv, mj.nv))
+        mujoco.mj_fullM(mj, data, M)
+        q, qd, tau, J, cc = to_aggsym(mj, qpos, qvel, force)
+        assert np.max(np.abs(twin.call("inertia", q, p=p) - J.T @ M @ J)) <= 1e-12 * np.max(np.abs(M))
+        qacc = J @ twin.call("forward_dynamics", q, qd, tau, p=p) + cc
+        assert np.max(np.abs(qacc - data.qacc)) <= 1e-9 * np.max(np.abs(data.qacc)), np.abs(qacc - data.qacc)
+
+
+def test_energy_holds_the_rotors_and_a_constraint_on_a_body(scene, tmp_path):
+    """T = 1/2 qd^T A qd with the armature (a free joint's too) in A; a --constraints side file names MJCF bodies."""
+    from aggsym.model.yaml_reader import load_constraints
+
+    model = load(scene)
+    twin = NumericTwin(model)
+    q, qd, _, _, _ = to_aggsym(mujoco_model(scene), *states(mujoco_model(scene), np.random.default_rng(13)))
+    A = twin.call("inertia", q)
+    assert twin.call("kinetic_energy", q, qd) == pytest.approx(0.5 * qd @ A @ qd, rel=1e-12)
+    side = tmp_path / "contact.yaml"
+    side.write_text("constraints:\n  - name: lid_tip\n    body: lid\n    point: [0.1, 0.2, 0.02]\n    block: point\n")
+    constrained = load_constraints(side, model)
+    assert constrained.constraint_rows == 3 and constrained.constraints[0].body == "lid"

@@ -372,12 +372,21 @@ def load_mjcf(path) -> Model:
         import mujoco
     except ImportError:
         raise ModelError(path, "", "reading MJCF needs the mujoco package (pip install 'aggsym[mjcf]')") from None
+    said: list = []  # MuJoCo's warnings, taken from its handler (which prints them and appends to a log file in
+    # the working directory) and issued as ModelWarning
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(said.append)
     try:
         m = mujoco.MjModel.from_xml_path(str(path))
     except Exception as exc:  # MuJoCo's compiler reports every problem of the file as a ValueError
         text = " ".join(str(exc).split())
         raise ModelError(path, "", f"MuJoCo's compiler refuses the file: {text[:2000]}") from None
-    return _Reader(path, m, mujoco).read()
+    finally:
+        mujoco.set_mju_user_warning(previous)
+    reader = _Reader(path, m, mujoco)
+    for text in said:
+        reader.warn("", f"MuJoCo's compiler warns: {' '.join(str(text).split())[:2000]}")
+    return reader.read()
 
 
 __all__ = ["load_mjcf", "CONVENTION"]

@@ -63,7 +63,12 @@ def mujoco_model(path):
     """The compiled model with constraints and actuation disabled and no fluid (the comparison's MuJoCo)."""
     import mujoco
 
-    m = mujoco.MjModel.from_xml_path(str(path))
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda text: None)  # (the reader has issued them; no log file in the working folder)
+    try:
+        m = mujoco.MjModel.from_xml_path(str(path))
+    finally:
+        mujoco.set_mju_user_warning(previous)
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
     m.opt.density = 0.0
     m.opt.viscosity = 0.0
