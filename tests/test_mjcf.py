@@ -355,3 +355,39 @@ def test_energy_holds_the_rotors_and_a_constraint_on_a_body(scene, tmp_path):
     side.write_text("constraints:\n  - name: lid_tip\n    body: lid\n    point: [0.1, 0.2, 0.02]\n    block: point\n")
     constrained = load_constraints(side, model)
     assert constrained.constraint_rows == 3 and constrained.constraints[0].body == "lid"
+
+
+def test_disable_flags_are_honoured(tmp_path):
+    """<flag spring/damper/gravity="disable">: those terms leave the equations (and their parameters) as MuJoCo's."""
+    path = tmp_path / "flags.xml"
+    path.write_text(SCENE.replace('<option gravity="0.3 -0.2 -9.5"/>',
+                                  '<option gravity="0.3 -0.2 -9.5"><flag spring="disable" damper="disable" '
+                                  'gravity="disable"/></option>'))
+    model = load(path)
+    names = [p.name for p in model.parameters]
+    assert not any(n.startswith(("damping_", "stiffness_", "springref_")) for n in names)
+    assert model.parameter_values[-3:] == (0.0, 0.0, 0.0) and model.conservative
+    worst = compare(path, model=model, samples=2)
+    assert max(worst.values()) <= TOLERANCE, worst
+
+
+def test_symbolic_equations_hold_the_damping(scene):
+    """aggsym.symbolic's u* = A qdd + b + g + C (q - q0) + D qd for a model with joint damping."""
+    import sympy as sp
+
+    from aggsym.symbolic import Equations
+
+    path = SUITE / "acrobot.xml"
+    eq = Equations(load(path))
+    D = sp.diag(*[sp.Symbol(f"damping_{n}", real=True) for n in ("shoulder", "elbow")])
+    residual = eq.u_star - (eq.A * eq.qdd + eq.b + eq.g + eq.c + D * eq.qd)
+    assert all(sp.simplify(x) == 0 for x in residual)
+
+
+def test_unnamed_elements_get_distinct_names(tmp_path):
+    path = tmp_path / "unnamed.xml"
+    path.write_text('<mujoco><worldbody><body name="body2"><joint/><geom size=".1"/><body><joint/><geom size=".1"/>'
+                    '<site/></body></body></worldbody></mujoco>')
+    model = load(path)
+    assert [f.name for f in model.link_table.frames] == ["world", "body2", "body2_", "site0"]
+    assert [c.joint for c in model.coordinates] == ["joint0", "joint1"]

@@ -41,7 +41,8 @@ The mapping
 * ``model.links`` (kind ``"link"``): every MuJoCo body (``world`` included when ``worldbody`` is there) and every
   site (a site sharing a body's name is listed as ``site:<name>``) as a frame on the body it belongs to, for
   ``--frames``, ``--payload``, ``--inertial-parameters`` and ``--constraints``; the leaves are the moving bodies
-  without a child body.  Unnamed bodies, joints and sites are named ``body<id>``, ``joint<id>``, ``site<id>``.
+  without a child body.  Unnamed bodies, joints and sites are named ``body<id>``, ``joint<id>``, ``site<id>``
+  (with ``_`` appended while an element of that kind has the name).
 """
 from __future__ import annotations
 
@@ -73,8 +74,15 @@ CONVENTION = (
 
 
 def _name(m, mujoco, kind, i: int, prefix: str) -> str:
+    """The element's name, or ``<prefix><id>`` when it has none (``_`` appended while a named element of its kind
+    has that name: names of one kind stay distinct)."""
     name = mujoco.mj_id2name(m, kind, i)
-    return name if name else f"{prefix}{i}"
+    if name:
+        return name
+    name = f"{prefix}{i}"
+    while mujoco.mj_name2id(m, kind, name) >= 0:
+        name += "_"
+    return name
 
 
 class _Ids:
