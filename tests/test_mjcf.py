@@ -241,6 +241,9 @@ UNSUPPORTED = {
                       ['<tendon name="t">', "stiffness", "tendons are not supported yet"]),
     "gravcomp": (ARM.replace('<body name="a">', '<body name="a" gravcomp="1">').format(attrs="", extra="", after=""),
                  ['<body name="a">', "gravity compensation"]),
+    "parameter-clash": ('<mujoco><worldbody><body name="f"><joint name="a-b" type="free" damping="1"/><geom size=".1"/>'
+                        '</body><body name="h"><joint name="a_b" damping="1"/><geom size=".1"/></body></worldbody>'
+                        '</mujoco>', ["runtime parameter the name 'damping_a_b'", "rename one"]),
     "no-joint": ('<mujoco><worldbody><body name="a"><geom size=".1"/></body></worldbody></mujoco>', ["no joint"]),
     "compiler": ('<mujoco><worldbody><body name="a"><joint name="j" bogus="1"/><geom size=".1"/></body></worldbody>'
                  '</mujoco>', ["MuJoCo's compiler refuses the file", "bogus"]),
@@ -298,6 +301,16 @@ def test_compiler_warnings_become_model_warnings(tmp_path, monkeypatch):
     with pytest.warns(UserWarning, match="MuJoCo's compiler warns: compiler attribute 'settotalmass'"):
         load(SUITE / "cheetah.xml")
     assert not list(tmp_path.iterdir())
+
+
+def test_inactive_equality_is_a_warning(tmp_path):
+    path = tmp_path / "m.xml"
+    path.write_text(ARM.format(attrs="", extra='<body name="b"><joint name="j2"/><geom size=".1"/></body>',
+                               after='<equality><joint name="tie" joint1="j1" joint2="j2" active="false"/>'
+                                     '</equality>'))
+    with pytest.warns(UserWarning, match="inactive joint equality is not in the equations"):
+        model = load(path)
+    assert model.meta["mjcf"]["inactive_equalities"] == ["tie"]
 
 
 def test_urdf_options_are_refused(scene, capsys, tmp_path):

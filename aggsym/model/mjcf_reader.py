@@ -149,6 +149,8 @@ class _Reader:
                 self.fail(f'<equality> <{kind} name="{name}">',
                           f"an active {kind} equality; equality constraints are not supported yet (they change the "
                           f"equations of motion)")
+            self.warn(f'<equality> <{kind} name="{name}">', f"an inactive {kind} equality is not in the equations "
+                                                            f"of motion (listed in the manifest)")
         for t in range(m.ntendon):
             name = _name(m, mj, mj.mjtObj.mjOBJ_TENDON, t, "tendon")
             for field, what in (("tendon_stiffness", "stiffness"), ("tendon_damping", "damping"),
@@ -280,6 +282,12 @@ class _Reader:
         sites = self.sites(tree, names, welded, needs_world, body_links)
         for axis, value in zip("xyz", gravity):
             params.append(Parameter(f"gravity_{axis}", float(value)))
+        seen: dict = {}
+        for parameter in params:
+            if parameter.name in seen:
+                self.fail("", f"two joints give the runtime parameter the name {parameter.name!r} (their names "
+                              f"become one identifier); rename one of them")
+            seen[parameter.name] = parameter
         g = tuple(sp.Symbol(f"gravity_{axis}", real=True) for axis in "xyz")
         bodies = list(tree.bodies(lambda link: f'<body name="{link}">' if isinstance(link, str) else ""))
         zero = sp.Integer(0)
