@@ -168,8 +168,8 @@ class _Reader:
             name = _name(m, mj, mj.mjtObj.mjOBJ_ACTUATOR, a, "actuator")
             for field, what in (("actuator_damping", "damping"), ("actuator_armature", "armature")):
                 if hasattr(m, field) and np.any(getattr(m, field)[a]):
-                    self.fail(f'<actuator> <... name="{name}">', f"an actuator with {what} (it changes the "
-                                                                 f"equations of motion) is not supported")
+                    self.fail(f"actuator {name!r}", f"an actuator with {what} (it changes the equations of motion) "
+                                                    f"is not supported")
         if m.opt.density or m.opt.viscosity:
             self.warn("<option>", f"fluid forces (density={m.opt.density:g}, viscosity={m.opt.viscosity:g}) are not "
                                   f"in the equations of motion; MuJoCo adds them to qfrc_passive")
