@@ -404,3 +404,15 @@ def test_unnamed_elements_get_distinct_names(tmp_path):
     model = load(path)
     assert [f.name for f in model.link_table.frames] == ["world", "body2", "body2_", "site0"]
     assert [c.joint for c in model.coordinates] == ["joint0", "joint1"]
+
+
+@pytest.mark.compiler
+@pytest.mark.slow
+def test_check_runs_every_routine_of_the_scene(scene, capsys):
+    """``aggsym check`` on the scene (two free-flyers: integrate, the derivatives, the passive forces, the frames):
+    the generated C and NumPy equal the numeric twin; ``ops`` and ``latex`` read it too."""
+    assert cli.main(["check", str(scene), "--routines", "all", "--trials", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "passive_forces" in out and "integrate" in out and "forward_dynamics_derivatives" in out
+    assert cli.main(["ops", str(scene)]) == 0
+    assert cli.main(["latex", str(scene)]) == 0 and "\\begin{document}" in capsys.readouterr().out
