@@ -416,3 +416,22 @@ def test_check_runs_every_routine_of_the_scene(scene, capsys):
     assert "passive_forces" in out and "integrate" in out and "forward_dynamics_derivatives" in out
     assert cli.main(["ops", str(scene)]) == 0
     assert cli.main(["latex", str(scene)]) == 0 and "\\begin{document}" in capsys.readouterr().out
+
+
+def test_unusual_names_are_escaped(tmp_path):
+    """Quotes, comment ends, backslashes and newlines in MJCF names reach the generated Python only escaped: the
+    module imports and keeps the original joint name."""
+    import importlib.util
+
+    path = tmp_path / "evil.xml"
+    path.write_text('<mujoco model="e&quot;&quot;&quot;vil"><worldbody><body name="b&quot;&quot;&quot; */ \\n">'
+                    '<joint name="j\'\'\'&quot;&quot;&quot;\\input{x} */" damping="1"/><geom size=".1"/>'
+                    '<site name="s&#10;&quot;&quot;&quot;"/></body></worldbody></mujoco>')
+    out = tmp_path / "out"
+    assert cli.main(["generate", str(path), "-o", str(out), "-q", "--targets", "numpy,manifest"]) == 0
+    module_path = next(out.glob("*.py"))
+    spec = importlib.util.spec_from_file_location("evil_module", module_path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.JOINTS == ('j\'\'\'"""\\input{x} */',)
+    assert float(module.passive_forces([0.0], [2.0])) == -2.0  # (n = 1: a scalar)
