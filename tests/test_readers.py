@@ -21,7 +21,7 @@ def test_suffixes_choose_the_reader(tmp_path):
     assert reader_for(model_path("double_pendulum")).name == "YAML"
     assert reader_for(tmp_path / "a.YML").name == "YAML"
     assert reader_for(robot_path("ur5")).name == "URDF"
-    with pytest.raises(ModelError, match=r"unknown model type '\.foo': expected \.yaml, \.yml or \.urdf"):
+    with pytest.raises(ModelError, match=r"unknown model type '\.foo': expected \.yaml, \.yml, \.urdf or \.mjcf"):
         reader_for(tmp_path / "a.foo")
 
 
@@ -30,8 +30,11 @@ def test_a_shared_suffix_is_decided_by_the_content(tmp_path):
     urdf.write_bytes(robot_path("ur5").read_bytes())
     assert reader_for(urdf).name == "URDF"
     assert aggsym.load(urdf) == dataclasses.replace(aggsym.load(robot_path("ur5")), source=str(urdf))
-    other = tmp_path / "scene.xml"
-    other.write_text("<mujoco/>\n")
+    scene = tmp_path / "scene.xml"
+    scene.write_text("<mujoco/>\n")
+    assert reader_for(scene).name == "MJCF"
+    other = tmp_path / "world.xml"
+    other.write_text("<sdf/>\n")
     with pytest.raises(ModelError, match="no reader recognizes"):
         aggsym.load(other)
 

@@ -98,6 +98,8 @@ def manifest(model, routines, ops: dict, omitted=None, scalar: str = "double", l
         out["constraints"] = constraints_entry(model)
     if any(r.role.startswith("frame_") for r in routines):
         out["frames"] = frames_entry(model)
+    if model.meta.get("mjcf"):  # an MJCF model: its conventions and what MuJoCo has beside the equations
+        out["mjcf"] = model.meta["mjcf"]
     if model.meta.get("snapped_angles"):  # an approximation the user asked for (--snap-angles), recorded
         out["snapped_angles"] = model.meta["snapped_angles"]
     if layout is not None:

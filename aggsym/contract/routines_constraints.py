@@ -2,7 +2,7 @@
 velocities, the Delassus matrix G and the constrained forward dynamics; with their layouts."""
 from __future__ import annotations
 
-from ..mechanics import constraints, elastic
+from ..mechanics import constraints, passive
 from .registry import Output, Routine, flat, minus, register
 from .shapes import (
     constraint_jacobian_shape, constraint_rows_vector, constraint_square, nq_vector, scalar, slip_vector,
@@ -41,7 +41,7 @@ CONSTRAINT_FAILURE = ("the constraints are singular (J A^-1 J^T has a pivot belo
 
 def _constrained_forward_dynamics(bound, kin, x):
     qdd, lam, status = constraints.constrained_forward_dynamics(
-        bound, kin, x["qd"], minus(x["tau"], elastic.elastic_forces(bound, kin.q)))
+        bound, kin, x["qd"], minus(x["tau"], passive.left_forces(bound, kin.q, x["qd"])))
     return qdd, lam, [status]
 
 

@@ -2,7 +2,7 @@
 d qdd / d(q, qd) through A^-1 by the transvective factors."""
 from __future__ import annotations
 
-from ..mechanics import derivatives, elastic
+from ..mechanics import derivatives, passive
 from .registry import Output, Routine, flat, minus, register
 from .shapes import nq_square
 
@@ -14,7 +14,7 @@ def _inverse_dynamics_derivatives(bound, kin, x):
 
 def _forward_dynamics_derivatives(bound, kin, x):
     dq, dqd = derivatives.forward_dynamics_derivatives(
-        bound, kin, x["qd"], minus(x["tau"], elastic.elastic_forces(bound, kin.q)))
+        bound, kin, x["qd"], minus(x["tau"], passive.left_forces(bound, kin.q, x["qd"])))
     return flat(dq), flat(dqd)
 
 

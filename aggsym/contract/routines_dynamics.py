@@ -3,7 +3,7 @@ g, d, tau, c, the energies, the momentum, the joint wrenches and friction, the f
 the elastic partition (Prop. 2.14); with the layouts the manifest gives their outputs."""
 from __future__ import annotations
 
-from ..mechanics import elastic, sweeps, transvective
+from ..mechanics import elastic, passive, sweeps, transvective
 from ..mechanics.bias import coriolis_matrix, gravity_vector
 from ..mechanics.energy import kinetic_energy, momentum, potential_energy
 from ..mechanics.inertia import inertia_matrix
@@ -138,12 +138,12 @@ register(Routine("gravity", ("q", "p"), (Output("g", nq_vector),), _gravity,
                  "g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)", frame_free=True))
 register(Routine("nonlinear_effects", ("q", "qd", "p"), (Output("d", nq_vector),),
                  lambda bound, kin, x: (_plus(sweeps.d_vector(bound, kin, x["qd"]),
-                                              elastic.elastic_forces(bound, kin.q)),),
+                                              passive.left_forces(bound, kin.q, x["qd"])),),
                  "d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic "
                  "force C (q - q0) of (2.27)", frame_free=True))
 register(Routine("inverse_dynamics", ("q", "qd", "qdd", "p"), (Output("tau", nq_vector),),
                  lambda bound, kin, x: (_plus(sweeps.inverse_dynamics(bound, kin, x["qd"], x["qdd"]),
-                                              elastic.elastic_forces(bound, kin.q)),),
+                                              passive.left_forces(bound, kin.q, x["qd"])),),
                  "tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals "
                  "A(q) qdd + b(q, qd) + g(q) + c(q)", frame_free=True))
 register(Routine("elastic", ("q", "p"), (Output("c", nq_vector),),
@@ -170,9 +170,14 @@ register(Routine("joint_friction", ("qd", "p"), (Output("tau_f", nq_vector),), _
                  "tau_f = -d qd - f sign(qd) per joint with URDF <dynamics> (damping d, Coulomb friction f: the "
                  "parameters damping_<joint>, friction_<joint>), a generalized force on the right: "
                  "A qdd + b + g = tau + tau_f", applies=lambda model: model.has_joint_dynamics, coupled=None))
+register(Routine("passive_forces", ("q", "qd", "p"), (Output("tau_p", nq_vector),),
+                 lambda bound, kin, x: (passive.passive_forces(bound, kin.q, x["qd"]),),
+                 "tau_p = -(C (q - q0) + D qd), the springs (2.27) and the viscous joint damping as a generalized "
+                 "force on the right side (MuJoCo's qfrc_passive): A qdd + b + g = tau + tau_p",
+                 applies=lambda model: bool(model.damping), frame_free=True))
 register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_vector),),
                  lambda bound, kin, x: (transvective.forward_dynamics(
-                     bound, kin, minus(x["tau"], elastic.elastic_forces(bound, kin.q)), x["qd"]),),
+                     bound, kin, minus(x["tau"], passive.left_forces(bound, kin.q, x["qd"])), x["qd"]),),
                  "qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), "
                  "evaluated in O(n)", coupled="forward", regular=True, frame_free=True))
 register(Routine("inertia_inverse", ("q", "p"), (Output("Ainv", nq_square),),

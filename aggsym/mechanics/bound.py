@@ -14,7 +14,7 @@ import numpy as np
 import sympy as sp
 
 from ..core.backend import Backend, to_scalar
-from ..core.program import fold
+from ..core.program import fold, is_zero
 from ..model.tree import Tree
 from ..model.types import TIME, Model, code_index
 from .aggregates import General, Rigid
@@ -54,6 +54,17 @@ class Bound:
     params: list  # the backend scalars of p
     t: object = None  # the time (models with prescribed motions), a backend scalar
     armature: object = 0  # the rotor inertia added on every coordinate's own axis (model.armature)
+    rotors: tuple = ()  # per coordinate: armature plus its own (model.dof_armature); empty: armature on every one
+    damping: tuple = ()  # per coordinate: the viscous damping (model.damping); empty: none
+
+    def rotor(self, j: int):
+        """The rotor inertia on coordinate j's own axis (the diagonal entry it adds to A)."""
+        return self.rotors[j] if self.rotors else self.armature
+
+    @property
+    def has_rotors(self) -> bool:
+        """Whether some coordinate has a rotor inertia (an armature) that is not exactly zero."""
+        return any(not is_zero(r) for r in self.rotors) if self.rotors else not is_zero(self.armature)
 
     def rational(self, num: int, den: int):
         """num/den as an exact constant on the symbolic backend, a float on the numeric one."""
@@ -129,7 +140,9 @@ def bind(model: Model, backend, p=None, tree: Tree | None = None, t=None) -> Bou
                                 _steps(pair.rotation, s) if not pair.prescribed else None))
     gravity = tuple(s(x) for x in model.gravity)
     armature = fold(model.armature) if backend.symbolic else float(model.armature)
-    return Bound(model, tree, backend, bodies, gravity, params, t, armature)
+    rotors = tuple(s(a + model.armature if model.armature else a) for a in model.dof_armature)
+    damping = tuple(s(d) for d in model.damping)
+    return Bound(model, tree, backend, bodies, gravity, params, t, armature, rotors, damping)
 
 
 def _steps(rotation, s):

@@ -18,7 +18,7 @@ The transvective factors and the elastic partition belong to the tree; they are 
 """
 from __future__ import annotations
 
-from . import elastic, transvective
+from . import passive, transvective
 
 
 class Coupler:
@@ -75,7 +75,7 @@ class Coupler:
 
     def forward_dynamics(self, bound, kin, x: dict) -> list:
         """q'' under the coupling: the constraint form above, with A^-1 applied by (3.20) in O(n)."""
-        c = elastic.elastic_forces(bound, kin.q)
+        c = passive.left_forces(bound, kin.q, x["qd"])
         a0 = transvective.forward_dynamics(bound, kin, [t - ci for t, ci in zip(x["tau"], c)], x["qd"])
         fac = transvective.articulated_factors(bound, kin, arguments=False)
         Y = [transvective.cauchy_solve_tree(kin, fac, col) for col in self.constraint_columns()]

@@ -3,7 +3,7 @@
 The sweeps (2.39)-(2.46) run on dual numbers (:mod:`aggsym.core.dual`) seeded with unit tangents on q (directions
 0..n-1) and qd (directions n..2n-1): every intermediate of the straight-line program of tau = u* gets its
 derivatives beside it, so that ``dtau/dq`` and ``dtau/dqd`` reuse the kinematics and the wrenches of the sweeps
-(the elastic force C (q - q0) of (2.27) is differentiated the same way); ``dtau/dqdd`` is A(q).
+(the elastic force C (q - q0) of (2.27) and a joint damping D qd are differentiated the same way); ``dtau/dqdd`` is A(q).
 
 Forward dynamics: q'' solves A(q) q'' + d(q, qd) = tau, so along any input x (q or qd) at fixed tau
 ``A dq''/dx + dtau_ID/dx (q, qd, q'') = 0``, i.e. ``dq''/dx = -A^-1 dtau_ID/dx`` evaluated at the forward
@@ -21,7 +21,7 @@ import dataclasses
 
 from ..core.dual import Dual, DualBackend, lift, tangent
 from .bound import scratch_operations
-from .elastic import elastic_forces
+from .passive import left_forces
 from .kinematics import TreeKinematics
 from .sweeps import inverse_dynamics
 from .transvective import articulated_factors, cauchy_solve, cauchy_solve_tree, forward_dynamics
@@ -39,7 +39,7 @@ def _dual_inverse_dynamics(bound, kin, qd, qdd, directions=None) -> tuple:
         rates = [lift(x.v, {k: t for k, t in x.d.items() if k in directions}) for x in rates]
     dkin = TreeKinematics(dual, q)
     tau = inverse_dynamics(dual, dkin, rates, qdd)
-    return [a + b for a, b in zip(tau, elastic_forces(dual, q))]
+    return [a + b for a, b in zip(tau, left_forces(dual, q, rates))]
 
 
 def tangent_seeds(kin) -> list:

@@ -29,7 +29,11 @@ def kinetic_energy(bound, kin, qd):
     for k, body in enumerate(bound.bodies):
         if body.mises is not None:
             acc = acc + dot(V[k], body.mises.apply(V[k]))
-    acc = acc + mul(bound.armature, dot(qd, qd))  # the rotors of the armature
+    if bound.rotors:  # each coordinate's own rotor
+        for j, rate in enumerate(qd):
+            acc = acc + mul(bound.rotor(j), mul(rate, rate))
+    else:
+        acc = acc + mul(bound.armature, dot(qd, qd))  # the rotors of the armature
     return bound.rational(1, 2) * acc
 
 

@@ -47,10 +47,11 @@ def inertia_matrix(bound, kin, plus=None):
 
 
 def with_armature(bound, A):
-    """A + armature E."""
-    if not is_zero(bound.armature):
+    """A + armature E (plus each coordinate's own rotor inertia, ``model.dof_armature``)."""
+    if bound.has_rotors:
         for i in range(len(A)):
-            A[i][i] = A[i][i] + bound.armature
+            if not is_zero(bound.rotor(i)):
+                A[i][i] = A[i][i] + bound.rotor(i)
     return A
 
 

@@ -294,6 +294,8 @@ def inverse_dynamics(bound, kin, qd, qdd, H=None, gravity=True, transvect=None):
     origins = origin_sweep(bound, kin, qd, qdd, _gravity(bound, gravity))
     rest = body_wrenches(bound, kin, qd, qdd, H, gravity, origins=origins, rest=True)
     tau = generalized_forces_lumped(bound, kin, origins, rest, transvect)
+    if bound.rotors:  # each coordinate's own rotor: + a_j q''_j
+        return [t + mul(bound.rotor(j), a) for j, (t, a) in enumerate(zip(tau, qdd))]
     return [t + mul(bound.armature, a) for t, a in zip(tau, qdd)]  # a rotor on every axis: + armature q
 
 

@@ -219,12 +219,12 @@ def articulated_factors(bound, kin, arguments: bool = True) -> Factors:
         X = acc[k]
         coords = tree.coords[k]
         for pos in range(len(coords) - 1, -1, -1):
+            j = coords[pos]
             if X is None:  # nothing moves beyond this axis: only the armature's rotor has inertia there
-                if is_zero(bound.armature):
+                if is_zero(bound.rotor(j)):
                     raise ZeroDivisionError(f"coordinate {coords[pos]} moves no mass: A(q) is singular")
                 X = General.from_rows([[0] * 6 for _ in range(6)])
-            j = coords[pos]
-            beta[j], diag[j], recip[j], bbar, X = _eliminate(X, kin.psi[k][pos], bound.armature)
+            beta[j], diag[j], recip[j], bbar, X = _eliminate(X, kin.psi[k][pos], bound.rotor(j))
             betabar[j] = bbar
             if arguments:
                 _record_arguments(tree, kin, args, k, pos, bbar, reach)
@@ -256,13 +256,13 @@ def corrected_factors(bound, kin) -> Factors:
         k = body_of[j]
         pos = tree.coords[k].index(j)
         psi = kin.psi[k][pos]
-        if plus[k] is None and is_zero(bound.armature):
+        if plus[k] is None and is_zero(bound.rotor(j)):
             raise ZeroDivisionError(f"coordinate {j} moves no mass: A(q) is singular")
         col = (0,) * 6 if plus[k] is None else plus[k].apply(psi)  # beta^j+ (3.3)
         for p in below[j]:  # delta^j+ (3.15)
             col = sub(col, scale(args[(j, p)], moved[(k, p)]))
         beta[j] = col
-        diag[j], recip[j], bbar = _pivot(col, psi, bound.armature)
+        diag[j], recip[j], bbar = _pivot(col, psi, bound.rotor(j))
         betabar[j] = bbar
         _record_arguments(tree, kin, args, k, pos, bbar, reach)
         w, a = col, k
@@ -545,7 +545,7 @@ def unit_bases(bound, kin) -> dict:
     zero).  The Euler floating base (o1 o2 o3 theta4 theta5 theta6) and a spherical pair qualify; a universal
     pair (two rotations span three axes) does not.  None with an armature (it is diagonal in the coordinates,
     not in the axes)."""
-    if not is_zero(bound.armature):
+    if bound.has_rotors:
         return {}
     out = {}
     for k, psi in enumerate(kin.psi):

@@ -197,16 +197,21 @@ class Place:
     t: tuple
 
 
-def floating_root(kind, names: Names, pair_name: str) -> Pair:
+def floating_root(kind, names: Names, pair_name: str, prefix: str = "base") -> Pair:
     """The pair of a tree's root with the world: none (``kind`` False: fixed base), the Euler pair o1 o2 o3 theta4
     theta5 theta6 (True), or the free-flyer (``"quaternion"``: q holds the position and a unit quaternion, the
-    velocities the root's own (v, w)); its coordinates named by ``names`` (:data:`FLOATING`, :data:`FREE_FLYER`)."""
+    velocities the root's own (v, w)); its coordinates named by ``names`` (:data:`FLOATING`, :data:`FREE_FLYER`,
+    with ``prefix`` in place of ``base`` when given: several free roots, named after their joints)."""
     positions = ()
+
+    def named(n):
+        return n if prefix == "base" else prefix + n[len("base"):]
+
     if kind == "quaternion":
-        coords = tuple(Coordinate(names.own(n), code, pair_name) for n, code in FREE_FLYER)
-        positions = tuple(names.own(n) for n in FREE_FLYER_POSITIONS)
+        coords = tuple(Coordinate(names.own(named(n)), code, pair_name) for n, code in FREE_FLYER)
+        positions = tuple(names.own(named(n)) for n in FREE_FLYER_POSITIONS)
     elif kind:
-        coords = tuple(Coordinate(names.own(n), code, pair_name) for n, code in FLOATING)
+        coords = tuple(Coordinate(names.own(named(n)), code, pair_name) for n, code in FLOATING)
     else:
         coords = ()
     zero = (sp.Integer(0),) * 3
@@ -239,10 +244,11 @@ class TreeBuilder:
         self.given: list = []  # bodies given whole (:meth:`body`)
 
     def root(self, link: str, name: str, pair: Pair) -> None:
-        """The root link, the body ``name`` attached to the world by ``pair`` (:func:`floating_root`)."""
+        """A root link, the body ``name`` attached to the world by ``pair`` (:func:`floating_root`); a model of
+        several trees (MJCF: several free bodies) calls it once per tree."""
         self.rows.append({"name": name, "parent": WORLD, "link": link, "pair": pair, "link_rotation": None,
                           "parts": []})
-        self.place[link] = Place(0, [], IDENTITY, ORIGIN)
+        self.place[link] = Place(len(self.rows) - 1, [], IDENTITY, ORIGIN)
 
     def _origin(self, parent: str, xyz) -> tuple:
         here = self.place[parent]
@@ -261,21 +267,32 @@ class TreeBuilder:
         self.place[child] = Place(here.body, turned, R, round_off(t))
 
     def joint(self, parent: str, child: str, body_name: str, joint_name: str, coordinate, xyz, rotation: list,
-              axis, kind: str) -> Pair:
+              axis, kind: str, anchor=None, offset=()) -> Pair:
         """A movable joint ``joint_name`` from ``parent`` to ``child``, which becomes the body ``body_name``: its
         origin ``xyz`` and ``rotation`` in the parent link's frame, then the constant rotation R_a bringing e1, e2
         or e3 onto ``axis`` (:func:`align`), so that the joint is the elementary motion of ``kind`` (``"theta"``
         about, ``"o"`` along) (1.24)-(1.27); ``coordinate(code)`` makes its :class:`Coordinate`.  The child's body
-        frame is its link frame turned by R_a (``link_rotation``)."""
+        frame is its link frame turned by R_a (``link_rotation``).
+
+        ``anchor`` (MJCF: a joint whose axis does not pass through the child's origin): the point of the axis in
+        the child link's frame; the pair then sits at the anchor, and the child link's origin at -R_a^T anchor in
+        the body, so that the link turns about (or slides along) the axis through the anchor.  ``offset``: the
+        pair's :attr:`~.types.Pair.offset` (MJCF: -qpos0, so that the coordinate is MuJoCo's qpos)."""
         here, t = self._origin(parent, xyz)
+        if anchor is not None:
+            turned = here.R if not rotation else snapped(product(here.R, rotation_matrix(rotation)))
+            t = round_off(add(t, turn(turned, tuple(exact(x) for x in anchor))))
         rotate, i = align(axis)
         pair = Pair(joint_name, tuple(t), tuple(tidy(here.rotation + rotation + rotate)),
-                    (coordinate(CODES[kind][i]),))
+                    (coordinate(CODES[kind][i]),), offset=tuple(offset))
         back = inverse(rotate)
         R = rotation_matrix(back)
+        origin = ORIGIN
+        if anchor is not None:
+            origin = round_off(tuple(-x for x in turn(R, tuple(exact(x) for x in anchor))))
         self.rows.append({"name": body_name, "parent": self.rows[here.body]["name"], "link": child, "pair": pair,
                           "link_rotation": R if rotate else None, "parts": []})
-        self.place[child] = Place(len(self.rows) - 1, back, R, ORIGIN)
+        self.place[child] = Place(len(self.rows) - 1, back, R, origin)
         return pair
 
     def inertial(self, link: str, mass, com, inertia, rotation: list) -> None:

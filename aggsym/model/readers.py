@@ -44,12 +44,24 @@ def _load_urdf(path, **options):
     return load_urdf(path, **options)
 
 
+def _load_mjcf(path, **options):
+    from .mjcf_reader import load_mjcf
+
+    return load_mjcf(path, **options)
+
+
 def _is_urdf(head: bytes) -> bool:
     return b"<robot" in head
 
 
+def _is_mjcf(head: bytes) -> bool:
+    return b"<mujoco" in head
+
+
 URDF_CLI_OPTIONS = ("--floating-base", "--mimic", "--snap-angles", "--constraints", "--support",
                     "--inertial-parameters", "--payload")
+
+MJCF_CLI_OPTIONS = ("--constraints", "--inertial-parameters", "--payload")
 
 READERS: list = [
     Reader("YAML", (".yaml", ".yml"), _load_yaml,
@@ -57,6 +69,9 @@ READERS: list = [
                 "expressions in its parameters"),
     Reader("URDF", (".urdf",), _load_urdf, options=("floating_base", "mimic", "snap_angles"),
            cli_options=URDF_CLI_OPTIONS, sniffed=(".xml",), sniff=_is_urdf),
+    Reader("MJCF", (".mjcf",), _load_mjcf, cli_options=MJCF_CLI_OPTIONS, sniffed=(".xml",), sniff=_is_mjcf,
+           note="an MJCF model's joints come from its file (a free joint is the quaternion free-flyer), as do its "
+                "angles"),
 ]
 
 

@@ -374,6 +374,10 @@ class Model:
     routines: tuple | None = None  # the routines to emit (--routines), None: the contract's default set
     regularization: object = 0  # epsilon: constrained forward dynamics solves (J A^-1 J^T + epsilon E) lambda = ...
     links: Links | None = None  # the file's links (see Links); None: each body is its own link (see link_table)
+    dof_armature: tuple = ()  # per pair coordinate (tree order): a rotor inertia of its own on A's diagonal, added to
+    # ``armature`` (MJCF ``armature``; expressions, usually runtime parameters); empty: none
+    damping: tuple = ()  # per pair coordinate (tree order): viscous damping d, the force d qd on the left side of the
+    # equations of motion beside the elastic C (q - q0) (MJCF ``damping``; expressions); empty: none
 
     @property
     def link_table(self) -> Links:
@@ -475,8 +479,14 @@ class Model:
     def conservative(self) -> bool:
         """True when tau = 0 conserves T + U: no prescribed motion (a prescribed spin injects energy); elastic
         pairs and added masses keep it (U holds 1/2 q^T C q, T the medium's 1/2 V^T Lambda V); friction on a
-        sliding contact (chapter 4) dissipates it."""
-        return not self.time_dependent and not self.has_friction
+        sliding contact (chapter 4) dissipates it, and so does viscous joint damping (``damping``).  The armature's
+        rotors keep it (T holds their 1/2 a qd^2)."""
+        return not self.time_dependent and not self.has_friction and not self.has_damping
+
+    @property
+    def has_damping(self) -> bool:
+        """True when some coordinate has a viscous damping that is not exactly zero (``damping``)."""
+        return any(not (getattr(d, "is_zero", False) or d == 0) for d in self.damping)
 
     @functools.cached_property
     def parameter_symbols(self) -> tuple:

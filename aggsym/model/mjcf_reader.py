@@ -1,0 +1,408 @@
+"""The MJCF reader: MuJoCo's own compiler reads the XML, this reader maps the compiled ``MjModel`` onto the book's
+bodies and pairs (1.24)-(1.27) through :class:`~aggsym.model.builder.TreeBuilder`.
+
+Nothing of MJCF's meaning is re-implemented: defaults and classes, ``<include>``, ``compiler angle/eulerseq``,
+``fromto``, inertias from geoms, ``settotalmass`` and ``boundmass`` are what MuJoCo compiled.  The file is first
+screened (:mod:`aggsym.model.mjcf_source`: size, entities, includes outside the model's folder); a file MuJoCo's
+compiler refuses is a :class:`~aggsym.errors.ModelError` carrying the compiler's message.
+
+The mapping
+-----------
+* Bodies in MuJoCo's order (depth first).  A body's frame in its parent at qpos0 is ``body_pos`` then
+  ``body_quat``; its mass ``body_mass`` at ``body_ipos`` with the inertia R(``body_iquat``) diag(``body_inertia``)
+  R^T about it.  A body without joints is welded to its parent (merged into its parent's body, as a URDF fixed
+  joint); the bodies welded to the world are merged into one massless fixed root, ``worldbody``, present when some
+  child of the world is not a free body.
+* ``hinge`` and ``slide`` joints: one pair each (theta about / o along the joint's axis, :func:`~.builder.align`),
+  placed at the joint's anchor ``jnt_pos`` (MuJoCo turns the body about the axis through the anchor), with the
+  pair's offset -``qpos0``: **q is MuJoCo's qpos** entry for entry.  Several joints in one body are applied in
+  order, as MuJoCo does: each but the last moves a massless intermediate body named ``<body>_<joint>``.
+* ``free`` joint (only on a child of the world, MuJoCo's rule): the root of a tree of its own, aggsym's quaternion
+  free-flyer, its coordinates named after the joint: positions ``J_x J_y J_z J_qx J_qy J_qz J_qw``, velocities
+  ``J_vx J_vy J_vz J_wx J_wy J_wz``.  Several free bodies are several trees of one model.  Conversion from MuJoCo
+  (qpos, qvel of the joint: x, y, z, qw, qx, qy, qz and v_world, w_body; R the body's rotation):
+  q = (x, y, z, qx, qy, qz, qw); v = R^T v_world, w = w_body; generalized forces f_lin = R^T f_world (torques
+  as they are); accelerations dv/dt = R^T a_world - w x v (a_world = d v_world / dt = MuJoCo's qacc).
+* ``ball`` joints: not supported yet (an error naming the joint).
+* What MuJoCo adds (runtime parameters, defaults from the compiled model; only where the model's value is not
+  zero, so that zeros fold):  ``armature_<coordinate>`` (``dof_armature``, on A's diagonal:
+  ``Model.dof_armature``), ``damping_<coordinate>`` (``dof_damping``, the viscous force D qd on the left:
+  ``Model.damping``), ``stiffness_<coordinate>`` and ``springref_<coordinate>`` (``jnt_stiffness`` and
+  ``qpos_spring``: an elastic pair, C (q - q0) of (2.27)), and always ``gravity_x gravity_y gravity_z``
+  (``opt.gravity``, 0 when ``<flag gravity="disable">``).  ``<flag spring/damper="disable">`` leave those out.
+  Forward and inverse dynamics then include the passive forces as MuJoCo's ``qacc`` and ``qfrc_passive`` do:
+  A qdd + b + g + C (q - q0) + D qd = tau (``passive_forces`` gives -(C (q - q0) + D qd), MuJoCo's sign).
+* Not in the equations, listed in ``model.meta["mjcf"]`` (and the manifest): ``frictionloss`` (a constraint in
+  MuJoCo), joint limits (also on the coordinates' limits), contacts, actuators (with their joint and gear),
+  tendons that change nothing but constraints or actuation, inactive equalities, fluid forces (``density``,
+  ``viscosity``: a warning).  Refused with an error naming them, since they would change the equations: active
+  equalities, tendons with a stiffness, damping or armature, flexes, gravity compensation, actuators with
+  damping or armature, polynomial damping or stiffness.
+* ``model.links`` (kind ``"link"``): every MuJoCo body (``world`` included when ``worldbody`` is there) and every
+  site (a site sharing a body's name is listed as ``site:<name>``) as a frame on the body it belongs to, for
+  ``--frames``, ``--payload``, ``--inertial-parameters`` and ``--constraints``; the leaves are the moving bodies
+  without a child body.  Unnamed bodies, joints and sites are named ``body<id>``, ``joint<id>``, ``site<id>``
+  (with ``_`` appended while an element of that kind has the name).
+"""
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from pathlib import Path
+
+import numpy as np
+import sympy as sp
+
+from ..errors import ModelError, ModelWarning
+from .builder import TreeBuilder, floating_root, identifier, link_table, quaternion_rotations
+from .frames import default_frames
+from .link_numbers import exact
+from .mjcf_source import screen
+from .types import Coordinate, JointLimits, Links, Model, Parameter
+
+FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3  # mjtJoint
+KINDS = {HINGE: "theta", SLIDE: "o"}
+JOINT_TYPES = {FREE: "free", BALL: "ball", SLIDE: "slide", HINGE: "hinge"}
+DISABLE_SPRING, DISABLE_DAMPER, DISABLE_GRAVITY = 32, 64, 128  # mjtDisableBit
+WORLD_BODY = "worldbody"
+EQUALITY_TYPES = {0: "connect", 1: "weld", 2: "joint", 3: "tendon", 4: "flex"}
+CONVENTION = (
+    "q is MuJoCo's qpos and qd its qvel entry for entry, except for a free joint J: q holds J_x J_y J_z "
+    "J_qx J_qy J_qz J_qw (MuJoCo: x y z qw qx qy qz) and qd the body's own velocity J_vx J_vy J_vz (body axes: "
+    "v = R^T v_world, R the body's rotation) and J_wx J_wy J_wz (body axes, as MuJoCo's); a generalized force "
+    "on its linear part is R^T f_world, and its acceleration R^T a_world - w x v (a_world: MuJoCo's qacc)")
+
+
+def _name(m, mujoco, kind, i: int, prefix: str) -> str:
+    """The element's name, or ``<prefix><id>`` when it has none (``_`` appended while a named element of its kind
+    has that name: names of one kind stay distinct)."""
+    name = mujoco.mj_id2name(m, kind, i)
+    if name:
+        return name
+    name = f"{prefix}{i}"
+    while mujoco.mj_name2id(m, kind, name) >= 0:
+        name += "_"
+    return name
+
+
+class _Ids:
+    """Identifiers for the generated code, made unique deterministically (``identifier``); the file's names stay
+    on the coordinates (``Coordinate.joint``) and links."""
+
+    def __init__(self):
+        self.used: set = set()
+
+    def own(self, name: str) -> str:
+        return identifier(name, self.used, "q")
+
+
+class _Reader:
+    def __init__(self, file: Path, m, mujoco):
+        self.file, self.m, self.mj = file, m, mujoco
+        self.warnings: list[str] = []
+
+    def fail(self, where: str, message: str):
+        raise ModelError(self.file, where, message)
+
+    def warn(self, where: str, message: str):
+        text = str(ModelError(self.file, where, message))
+        self.warnings.append(text)
+        warnings.warn(text, ModelWarning, stacklevel=3)
+
+    # names -----------------------------------------------------------------------------------------------
+    def body_name(self, i):
+        return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_BODY, i, "body")
+
+    def joint_name(self, j):
+        return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_JOINT, j, "joint")
+
+    # what the equations cannot hold ------------------------------------------------------------------------
+    def refuse_unsupported(self):
+        m, mj = self.m, self.mj
+        for j in range(m.njnt):
+            b = int(m.jnt_bodyid[j])
+            where = f'<joint name="{self.joint_name(j)}"> (body {self.body_name(b)!r})'
+            if m.jnt_type[j] == BALL:
+                self.fail(where, "a ball joint; ball joints are not supported yet (hinge, slide and free are)")
+            if m.jnt_type[j] == FREE:
+                if m.body_parentid[b] != 0:
+                    self.fail(where, "a free joint below the top level; a free joint must be on a child of the "
+                                     "world")
+                if m.body_jntnum[b] != 1:
+                    self.fail(where, "a free joint beside other joints in one body; give the body the free joint "
+                                     "alone")
+                if m.jnt_stiffness[j] != 0 and not m.opt.disableflags & DISABLE_SPRING:
+                    self.fail(where, f"stiffness={m.jnt_stiffness[j]:g} on a free joint (a spring on the pose) is "
+                                     f"not supported")
+            if np.any(m.jnt_stiffnesspoly[j]):
+                self.fail(where, "a polynomial stiffness (stiffnesspoly) is not supported (stiffness is)")
+            if hasattr(m, "jnt_springyield") and np.any(m.jnt_springyield[j]):
+                self.fail(where, "a spring with a yield (springyield) is not supported")
+        for i in range(m.nv):
+            if np.any(m.dof_dampingpoly[i]):
+                self.fail(f'<joint name="{self.joint_name(int(m.dof_jntid[i]))}">',
+                          "a polynomial damping (dampingpoly) is not supported (damping is)")
+        for e in range(m.neq):
+            name = _name(m, mj, mj.mjtObj.mjOBJ_EQUALITY, e, "equality")
+            kind = EQUALITY_TYPES.get(int(m.eq_type[e]), str(int(m.eq_type[e])))
+            if m.eq_active0[e]:
+                self.fail(f'<equality> <{kind} name="{name}">',
+                          f"an active {kind} equality; equality constraints are not supported yet (they change the "
+                          f"equations of motion)")
+            self.warn(f'<equality> <{kind} name="{name}">', f"an inactive {kind} equality is not in the equations "
+                                                            f"of motion (listed in the manifest)")
+        for t in range(m.ntendon):
+            name = _name(m, mj, mj.mjtObj.mjOBJ_TENDON, t, "tendon")
+            for field, what in (("tendon_stiffness", "stiffness"), ("tendon_damping", "damping"),
+                                ("tendon_armature", "armature")):
+                value = getattr(m, field)[t] if hasattr(m, field) else 0
+                if np.any(value):
+                    self.fail(f'<tendon name="{name}">', f"a tendon with {what} (it changes the equations of "
+                                                         f"motion); tendons are not supported yet")
+        if m.nflex:
+            self.fail("<deformable>", f"{m.nflex} flex object(s); flexes are not supported")
+        heavy = [self.body_name(i) for i in range(m.nbody) if m.body_gravcomp[i] != 0]
+        if heavy:
+            self.fail(f'<body name="{heavy[0]}">', "gravity compensation (gravcomp) is not supported")
+        for a in range(m.nu):
+            name = _name(m, mj, mj.mjtObj.mjOBJ_ACTUATOR, a, "actuator")
+            for field, what in (("actuator_damping", "damping"), ("actuator_armature", "armature")):
+                if hasattr(m, field) and np.any(getattr(m, field)[a]):
+                    self.fail(f"actuator {name!r}", f"an actuator with {what} (it changes the equations of motion) "
+                                                    f"is not supported")
+        if m.opt.density or m.opt.viscosity:
+            self.warn("<option>", f"fluid forces (density={m.opt.density:g}, viscosity={m.opt.viscosity:g}) are not "
+                                  f"in the equations of motion; MuJoCo adds them to qfrc_passive")
+
+    # the tree ------------------------------------------------------------------------------------------------
+    def read(self) -> Model:
+        m, mj = self.m, self.mj
+        self.refuse_unsupported()
+        flags = int(m.opt.disableflags)
+        springs, dampers = not flags & DISABLE_SPRING, not flags & DISABLE_DAMPER
+        ids, bodies_ids = _Ids(), _Ids()
+        tree = TreeBuilder()
+        names = [self.body_name(i) for i in range(m.nbody)]
+        welded = [True] + [False] * (m.nbody - 1)  # welded to the world
+        for i in range(1, m.nbody):
+            welded[i] = welded[m.body_parentid[i]] and m.body_jntnum[i] == 0
+        needs_world = any(m.body_parentid[i] == 0 and not (m.body_jntnum[i] == 1 and m.jnt_type[m.body_jntadr[i]] ==
+                                                           FREE) for i in range(1, m.nbody))
+        world_link = names[0]
+        params: list = []
+        gravity = np.zeros(3) if flags & DISABLE_GRAVITY else np.array(m.opt.gravity, dtype=float)
+        dof_of: list = []  # MuJoCo's dof of each coordinate, in tree order
+        armature, damping = [], []
+        pending_stiffness: dict = {}  # row index -> (stiffness symbol, rest symbol)
+        free_joints = []
+        added_mass: dict = {}  # row index of a free body -> its armature symbol
+
+        def rate_parameters(coordinate: str, dof: int):
+            a = float(m.dof_armature[dof])
+            d = float(m.dof_damping[dof]) if dampers else 0.0
+            if a:
+                params.append(Parameter(f"armature_{coordinate}", a))
+                armature.append(params[-1].symbol)
+            else:
+                armature.append(sp.Integer(0))
+            if d:
+                params.append(Parameter(f"damping_{coordinate}", d))
+                damping.append(params[-1].symbol)
+            else:
+                damping.append(sp.Integer(0))
+            dof_of.append(dof)
+
+        if needs_world:
+            tree.root(world_link, bodies_ids.own(WORLD_BODY), floating_root(False, ids, "world"))
+        for i in range(1, m.nbody):
+            link, parent = names[i], names[m.body_parentid[i]]
+            xyz = tuple(float(x) for x in m.body_pos[i])
+            w, x, y, z = (float(v) for v in m.body_quat[i])
+            rotation = quaternion_rotations(x, y, z, w) if (w, x, y, z) != (1.0, 0.0, 0.0, 0.0) else []
+            n, first = int(m.body_jntnum[i]), int(m.body_jntadr[i])
+            if n == 0:
+                tree.fixed(parent, link, xyz, rotation)
+            elif m.jnt_type[first] == FREE:
+                jname = self.joint_name(first)
+                prefix = identifier(jname, set(), "q")
+                tree.root(link, bodies_ids.own(link), floating_root("quaternion", ids, jname, prefix=prefix))
+                # (the free body's frame is its pose in the world: body_pos and body_quat are qpos0's)
+                free_joints.append(jname)
+                dof = int(m.jnt_dofadr[first])
+                a = float(m.dof_armature[dof])
+                d = float(m.dof_damping[dof]) if dampers else 0.0
+                if a:  # MuJoCo's a on the free joint's six dofs: the kinetic energy 1/2 a (|v|^2 + |w|^2) of an
+                    # added mass a E6 at the body's origin (Prop. 2.8), which gravity does not pull: its momentum
+                    # a v_world changes as a R (dv + w x v), the term MuJoCo's M qacc holds
+                    params.append(Parameter(f"armature_{prefix}", a))
+                    added_mass[len(tree.rows) - 1] = params[-1].symbol
+                if d:
+                    params.append(Parameter(f"damping_{prefix}", d))
+                for k in range(6):
+                    armature.append(sp.Integer(0))
+                    damping.append(params[-1].symbol if d else sp.Integer(0))
+                    dof_of.append(dof + k)
+            else:
+                for k in range(n):
+                    j = first + k
+                    if m.jnt_type[j] not in KINDS:
+                        self.fail(f'<joint name="{self.joint_name(j)}">', f"a {JOINT_TYPES.get(int(m.jnt_type[j]))} "
+                                                                         f"joint here is not supported")
+                    jname = self.joint_name(j)
+                    coordinate = ids.own(jname)
+                    last = k == n - 1
+                    child = link if last else ("mjcf-joint", j)
+                    body_id = bodies_ids.own(link if last else f"{link}_{jname}")
+                    limits = JointLimits(float(m.jnt_range[j][0]), float(m.jnt_range[j][1])) if m.jnt_limited[j] \
+                        else JointLimits()
+                    q0 = float(m.qpos0[m.jnt_qposadr[j]])
+                    anchor = tuple(float(v) for v in m.jnt_pos[j])
+                    tree.joint(parent if k == 0 else ("mjcf-joint", j - 1), child, body_id, jname,
+                               lambda code, c=coordinate, jn=jname, lim=limits: Coordinate(c, code, jn, limits=lim),
+                               xyz if k == 0 else (0.0, 0.0, 0.0), rotation if k == 0 else [],
+                               tuple(float(v) for v in m.jnt_axis[j]), KINDS[int(m.jnt_type[j])],
+                               anchor=anchor if any(anchor) else None, offset=(exact(-q0),) if q0 else ())
+                    rate_parameters(coordinate, int(m.jnt_dofadr[j]))
+                    stiffness = float(m.jnt_stiffness[j]) if springs else 0.0
+                    if stiffness:
+                        params.append(Parameter(f"stiffness_{coordinate}", stiffness))
+                        params.append(Parameter(f"springref_{coordinate}", float(m.qpos_spring[m.jnt_qposadr[j]])))
+                        pending_stiffness[len(tree.rows) - 1] = (params[-2].symbol, params[-1].symbol)
+            if m.body_mass[i] or np.any(m.body_inertia[i]):
+                w, x, y, z = (float(v) for v in m.body_iquat[i])
+                irot = quaternion_rotations(x, y, z, w) if (w, x, y, z) != (1.0, 0.0, 0.0, 0.0) else []
+                J = tuple(tuple(float(m.body_inertia[i][r]) if r == c else 0.0 for c in range(3)) for r in range(3))
+                tree.inertial(link, float(m.body_mass[i]), tuple(float(v) for v in m.body_ipos[i]), J, irot)
+        if dof_of != list(range(m.nv)):
+            self.fail("", "internal: the coordinates are not in MuJoCo's dof order")  # (the walk above keeps it)
+        for k, (stiffness, rest) in pending_stiffness.items():
+            pair = tree.rows[k]["pair"]
+            tree.rows[k]["pair"] = dataclasses.replace(pair, stiffness=((stiffness,),), rest=(rest,))
+        body_links = set(names) if needs_world else set(names[1:])
+        sites = self.sites(tree, names, welded, needs_world, body_links)
+        for axis, value in zip("xyz", gravity):
+            params.append(Parameter(f"gravity_{axis}", float(value)))
+        seen: dict = {}
+        for parameter in params:
+            if parameter.name in seen:
+                self.fail("", f"two joints give the runtime parameter the name {parameter.name!r} (their names "
+                              f"become one identifier); rename one of them")
+            seen[parameter.name] = parameter
+        g = tuple(sp.Symbol(f"gravity_{axis}", real=True) for axis in "xyz")
+        bodies = list(tree.bodies(lambda link: f'<body name="{link}">' if isinstance(link, str) else ""))
+        zero = sp.Integer(0)
+        for k, a in added_mass.items():
+            bodies[k] = dataclasses.replace(bodies[k], added_mass=tuple(tuple(a if r == c else zero for c in range(6))
+                                                                        for r in range(6)))
+        bodies = tuple(bodies)
+        children = {int(m.body_parentid[i]) for i in range(1, m.nbody)}
+        leaves = [names[i] for i in range(1, m.nbody) if not welded[i] and i not in children]
+        place = {link: p for link, p in tree.place.items() if isinstance(link, str)}
+        table = link_table(place, [row["name"] for row in tree.rows], tree.parts, leaves)
+        model_name = self.model_name() or self.file.stem
+        model = Model(name=identifier(model_name, set(), "robot"), bodies=bodies, gravity=g,
+                      parameters=tuple(params), source=str(self.file), description=f"MJCF model {model_name!r}",
+                      links=Links(table.kind, table.frames, table.leaves),
+                      dof_armature=tuple(armature) if any(a != 0 for a in armature) else (),
+                      damping=tuple(damping) if any(d != 0 for d in damping) or pending_stiffness else (),
+                      meta={"floating_base": "quaternion" if free_joints else False,
+                            "warnings": list(self.warnings),
+                            "mjcf": self.summary(free_joints, sites, springs, dampers, flags)})
+        model = dataclasses.replace(model, frames=default_frames(model))
+        if model.nv == 0:
+            self.fail("", "the model has no joint; there are no equations of motion")
+        return model
+
+    def model_name(self) -> str:
+        raw = bytes(self.m.names)
+        return raw[:raw.index(b"\0")].decode("utf-8", "replace") if b"\0" in raw else ""
+
+    def sites(self, tree, names, welded, needs_world, body_links) -> list:
+        """Every site as a link of the body it is on (its name, or ``site:<name>`` beside a body of that name)."""
+        m, mj = self.m, self.mj
+        out = []
+        for s in range(m.nsite):
+            b = int(m.site_bodyid[s])
+            if welded[b] and not needs_world:
+                continue
+            name = _name(m, mj, mj.mjtObj.mjOBJ_SITE, s, "site")
+            link = f"site:{name}" if name in body_links else name
+            w, x, y, z = (float(v) for v in m.site_quat[s])
+            rotation = quaternion_rotations(x, y, z, w) if (w, x, y, z) != (1.0, 0.0, 0.0, 0.0) else []
+            tree.fixed(names[b], link, tuple(float(v) for v in m.site_pos[s]), rotation)
+            out.append(link)
+        return out
+
+    def summary(self, free_joints, sites, springs, dampers, flags) -> dict:
+        """``model.meta["mjcf"]``: the conventions, and what MuJoCo has that the equations leave out."""
+        m, mj = self.m, self.mj
+        joints = []
+        for j in range(m.njnt):
+            dof = int(m.jnt_dofadr[j])
+            entry = {"joint": self.joint_name(j), "type": JOINT_TYPES[int(m.jnt_type[j])],
+                     "body": self.body_name(int(m.jnt_bodyid[j]))}
+            if m.dof_frictionloss[dof]:
+                entry["frictionloss"] = float(m.dof_frictionloss[dof])
+            if m.jnt_limited[j]:
+                entry["range"] = [float(m.jnt_range[j][0]), float(m.jnt_range[j][1])]
+            joints.append(entry)
+        actuators = []
+        for a in range(m.nu):
+            target = int(m.actuator_trnid[a][0])
+            kind = int(m.actuator_trntype[a])
+            on = (self.joint_name(target) if kind in (0, 1) else
+                  _name(m, mj, mj.mjtObj.mjOBJ_TENDON, target, "tendon") if kind == 3 else str(target))
+            actuators.append({"name": _name(m, mj, mj.mjtObj.mjOBJ_ACTUATOR, a, "actuator"),
+                              "transmission": {0: "joint", 1: "joint", 2: "slider-crank", 3: "tendon",
+                                               4: "site", 5: "body"}.get(kind, str(kind)),
+                              "target": on, "gear": [float(v) for v in m.actuator_gear[a]]})
+        tendons = [_name(m, mj, mj.mjtObj.mjOBJ_TENDON, t, "tendon") for t in range(m.ntendon)]
+        inactive = [_name(m, mj, mj.mjtObj.mjOBJ_EQUALITY, e, "equality") for e in range(m.neq)]
+        return {
+            "source": "MuJoCo's compiled model (mujoco " + mj.__version__ + ")",
+            "convention": CONVENTION,
+            "free_joints": list(free_joints),
+            "in_the_equations": (
+                "A(q) qdd + b + g + C (q - q0) + D qd = tau: armature on A's diagonal (armature_<coordinate>), "
+                "viscous damping D (damping_<coordinate>), springs C (stiffness_<coordinate>, rest "
+                "springref_<coordinate>), gravity (gravity_x, gravity_y, gravity_z); forward and inverse dynamics "
+                "include the passive forces as MuJoCo's qacc and qfrc_passive do; passive_forces gives "
+                "-(C (q - q0) + D qd) (MuJoCo's qfrc_passive sign)"),
+            "springs": springs, "dampers": dampers, "gravity_disabled": bool(flags & DISABLE_GRAVITY),
+            "not_in_the_equations": (
+                "frictionloss (a constraint in MuJoCo), joint and tendon limits, contacts, equalities "
+                "(inactive ones), actuators (their forces are tau's to give: actuators lists each with its "
+                "transmission target and gear), fluid forces" + (" (this model has some)" if m.opt.density or
+                                                                  m.opt.viscosity else "")),
+            "joints": joints, "actuators": actuators, "tendons": tendons, "inactive_equalities": inactive,
+            "sites": list(sites),
+        }
+
+
+def load_mjcf(path) -> Model:
+    """Read an MJCF file through MuJoCo's compiler (the ``mujoco`` package: ``pip install 'aggsym[mjcf]'``); raises
+    :class:`ModelError` with the file and the compiler's message, or naming what is not supported."""
+    path = Path(path)
+    screen(path)
+    try:
+        import mujoco
+    except ImportError:
+        raise ModelError(path, "", "reading MJCF needs the mujoco package (pip install 'aggsym[mjcf]')") from None
+    said: list = []  # MuJoCo's warnings, taken from its handler (which prints them and appends to a log file in
+    # the working directory) and issued as ModelWarning
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(said.append)
+    try:
+        m = mujoco.MjModel.from_xml_path(str(path))
+    except Exception as exc:  # MuJoCo's compiler reports every problem of the file as a ValueError
+        text = " ".join(str(exc).split())
+        raise ModelError(path, "", f"MuJoCo's compiler refuses the file: {text[:2000]}") from None
+    finally:
+        mujoco.set_mju_user_warning(previous)
+    reader = _Reader(path, m, mujoco)
+    for text in said:
+        reader.warn("", f"MuJoCo's compiler warns: {' '.join(str(text).split())[:2000]}")
+    return reader.read()
+
+
+__all__ = ["load_mjcf", "CONVENTION"]

@@ -1,0 +1,118 @@
+"""The MJCF reader against MuJoCo on two whole corpora: every model of dm_control's suite and of gymnasium's MuJoCo
+environments (the XML their wheels ship) that has a joint.
+
+For each: load it with aggsym (``aggsym.load``, MuJoCo's compiler underneath), and compare A, d = b + g - passive
+and qacc with MuJoCo's ``mj_fullM``, ``qfrc_bias - qfrc_passive`` and ``mj_forward`` at random states and forces
+(:func:`benchmarks.mujoco_reference.compare`: contacts, limits, equalities, frictionloss and actuators disabled,
+fluid forces zero, the model's own armature, damping, springs and gravity kept).  A model that does not load is
+listed with aggsym's message (what is not supported yet).  Writes ``benchmarks/mjcf_corpus.json`` and prints the
+Markdown table of the README's section "MJCF".
+
+    python -m benchmarks.mjcf_corpus [--samples N]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import warnings
+from pathlib import Path
+
+TOLERANCE = 1e-9
+OUT = Path(__file__).with_name("mjcf_corpus.json")
+
+
+def corpora() -> dict:
+    """{corpus name: sorted XML files}: dm_control's suite and gymnasium's MuJoCo assets, from the installed wheels."""
+    import dm_control
+    import gymnasium
+
+    suite = Path(dm_control.__file__).parent / "suite"
+    gym = Path(gymnasium.__file__).parent / "envs" / "mujoco" / "assets"
+    return {"dm_control suite": sorted(suite.glob("*.xml")), "gymnasium mujoco": sorted(gym.glob("*.xml"))}
+
+
+def has_joint(path) -> bool:
+    import mujoco
+
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda text: None)
+    try:
+        return mujoco.MjModel.from_xml_path(str(path)).njnt > 0
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
+def reason(message: str) -> str:
+    """The short reason of a refusal, from the reader's message."""
+    for key, short in (("ball joint", "ball joint (not yet)"), ("equality", "active equality (not yet)"),
+                       ("tendon", "tendon with stiffness/damping (not yet)"), ("flex", "flex"),
+                       ("gravity compensation", "gravcomp")):
+        if key in message:
+            return short
+    return message
+
+
+def run(samples: int) -> list:
+    from aggsym.errors import ModelError
+    from aggsym.model import load
+
+    from .mujoco_reference import compare
+
+    rows = []
+    for corpus, files in corpora().items():
+        for path in files:
+            row = {"corpus": corpus, "model": path.name}
+            if not has_joint(path):
+                row["status"] = "no joint (not counted)"
+                rows.append(row)
+                continue
+            with warnings.catch_warnings(record=True) as said:
+                warnings.simplefilter("always")
+                try:
+                    model = load(path)
+                except ModelError as exc:
+                    row.update(status="refused", reason=reason(exc.message), message=exc.message)
+                    rows.append(row)
+                    continue
+            worst = compare(path, model=model, samples=samples)
+            row.update(nq=model.nq, nv=model.nv, free=len(model.meta["mjcf"]["free_joints"]),
+                       worst={k: float(v) for k, v in worst.items()},
+                       status="agrees" if max(worst.values()) <= TOLERANCE else "DIFFERS",
+                       notes="fluid forces left out (warned)" if any("fluid" in str(w.message) for w in said)
+                       else "")
+            rows.append(row)
+    return rows
+
+
+def table(rows) -> str:
+    counted = [r for r in rows if not r["status"].startswith("no joint")]
+    agree = [r for r in counted if r["status"] == "agrees"]
+    lines = [f"{len(counted)} models with a joint: {len(agree)} load and agree with MuJoCo within "
+             f"{TOLERANCE:g} (relative); {len(counted) - len(agree)} do not load (reason below).", "",
+             "| corpus | model | nq | nv | A | b + g - passive | qacc | status |", "|---|---|---|---|---|---|---|---|"]
+    for r in counted:
+        if r["status"] == "refused":
+            lines.append(f"| {r['corpus']} | {r['model']} | | | | | | refused: {r['reason']} |")
+        else:
+            w = r["worst"]
+            note = f" ({r['notes']})" if r["notes"] else ""
+            lines.append(f"| {r['corpus']} | {r['model']} | {r['nq']} | {r['nv']} | {w['A']:.1e} | {w['d']:.1e} | "
+                         f"{w['qdd']:.1e} | {r['status']}{note} |")
+    skipped = [r["model"] for r in rows if r["status"].startswith("no joint")]
+    if skipped:
+        lines += ["", f"Without a joint (not counted): {', '.join(skipped)}."]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples", type=int, default=5, help="random states per model (default 5)")
+    args = parser.parse_args(argv)
+    rows = run(args.samples)
+    OUT.write_text(json.dumps({"tolerance": TOLERANCE, "samples": args.samples, "rows": rows}, indent=1) + "\n")
+    print(table(rows))
+    return 0 if all(r["status"] != "DIFFERS" for r in rows) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,112 @@
+"""MuJoCo itself as the reference of the MJCF reader: A, the velocity and gravity terms with the passive forces,
+and the forward dynamics of aggsym's numeric twin against ``mj_fullM``, ``qfrc_bias - qfrc_passive`` and
+``qacc`` of ``mj_forward``, at random states and forces.
+
+MuJoCo runs with its constraints (contacts, joint limits, equalities, frictionloss) and its actuators disabled and
+fluid forces set to zero (none of them is in the equations of motion); the model's own armature, damping, springs
+and gravity (and their disable flags) are kept.  A free joint's velocity is converted as the reader's convention
+says (``aggsym.model.mjcf_reader.CONVENTION``): with J = I except R (the body's rotation) on each free joint's
+linear velocity, qvel = J v, MuJoCo's qacc = J qdd + c (c = R (w x v) on the free linear rows), so
+A = J^T M J, d = J^T (M c + qfrc_bias - qfrc_passive), tau = J^T qfrc_applied.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from aggsym.model.mjcf_reader import FREE
+
+
+def _quat(rng):
+    v = rng.normal(size=4)
+    return v / np.linalg.norm(v)
+
+
+def states(m, rng):
+    """A random MuJoCo (qpos, qvel, force): hinge and slide positions uniform in [-pi, pi], free joints a random
+    position and unit quaternion; velocities and forces normal."""
+    qpos = rng.uniform(-np.pi, np.pi, m.nq)
+    for j in range(m.njnt):
+        if m.jnt_type[j] == FREE:
+            a = m.jnt_qposadr[j]
+            qpos[a + 3:a + 7] = _quat(rng)
+    return qpos, rng.normal(size=m.nv), rng.normal(size=m.nv) * 3
+
+
+def to_aggsym(m, qpos, qvel, force):
+    """(q, qd, tau, J, c-builder) in aggsym's convention from MuJoCo's."""
+    import mujoco
+
+    q, qd, tau = [], qvel.copy(), force.copy()
+    J = np.eye(m.nv)
+    free = []
+    for j in range(m.njnt):
+        a, d = m.jnt_qposadr[j], m.jnt_dofadr[j]
+        if m.jnt_type[j] == FREE:
+            w, x, y, z = qpos[a + 3:a + 7]
+            R = np.zeros(9)
+            mujoco.mju_quat2Mat(R, qpos[a + 3:a + 7])
+            R = R.reshape(3, 3)
+            J[d:d + 3, d:d + 3] = R
+            qd[d:d + 3] = R.T @ qvel[d:d + 3]
+            tau[d:d + 3] = R.T @ force[d:d + 3]
+            q.extend([*qpos[a:a + 3], x, y, z, w])
+            free.append((d, R))
+        else:
+            q.append(qpos[a])
+    c = np.zeros(m.nv)
+    for d, R in free:
+        c[d:d + 3] = R @ np.cross(qd[d + 3:d + 6], qd[d:d + 3])
+    return np.array(q), qd, tau, J, c
+
+
+def mujoco_model(path):
+    """The compiled model with constraints and actuation disabled and no fluid (the comparison's MuJoCo)."""
+    import mujoco
+
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda text: None)  # (the reader has issued them; no log file in the working folder)
+    try:
+        m = mujoco.MjModel.from_xml_path(str(path))
+    finally:
+        mujoco.set_mju_user_warning(previous)
+    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
+    m.opt.density = 0.0
+    m.opt.viscosity = 0.0
+    return m
+
+
+def compare(path, model=None, samples: int = 3, seed: int = 0) -> dict:
+    """The largest relative differences {A, d, qdd, passive} over ``samples`` random states: max |aggsym - MuJoCo|
+    over max |MuJoCo| of each quantity."""
+    import mujoco
+
+    from aggsym.model import load
+    from aggsym.twin import NumericTwin
+
+    model = load(path) if model is None else model
+    twin = NumericTwin(model)
+    m = mujoco_model(path)
+    data = mujoco.MjData(m)
+    rng = np.random.default_rng(seed)
+    worst = {"A": 0.0, "d": 0.0, "qdd": 0.0, "passive": 0.0}
+    for _ in range(samples):
+        qpos, qvel, force = states(m, rng)
+        data.qpos[:], data.qvel[:], data.qfrc_applied[:] = qpos, qvel, force
+        data.ctrl[:] = 0
+        mujoco.mj_forward(m, data)
+        M = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, data, M)
+        q, qd, tau, J, c = to_aggsym(m, qpos, qvel, force)
+        A_ref = J.T @ M @ J
+        d_ref = J.T @ (M @ c + data.qfrc_bias - data.qfrc_passive)
+        qacc = J @ twin.call("forward_dynamics", q, qd, tau) + c
+        A = twin.call("inertia", q)
+        d = twin.call("nonlinear_effects", q, qd)
+        for key, mine, ref in (("A", A, A_ref), ("d", d, d_ref), ("qdd", qacc, data.qacc)):
+            worst[key] = max(worst[key], float(np.max(np.abs(mine - ref)) / max(np.max(np.abs(ref)), 1e-300)))
+        if model.has_damping or any(b.pair.elastic for b in model.bodies):
+            mine = twin.call("passive_forces", q, qd) if model.has_damping else -twin.call("elastic", q)
+            ref = J.T @ data.qfrc_passive
+            worst["passive"] = max(worst["passive"], float(np.max(np.abs(mine - ref)) /
+                                                           max(np.max(np.abs(ref)), 1e-300)))
+    return worst
