@@ -93,7 +93,7 @@ def _parser() -> argparse.ArgumentParser:
                         "Makefile building libNAME.a (make -j2; CC, CFLAGS default -O2 -std=c99) instead of NAME.c")
     g.add_argument("--targets", metavar="A,B,...",
                    help="write only these targets' files: c (NAME.h, NAME.c or the --split files), numpy (NAME.py), "
-                        "manifest (NAME.json), latex (NAME.tex); default: all four")
+                        "manifest (NAME.json), latex (NAME.tex), jax (NAME_jax.py); default: c, numpy, manifest, latex")
     g.add_argument("--list-routines", action="store_true",
                    help="print the routines this model gets, one line each (what each computes), and write nothing")
     command("latex", "print the LaTeX document of the equations of motion")
@@ -109,7 +109,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="check the --split layout: its Makefile builds libNAME.a (make -j2, the same warnings as "
                         "errors and --opt), and that library is what runs")
     c.add_argument("--targets", metavar="A,B,...",
-                   help="check only these targets (default: every target with something to run here: c, numpy)")
+                   help="check only these targets (default: every target with something to run here: c, numpy, jax "
+                        "where jax imports)")
     command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
     return parser
 
@@ -279,9 +280,13 @@ def cmd_check(args) -> int:
                               targets=[t.name for t in checked])
     width = max(len(r.role) for r in results)
     single = args.scalar == "float"
-    bounded = {t.name for t in checked if single and t.name == "c"}  # the float C, held to its own bound
+    # the float C and the JAX module in float32: each held to its own bounds (its runner's, the manifest's
+    # float_tolerance); the others to --tol
+    bounded = {name for r in results for name in r.tolerances} if single else set()
     print(f"{model.name}: {args.trials} random states per routine; worst error against the numeric twin, relative "
-          f"to the largest value the routine returns" + ("; the C in float, held to its bound" if single else ""))
+          f"to the largest value the routine returns"
+          + (f"; {' and '.join(t.column for t in checked if t.name in bounded)} in float, held to its bound"
+             if bounded else ""))
     print(f"{'routine'.ljust(width)}  " + "  ".join(f"{t.column:>9}" + (f"  {t.column + ' bound':>9}"
                                                                         if t.name in bounded else "")
                                                     for t in checked))
@@ -298,10 +303,10 @@ def cmd_check(args) -> int:
             bad.append(r.role)
     others = " or ".join(t.column for t in checked if t.name not in bounded)
     if bad:
-        print(f"mismatch ({'C beyond its bound or ' + others + ' ' if bounded and others else ''}"
+        print(f"mismatch ({'a float target beyond its bound or ' + others + ' ' if bounded and others else ''}"
               f"> {args.tol:g}) in: {', '.join(bad)}", file=sys.stderr)
         return 1
-    print(f"ok: every routine within {'its float bound (C) and ' if bounded else ''}{args.tol:g}"
+    print(f"ok: every routine within {'its float bound (' + ', '.join(t.column for t in checked if t.name in bounded) + ') and ' if bounded else ''}{args.tol:g}"
           + (f" ({others})" if bounded and others else ""))
     return 0
 
