@@ -285,8 +285,8 @@ def cmd_check(args) -> int:
     bounded = {name for r in results for name in r.tolerances} if single else set()
     print(f"{model.name}: {args.trials} random states per routine; worst error against the numeric twin, relative "
           f"to the largest value the routine returns"
-          + (f"; {' and '.join(t.column for t in checked if t.name in bounded)} in float, held to its bound"
-             if bounded else ""))
+          + (f"; {' and '.join(t.column for t in checked if t.name in bounded)} in float, held to "
+             f"{'its bound' if len(bounded) == 1 else 'their bounds'}" if bounded else ""))
     print(f"{'routine'.ljust(width)}  " + "  ".join(f"{t.column:>9}" + (f"  {t.column + ' bound':>9}"
                                                                         if t.name in bounded else "")
                                                     for t in checked))
