@@ -181,3 +181,24 @@ def test_check_has_a_jax_column_in_float64_and_float32(capsys):
     assert main(["check", model, "--targets", "jax", "--scalar", "float", "--trials", "3"]) == 0
     out = capsys.readouterr().out
     assert "JAX bound" in out.splitlines()[1] and "1e-04" in out
+
+
+def test_a_quaternion_free_flyer_equals_the_numpy_module(tmp_path, rng):
+    """nq = nv + 1, and integrate(q, v, dt) with its time step: every routine as the NumPy module's."""
+    import warnings
+
+    from aggsym.errors import ModelWarning
+    from helpers import robot_path
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ModelWarning)
+        model = aggsym.load(robot_path("double_pendulum"), floating_base="quaternion")
+    npm, jm = modules(model, tmp_path)
+    assert jm.NQ == jm.NV + 1 and jm.VELOCITIES == npm.VELOCITIES and "integrate" in routines(jm)
+    with float64():
+        for role in routines(npm):
+            args = arguments(npm, role, rng, (3,))
+            args[0][..., 3:7] /= np.linalg.norm(args[0][..., 3:7], axis=-1, keepdims=True)
+            want, got = getattr(npm, role)(*args), getattr(jm, role)(*args)
+            assert [np.shape(x) for x in as_tuple(got)] == [np.shape(x) for x in as_tuple(want)], role
+            assert relative(got, want) < 1e-12, role
