@@ -116,7 +116,7 @@ def _parser() -> argparse.ArgumentParser:
                         "Makefile building libNAME.a (make -j2; CC, CFLAGS default -O2 -std=c99) instead of NAME.c")
     g.add_argument("--targets", metavar="A,B,...",
                    help="write only these targets' files: c (NAME.h, NAME.c or the --split files), numpy (NAME.py), "
-                        "manifest (NAME.json), latex (NAME.tex), torch (NAME_torch.py); default: the first four")
+                        "manifest (NAME.json), latex (NAME.tex), jax (NAME_jax.py), torch (NAME_torch.py); default: c, numpy, manifest, latex")
     g.add_argument("--list-routines", action="store_true",
                    help="print the routines this model gets, one line each (what each computes), and write nothing")
     command("latex", "print the LaTeX document of the equations of motion")
@@ -132,8 +132,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="check the --split layout: its Makefile builds libNAME.a (make -j2, the same warnings as "
                         "errors and --opt), and that library is what runs")
     c.add_argument("--targets", metavar="A,B,...",
-                   help="check only these targets (default: every target with something to run here: c, numpy, and torch "
-                        "where torch is installed)")
+                   help="check only these targets (default: every target with something to run here: c, numpy, and jax "
+                        "and torch where they import)")
     command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
     return parser
 
@@ -303,11 +303,13 @@ def cmd_check(args) -> int:
                               targets=[t.name for t in checked])
     width = max(len(r.role) for r in results)
     single = args.scalar == "float"
-    # the float C, and the targets run in float32 under --scalar float (PyTorch), held to their own bounds
+    # the float C and the JAX module in float32: each held to its own bounds (its runner's, the manifest's
+    # float_tolerance); the others to --tol
     bounded = {name for r in results for name in r.tolerances} if single else set()
-    names = " and ".join(t.column for t in checked if t.name in bounded)
     print(f"{model.name}: {args.trials} random states per routine; worst error against the numeric twin, relative "
-          f"to the largest value the routine returns" + (f"; {names} in float, held to the bound" if bounded else ""))
+          f"to the largest value the routine returns"
+          + (f"; {' and '.join(t.column for t in checked if t.name in bounded)} in float, held to "
+             f"{'its bound' if len(bounded) == 1 else 'their bounds'}" if bounded else ""))
     print(f"{'routine'.ljust(width)}  " + "  ".join(f"{t.column:>9}" + (f"  {t.column + ' bound':>9}"
                                                                         if t.name in bounded else "")
                                                     for t in checked))
@@ -324,10 +326,11 @@ def cmd_check(args) -> int:
             bad.append(r.role)
     others = " or ".join(t.column for t in checked if t.name not in bounded)
     if bad:
-        print(f"mismatch ({names + ' beyond its bound or ' + others + ' ' if bounded and others else ''}"
+        print(f"mismatch ({'a float target beyond its bound or ' + others + ' ' if bounded and others else ''}"
               f"> {args.tol:g}) in: {', '.join(bad)}", file=sys.stderr)
         return 1
-    print(f"ok: every routine within {'its float bound (' + names + ') and ' if bounded else ''}{args.tol:g}"
+    floats = ", ".join(t.column for t in checked if t.name in bounded)
+    print(f"ok: every routine within {'its float bound (' + floats + ') and ' if bounded else ''}{args.tol:g}"
           + (f" ({others})" if bounded and others else ""))
     return 0
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 from ...errors import AggsymError
 from .base import Job, RoutineLines, Runner, Target
 from .c import CTarget
+from .jax import JaxTarget
 from .latex import LatexTarget
 from .manifest import ManifestTarget
 from .numpy import NumPyTarget
@@ -57,7 +58,7 @@ def select(names=None) -> list:
     return [t for name, t in TARGETS.items() if name in names]
 
 
-for _target in (CTarget(), NumPyTarget(), ManifestTarget(), LatexTarget()):  # one line per target
+for _target in (CTarget(), NumPyTarget(), ManifestTarget(), LatexTarget(), JaxTarget()):  # one line per target
     register(_target)
 register(TorchTarget())  # --targets torch (not in the default set)
 
