@@ -68,8 +68,8 @@ class _MjxConvention:
         inverse[self.dof] = np.arange(len(order)) + base
         if self.floating:
             inverse[:6] = np.arange(6)
-        self.dof_to_pin = inverse
-        self.pin_to_dof = np.argsort(inverse)
+        self.dof_to_pin = inverse  # x_mj = x_pin[dof_to_pin]
+        self.pin_to_dof = np.argsort(inverse)  # x_pin = x_mj[pin_to_dof]
 
     def qpos_of(self, q):
         import jax.numpy as jnp
@@ -87,7 +87,7 @@ class _MjxConvention:
         if self.floating:
             R = quat_matrix(jnp, q[3:7])
             x = jnp.concatenate([_matvec(jnp, R, x[:3]), x[3:]])
-        return x[self.pin_to_dof]
+        return x[self.dof_to_pin]
 
     def acc_to_mj(self, q, v, a):
         import jax.numpy as jnp
@@ -95,12 +95,12 @@ class _MjxConvention:
         if self.floating:
             R = quat_matrix(jnp, q[3:7])
             a = jnp.concatenate([_matvec(jnp, R, _cross(jnp, v[3:6], v[:3]) + a[:3]), a[3:]])
-        return a[self.pin_to_dof]
+        return a[self.dof_to_pin]
 
     def acc_from_mj(self, q, v, qacc):
         import jax.numpy as jnp
 
-        a = qacc[self.dof_to_pin]
+        a = qacc[self.pin_to_dof]
         if self.floating:
             R = quat_matrix(jnp, q[3:7])
             a = jnp.concatenate([_tmatvec(jnp, R, a[:3]) - _cross(jnp, v[3:6], v[:3]), a[3:]])
@@ -109,7 +109,7 @@ class _MjxConvention:
     def force_from_mj(self, q, f):
         import jax.numpy as jnp
 
-        f = f[self.dof_to_pin]
+        f = f[self.pin_to_dof]
         if self.floating:
             R = quat_matrix(jnp, q[3:7])
             f = jnp.concatenate([_tmatvec(jnp, R, f[:3]), f[3:]])
@@ -119,7 +119,7 @@ class _MjxConvention:
         """S^T M S with v_mj = S v_pin (S: R on the base's linear block, the permutation elsewhere)."""
         import jax.numpy as jnp
 
-        M = M[self.dof_to_pin][:, self.dof_to_pin]
+        M = M[self.pin_to_dof][:, self.pin_to_dof]
         if self.floating:
             R = quat_matrix(jnp, q[3:7])
             S = jnp.eye(M.shape[0], dtype=M.dtype).at[:3, :3].set(R)
