@@ -300,7 +300,10 @@ def section(cfg=None) -> dict:
                                          0.0)
                         row["against_numpy"] = same["max_relative"]
     env["load_average_end"] = load_average()
-    return {"environment": env, "host": cpu_line(), "config": cfg,
+    notes = [f"{label}: `aggsym generate --targets numpy,jax,torch,manifest` failed, so the aggsym JAX and PyTorch "
+             f"entries had no module: {robot['generation']['full']['error'].strip().splitlines()[-1]}"
+             for label, robot in robots.items() if robot["generation"].get("full", {}).get("error", "").strip()]
+    return {"environment": env, "host": cpu_line(), "config": cfg, "notes": notes,
             "robots": {k: {x: v[x] for x in ("nq", "nv", "floating", "joints", "urdf", "generation")}
                        for k, v in robots.items()},
             "entries": {k: {"label": v[0], "framework": v[1], "jacobian": v[3]} for k, v in ENTRIES.items()},
