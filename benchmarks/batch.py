@@ -54,6 +54,22 @@ GENERATED = "inertia,inverse_dynamics,forward_dynamics,forward_dynamics_derivati
 PLAIN = "inertia,inverse_dynamics,forward_dynamics"
 
 
+PEER_PACKAGES = ("jax", "jaxlib", "torch", "adam-robotics", "jaxsim", "mujoco", "mujoco-mjx", "pin", "numpy")
+
+
+def peer_versions() -> dict:
+    """The versions of the frameworks and peers in this venv (None where one is missing)."""
+    from importlib import metadata
+
+    out = {}
+    for name in PEER_PACKAGES:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = None
+    return out
+
+
 def config() -> dict:
     env = os.environ
     return {
@@ -249,6 +265,7 @@ def section(cfg=None) -> dict:
 
     cfg = cfg or config()
     env = environment()
+    env["peer_versions"] = peer_versions()
     log(f"host: {cpu_line()}, {env['logical_cpus']} CPUs, load {load_average()}; settings {cfg}")
     unknown = [e for e in cfg["entries"] if e not in ENTRIES]
     if unknown:

@@ -250,6 +250,7 @@ def markdown(data) -> str:
              f"{', '.join(_sizes(data))}, {cfg.get('repeats')} interleaved samples per B of ≥ "
              f"{cfg.get('sample_seconds')} s, {cfg.get('rounds')} round(s); float64 on the CPU; each "
              "(entry, robot, routine) in its own process (`python -m benchmarks.batch`, in `.venv-batch`).", "",
+             "Versions: " + ", ".join(f"{k} {v}" for k, v in env.get("peer_versions", {}).items()) + ".", "",
              "Robots: " + "; ".join(f"{k} (nq = {v['nq']}, nv = {v['nv']}"
                                      + (", Pinocchio's free-flyer" if v.get("floating") else ", fixed base") + ")"
                                      for k, v in data.get("robots", {}).items()) + ".", "",
