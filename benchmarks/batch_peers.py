@@ -191,9 +191,12 @@ def build_pinocchio(robot):
             return out
         return run
 
+    lower = np.tril_indices(nv, -1)
+
     def A(q):
-        M = pin.crba(model, data, q)
-        return np.triu(M) + np.triu(M, 1).T
+        M = pin.crba(model, data, q)  # the upper triangle is Pinocchio's; the lower is copied from it
+        M[lower] = M.T[lower]
+        return M
 
     def jac(q, v, tau):
         pin.computeABADerivatives(model, data, q, v, tau)
