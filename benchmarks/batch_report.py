@@ -242,7 +242,7 @@ def markdown(data) -> str:
     cfg = data.get("config", {})
     env = data.get("environment", {})
     lines = [f"**The section did not complete: {data['error']}**", ""] if data.get("error") else []
-    lines += [f"*{note}*" for note in data.get("notes", [])] + ([""] if data.get("notes") else [])
+    lines += [f"- {note}" for note in data.get("notes", [])] + ([""] if data.get("notes") else [])
     if not data.get("rows"):
         return "\n".join(lines or ["No results."])
     lines += [f"Host: {data.get('host', 'unknown')}; {env.get('date', '')}; load average "

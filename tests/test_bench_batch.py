@@ -102,7 +102,7 @@ def test_report_tables_plot_and_targets_from_fake_results(tmp_path):
 
 def test_a_section_that_did_not_run_says_why():
     assert "did not complete: no venv" in batch_report.markdown({"error": "no venv"})
-    assert "*kept from two runs*" in batch_report.markdown(dict(fake_results(), notes=["kept from two runs"]))
+    assert "- kept from two runs\n" in batch_report.markdown(dict(fake_results(), notes=["kept from two runs"]))
     assert not batch_report.plot({"error": "no venv"}, Path("unused.png"))
 
 
