@@ -56,7 +56,7 @@ generate: $(VENV)/.runtime
 	for m in $(MODELS); do $(BIN)/aggsym generate $$m -q > /dev/null || exit 1; done
 
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) $(BATCH_VENV) build *.egg-info
 
 # benchmark: runtime + test + bench extras (matplotlib, Eigen and URDF headers for the Pinocchio C++ harness);
 # writes benchmarks/REPORT.md, benchmarks/*.json and the plots (see benchmarks/run.py for the settings)
@@ -64,7 +64,15 @@ $(VENV)/.bench: pyproject.toml $(VENV)/.test
 	$(BIN)/python -m pip install --quiet -e '.[test,bench]'
 	touch $@
 
+# the batched benchmark's own venv (benchmarks/batch.py, section batch of benchmarks.run): its peers pin an older
+# jax (adam-robotics 0.5 requires jax <= 0.6.0) than the project's, and torch is the CPU wheel 2.13.0
+BATCH_VENV := .venv-batch
+$(BATCH_VENV)/.ready: benchmarks/batch-requirements.txt pyproject.toml
+	$(PYTHON) -m venv $(BATCH_VENV)
+	$(BATCH_VENV)/bin/python -m pip install --quiet -r benchmarks/batch-requirements.txt -e .
+	touch $@
+
 .PHONY: bench
-bench: $(VENV)/.bench
+bench: $(VENV)/.bench $(BATCH_VENV)/.ready
 	$(BYTECODE)
 	$(BIN)/python -m benchmarks.run

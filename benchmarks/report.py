@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from . import report_plots
+
 ROBOTS = ("ur5", "panda", "hyq", "talos")
 RUNTIME_TARGET_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics",
                         "inverse_dynamics_derivatives", "forward_dynamics_derivatives", "frame_jacobians", "regressor")
@@ -293,122 +295,6 @@ def summary_text(results) -> str:
                       [(w, m, {True: "yes", False: "NO", None: "not measured"}[ok]) for w, m, ok in rows])
     host = "\n".join(host_lines(results))
     return (host + "\n\n" if host else "") + f"aggsym benchmark targets: {met} of {len(rows)} met\n{body}"
-
-
-# ---------------------------------------------------------------------------------------------- plots
-def plot_generation(results, path: Path) -> bool:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    chains = sorted((r for r in results.get("generation", {}).get("runs", []) if r.get("kind") == "chain"
-                     and r.get("ok")), key=lambda r: r["n"])
-    kane = results.get("kane", {}).get("runs", [])
-    if not chains and not kane:
-        return False
-    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
-    failed = [r for r in results.get("generation", {}).get("runs", []) if r.get("kind") == "chain"
-              and not r.get("ok")]
-    for r in failed:
-        ax.plot([r["n"]], [r["wall_seconds"]], "x", color="C0", markersize=10, mew=2)
-        ax.annotate(f"aggsym > {r['wall_seconds']:.0f} s (killed)", (r["n"], r["wall_seconds"]),
-                    textcoords="offset points", xytext=(6, 4), color="C0", fontsize=8)
-    if chains:
-        ax.plot([r["n"] for r in chains], [r["wall_seconds"] for r in chains], "o-", label="aggsym generate (all routines, C + NumPy + LaTeX)")
-        ax2.plot([r["n"] for r in chains], [r["maxrss_kib"] / 1024 for r in chains], "o-", label="aggsym generate")
-    done = [k for k in kane if k.get("finished")]
-    if done:
-        ax.plot([k["n"] for k in done], [k["seconds"] for k in done], "s-", color="C3",
-                label="KanesMethod (M, forcing) + sympy.cse")
-        ax2.plot([k["n"] for k in done], [k["maxrss_kib"] / 1024 for k in done], "s-", color="C3", label="KanesMethod + cse")
-    over = [k for k in kane if not k.get("finished") and not k.get("skipped") and not k.get("failed")]
-    for k in over:
-        ax.plot([k["n"]], [k["timeout"]], "x", color="C3", markersize=10, mew=2)
-        ax.annotate(f"> {k['timeout']:g} s (killed)", (k["n"], k["timeout"]), textcoords="offset points",
-                    xytext=(6, -12), color="C3", fontsize=8)
-    ax.set_yscale("log")
-    ax.set_xlabel("links n (3-D chain)")
-    ax.set_ylabel("wall time, s (log)")
-    ax.set_title("Generation time")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    ax2.set_xlabel("links n (3-D chain)")
-    ax2.set_ylabel("peak resident memory, MiB")
-    ax2.set_title("Peak memory of the process")
-    ax2.grid(True, alpha=0.3)
-    ax2.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
-
-
-def plot_runtime(results, path: Path) -> bool:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    robots = results.get("runtime", {}).get("robots", [])
-    if not robots:
-        return False
-    roles = []
-    for r in robots:
-        roles += [p["role"] for p in r["pairs"] if p["role"] not in roles]
-    fig, ax = plt.subplots(figsize=(max(10, 1.6 * len(roles) + 2), 4.8))
-    width = 0.85 / len(roles)
-    for k, role in enumerate(roles):
-        xs = [i + (k - (len(roles) - 1) / 2) * width for i in range(len(robots))]
-        ys = [next((p["ratio"] for p in r["pairs"] if p["role"] == role), math.nan) for r in robots]
-        ax.bar(xs, ys, width, label=RUNTIME_LABELS.get(role, role))
-        for x, y in zip(xs, ys):
-            if not math.isnan(y):
-                ax.text(x, y, f"{y:.2f}", ha="center", va="bottom", fontsize=6)
-    ax.axhline(1.0, color="k", lw=0.8)
-    ax.axhline(RUNTIME_RATIO_TARGET, color="C3", ls="--", lw=1, label=f"target {RUNTIME_RATIO_TARGET:g}")
-    ax.set_xticks(range(len(robots)))
-    ax.set_xticklabels([f"{r['name']} (n = {r['nq']})" for r in robots])
-    ax.set_ylabel("time generated / time Pinocchio")
-    ax.set_title("Runtime ratio, ns per call (median of batch means); below 1 the generated C is faster")
-    ax.legend(fontsize=7, ncol=3)
-    ax.grid(True, axis="y", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
-
-
-def plot_opcounts(results, path: Path) -> bool:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from aggsym.codegen.ops import BOOK_TABLE_32, FEATHERSTONE_ABA, FEATHERSTONE_CRBA, FEATHERSTONE_RNEA
-
-    runs = sorted((r for r in results.get("generation", {}).get("runs", []) if r.get("kind") == "chain" and r.get("ok")),
-                  key=lambda r: r["n"])
-    if not runs:
-        return False
-    ns = [r["n"] for r in runs]
-    fig, ax = plt.subplots(figsize=(7.5, 4.5))
-    for k, (role, ref) in enumerate((("inertia", FEATHERSTONE_CRBA), ("inverse_dynamics", FEATHERSTONE_RNEA),
-                                     ("forward_dynamics", FEATHERSTONE_ABA))):
-        ours = [r["ops"][role]["mul"] + r["ops"][role]["add"] + r["ops"][role]["div"] for r in runs]
-        ax.plot(ns, ours, "o-", color=f"C{k}", label=f"aggsym {role}")
-        ax.plot(ns, [sum(ref.at(n)) for n in ns], "--", color=f"C{k}", label=ref.label)
-    ax.plot(ns, [sum(BOOK_TABLE_32.at(n)) for n in ns], ":", color="C2", label=BOOK_TABLE_32.label)
-    ax.set_xlabel("links n (3-D chain)")
-    ax.set_ylabel("mul + add + div")
-    ax.set_yscale("log")
-    ax.set_title("Operation counts of the emitted C vs the references")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return True
 
 
 # ---------------------------------------------------------------------------------------------- the report
@@ -814,13 +700,15 @@ def _targets(results) -> str:
 
 
 def _extras(results) -> str:
-    """Scaling of generation, the sincos helper, and --split's compile time (each when measured)."""
-    from . import compile_split, scaling, trig
+    """Scaling of generation, the sincos helper, --split's compile time and the batched benchmark (each when
+    measured)."""
+    from . import batch_report, compile_split, scaling, trig
 
     parts = []
     for key, title, module in (("scaling", "Scaling of generation (benchmarks/scaling.py)", scaling),
                                ("trig", "sin and cos (benchmarks/trig.py)", trig),
-                               ("split", "Compiling with --split (benchmarks/compile_split.py)", compile_split)):
+                               ("split", "Compiling with --split (benchmarks/compile_split.py)", compile_split),
+                               ("batch", "Batched: JAX, PyTorch and their peers (benchmarks/batch.py)", batch_report)):
         data = results.get(key)
         if data:
             parts += [f"## {title}", "", module.markdown(data), ""]
@@ -831,9 +719,9 @@ def write_report(results, folder) -> Path:
     """Write REPORT.md and the PNG plots into ``folder``; returns the report's path."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    plot_generation(results, folder / "generation.png")
-    plot_opcounts(results, folder / "opcounts.png")
-    plot_runtime(results, folder / "runtime.png")
+    report_plots.plot_generation(results, folder / "generation.png")
+    report_plots.plot_opcounts(results, folder / "opcounts.png")
+    report_plots.plot_runtime(results, folder / "runtime.png", RUNTIME_LABELS, RUNTIME_RATIO_TARGET)
     env = results.get("environment", {})
     parts = [f"# aggsym benchmark ({env.get('date', 'date unknown')})", "",
              "Produced by `make bench` (`benchmarks/run.py`); raw results in `benchmarks/*.json`.  Sections: "

@@ -19,8 +19,10 @@ Settings (environment variables; defaults in brackets):
                                                                                          talos,chain24,chain48]
     AGGSYM_BENCH_CPU               the CPU the harness is pinned to                      [the last allowed]
     AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane,inputs,     [all]
-                                   opsn,scaling,trig,split
+                                   opsn,scaling,trig,split,batch
                                    (a section left out is read back from its JSON of an earlier run)
+    AGGSYM_BENCH_BATCH_PYTHON      the interpreter of the batch section's own venv      [.venv-batch/bin/python]
+                                   (the AGGSYM_BENCH_BATCH_* settings: benchmarks/batch.py)
 
 Sections: 1. generation time and peak memory of every models/*.yaml, the four example-robot-data robots and
 the chains, with KanesMethod on the chains (generation.json, kane.json); 2. operation counts from the
@@ -84,7 +86,8 @@ def config() -> dict:
         "AGGSYM_BENCH_STATES": int(env.get("AGGSYM_BENCH_STATES", "1000")),
         "AGGSYM_BENCH_CALLS": int(env.get("AGGSYM_BENCH_CALLS", "100")),
         "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS",
-                                         "generation,runtime,kane,inputs,opsn,scaling,trig,split"),
+                                         "generation,runtime,kane,inputs,opsn,scaling,trig,split,batch"),
+        "AGGSYM_BENCH_BATCH_PYTHON": env.get("AGGSYM_BENCH_BATCH_PYTHON", str(ROOT / ".venv-batch" / "bin" / "python")),
         "AGGSYM_BENCH_RUNTIME_ROBOTS": env.get("AGGSYM_BENCH_RUNTIME_ROBOTS", ""),
         "AGGSYM_BENCH_PEER_ROBOTS": env.get("AGGSYM_BENCH_PEER_ROBOTS", PEER_ROBOTS),
     }
@@ -340,6 +343,24 @@ def _keep_earlier_robots(runtime: dict, earlier: dict) -> dict:
     return runtime
 
 
+def section_batch(cfg) -> dict:
+    """Issue 32's batched benchmark, :mod:`benchmarks.batch`, run in its own venv (its peers pin an older jax than
+    the project's): a subprocess whose output is shown as it comes; it writes batch.json and batch.png, read back
+    here.  A missing venv or a failed run is reported in the section, not fatal."""
+    import subprocess
+
+    from .measure import child_env
+
+    python = Path(cfg["AGGSYM_BENCH_BATCH_PYTHON"])
+    if not python.exists():
+        return {"error": f"{python} does not exist: make .venv-batch/.ready creates it (make bench does)"}
+    log(f"batch section in {python} (python -m benchmarks.batch) ...")
+    proc = subprocess.run([str(python), "-m", "benchmarks.batch"], cwd=ROOT, env=child_env())
+    if proc.returncode != 0:
+        return {**_load("batch"), "error": f"python -m benchmarks.batch exited with {proc.returncode}"}
+    return _load("batch")
+
+
 def section_extras(sections) -> dict:
     """Issue 18's sections: scaling (chains of 6..192 bodies and a 200-body tree, :mod:`benchmarks.scaling`, which
     writes scaling.json and scaling.png itself), trig (the sincos helper against libm, :mod:`benchmarks.trig`) and
@@ -408,6 +429,7 @@ def main() -> int:
     else:
         opsn = _load("opsn")
     extras = section_extras(sections)
+    extras["batch"] = section_batch(cfg) if "batch" in sections else _load("batch")
 
     env["load_average_end"] = load_average()
     env["bench_wall_seconds"] = round(time.perf_counter() - t_start, 1)
