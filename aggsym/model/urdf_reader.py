@@ -603,12 +603,8 @@ def friction_parameters(coordinates) -> tuple:
     return tuple(out)
 
 
-def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent", snap_angles: float = 0.0) -> Model:
-    """Read and validate a URDF file; raises :class:`ModelError` naming the element and line of a problem.
-    ``snap_angles``: an approximation on request (off by default): the angles of joint and inertial origins
-    (``rpy``) within this many radians of a multiple of pi/2 are taken as that multiple (recorded in
-    ``model.meta["snapped_angles"]`` and the manifest); below it the file's values are kept (to round-off)."""
-    path = Path(path)
+def _check_options(floating_base, mimic, snap_angles):
+    """The options of :func:`load_urdf` checked; the floating base's kind (``"euler"`` is True)."""
     if not (isinstance(snap_angles, (int, float)) and 0 <= snap_angles < math.pi / 4):
         raise ValueError(f"snap_angles must be a number of radians from 0 to pi/4 (exclusive), got {snap_angles!r}")
     if mimic not in MIMIC_OPTIONS:
@@ -620,6 +616,16 @@ def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent
     if floating_base == "quaternion" and mimic == "couple":
         raise ValueError("mimic='couple' with a quaternion floating base is not supported: use the Euler base "
                          "(floating_base=True) or independent mimic joints")
+    return floating_base
+
+
+def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent", snap_angles: float = 0.0) -> Model:
+    """Read and validate a URDF file; raises :class:`ModelError` naming the element and line of a problem.
+    ``snap_angles``: an approximation on request (off by default): the angles of joint and inertial origins
+    (``rpy``) within this many radians of a multiple of pi/2 are taken as that multiple (recorded in
+    ``model.meta["snapped_angles"]`` and the manifest); below it the file's values are kept (to round-off)."""
+    path = Path(path)
+    _check_options(floating_base, mimic, snap_angles)
     try:
         with open(path, "rb") as f:
             data = f.read(MAX_BYTES + 1)
@@ -628,6 +634,18 @@ def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent
     if len(data) > MAX_BYTES:
         raise ModelError(path, "", f"the file is larger than {MAX_BYTES // 2 ** 20} MiB; a URDF this large is not "
                                    f"read (the limit guards against files made to exhaust memory)")
+    return urdf_from_bytes(path, data, floating_base, mimic, snap_angles)
+
+
+def urdf_from_bytes(path: Path, data: bytes, floating_base: bool | str = False, mimic: str = "independent",
+                    snap_angles: float = 0.0, label: str | None = None) -> Model:
+    """A URDF document given as bytes (the xacro reader's expansion), read as :func:`load_urdf` reads a file;
+    ``label`` names it in messages and as the model's source (default: ``path``)."""
+    floating_base = _check_options(floating_base, mimic, snap_angles)
+    if len(data) > MAX_BYTES:
+        raise ModelError(label or path, "", f"the document is larger than {MAX_BYTES // 2 ** 20} MiB; a URDF this "
+                                            f"large is not read (the limit guards against exhausting memory)")
+    shown = Path(label) if label else Path(path)
     notes: list[str] = []
-    root = _parse(path, data, notes)
-    return _Reader(path, root, floating_base, mimic, float(snap_angles), notes).read()
+    root = _parse(shown, data, notes)
+    return _Reader(shown, root, floating_base, mimic, float(snap_angles), notes).read()
