@@ -133,6 +133,11 @@ def test_unknown_package(tmp_path, capsys):
             "--package-path parts=DIR")
 
 
+def test_missing_include(tmp_path, capsys):
+    path = write(tmp_path, "i.urdf.xacro", '<xacro:include filename="missing.xacro"/>')
+    refused(capsys, ["ops", str(path)], str(path), f"cannot read {tmp_path / 'missing.xacro'}: No such file")
+
+
 def test_package_path_not_a_folder(tmp_path, capsys):
     refused(capsys, ["ops", str(SCARA), "--package-path", f"parts={tmp_path / 'none'}"], "no such folder")
 

@@ -234,6 +234,8 @@ def _model_error(xacro, path: Path, exc: Exception) -> ModelError:
         inner = getattr(exc, "exc", None)
         if isinstance(inner, _Refused) or isinstance(exc, _Refused):
             message = str(inner if isinstance(inner, _Refused) else exc)
+        elif isinstance(inner, OSError):
+            message = f"cannot read {inner.filename}: {inner.strerror}"
         else:
             message = " ".join(str(exc).split()) or exc.__class__.__name__
             if isinstance(exc, KeyError) or (inner is not None and isinstance(inner, KeyError)):
