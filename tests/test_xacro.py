@@ -133,6 +133,15 @@ def test_unknown_package(tmp_path, capsys):
             "--package-path parts=DIR")
 
 
+def test_warnings_of_the_package_are_model_warnings(tmp_path):
+    path = write(tmp_path, "w.urdf.xacro", '<xacro:property name="pi" value="3.14"/><link name="a"/><link name="b"/>'
+                 '<joint name="j" type="revolute"><parent link="a"/><child link="b"/></joint>')
+    with pytest.warns(aggsym.errors.ModelWarning) as record:
+        aggsym.load(path)
+    messages = [str(w.message) for w in record]
+    assert len(messages) == 1 and "redefining global symbol: pi" in messages[0] and str(path) in messages[0]
+
+
 def test_missing_include(tmp_path, capsys):
     path = write(tmp_path, "i.urdf.xacro", '<xacro:include filename="missing.xacro"/>')
     refused(capsys, ["ops", str(path)], str(path), f"cannot read {tmp_path / 'missing.xacro'}: No such file")

@@ -215,10 +215,18 @@ def expand(path, xacro_args=None, package_paths=None) -> str:
             raise _model_error(xacro, path, exc) from None
         finally:
             xacro.substitution_args_context["arg"] = {}
-    for line in stderr.getvalue().splitlines():
-        if line.strip():
-            warnings.warn(f"{path}: xacro: {line.strip()}", ModelWarning, stacklevel=2)
+    messages: list = []  # the package's messages, each with its location lines ("when processing file: ...")
+    for line in (x.strip() for x in stderr.getvalue().splitlines()):
+        if line and messages and line.startswith(_LOCATION):
+            messages[-1] += f" ({line})"
+        elif line:
+            messages.append(line)
+    for message in messages:
+        warnings.warn(f"{path}: xacro: {message}", ModelWarning, stacklevel=2)
     return text
+
+
+_LOCATION = ("when processing file:", "in file:", "included from:", "when instantiating macro:", "instantiated from:")
 
 
 def _model_error(xacro, path: Path, exc: Exception) -> ModelError:
