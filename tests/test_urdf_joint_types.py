@@ -4,7 +4,8 @@ The reference is a Pinocchio model built here by hand from the numbers of the UR
 reader: each planar joint is Pinocchio's composite of its two translations and its rotation in the joint frame
 turned so that its axis is e_i (for the axis z: PX PY RZ, Pinocchio's JointModelPlanar with q = (x, y, angle)), each
 floating joint the composite PX PY PZ RX RY RZ (the book's Euler pair, as ``--floating-base euler``).  A, b + g,
-inverse and forward dynamics at random states agree to 1e-10 relative.
+inverse and forward dynamics at random states agree to 1e-10 relative.  A planar joint about z is also checked
+against Pinocchio's own import of the file (its JointModelPlanar, velocities in the child's axes).
 """
 from __future__ import annotations
 
@@ -179,3 +180,43 @@ def test_generated_numpy_against_pinocchio(robot, tmp_path):
         M = np.triu(M) + np.triu(M, 1).T
         assert relative_error(np.asarray(module.inertia(q)).reshape(M.shape), M) <= TOL
         assert relative_error(np.asarray(module.forward_dynamics(q, qd, tau)), pin.aba(pm, data, q, qd, tau)) <= TOL
+
+
+PLANAR_ARM = """<robot name="planar_arm">
+<link name="ground"/>
+<link name="cart"><inertial><origin xyz="0.05 -0.02 0.01"/><mass value="1.5"/>
+<inertia ixx="0.02" ixy="0.001" ixz="-0.002" iyy="0.03" iyz="0.0015" izz="0.025"/></inertial></link>
+<link name="pole"><inertial><origin xyz="0 0.01 0.3"/><mass value="0.6"/>
+<inertia ixx="0.01" ixy="0.0002" ixz="0.0001" iyy="0.011" iyz="-0.0003" izz="0.002"/></inertial></link>
+<joint name="table" type="planar"><parent link="ground"/><child link="cart"/>
+<origin xyz="0.1 0.2 0.3" rpy="0.3 -0.2 0.1"/><axis xyz="0 0 1"/></joint>
+<joint name="hinge" type="revolute"><parent link="cart"/><child link="pole"/>
+<origin xyz="0.1 0 0.05" rpy="0 0 0.4"/><axis xyz="1 0 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/>
+</joint>
+</robot>
+"""
+
+
+def test_planar_against_pinocchios_own_planar_joint(tmp_path):
+    """Pinocchio's URDF importer makes the planar joint JointModelPlanar: q = (x, y, cos, sin), v = (vx, vy, w) in
+    the child's axes.  With J = d v / d qd (the rotation R(angle)^T on the translation rates), A = J^T M J and the
+    joint forces are J^T rnea(Q, J qd, J qdd + J' qd)."""
+    path = tmp_path / "planar_arm.urdf"
+    path.write_text(PLANAR_ARM)
+    model = aggsym.load(path)
+    pm = pin.buildModelFromUrdf(str(path))
+    assert pm.joints[1].shortname() == "JointModelPlanar" and model.nq == 4 and pm.nq == 5
+    twin, data, rng = aggsym.NumericTwin(model), pm.createData(), np.random.default_rng(11)
+    for _ in range(3):
+        q, qd, qdd = rng.uniform(-np.pi, np.pi, (3, 4))
+        c, s = np.cos(q[2]), np.sin(q[2])
+        Q = np.array([q[0], q[1], c, s, q[3]])
+        J = np.eye(4)
+        J[:2, :2] = [[c, s], [-s, c]]
+        Jdot = np.zeros((4, 4))
+        Jdot[:2, :2] = qd[2] * np.array([[-s, c], [-c, -s]])
+        M = pin.crba(pm, data, Q)
+        M = np.triu(M) + np.triu(M, 1).T
+        assert relative_error(twin.inertia(q), J.T @ M @ J) <= TOL
+        tau = J.T @ pin.rnea(pm, data, Q, J @ qd, J @ qdd + Jdot @ qd)
+        assert relative_error(twin.inverse_dynamics(q, qd, qdd), tau) <= TOL
