@@ -74,6 +74,12 @@ def _parser() -> argparse.ArgumentParser:
                             + "an approximation on request (off by default): take the rpy angles of the "
                             "file's origins within TOL rad of a multiple of pi/2 as that multiple (1.5708 -> pi/2); "
                             "every angle it moves is listed in the manifest's 'snapped_angles'")
+        p.add_argument("--xacro-arg", metavar="NAME:=VALUE", action="append", type=_xacro_arg, default=[],
+                       help=_only("--xacro-arg", ": ") + "the value of the file's <xacro:arg name=NAME> (repeat for "
+                            "several)")
+        p.add_argument("--package-path", metavar="PKG=DIR", action="append", type=_package_path, default=[],
+                       help=_only("--package-path", ": ") + "$(find PKG) is DIR, and files there may be included "
+                            "(repeat for several; else the folders of ROS_PACKAGE_PATH)")
         p.add_argument("--armature", metavar="VALUE", type=_armature, default=0.0,
                        help="add a rotor inertia VALUE (kg m^2, or kg for a prismatic joint) on every coordinate, as "
                             "Pinocchio's armature: A(q) + VALUE E (makes A regular where a joint moves no mass)")
@@ -148,7 +154,12 @@ def _load(args):
         options["mimic"] = args.mimic
     if args.snap_angles:
         options["snap_angles"] = args.snap_angles
+    if args.xacro_arg:
+        options["xacro_args"] = dict(args.xacro_arg)
+    if args.package_path:
+        options["package_paths"] = dict(args.package_path)
     given = [flag for flag, value in (("--floating-base", args.floating_base), ("--mimic", "mimic" in options),
+                                      ("--xacro-arg", args.xacro_arg), ("--package-path", args.package_path),
                                       ("--snap-angles", args.snap_angles), ("--constraints", args.constraints),
                                       ("--support", args.support),
                                       ("--inertial-parameters", args.inertial_parameters is not None),
@@ -208,6 +219,20 @@ def _armature(text: str) -> float:
     if not (0.0 <= value < float("inf")):
         raise argparse.ArgumentTypeError(f"{text!r}: the armature is a finite number >= 0")
     return value
+
+
+def _xacro_arg(text: str) -> tuple:
+    name, sep, value = text.partition(":=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"{text!r}: expected NAME:=VALUE")
+    return name.strip(), value
+
+
+def _package_path(text: str) -> tuple:
+    name, sep, folder = text.partition("=")
+    if not sep or not name.strip() or not folder:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected PKG=DIR")
+    return name.strip(), folder
 
 
 def _snap_tolerance(text: str) -> float:

@@ -21,7 +21,9 @@ def test_suffixes_choose_the_reader(tmp_path):
     assert reader_for(model_path("double_pendulum")).name == "YAML"
     assert reader_for(tmp_path / "a.YML").name == "YAML"
     assert reader_for(robot_path("ur5")).name == "URDF"
-    with pytest.raises(ModelError, match=r"unknown model type '\.foo': expected \.yaml, \.yml, \.urdf or \.mjcf"):
+    assert reader_for(tmp_path / "robot.urdf.xacro").name == "xacro"
+    with pytest.raises(ModelError, match=r"unknown model type '\.foo': expected \.yaml, \.yml, \.urdf, \.xacro or "
+                                         r"\.mjcf"):
         reader_for(tmp_path / "a.foo")
 
 

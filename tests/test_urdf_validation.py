@@ -173,8 +173,7 @@ def test_zero_axis(write):
           'axis xyz="0 0 0" has zero length')
 
 
-@pytest.mark.parametrize("jtype, says", [("planar", "planar joints are not supported"),
-                                         ("floating", "floating_base=True"),
+@pytest.mark.parametrize("jtype, says", [("spherical", "ball joints are not supported yet"),
                                          ("ball", "unknown joint type 'ball'")])
 def test_unsupported_joint_types(write, jtype, says):
     text = arm(link("hand"), joint("wrist", "lower", "hand", jtype=jtype))

@@ -1,4 +1,5 @@
-"""Model readers (YAML, URDF; one registry: readers.py), validation, the immutable Model and its tree indexing."""
+"""Model readers (YAML, URDF, xacro, MJCF; one registry: readers.py), validation, the immutable Model and its tree
+indexing."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -16,7 +17,8 @@ from .yaml_reader import load_yaml
 def load(path, **options) -> Model:
     """Read a model from a file; the reader is chosen by the suffix (``.yaml``/``.yml``, ``.urdf``; a shared
     suffix such as ``.xml`` by the content): :mod:`aggsym.model.readers`.  ``options`` go to the reader
-    (``load_urdf``'s ``floating_base``, ``mimic``, ``snap_angles``)."""
+    (``load_urdf``'s ``floating_base``, ``mimic``, ``snap_angles``; for ``.xacro`` also ``xacro_args`` and
+    ``package_paths``, :mod:`aggsym.model.xacro_reader`)."""
     with collector_paused():
         return _load(Path(path), options)
 

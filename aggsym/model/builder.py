@@ -226,6 +226,19 @@ def link_table(place: dict, body_names: list, parts: dict, leaves) -> Links:
 
 
 CODES = {"theta": ("theta4", "theta5", "theta6"), "o": ("o1", "o2", "o3")}  # a joint about / along e1, e2, e3
+KINDS = ("theta", "o", "planar", "floating")  # the motions of :meth:`TreeBuilder.joint`
+
+
+def motions(kind: str, i: int) -> tuple:
+    """The codes of a joint of ``kind`` whose axis is e_(i+1) after :func:`align`: one rotation about it
+    (``"theta"``) or translation along it (``"o"``); ``"planar"``: the translations along the two other axes, then
+    the rotation about it (the plane normal to the axis, as URDF defines it); ``"floating"``: all six, o1 o2 o3
+    theta4 theta5 theta6 (the book's Euler pair, as ``floating_root``), the axis unused."""
+    if kind == "planar":
+        return tuple(CODES["o"][j] for j in range(3) if j != i) + (CODES["theta"][i],)
+    if kind == "floating":
+        return CODES["o"] + CODES["theta"]
+    return (CODES[kind][i],)
 
 
 class TreeBuilder:
@@ -271,8 +284,9 @@ class TreeBuilder:
         """A movable joint ``joint_name`` from ``parent`` to ``child``, which becomes the body ``body_name``: its
         origin ``xyz`` and ``rotation`` in the parent link's frame, then the constant rotation R_a bringing e1, e2
         or e3 onto ``axis`` (:func:`align`), so that the joint is the elementary motion of ``kind`` (``"theta"``
-        about, ``"o"`` along) (1.24)-(1.27); ``coordinate(code)`` makes its :class:`Coordinate`.  The child's body
-        frame is its link frame turned by R_a (``link_rotation``).
+        about, ``"o"`` along) (1.24)-(1.27), or the several motions of a ``"planar"`` or ``"floating"`` joint
+        (:func:`motions`; a floating joint has no axis: ``axis`` None, no R_a); ``coordinate(code)`` makes each
+        :class:`Coordinate`.  The child's body frame is its link frame turned by R_a (``link_rotation``).
 
         ``anchor`` (MJCF: a joint whose axis does not pass through the child's origin): the point of the axis in
         the child link's frame; the pair then sits at the anchor, and the child link's origin at -R_a^T anchor in
@@ -282,9 +296,11 @@ class TreeBuilder:
         if anchor is not None:
             turned = here.R if not rotation else snapped(product(here.R, rotation_matrix(rotation)))
             t = round_off(add(t, turn(turned, tuple(exact(x) for x in anchor))))
-        rotate, i = align(axis)
+        if kind not in KINDS:
+            raise ValueError(f"joint kind {kind!r}: expected one of {', '.join(KINDS)}")
+        rotate, i = align(axis) if kind != "floating" else ([], 0)
         pair = Pair(joint_name, tuple(t), tuple(tidy(here.rotation + rotation + rotate)),
-                    (coordinate(CODES[kind][i]),), offset=tuple(offset))
+                    tuple(coordinate(code) for code in motions(kind, i)), offset=tuple(offset))
         back = inverse(rotate)
         R = rotation_matrix(back)
         origin = ORIGIN
@@ -331,6 +347,6 @@ class TreeBuilder:
         return Links(table.kind, table.frames, table.leaves, tuple(declared))
 
 
-__all__ = ["CODES", "FLOATING", "FREE_FLYER", "FREE_FLYER_POSITIONS", "MAX_ROTATIONS", "ANGLE_ROUND_OFF", "Names", "Place",
+__all__ = ["CODES", "KINDS", "motions", "FLOATING", "FREE_FLYER", "FREE_FLYER_POSITIONS", "MAX_ROTATIONS", "ANGLE_ROUND_OFF", "Names", "Place",
            "align", "angle", "floating_root", "fold", "identifier", "inverse", "link_table", "mangle", "matrix_rpy",
            "quaternion_rotations", "right_angle", "rotations", "rpy", "tidy", "TreeBuilder"]

@@ -44,6 +44,12 @@ def _load_urdf(path, **options):
     return load_urdf(path, **options)
 
 
+def _load_xacro(path, **options):
+    from .xacro_reader import load_xacro
+
+    return load_xacro(path, **options)
+
+
 def _load_mjcf(path, **options):
     from .mjcf_reader import load_mjcf
 
@@ -61,6 +67,8 @@ def _is_mjcf(head: bytes) -> bool:
 URDF_CLI_OPTIONS = ("--floating-base", "--mimic", "--snap-angles", "--constraints", "--support",
                     "--inertial-parameters", "--payload")
 
+XACRO_CLI_OPTIONS = URDF_CLI_OPTIONS + ("--xacro-arg", "--package-path")
+
 MJCF_CLI_OPTIONS = ("--constraints", "--inertial-parameters", "--payload")
 
 READERS: list = [
@@ -69,6 +77,10 @@ READERS: list = [
                 "expressions in its parameters"),
     Reader("URDF", (".urdf",), _load_urdf, options=("floating_base", "mimic", "snap_angles"),
            cli_options=URDF_CLI_OPTIONS, sniffed=(".xml",), sniff=_is_urdf),
+    Reader("xacro", (".xacro",), _load_xacro,
+           options=("floating_base", "mimic", "snap_angles", "xacro_args", "package_paths"),
+           cli_options=XACRO_CLI_OPTIONS,
+           note="a xacro file is expanded by the xacro package, then read as URDF with the URDF options"),
     Reader("MJCF", (".mjcf",), _load_mjcf, cli_options=MJCF_CLI_OPTIONS, sniffed=(".xml",), sniff=_is_mjcf,
            note="an MJCF model's joints come from its file (a free joint is the quaternion free-flyer), as do its "
                 "angles"),

@@ -20,6 +20,19 @@ The mapping
   ``Body.link_rotation = R_a^T`` (x_F = R_a^T x_link).  The link's inertial data are expressed in F, and R_a^T
   is folded into the constructive configuration of every joint leaving the link (its origin is given in the
   link frame).
+* A ``planar`` joint (URDF: motion in the plane normal to its ``<axis>``, default (1, 0, 0)) is one pair of three
+  coordinates: R_a brings e_i onto the axis as above, then the translations along the two other axes of the joint
+  frame (in the order x, y, z) and the rotation about e_i: for the axis z, o1 o2 theta6 (coordinates
+  ``<joint>_x, <joint>_y, <joint>_rz``), Pinocchio's planar joint with q = (x, y, angle) instead of its
+  (x, y, cos, sin), and the velocities the rates of these three (the translation rates in the parent-side axes,
+  where Pinocchio's are in the child's).  Pinocchio's URDF importer ignores a planar joint's axis (its plane is
+  always x-y); here the axis is the normal, as the URDF specification says.
+* A ``floating`` joint (anywhere in the tree; its axis is unused) is the book's Euler pair o1 o2 o3 theta4 theta5
+  theta6 at the joint's origin, as ``floating_base=True`` makes for the root: translations along x, y, z, then
+  rotations about x, y, z in that order (R = Rx Ry Rz; Pinocchio's composite PX PY PZ RX RY RZ), coordinates
+  ``<joint>_x, _y, _z, _rx, _ry, _rz``.  ``<dynamics>``, ``<limit>`` and ``<mimic>`` of a planar or floating joint
+  are not read (a mimic on one is an error).  ``spherical`` (a simulator extension: a ball joint) is refused:
+  ball joints are not supported yet.
 * A ``fixed`` joint merges its child link into the parent's body: masses add, the centre of mass is the
   mass-weighted mean, and the inertia tensors (rotated into the body axes) are moved to the common centre of
   mass by the parallel-axis theorem; the fixed transform is composed into the origins of the child's joints
@@ -108,10 +121,11 @@ from .xml_source import NUMBER as _NUMBER, _Element, _parse, _where
 
 GRAVITY = (sp.Integer(0), sp.Integer(0), sp.Float(-9.81))
 MOVABLE = {"revolute": "theta", "continuous": "theta", "prismatic": "o"}
+SEVERAL = {"planar": "planar", "floating": "floating"}  # joints of several coordinates (builder.motions)
+SUFFIX = {"o1": "x", "o2": "y", "o3": "z", "theta4": "rx", "theta5": "ry", "theta6": "rz"}  # their coordinates
 UNSUPPORTED = {
-    "planar": "planar joints are not supported (revolute, continuous, prismatic and fixed are)",
-    "floating": ("floating joints inside the tree are not supported (revolute, continuous, prismatic and fixed "
-                 "are); for a free root use floating_base=True"),
+    "spherical": ("ball joints are not supported yet (revolute, continuous, prismatic, planar, floating and fixed "
+                  "are)"),
 }
 FLOATING_BASES = (False, True, "euler", "quaternion")
 MIMIC_OPTIONS = ("independent", "couple")
@@ -303,9 +317,9 @@ class _Reader:
             jtype = self.attribute(el, "type")
             if jtype in UNSUPPORTED:
                 self.fail(el, f"joint type {jtype!r}: {UNSUPPORTED[jtype]}")
-            if jtype not in MOVABLE and jtype != "fixed":
-                self.fail(el, f"unknown joint type {jtype[:40]!r} (expected revolute, continuous, prismatic or "
-                              f"fixed)")
+            if jtype not in MOVABLE and jtype not in SEVERAL and jtype != "fixed":
+                self.fail(el, f"unknown joint type {jtype[:40]!r} (expected revolute, continuous, prismatic, "
+                              f"planar, floating or fixed)")
             ends = {}
             for end in ("parent", "child"):
                 e = self.single(el, end, required=True)
@@ -317,7 +331,7 @@ class _Reader:
             xyz, rotation = self.origin(el)
             axis = None
             dynamics, limits = JointDynamics(), JointLimits()
-            if jtype in MOVABLE:
+            if jtype in MOVABLE or jtype == "planar":  # (a floating joint has no axis)
                 axis_el = self.single(el, "axis")
                 axis = (1.0, 0.0, 0.0)
                 if axis_el is not None:
@@ -327,6 +341,7 @@ class _Reader:
                         self.fail(axis_el, f'the axis xyz="{axis_el.attrib.get("xyz")}" has zero length; a joint '
                                            f"axis must be a non-zero vector")
                     axis = tuple(0.0 if x == 0 else x / norm for x in raw)
+            if jtype in MOVABLE:  # (<dynamics> and <limit> of one coordinate)
                 dynamics, limits = self.dynamics(el), self.limits(el)
             mimic = None
             mimic_el = self.single(el, "mimic")
@@ -371,6 +386,10 @@ class _Reader:
                 continue
             el, wanted = joint.mimic["el"], joint.mimic["master"]
             master = joints.get(wanted)
+            for which in (joint, master):
+                if which is not None and which.type in SEVERAL:
+                    self.fail(el, f"a <mimic> ties one coordinate to one other; joint {which.name!r} is {which.type} "
+                                  f"(several coordinates)")
             problem = None
             if joint.type not in MOVABLE:
                 # e.g. talos_reduced.urdf: gripper joints made fixed, their <mimic> tags left (Pinocchio ignores them)
@@ -465,6 +484,15 @@ class _Reader:
             joint = stack.pop()
             if joint.type == "fixed":
                 tree.fixed(joint.parent, joint.child, joint.xyz, joint.rotation)
+            elif joint.type in SEVERAL:
+                names = {}  # (claimed in code order: the builder makes them in that order)
+
+                def several(code, j=joint, names=names):
+                    names[code] = coordinate_names.claim(f"{j.name}_{SUFFIX[code]}", j.el)
+                    return Coordinate(names[code], code, j.name)
+
+                tree.joint(joint.parent, joint.child, bodies_names.claim(joint.child, link_el[joint.child]),
+                           joint.name, several, joint.xyz, joint.rotation, joint.axis, SEVERAL[joint.type])
             else:
                 name = coordinate_names.claim(joint.name, joint.el)
                 tree.joint(joint.parent, joint.child, bodies_names.claim(joint.child, link_el[joint.child]),
@@ -492,7 +520,8 @@ class _Reader:
                                if self.snapped else {})})
         model = dataclasses.replace(model, frames=default_frames(model))
         if model.nq == 0:
-            self.fail(self.root, "the robot has no movable joint (revolute, continuous or prismatic); there are "
+            self.fail(self.root, "the robot has no movable joint (revolute, continuous, prismatic, planar or "
+                                 "floating); there are "
                                  "no equations of motion (load with floating_base=True for a free body)")
         return model
 
@@ -574,12 +603,8 @@ def friction_parameters(coordinates) -> tuple:
     return tuple(out)
 
 
-def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent", snap_angles: float = 0.0) -> Model:
-    """Read and validate a URDF file; raises :class:`ModelError` naming the element and line of a problem.
-    ``snap_angles``: an approximation on request (off by default): the angles of joint and inertial origins
-    (``rpy``) within this many radians of a multiple of pi/2 are taken as that multiple (recorded in
-    ``model.meta["snapped_angles"]`` and the manifest); below it the file's values are kept (to round-off)."""
-    path = Path(path)
+def _check_options(floating_base, mimic, snap_angles):
+    """The options of :func:`load_urdf` checked; the floating base's kind (``"euler"`` is True)."""
     if not (isinstance(snap_angles, (int, float)) and 0 <= snap_angles < math.pi / 4):
         raise ValueError(f"snap_angles must be a number of radians from 0 to pi/4 (exclusive), got {snap_angles!r}")
     if mimic not in MIMIC_OPTIONS:
@@ -591,6 +616,16 @@ def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent
     if floating_base == "quaternion" and mimic == "couple":
         raise ValueError("mimic='couple' with a quaternion floating base is not supported: use the Euler base "
                          "(floating_base=True) or independent mimic joints")
+    return floating_base
+
+
+def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent", snap_angles: float = 0.0) -> Model:
+    """Read and validate a URDF file; raises :class:`ModelError` naming the element and line of a problem.
+    ``snap_angles``: an approximation on request (off by default): the angles of joint and inertial origins
+    (``rpy``) within this many radians of a multiple of pi/2 are taken as that multiple (recorded in
+    ``model.meta["snapped_angles"]`` and the manifest); below it the file's values are kept (to round-off)."""
+    path = Path(path)
+    _check_options(floating_base, mimic, snap_angles)
     try:
         with open(path, "rb") as f:
             data = f.read(MAX_BYTES + 1)
@@ -599,6 +634,18 @@ def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent
     if len(data) > MAX_BYTES:
         raise ModelError(path, "", f"the file is larger than {MAX_BYTES // 2 ** 20} MiB; a URDF this large is not "
                                    f"read (the limit guards against files made to exhaust memory)")
+    return urdf_from_bytes(path, data, floating_base, mimic, snap_angles)
+
+
+def urdf_from_bytes(path: Path, data: bytes, floating_base: bool | str = False, mimic: str = "independent",
+                    snap_angles: float = 0.0, label: str | None = None) -> Model:
+    """A URDF document given as bytes (the xacro reader's expansion), read as :func:`load_urdf` reads a file;
+    ``label`` names it in messages and as the model's source (default: ``path``)."""
+    floating_base = _check_options(floating_base, mimic, snap_angles)
+    if len(data) > MAX_BYTES:
+        raise ModelError(label or path, "", f"the document is larger than {MAX_BYTES // 2 ** 20} MiB; a URDF this "
+                                            f"large is not read (the limit guards against exhausting memory)")
+    shown = Path(label) if label else Path(path)
     notes: list[str] = []
-    root = _parse(path, data, notes)
-    return _Reader(path, root, floating_base, mimic, float(snap_angles), notes).read()
+    root = _parse(shown, data, notes)
+    return _Reader(shown, root, floating_base, mimic, float(snap_angles), notes).read()
