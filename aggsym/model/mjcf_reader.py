@@ -57,6 +57,7 @@ from ..errors import ModelError, ModelWarning
 from .builder import TreeBuilder, floating_root, identifier, link_table, quaternion_rotations
 from .frames import default_frames
 from .link_numbers import exact
+from .mjcf_equalities import with_equalities
 from .mjcf_source import screen
 from .types import Coordinate, JointLimits, Links, Model, Parameter
 
@@ -100,6 +101,7 @@ class _Reader:
     def __init__(self, file: Path, m, mujoco):
         self.file, self.m, self.mj = file, m, mujoco
         self.warnings: list[str] = []
+        self.constraint_ids: set = set()
 
     def fail(self, where: str, message: str):
         raise ModelError(self.file, where, message)
@@ -115,6 +117,16 @@ class _Reader:
 
     def joint_name(self, j):
         return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_JOINT, j, "joint")
+
+    def tendon_name(self, t):
+        return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_TENDON, t, "tendon")
+
+    def equality_name(self, e):
+        return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_EQUALITY, e, "equality")
+
+    def ids_constraint(self, name: str) -> str:
+        """A constraint's identifier (distinct from the others')."""
+        return identifier(name, self.constraint_ids, "equality")
 
     # what the equations cannot hold ------------------------------------------------------------------------
     def refuse_unsupported(self):
@@ -146,9 +158,7 @@ class _Reader:
             name = _name(m, mj, mj.mjtObj.mjOBJ_EQUALITY, e, "equality")
             kind = EQUALITY_TYPES.get(int(m.eq_type[e]), str(int(m.eq_type[e])))
             if m.eq_active0[e]:
-                self.fail(f'<equality> <{kind} name="{name}">',
-                          f"an active {kind} equality; equality constraints are not supported yet (they change the "
-                          f"equations of motion)")
+                continue  # (aggsym.model.mjcf_equalities: a constraint, a coupling or an error naming it)
             self.warn(f'<equality> <{kind} name="{name}">', f"an inactive {kind} equality is not in the equations "
                                                             f"of motion (listed in the manifest)")
         for t in range(m.ntendon):
@@ -157,8 +167,9 @@ class _Reader:
                                 ("tendon_armature", "armature")):
                 value = getattr(m, field)[t] if hasattr(m, field) else 0
                 if np.any(value):
-                    self.fail(f'<tendon name="{name}">', f"a tendon with {what} (it changes the equations of "
-                                                         f"motion); tendons are not supported yet")
+                    self.fail(f'<tendon name="{name}">', f"a tendon with {what} (a force along the tendon: it "
+                                                         f"changes the equations of motion); tendon springs, "
+                                                         f"dampers and armature are not supported yet")
         if m.nflex:
             self.fail("<deformable>", f"{m.nflex} flex object(s); flexes are not supported")
         heavy = [self.body_name(i) for i in range(m.nbody) if m.body_gravcomp[i] != 0]
@@ -309,6 +320,7 @@ class _Reader:
                             "warnings": list(self.warnings),
                             "mjcf": self.summary(free_joints, sites, springs, dampers, flags)})
         model = dataclasses.replace(model, frames=default_frames(model))
+        model = with_equalities(self, model)
         if model.nv == 0:
             self.fail("", "the model has no joint; there are no equations of motion")
         return model
