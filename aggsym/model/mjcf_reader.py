@@ -35,8 +35,11 @@ The mapping
 * Not in the equations, listed in ``model.meta["mjcf"]`` (and the manifest): ``frictionloss`` (a constraint in
   MuJoCo), joint limits (also on the coordinates' limits), contacts, actuators (with their joint and gear),
   tendons that change nothing but constraints or actuation, inactive equalities, fluid forces (``density``,
-  ``viscosity``: a warning).  Refused with an error naming them, since they would change the equations: active
-  equalities, tendons with a stiffness, damping or armature, flexes, gravity compensation, actuators with
+  ``viscosity``: a warning).  Active equalities (:mod:`aggsym.model.mjcf_equalities`): ``connect`` and ``weld``
+  become constraints (``model.constraints``), linear ``joint`` and fixed-tendon equalities couplings
+  (``model.couplings``), each listed in ``meta["mjcf"]["equalities"]``; the others are refused there by name.
+  Refused with an error naming them, since they would change the equations: tendons with a stiffness, damping or
+  armature, flexes, gravity compensation, actuators with
   damping or armature, polynomial damping or stiffness.
 * ``model.links`` (kind ``"link"``): every MuJoCo body (``world`` included when ``worldbody`` is there) and every
   site (a site sharing a body's name is listed as ``site:<name>``) as a frame on the body it belongs to, for
@@ -369,7 +372,7 @@ class _Reader:
                                                4: "site", 5: "body"}.get(kind, str(kind)),
                               "target": on, "gear": [float(v) for v in m.actuator_gear[a]]})
         tendons = [_name(m, mj, mj.mjtObj.mjOBJ_TENDON, t, "tendon") for t in range(m.ntendon)]
-        inactive = [_name(m, mj, mj.mjtObj.mjOBJ_EQUALITY, e, "equality") for e in range(m.neq)]
+        inactive = [_name(m, mj, mj.mjtObj.mjOBJ_EQUALITY, e, "equality") for e in range(m.neq) if not m.eq_active0[e]]
         return {
             "source": "MuJoCo's compiled model (mujoco " + mj.__version__ + ")",
             "convention": CONVENTION,
@@ -382,8 +385,9 @@ class _Reader:
                 "-(C (q - q0) + D qd) (MuJoCo's qfrc_passive sign)"),
             "springs": springs, "dampers": dampers, "gravity_disabled": bool(flags & DISABLE_GRAVITY),
             "not_in_the_equations": (
-                "frictionloss (a constraint in MuJoCo), joint and tendon limits, contacts, equalities "
-                "(inactive ones), actuators (their forces are tau's to give: actuators lists each with its "
+                "frictionloss (a constraint in MuJoCo), joint and tendon limits, contacts, inactive equalities "
+                "(active ones are constraints or couplings: equalities), actuators (their forces are tau's to "
+                "give: actuators lists each with its "
                 "transmission target and gear), fluid forces" + (" (this model has some)" if m.opt.density or
                                                                   m.opt.viscosity else "")),
             "joints": joints, "actuators": actuators, "tendons": tendons, "inactive_equalities": inactive,
