@@ -288,3 +288,34 @@ def test_generate_writes_the_equalities_in_the_manifest(tmp_path):
     assert cli.main(["generate", str(path), "-o", str(tmp_path / "out"), "-q", "--targets", "manifest"]) == 0
     manifest = json.loads((tmp_path / "out" / "fourbar.json").read_text())
     assert "constraint 'loop'" in json.dumps(manifest)
+
+
+def _suite(name):
+    dm_control = pytest.importorskip("dm_control")
+    from pathlib import Path
+
+    return Path(dm_control.__file__).parent / "suite" / name
+
+
+def test_manipulator_loads_with_its_tendon_coupling():
+    """dm_control's manipulator: the tendon equality 'coupling' (-0.5 thumb + 0.5 finger held at 0) is the coupling
+    finger = thumb; A, the forces and q'' (the hard coupling, dense KKT from MuJoCo's M and bias) agree <= 1e-9."""
+    from benchmarks.mujoco_reference import compare
+
+    path = _suite("manipulator.xml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = load(path)
+    assert [(c.coordinate, c.master, c.multiplier, c.offset) for c in model.couplings] == [
+        ("finger", "thumb", 1.0, 0.0)]
+    worst = compare(path, model=model, samples=2, seed=3)
+    assert max(worst.values()) <= 1e-9, worst
+
+
+def test_quadruped_is_refused_naming_its_equality():
+    from aggsym.errors import ModelError
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ModelError, match=r'<tendon name="coupling_front_left">.*ties 3 coordinates'):
+            load(_suite("quadruped.xml"))
