@@ -319,3 +319,19 @@ def test_quadruped_is_refused_naming_its_equality():
         warnings.simplefilter("ignore")
         with pytest.raises(ModelError, match=r'<tendon name="coupling_front_left">.*ties 3 coordinates'):
             load(_suite("quadruped.xml"))
+
+
+def test_a_side_file_adds_to_the_equalities(tmp_path):
+    """--constraints on an MJCF model with a connect: the side file's constraints come after the file's own (none
+    dropped); a name the file already uses is refused."""
+    from aggsym.errors import ModelError
+    from aggsym.model.yaml_reader import load_constraints
+
+    model = load(write(tmp_path, FOUR_BAR))
+    side = write(tmp_path, "constraints:\n  - name: tip\n    body: a\n    point: [0.3, 0, 0]\n    block: normal\n",
+                 "side.yaml")
+    both = load_constraints(side, model)
+    assert [c.name for c in both.constraints] == ["loop", "tip"] and both.constraint_rows == 4
+    side.write_text("constraints:\n  - name: loop\n    body: a\n    block: normal\n")
+    with pytest.raises(ModelError, match="already has a constraint named 'loop'"):
+        load_constraints(side, model)
