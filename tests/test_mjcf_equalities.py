@@ -19,6 +19,8 @@ from aggsym.twin import NumericTwin
 
 mujoco = pytest.importorskip("mujoco")
 
+from benchmarks.mujoco_reference import to_aggsym  # noqa: E402
+
 # a spatial four-bar: crank a (hinge y), coupler b (hinges y, x), rocker c (hinge y); b's end tied to c's by connect
 FOUR_BAR = """<mujoco model="fourbar"><option gravity="0.3 -1 -9.81"><flag contact="disable"/></option><worldbody>
 <body name="a"><joint name="crank" axis="0 1 0" damping="0.3" armature="0.05"/><geom type="capsule" fromto="0 0 0 .3 0 0" size=".02"/>
@@ -43,6 +45,13 @@ WORLD_WELD = """<mujoco model="worldweld"><worldbody>
  <body name="b" pos=".4 .1 0"><joint name="b1" type="slide" axis="1 0 0"/><joint name="b2" type="slide" axis="0 1 0"/>
   <joint name="b3" type="slide" axis="0 0 1"/><joint name="b4" axis="0 1 0"/><geom type="box" size=".2 .1 .05"/></body></body>
 </worldbody><equality><weld name="pin" body1="world" body2="b" anchor=".1 0 0"/></equality></mujoco>"""
+
+# a free body carrying an arm whose hand is held on a world point (connect to the world: a contact)
+FREE_HELD = """<mujoco model="held"><option gravity="0 0 -9.81"/><worldbody>
+<body name="f" pos="0 0 1"><freejoint name="fj"/><geom type="box" size=".2 .1 .05" mass="3"/>
+ <body name="a" pos=".2 0 0"><joint name="j1" axis="0 1 0" damping=".4"/><geom type="capsule" fromto="0 0 0 .3 0 .1" size=".03"/>
+  <body name="h" pos=".3 0 .1"><joint name="j2" axis="1 0 0"/><geom size=".04" mass=".05"/></body></body></body>
+</worldbody><equality><connect name="hold" body1="h" body2="world" anchor="0 0 .04"/></equality></mujoco>"""
 
 # a linear joint equality and a fixed-tendon equality on a chain of four hinges
 COUPLED = """<mujoco model="coupled"><option gravity="0 0 -9.81"/><worldbody>
@@ -83,13 +92,14 @@ def efc_jacobian(m, d):
 def consistent_state(m, rng, spread=0.3):
     """(qpos, qvel) where MuJoCo's equality residual is zero (Newton on efc_pos) and its velocity too."""
     d = mujoco.MjData(m)
-    d.qpos[:] = m.qpos0 + rng.uniform(-spread, spread, m.nq)
+    d.qpos[:] = m.qpos0
+    mujoco.mj_integratePos(m, d.qpos, rng.uniform(-spread, spread, m.nv), 1.0)
     for _ in range(100):
         mujoco.mj_forward(m, d)
         J, r = efc_jacobian(m, d), d.efc_pos[:d.nefc]
         if np.max(np.abs(r)) < 1e-15:
             break
-        d.qpos[:] -= np.linalg.lstsq(J, r, rcond=None)[0]
+        mujoco.mj_integratePos(m, d.qpos, -np.linalg.lstsq(J, r, rcond=None)[0], 1.0)
     assert np.max(np.abs(r)) < 1e-13
     null = np.linalg.svd(J)[2][np.linalg.matrix_rank(J):]
     return d.qpos.copy(), null.T @ rng.normal(size=null.shape[0])
@@ -146,14 +156,15 @@ def check_against_kkt(path, body1, body2, rotations, seeds=(1, 2, 3)):
             return point_rows(m, d, b1, b2, point, rotations)
 
         qacc, _ = reference(m, qpos, qvel, force, jacobian)
-        assert np.max(np.abs(twin.call("constraint_residual", qpos))) < 1e-12  # holds where MuJoCo's does
-        qdd, lam = twin.call("constrained_forward_dynamics", qpos, qvel, force)
-        worst = max(worst, np.max(np.abs(qdd - qacc)) / np.max(np.abs(qacc)))
+        q, qd, tau, conversion, c = to_aggsym(m, qpos, qvel, force)  # (free joints: MuJoCo's qvel = conversion qd)
+        assert np.max(np.abs(twin.call("constraint_residual", q))) < 1e-12  # holds where MuJoCo's does
+        qdd, lam = twin.call("constrained_forward_dynamics", q, qd, tau)
+        worst = max(worst, np.max(np.abs(conversion @ qdd + c - qacc)) / np.max(np.abs(qacc)))
         # the multipliers: A qdd + d = tau + J^T lambda with aggsym's own J
-        J = twin.call("constraint_jacobian", qpos)
-        A = twin.call("inertia", qpos)
-        d = twin.call("nonlinear_effects", qpos, qvel)
-        assert np.allclose(A @ qdd + d, force + J.T @ lam, rtol=0, atol=1e-10 * np.max(np.abs(force)))
+        J = twin.call("constraint_jacobian", q)
+        A = twin.call("inertia", q)
+        d = twin.call("nonlinear_effects", q, qd)
+        assert np.allclose(A @ qdd + d, tau + J.T @ lam, rtol=0, atol=1e-10 * np.max(np.abs(tau)))
     assert worst <= 1e-8, worst
     return model
 
@@ -177,6 +188,13 @@ def test_weld_to_the_world(tmp_path):
     model = check_against_kkt(write(tmp_path, WORLD_WELD), "b", "world", rotations=True)
     (c,) = model.constraints
     assert (c.body, c.medium) == ("b", "world")
+
+
+def test_connect_to_the_world_on_a_free_body(tmp_path):
+    """A free-flyer's arm held at a world point (masses over two decades: 3 kg, 0.05 kg), free joint converted."""
+    model = check_against_kkt(write(tmp_path, FREE_HELD), "h", "world", rotations=False)
+    (c,) = model.constraints
+    assert (c.body, c.medium) == ("h", "world")
 
 
 def test_residual_translation_is_mujocos(tmp_path):
@@ -250,6 +268,8 @@ REFUSED = {
                   ['<connect name="self">', "two points of one rigid body"]),
     "chained": ('<equality><joint name="e1" joint1="j2" joint2="j1"/><joint name="e2" joint1="j3" joint2="j2"/>'
                 '</equality>', ["'j2' follows 'j1' and is followed by another"]),
+    "free-coupled": ('<equality><joint name="e1" joint1="j2" joint2="j1"/></equality>',
+                     ["couplings (joint or tendon equalities) in a model with a free joint"]),
     "mixed": ('<equality><joint name="e1" joint1="j2" joint2="j1"/><connect body1="b" body2="world" anchor="0 0 0"/>'
               '</equality>', ["beside couplings", "not supported together yet"]),
 }
@@ -259,10 +279,8 @@ REFUSED = {
 def test_refused(tmp_path, capsys, case):
     after, fragments = REFUSED[case]
     text = ARM.format(after=after)
-    if case != "spatial":  # (the ball joint is refused first; keep it only where it does not matter)
-        text = text.replace('<joint name="j4" type="ball"/>', '<joint name="j4"/>')
-    else:
-        text = text.replace('<joint name="j4" type="ball"/>', '<joint name="j4"/>')
+    text = text.replace('<joint name="j4" type="ball"/>', '<freejoint name="j4"/>' if case == "free-coupled" else
+                        '<joint name="j4"/>')  # (a ball joint would be refused first)
     path = write(tmp_path, text)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -27,7 +27,8 @@ Refused with an error naming the equality: a nonlinear polynomial, a joint or te
 coordinate or ties more than two (aggsym's constraints are motions of body points, its couplings one coordinate
 following another: a general joint-space row has no place yet), an equality between sites (``site1``/``site2``),
 on a spatial tendon, on a flex, on a free or ball joint, couplings that chain or collide (a coordinate coupled
-twice, or coupled and master), and constraints beside couplings in one model (not supported together yet).
+twice, or coupled and master), constraints beside couplings in one model (not supported together yet), and
+couplings in a model with a free joint (not yet).
 """
 from __future__ import annotations
 
@@ -96,6 +97,9 @@ class Equalities:
                 self.reader.fail(where, f"an active {kind} equality is not supported (connect, weld, and joint or "
                                         f"fixed-tendon equalities that tie one coordinate to another are)")
         self.check_couplings(couplings)
+        if couplings and any(b.pair.quaternion for b in self.model.bodies):
+            self.reader.fail("<equality>", "couplings (joint or tendon equalities) in a model with a free joint are not "
+                                           "supported yet")
         if constraints and couplings:
             self.reader.fail("<equality>", "loop or weld constraints (connect, weld) beside couplings (joint or tendon "
                                            "equalities) in one model are not supported together yet")
