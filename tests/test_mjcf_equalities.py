@@ -144,6 +144,7 @@ def check_against_kkt(path, body1, body2, rotations, seeds=(1, 2, 3)):
     twin = NumericTwin(model)
     m = compiled(path)
     b1, b2 = (mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, n) for n in (body1, body2))
+    sites = m.eq_objtype[0] == mujoco.mjtObj.mjOBJ_SITE
     worst = 0.0
     for seed in seeds:
         rng = np.random.default_rng(seed)
@@ -152,7 +153,7 @@ def check_against_kkt(path, body1, body2, rotations, seeds=(1, 2, 3)):
 
         def jacobian(m, d):
             anchor = m.eq_data[0][0:3] if m.eq_type[0] == 0 else m.eq_data[0][3:6]
-            point = d.xpos[b1] + d.xmat[b1].reshape(3, 3) @ anchor
+            point = d.site_xpos[m.eq_obj1id[0]] if sites else d.xpos[b1] + d.xmat[b1].reshape(3, 3) @ anchor
             return point_rows(m, d, b1, b2, point, rotations)
 
         qacc, _ = reference(m, qpos, qvel, force, jacobian)
@@ -182,6 +183,18 @@ def test_weld_between_two_chains(tmp_path):
     (c,) = model.constraints
     assert c.kind == "weld" and len(c.rows) == 6
     assert "torquescale 2" in model.meta["mjcf"]["equalities"][0]["became"]
+
+
+def test_weld_between_sites(tmp_path):
+    """site1's frame welded on site2's (MuJoCo's site semantics: no anchor, no relpose)."""
+    text = (WELD.replace('<geom type="box" size=".2 .1 .05" mass="1.5"/>',
+                         '<geom type="box" size=".2 .1 .05" mass="1.5"/><site name="s1" pos=".1 .2 .3" euler="5 15 25"/>')
+            .replace('<geom type="box" size=".1 .3 .05" mass=".8"/>',
+                     '<geom type="box" size=".1 .3 .05" mass=".8"/><site name="s2" pos="-.1 .05 .2" euler="-30 10 5"/>')
+            .replace('body1="b" body2="c" anchor=".05 .1 -.02" relpose=".1 .2 .3 .9 .2 .3 .1" torquescale="2"',
+                     'site1="s1" site2="s2"'))
+    model = check_against_kkt(write(tmp_path, text), "b", "c", rotations=True)
+    assert model.constraints[0].kind == "weld"
 
 
 def test_weld_to_the_world(tmp_path):
@@ -262,8 +275,6 @@ REFUSED = {
     "spatial": ('<tendon><spatial name="rope"><site site="s1"/><site site="s2"/></spatial></tendon>'
                 '<equality><tendon name="len" tendon1="rope"/></equality>',
                 ['<tendon name="len">', "'rope' is a spatial tendon"]),
-    "sites": ('<equality><connect name="pin" site1="s1" site2="s2"/></equality>',
-              ['<connect name="pin">', "between sites"]),
     "same-body": ('<equality><connect name="self" body1="w" body2="world" anchor="0 0 0"/></equality>',
                   ['<connect name="self">', "two points of one rigid body"]),
     "chained": ('<equality><joint name="e1" joint1="j2" joint2="j1"/><joint name="e2" joint1="j3" joint2="j2"/>'

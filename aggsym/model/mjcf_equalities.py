@@ -16,6 +16,8 @@ MuJoCo's conventions (checked against its ``efc_pos``: the residual rows it stab
   body1's frame against body2's, along body2's axes), with ``orientation`` the relative orientation at which the
   rotational residual is zero.  With ``torquescale`` 0 MuJoCo's rotational rows vanish: a ``point`` constraint.
   A body welded to the world is the world (the medium); when body1 is, the two sides swap.
+* Between sites (``site1``, ``site2``): site1's frame coincides with site2's (``connect``: their origins), as
+  MuJoCo's residual (site positions, and neg(q_site2) q_site1) says; the reference axes are site2's.
 * ``joint`` (joint1, joint2, polycoef y0 a1..a4): ``q1 - q1_0 = y0 + a1 (q2 - q2_0) + a2 (q2 - q2_0)^2 + ...``
   (q_0: ``qpos0``).  Linear (a2 = a3 = a4 = 0, a1 != 0): a :class:`~aggsym.model.types.Coupling`
   ``q1 = a1 q2 + (q1_0 + y0 - a1 q2_0)``.
@@ -25,8 +27,7 @@ MuJoCo's conventions (checked against its ``efc_pos``: the residual rows it stab
 
 Refused with an error naming the equality: a nonlinear polynomial, a joint or tendon equality that fixes one
 coordinate or ties more than two (aggsym's constraints are motions of body points, its couplings one coordinate
-following another: a general joint-space row has no place yet), an equality between sites (``site1``/``site2``),
-on a spatial tendon, on a flex, on a free or ball joint, couplings that chain or collide (a coordinate coupled
+following another: a general joint-space row has no place yet), an equality on a spatial tendon, on a flex, on a free or ball joint, couplings that chain or collide (a coordinate coupled
 twice, or coupled and master), constraints beside couplings in one model (not supported together yet), and
 couplings in a model with a free joint (not yet).
 """
@@ -118,15 +119,16 @@ class Equalities:
 
     def body_constraint(self, e: int, kind: str, where: str) -> Constraint:
         m = self.m
-        if int(m.eq_objtype[e]) != int(self.mj.mjtObj.mjOBJ_BODY):
-            self.reader.fail(where, f"a {kind} equality between sites (site1, site2) is not supported yet; give "
-                                    f"body1, body2 and the anchor")
         data = np.array(m.eq_data[e], dtype=float)
-        b1, b2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
-        if kind == "connect":  # body1's point data[0:3] on body2's point data[3:6]
-            ends = [(b1, data[0:3], np.eye(3)), (b2, data[3:6], np.eye(3))]
+        o1, o2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
+        if int(m.eq_objtype[e]) == int(self.mj.mjtObj.mjOBJ_SITE):  # site1's frame on site2's (connect: origins)
+            ends = [(int(m.site_bodyid[o]), np.array(m.site_pos[o], dtype=float), _quat_matrix(*m.site_quat[o]))
+                    for o in (o1, o2)]
+        elif kind == "connect":  # body1's point data[0:3] on body2's point data[3:6]
+            ends = [(o1, data[0:3], np.eye(3)), (o2, data[3:6], np.eye(3))]
         else:  # body1's frame (data[3:6], relpose) on body2's frame (anchor data[0:3], body2's axes)
-            ends = [(b1, data[3:6], _quat_matrix(*data[6:10])), (b2, data[0:3], np.eye(3))]
+            ends = [(o1, data[3:6], _quat_matrix(*data[6:10])), (o2, data[0:3], np.eye(3))]
+        b1, b2 = ends[0][0], ends[1][0]
         rows = CONSTRAINT_KINDS["point"] if kind == "connect" or data[10] == 0 else CONSTRAINT_KINDS["weld"]
         placed = []
         for b, point, axes in ends:
