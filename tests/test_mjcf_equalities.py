@@ -275,8 +275,6 @@ REFUSED = {
     "spatial": ('<tendon><spatial name="rope"><site site="s1"/><site site="s2"/></spatial></tendon>'
                 '<equality><tendon name="len" tendon1="rope"/></equality>',
                 ['<tendon name="len">', "'rope' is a spatial tendon"]),
-    "same-body": ('<equality><connect name="self" body1="w" body2="world" anchor="0 0 0"/></equality>',
-                  ['<connect name="self">', "two points of one rigid body"]),
     "chained": ('<equality><joint name="e1" joint1="j2" joint2="j1"/><joint name="e2" joint1="j3" joint2="j2"/>'
                 '</equality>', ["'j2' follows 'j1' and is followed by another"]),
     "free-coupled": ('<equality><joint name="e1" joint1="j2" joint2="j1"/></equality>',
@@ -300,6 +298,15 @@ def test_refused(tmp_path, capsys, case):
     assert code == 2
     for fragment in fragments:
         assert fragment in err, f"{fragment!r} not in {err!r}"
+
+
+def test_an_equality_within_one_rigid_body_is_left_out_with_a_warning(tmp_path):
+    text = ARM.format(after='<equality><connect name="self" body1="w" body2="world" anchor="0 0 0"/></equality>')
+    path = write(tmp_path, text.replace('<joint name="j4" type="ball"/>', '<joint name="j4"/>'))
+    with pytest.warns(UserWarning, match="connect equality joins two points of one rigid body"):
+        model = load(path)
+    assert not model.constraints
+    assert model.meta["mjcf"]["equalities"][0]["became"].startswith("nothing (joins two points of one rigid body")
 
 
 def test_inactive_equality_stays_listed(tmp_path):

@@ -15,7 +15,9 @@ MuJoCo's conventions (checked against its ``efc_pos``: the residual rows it stab
   moment is in the unscaled rows here).  It becomes a constraint of kind ``weld`` (six rows: the relative motion of
   body1's frame against body2's, along body2's axes), with ``orientation`` the relative orientation at which the
   rotational residual is zero.  With ``torquescale`` 0 MuJoCo's rotational rows vanish: a ``point`` constraint.
-  A body welded to the world is the world (the medium); when body1 is, the two sides swap.
+  A body welded to the world is the world (the medium); when body1 is, the two sides swap.  Two ends on one
+  rigid body (both welded to the world, or one welded to the other) constrain no motion: a warning, and the
+  manifest lists the equality as left out.
 * Between sites (``site1``, ``site2``): site1's frame coincides with site2's (``connect``: their origins), as
   MuJoCo's residual (site positions, and neg(q_site2) q_site1) says; the reference axes are site2's.
 * ``joint`` (joint1, joint2, polycoef y0 a1..a4): ``q1 - q1_0 = y0 + a1 (q2 - q2_0) + a2 (q2 - q2_0)^2 + ...``
@@ -91,7 +93,9 @@ class Equalities:
                 continue
             where = self.where(e, kind)
             if kind in ("connect", "weld"):
-                constraints.append(self.body_constraint(e, kind, where))
+                constraint = self.body_constraint(e, kind, where)
+                if constraint is not None:
+                    constraints.append(constraint)
             elif kind in ("joint", "tendon"):
                 couplings.append(self.coupling(e, kind, where))
             else:
@@ -134,9 +138,12 @@ class Equalities:
         for b, point, axes in ends:
             body, R, t = self.side(b)
             placed.append((body, R @ point + t, R @ axes))  # the end's point and axes in its aggsym body
-        if placed[0][0] == placed[1][0]:
-            self.reader.fail(where, f"the {kind} equality joins two points of one rigid body "
-                                    f"({self.reader.body_name(b1)!r} and {self.reader.body_name(b2)!r} move together)")
+        if placed[0][0] == placed[1][0]:  # no coordinate moves one end against the other: J = 0, no force
+            why = (f"joins two points of one rigid body ({self.reader.body_name(b1)!r} and "
+                   f"{self.reader.body_name(b2)!r} move together): it constrains no motion and is left out")
+            self.reader.warn(where, f"the {kind} equality {why}")
+            self.listing.append({"equality": self.name(e), "type": kind, "became": f"nothing ({why})"})
+            return None
         if placed[0][0] == WORLD:
             placed.reverse()
         (body, point, axes1), (medium, at, axes2) = placed
