@@ -44,7 +44,7 @@ def has_joint(path) -> bool:
 
 def reason(message: str) -> str:
     """The short reason of a refusal, from the reader's message."""
-    for key, short in (("ball joint", "ball joint (not yet)"), ("equality", "active equality (not yet)"),
+    for key, short in (("ball joint", "ball joint (not yet)"), ("equality", "equality tying 3 joints (a joint-space row: not yet)"),
                        ("tendon", "tendon with stiffness/damping (not yet)"), ("flex", "flex"),
                        ("gravity compensation", "gravcomp")):
         if key in message:

@@ -59,6 +59,42 @@ def to_aggsym(m, qpos, qvel, force):
     return np.array(q), qd, tau, J, c
 
 
+class couplings:
+    """A model's couplings on MuJoCo's arrays (hinge and slide joints, no free joint: q = qpos, qd = qvel):
+    ``keep`` the dofs that stay in q, ``Jc`` (nv x len(keep)) with qvel = Jc qd, ``C`` the rows e_d - k e_m
+    (C qvel = 0)."""
+
+    def __init__(self, m, model):
+        import mujoco
+
+        if m.nq != m.nv:
+            raise ValueError("couplings beside free or ball joints are not compared here")
+        joint = {c.name: c.joint for c in model.pair_coordinates}
+        dof = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j): int(m.jnt_dofadr[j]) for j in range(m.njnt)}
+        self.ties = [(dof[joint[c.coordinate]], dof[joint[c.master]], c.multiplier, c.offset) for c in model.couplings]
+        coupled = {d for d, _, _, _ in self.ties}
+        self.keep = np.array([i for i in range(m.nv) if i not in coupled])
+        self.Jc = np.zeros((m.nv, len(self.keep)))
+        self.Jc[self.keep, np.arange(len(self.keep))] = 1.0
+        self.C = np.zeros((len(self.ties), m.nv))
+        for r, (d, master, k, _) in enumerate(self.ties):
+            self.Jc[d] = k * self.Jc[master]  # (a master is never coupled itself: the reader refuses chains)
+            self.C[r, d], self.C[r, master] = 1.0, -k
+
+    def state(self, qpos, qvel, force):
+        qpos, force = qpos.copy(), force.copy()
+        for d, master, k, offset in self.ties:
+            qpos[d] = k * qpos[master] + offset
+            force[d] = 0.0
+        return qpos, self.Jc @ qvel[self.keep], force
+
+    def kkt(self, A, rhs):
+        """q's part of qdd from [A C^T; C 0] [qdd; -lambda] = [rhs; 0]."""
+        k = len(self.C)
+        x = np.linalg.solve(np.block([[A, self.C.T], [self.C, np.zeros((k, k))]]), np.concatenate([rhs, np.zeros(k)]))
+        return x[self.keep]
+
+
 def mujoco_model(path):
     """The compiled model with constraints and actuation disabled and no fluid (the comparison's MuJoCo)."""
     import mujoco
@@ -89,8 +125,11 @@ def compare(path, model=None, samples: int = 3, seed: int = 0) -> dict:
     data = mujoco.MjData(m)
     rng = np.random.default_rng(seed)
     worst = {"A": 0.0, "d": 0.0, "qdd": 0.0, "passive": 0.0}
+    coupled = couplings(m, model) if model.couplings else None
     for _ in range(samples):
         qpos, qvel, force = states(m, rng)
+        if coupled is not None:  # a state where the couplings hold, no force on the coupled coordinates
+            qpos, qvel, force = coupled.state(qpos, qvel, force)
         data.qpos[:], data.qvel[:], data.qfrc_applied[:] = qpos, qvel, force
         data.ctrl[:] = 0
         mujoco.mj_forward(m, data)
@@ -99,14 +138,22 @@ def compare(path, model=None, samples: int = 3, seed: int = 0) -> dict:
         q, qd, tau, J, c = to_aggsym(m, qpos, qvel, force)
         A_ref = J.T @ M @ J
         d_ref = J.T @ (M @ c + data.qfrc_bias - data.qfrc_passive)
-        qacc = J @ twin.call("forward_dynamics", q, qd, tau) + c
+        if coupled is not None:  # q's coordinates; the reference: the hard coupling solved densely (KKT)
+            qacc_ref = coupled.kkt(A_ref, tau - d_ref)
+            A_ref, d_ref = coupled.Jc.T @ A_ref @ coupled.Jc, coupled.Jc.T @ d_ref
+            q, qd, tau = q[coupled.keep], qd[coupled.keep], tau[coupled.keep]
+            qacc = twin.call("forward_dynamics", q, qd, tau)
+        else:
+            qacc, qacc_ref = J @ twin.call("forward_dynamics", q, qd, tau) + c, data.qacc
         A = twin.call("inertia", q)
         d = twin.call("nonlinear_effects", q, qd)
-        for key, mine, ref in (("A", A, A_ref), ("d", d, d_ref), ("qdd", qacc, data.qacc)):
+        for key, mine, ref in (("A", A, A_ref), ("d", d, d_ref), ("qdd", qacc, qacc_ref)):
             worst[key] = max(worst[key], float(np.max(np.abs(mine - ref)) / max(np.max(np.abs(ref)), 1e-300)))
         if model.has_damping or any(b.pair.elastic for b in model.bodies):
             mine = twin.call("passive_forces", q, qd) if model.has_damping else -twin.call("elastic", q)
             ref = J.T @ data.qfrc_passive
+            if coupled is not None:
+                ref = coupled.Jc.T @ ref
             worst["passive"] = max(worst["passive"], float(np.max(np.abs(mine - ref)) /
                                                            max(np.max(np.abs(ref)), 1e-300)))
     return worst

@@ -25,7 +25,8 @@ r))`` ((v, w), (a, alpha) body k's quasi-velocity and X, r = P in k's axes); aga
 
 The residual phi: translational rows ``B (P - A)``, A the attachment point ``at`` fixed in the medium (by default
 where P is at q = 0); rotational rows the rotation vector (log map) of ``Q = B R_k C0``, ``C0 = R_k0^T R_m0 R_ref``
-(the body's orientation relative to the one it has at q = 0, in the reference axes): ``phi = theta/sin(theta)
+(the body's orientation relative to the one it has at q = 0, in the reference axes; a constraint's own
+``orientation`` replaces C0, an MJCF weld's relpose): ``phi = theta/sin(theta)
 vee(Q - Q^T)/2`` with theta = atan2(|vee|, (tr Q - 1)/2), evaluated as ``(theta + eps)/(|vee| + eps)`` (exact in
 doubles at theta = 0 and everywhere else, no branch).
 
@@ -74,6 +75,7 @@ class BoundConstraint:
     normal: int | None  # the normal row's place among this constraint's rows (Coulomb)
     wheel: tuple | None = None  # (radius, axle in k's axes) of a rolling disc, its centre at r
     frame: "MovingFrame | None" = None  # the world-side frame's prescribed motion (motion:), None: at rest
+    C0: tuple | None = None  # 3x3: the rotational residual's C0 when given (Constraint.orientation), None: q = 0's
 
 
 def bind_constraints(bound) -> list:
@@ -92,7 +94,8 @@ def bind_constraints(bound) -> list:
             coefficient=None if c.friction is None else bound.scalar(c.friction[1]),
             normal=None if c.normal is None else c.rows.index(c.normal),
             wheel=None if c.wheel is None else (bound.scalar(c.wheel[0]), tuple(bound.scalar(x) for x in c.wheel[1])),
-            frame=None if not c.motion else MovingFrame(bound, c.motion)))
+            frame=None if not c.motion else MovingFrame(bound, c.motion),
+            C0=None if c.orientation is None else tuple(tuple(bound.scalar(x) for x in r) for r in c.orientation)))
     return out
 
 
@@ -233,7 +236,7 @@ class ConstraintKinematics:
             lin = mv(B, sub(P, add(pm.o, mv(pm.c, local))))
             ang = (0, 0, 0)
             if any(j >= 3 for j in c.rows):
-                C0 = mm(transpose(rest.poses[c.k].c), mm(pm0.c, c.R_ref))
+                C0 = c.C0 if c.C0 is not None else mm(transpose(rest.poses[c.k].c), mm(pm0.c, c.R_ref))
                 Q = mm(B, mm(self.poses[c.k].c, C0))
                 s = scale(backend.rational(1, 2), (Q[2][1] - Q[1][2], Q[0][2] - Q[2][0], Q[1][0] - Q[0][1]))
                 cos = (Q[0][0] + Q[1][1] + Q[2][2] - 1) * backend.rational(1, 2)

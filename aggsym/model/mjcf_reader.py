@@ -35,8 +35,11 @@ The mapping
 * Not in the equations, listed in ``model.meta["mjcf"]`` (and the manifest): ``frictionloss`` (a constraint in
   MuJoCo), joint limits (also on the coordinates' limits), contacts, actuators (with their joint and gear),
   tendons that change nothing but constraints or actuation, inactive equalities, fluid forces (``density``,
-  ``viscosity``: a warning).  Refused with an error naming them, since they would change the equations: active
-  equalities, tendons with a stiffness, damping or armature, flexes, gravity compensation, actuators with
+  ``viscosity``: a warning).  Active equalities (:mod:`aggsym.model.mjcf_equalities`): ``connect`` and ``weld``
+  become constraints (``model.constraints``), linear ``joint`` and fixed-tendon equalities couplings
+  (``model.couplings``), each listed in ``meta["mjcf"]["equalities"]``; the others are refused there by name.
+  Refused with an error naming them, since they would change the equations: tendons with a stiffness, damping or
+  armature, flexes, gravity compensation, actuators with
   damping or armature, polynomial damping or stiffness.
 * ``model.links`` (kind ``"link"``): every MuJoCo body (``world`` included when ``worldbody`` is there) and every
   site (a site sharing a body's name is listed as ``site:<name>``) as a frame on the body it belongs to, for
@@ -57,6 +60,7 @@ from ..errors import ModelError, ModelWarning
 from .builder import TreeBuilder, floating_root, identifier, link_table, quaternion_rotations
 from .frames import default_frames
 from .link_numbers import exact
+from .mjcf_equalities import with_equalities
 from .mjcf_source import screen
 from .types import Coordinate, JointLimits, Links, Model, Parameter
 
@@ -100,6 +104,7 @@ class _Reader:
     def __init__(self, file: Path, m, mujoco):
         self.file, self.m, self.mj = file, m, mujoco
         self.warnings: list[str] = []
+        self.constraint_ids: set = set()
 
     def fail(self, where: str, message: str):
         raise ModelError(self.file, where, message)
@@ -115,6 +120,16 @@ class _Reader:
 
     def joint_name(self, j):
         return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_JOINT, j, "joint")
+
+    def tendon_name(self, t):
+        return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_TENDON, t, "tendon")
+
+    def equality_name(self, e):
+        return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_EQUALITY, e, "equality")
+
+    def ids_constraint(self, name: str) -> str:
+        """A constraint's identifier (distinct from the others')."""
+        return identifier(name, self.constraint_ids, "equality")
 
     # what the equations cannot hold ------------------------------------------------------------------------
     def refuse_unsupported(self):
@@ -146,9 +161,7 @@ class _Reader:
             name = _name(m, mj, mj.mjtObj.mjOBJ_EQUALITY, e, "equality")
             kind = EQUALITY_TYPES.get(int(m.eq_type[e]), str(int(m.eq_type[e])))
             if m.eq_active0[e]:
-                self.fail(f'<equality> <{kind} name="{name}">',
-                          f"an active {kind} equality; equality constraints are not supported yet (they change the "
-                          f"equations of motion)")
+                continue  # (aggsym.model.mjcf_equalities: a constraint, a coupling or an error naming it)
             self.warn(f'<equality> <{kind} name="{name}">', f"an inactive {kind} equality is not in the equations "
                                                             f"of motion (listed in the manifest)")
         for t in range(m.ntendon):
@@ -157,8 +170,9 @@ class _Reader:
                                 ("tendon_armature", "armature")):
                 value = getattr(m, field)[t] if hasattr(m, field) else 0
                 if np.any(value):
-                    self.fail(f'<tendon name="{name}">', f"a tendon with {what} (it changes the equations of "
-                                                         f"motion); tendons are not supported yet")
+                    self.fail(f'<tendon name="{name}">', f"a tendon with {what} (a force along the tendon: it "
+                                                         f"changes the equations of motion); tendon springs, "
+                                                         f"dampers and armature are not supported yet")
         if m.nflex:
             self.fail("<deformable>", f"{m.nflex} flex object(s); flexes are not supported")
         heavy = [self.body_name(i) for i in range(m.nbody) if m.body_gravcomp[i] != 0]
@@ -309,6 +323,7 @@ class _Reader:
                             "warnings": list(self.warnings),
                             "mjcf": self.summary(free_joints, sites, springs, dampers, flags)})
         model = dataclasses.replace(model, frames=default_frames(model))
+        model = with_equalities(self, model)
         if model.nv == 0:
             self.fail("", "the model has no joint; there are no equations of motion")
         return model
@@ -357,7 +372,7 @@ class _Reader:
                                                4: "site", 5: "body"}.get(kind, str(kind)),
                               "target": on, "gear": [float(v) for v in m.actuator_gear[a]]})
         tendons = [_name(m, mj, mj.mjtObj.mjOBJ_TENDON, t, "tendon") for t in range(m.ntendon)]
-        inactive = [_name(m, mj, mj.mjtObj.mjOBJ_EQUALITY, e, "equality") for e in range(m.neq)]
+        inactive = [_name(m, mj, mj.mjtObj.mjOBJ_EQUALITY, e, "equality") for e in range(m.neq) if not m.eq_active0[e]]
         return {
             "source": "MuJoCo's compiled model (mujoco " + mj.__version__ + ")",
             "convention": CONVENTION,
@@ -370,8 +385,9 @@ class _Reader:
                 "-(C (q - q0) + D qd) (MuJoCo's qfrc_passive sign)"),
             "springs": springs, "dampers": dampers, "gravity_disabled": bool(flags & DISABLE_GRAVITY),
             "not_in_the_equations": (
-                "frictionloss (a constraint in MuJoCo), joint and tendon limits, contacts, equalities "
-                "(inactive ones), actuators (their forces are tau's to give: actuators lists each with its "
+                "frictionloss (a constraint in MuJoCo), joint and tendon limits, contacts, inactive equalities "
+                "(active ones are constraints or couplings: equalities), actuators (their forces are tau's to "
+                "give: actuators lists each with its "
                 "transmission target and gear), fluid forces" + (" (this model has some)" if m.opt.density or
                                                                   m.opt.viscosity else "")),
             "joints": joints, "actuators": actuators, "tendons": tendons, "inactive_equalities": inactive,

@@ -265,6 +265,8 @@ class Constraint:
     friction: tuple | None = None  # ("viscous", c) or ("coulomb", mu): on the free translations, (4.33)-(4.34)
     wheel: tuple | None = None  # (radius, axle: 3 expressions, unit, body axes) for block: rolling
     motion: tuple = ()  # ((code, expression in TIME), ...): the world-side frame's prescribed functional motion
+    orientation: tuple | None = None  # 3x3 (rows): C0 of the rotational residual, the body's axes in the reference
+    # axes transposed where the residual vanishes (an MJCF weld's relpose); None: the relative orientation at q = 0
 
     @property
     def free_translations(self) -> tuple:

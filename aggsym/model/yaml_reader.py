@@ -709,7 +709,7 @@ def load_yaml(path) -> Model:
 def load_constraints(path, model: Model) -> Model:
     """A URDF robot's constraints from a side file (``aggsym generate robot.urdf --constraints feet.yaml``):
     ``constraints:`` as in a YAML model, bodies and media named by URDF link (a point in the link's frame), and
-    ``stabilization:``.  Returns the model with them."""
+    ``stabilization:``.  Returns the model with them after its own (an MJCF model's equalities)."""
     path = Path(path)
     try:
         if path.stat().st_size > MAX_FILE_BYTES:
@@ -728,6 +728,12 @@ def load_constraints(path, model: Model) -> Model:
         reader.fail(("constraints",), "constraints on a model with coupled (mimic) coordinates are not supported yet")
     frames = {f.name: (f.body, f.rotation, f.translation) for f in model.link_table.frames}
     constraints = reader.constraints(top["constraints"], frames, model.time_dependent)
+    own = {c.name for c in model.constraints}  # the model's own (an MJCF model's connect and weld) come first
+    for i, c in enumerate(constraints):
+        if c.name in own:
+            reader.fail(("constraints", i, "name"), f"the model already has a constraint named {c.name!r} (from its "
+                                                    f"file); choose another name")
+    constraints = tuple(model.constraints) + tuple(constraints)
     stabilization = reader.stabilization(top.get("stabilization"), constraints)
     return dataclasses.replace(model, constraints=constraints, stabilization=stabilization,
                                regularization=reader.regularization(top.get("regularization"), constraints))
