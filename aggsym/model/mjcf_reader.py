@@ -190,7 +190,7 @@ class _Reader:
 
     # the tree ------------------------------------------------------------------------------------------------
     def read(self) -> Model:
-        m, mj = self.m, self.mj
+        m = self.m
         self.refuse_unsupported()
         flags = int(m.opt.disableflags)
         springs, dampers = not flags & DISABLE_SPRING, not flags & DISABLE_DAMPER

@@ -23,6 +23,7 @@ from pathlib import Path
 from xml.parsers import expat
 
 from ..errors import ModelError
+from .xml_source import guard, read_capped
 
 MAX_BYTES = 64 * 2 ** 20  # one file (the largest MJCF of dm_control and gymnasium is under 1 MiB)
 MAX_TOTAL_BYTES = 256 * 2 ** 20  # the model and everything it includes
@@ -32,14 +33,7 @@ INCLUDING = {"include", "model"}  # elements whose file= is XML that MuJoCo read
 
 
 def _read(path: Path, shown, budget: dict) -> bytes:
-    try:
-        with open(path, "rb") as f:
-            data = f.read(MAX_BYTES + 1)
-    except OSError as exc:
-        raise ModelError(shown, "", f"cannot read the file: {exc.strerror}") from None
-    if len(data) > MAX_BYTES:
-        raise ModelError(shown, "", f"the file is larger than {MAX_BYTES // 2 ** 20} MiB; an MJCF file this large is "
-                                    f"not read (the limit guards against files made to exhaust memory)")
+    data = read_capped(path, shown, MAX_BYTES, "an MJCF file")
     budget["bytes"] += len(data)
     if budget["bytes"] > MAX_TOTAL_BYTES:
         raise ModelError(shown, "", f"the model and its included files exceed {MAX_TOTAL_BYTES // 2 ** 20} MiB "
@@ -69,25 +63,8 @@ def _scan(shown, data: bytes, budget: dict, top_required: bool) -> list:
         if tag in INCLUDING and "file" in attrib:
             includes.append((attrib["file"], tag, parser.CurrentLineNumber))
 
-    def entity(name, is_parameter, value, base, system_id, public_id, notation):
-        refuse("<!DOCTYPE>", f"an entity declaration (<!ENTITY {'% ' if is_parameter else ''}{name} ...>) is refused: "
-                             f"MJCF needs no entities, and expanding them can exhaust memory or read other files")
-
-    def external(context, base, system_id, public_id):
-        refuse("<!DOCTYPE>", f"a reference to the external entity {system_id!r} is refused; nothing outside the "
-                             f"file is read")
-
-    def doctype(name, system_id, public_id, has_internal_subset):
-        if system_id or public_id:
-            refuse("<!DOCTYPE>", f"a document type naming an external DTD ({system_id or public_id!r}) is refused; "
-                                 f"nothing outside the file is read")
-
-    parser.StartDoctypeDeclHandler = doctype
+    guard(parser, refuse, "MJCF")
     parser.StartElementHandler = start
-    parser.EntityDeclHandler = entity
-    parser.UnparsedEntityDeclHandler = lambda name, base, system_id, public_id, notation: entity(
-        name, False, None, base, system_id, public_id, notation)
-    parser.ExternalEntityRefHandler = external
     try:
         parser.Parse(data, True)
     except expat.ExpatError as exc:

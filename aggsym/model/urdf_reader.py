@@ -117,7 +117,7 @@ from .frames import default_frames
 from .types import Coordinate, Coupling, JointDynamics, JointLimits, Model, Parameter
 from .sympy_numbers import double
 from .validate import kinetic_energy_problem, motion_space, principal_problem
-from .xml_source import NUMBER as _NUMBER, _Element, _parse, _where
+from .xml_source import NUMBER as _NUMBER, _Element, _parse, _where, read_capped
 
 GRAVITY = (sp.Integer(0), sp.Integer(0), sp.Float(-9.81))
 MOVABLE = {"revolute": "theta", "continuous": "theta", "prismatic": "o"}
@@ -626,14 +626,7 @@ def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent
     ``model.meta["snapped_angles"]`` and the manifest); below it the file's values are kept (to round-off)."""
     path = Path(path)
     _check_options(floating_base, mimic, snap_angles)
-    try:
-        with open(path, "rb") as f:
-            data = f.read(MAX_BYTES + 1)
-    except OSError as exc:
-        raise ModelError(path, "", f"cannot read the file: {exc.strerror}") from None
-    if len(data) > MAX_BYTES:
-        raise ModelError(path, "", f"the file is larger than {MAX_BYTES // 2 ** 20} MiB; a URDF this large is not "
-                                   f"read (the limit guards against files made to exhaust memory)")
+    data = read_capped(path, path, MAX_BYTES, "a URDF")
     return urdf_from_bytes(path, data, floating_base, mimic, snap_angles)
 
 

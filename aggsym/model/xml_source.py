@@ -122,6 +122,48 @@ def _declaration_first(file: Path, data: bytes) -> tuple:
     return (m.group(1) or b"") + m.group(3) + space + data[m.end():], text
 
 
+def read_capped(path, shown, limit: int, what: str) -> bytes:
+    """The bytes of the file ``path`` (``shown`` in messages), refused above ``limit`` bytes before more is read
+    (``what``: "a URDF", "an MJCF file")."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read(limit + 1)
+    except OSError as exc:
+        raise ModelError(shown, "", f"cannot read the file: {exc.strerror}") from None
+    if len(data) > limit:
+        raise ModelError(shown, "", f"the file is larger than {limit // 2 ** 20} MiB; {what} this large is not read "
+                                    f"(the limit guards against files made to exhaust memory)")
+    return data
+
+
+def guard(parser, refuse, format_name: str) -> None:
+    """Refuse, on the expat ``parser``, what would make it expand or read anything beyond the file: entity
+    declarations (internal, external, parameter, unparsed), references to external entities and a document type
+    naming an external DTD; ``refuse(where, message)`` raises the reader's error (``format_name``: what the
+    messages call the file, "URDF", "MJCF")."""
+
+    def entity(name, is_parameter, value, base, system_id, public_id, notation):
+        kind = "an external" if system_id or public_id else "a parameter" if is_parameter else "an"
+        refuse("<!DOCTYPE>", f"{kind} entity declaration (<!ENTITY {'% ' if is_parameter else ''}{name} ...>) is "
+                             f"refused: {format_name} needs no entities, and expanding them can exhaust memory or "
+                             f"read other files")
+
+    def external(context, base, system_id, public_id):
+        refuse("<!DOCTYPE>", f"a reference to the external entity {system_id!r} is refused; nothing outside the "
+                             f"file is read")
+
+    def doctype(name, system_id, public_id, has_internal_subset):
+        if system_id or public_id:
+            refuse("<!DOCTYPE>", f"a document type naming an external DTD ({system_id or public_id!r}) is refused; "
+                                 f"nothing outside the file is read")
+
+    parser.StartDoctypeDeclHandler = doctype
+    parser.EntityDeclHandler = entity
+    parser.UnparsedEntityDeclHandler = lambda name, base, system_id, public_id, notation: entity(
+        name, False, None, base, system_id, public_id, notation)
+    parser.ExternalEntityRefHandler = external
+
+
 def _parse(file: Path, data: bytes, notes: list | None = None) -> _Element:
     """Parse XML with expat, recording each element's line; raises ModelError for malformed XML, for entity
     declarations and for a document over the element limits.  Warnings (a declaration after white space) are
@@ -182,28 +224,9 @@ def _parse(file: Path, data: bytes, notes: list | None = None) -> _Element:
                 if first.repeated_on is None:
                     first.repeated_on = el.line
 
-    def entity(name, is_parameter, value, base, system_id, public_id, notation):
-        kind = "an external" if system_id or public_id else "a parameter" if is_parameter else "an"
-        refuse("<!DOCTYPE>", f"{kind} entity declaration (<!ENTITY {'% ' if is_parameter else ''}{name} ...>) is "
-                             f"refused: URDF needs no entities, and expanding them can exhaust memory or read "
-                             f"other files")
-
-    def external(context, base, system_id, public_id):
-        refuse("<!DOCTYPE>", f"a reference to the external entity {system_id!r} is refused; nothing outside the "
-                             f"file is read")
-
-    def doctype(name, system_id, public_id, has_internal_subset):
-        if system_id or public_id:
-            refuse("<!DOCTYPE>", f"a document type naming an external DTD ({system_id or public_id!r}) is refused; "
-                                 f"nothing outside the file is read")
-
-    parser.StartDoctypeDeclHandler = doctype
+    guard(parser, refuse, "URDF")
     parser.StartElementHandler = start
     parser.EndElementHandler = end
-    parser.EntityDeclHandler = entity
-    parser.UnparsedEntityDeclHandler = lambda name, base, system_id, public_id, notation: entity(
-        name, False, None, base, system_id, public_id, notation)
-    parser.ExternalEntityRefHandler = external
     try:
         parser.Parse(data, True)
     except expat.ExpatError as exc:
