@@ -29,9 +29,9 @@ def _formats() -> str:
 def _only(option: str, then: str) -> str:
     """The help's opening for an option that only some readers accept ("URDF only" and ``then``), from the
     readers' declarations."""
-    from .model.readers import READERS
+    from .model.readers import listing, takers
 
-    return f"{' and '.join(r.name for r in READERS if option in r.cli_options)} only{then}"
+    return f"{listing(takers(option))} only{then}"
 
 EXAMPLES = {
     "generate": "example:\n  aggsym generate models/double_pendulum.yaml             # writes generated/double_pendulum/\n"

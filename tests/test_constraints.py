@@ -338,7 +338,7 @@ def test_a_urdf_side_file_names_links_and_is_checked(tmp_path):
     assert code == 2 and f"{bad}:3:" in err and "constraints[1].body" in err and "NO_SUCH_LINK" in err, err
     assert not out.exists()
     code, err = run_cli(["generate", str(model_path("four_bar")), "--constraints", str(bad), "-o", str(out)])
-    assert code == 2 and "URDF models only" in err
+    assert code == 2 and "(URDF, xacro and MJCF models only" in err
     good = side_file(tmp_path, FEET["solo12"][0], "point", extra="stabilization: {kp: 10, kd: 5}\n")
     code, err = run_cli(["generate", str(urdf), "--floating-base", "--constraints", str(good), "-o", str(out), "-q"])
     assert code == 0, err

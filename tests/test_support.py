@@ -197,7 +197,7 @@ def test_support_options_on_the_command_line(tmp_path):
     code, err = run_cli(["generate", urdf, "--support", "-o", str(tmp_path / "a")])
     assert code == 2 and "--support needs --floating-base" in err
     code, err = run_cli(["generate", str(model_path("spacecraft")), "--support", "-o", str(tmp_path / "b")])
-    assert code == 2 and "URDF models only" in err
+    assert code == 2 and "does not accept --support (URDF and xacro models only" in err
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
     model = aggsym.load(model_path("spacecraft"))
     without = dataclasses.replace(model, support=None)

@@ -128,6 +128,17 @@ def reader_for(path) -> Reader:
     raise ModelError(path, "", f"unknown model type {suffix!r}: expected {listed}")
 
 
+def listing(names) -> str:
+    """"a", "a and b", "a, b and c"."""
+    names = list(names)
+    return " and ".join(names) if len(names) <= 2 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def takers(option: str) -> list:
+    """The names of the readers that accept the command-line ``option``."""
+    return [r.name for r in READERS if option in r.cli_options]
+
+
 def check_cli_options(path, given) -> Reader:
     """The file's reader; an error naming the reader and the option when it does not accept one of ``given``
     (the command-line options the user gave that not every model takes)."""
@@ -136,13 +147,13 @@ def check_cli_options(path, given) -> Reader:
     reader = reader_for(path)
     refused = [o for o in given if o not in reader.cli_options]
     if refused:
-        which = " and ".join(refused) if len(refused) <= 2 else ", ".join(refused[:-1]) + " and " + refused[-1]
-        takers = [r.name for r in READERS if all(o in r.cli_options for o in refused)]
-        why = [f"{' and '.join(takers)} models only"] if takers else []
+        which = listing(refused)
+        able = [r.name for r in READERS if all(o in r.cli_options for o in refused)]
+        why = [f"{listing(able)} models only"] if able else []
         why += [reader.note] if reader.note else []
         raise AggsymError(f"{path}: the {reader.name} reader does not accept {which}"
                           + (f" ({'; '.join(why)})" if why else ""))
     return reader
 
 
-__all__ = ["Reader", "READERS", "register", "reader_for", "check_cli_options", "known_suffixes"]
+__all__ = ["Reader", "READERS", "register", "reader_for", "check_cli_options", "known_suffixes", "listing", "takers"]
