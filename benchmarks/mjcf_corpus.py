@@ -6,7 +6,7 @@ and qacc with MuJoCo's ``mj_fullM``, ``qfrc_bias - qfrc_passive`` and ``mj_forwa
 (:func:`benchmarks.mujoco_reference.compare`: contacts, limits, equalities, frictionloss and actuators disabled,
 fluid forces zero, the model's own armature, damping, springs and gravity kept).  A model that does not load is
 listed with aggsym's message (what is not supported yet).  Writes ``benchmarks/mjcf_corpus.json`` and prints the
-Markdown table of the README's section "MJCF".
+Markdown table of docs/mjcf.md.
 
     python -m benchmarks.mjcf_corpus [--samples N]
 """

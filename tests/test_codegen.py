@@ -315,11 +315,11 @@ def test_check_opt_takes_the_level_with_or_without_its_dash():
 
 @pytest.mark.compiler
 def test_readme_c_example_compiles_and_runs(tmp_path):
-    """The complete C program of README.md, compiled against the committed generated/double_pendulum with -Werror,
+    """The complete C program of docs/generated-code.md, compiled against the committed generated/double_pendulum with -Werror,
     prints tau = A qdd + b + g and recovers qdd by forward dynamics, with the run-time parameter change applied."""
     import re
 
-    text = (ROOT / "README.md").read_text()
+    text = (ROOT / "docs/generated-code.md").read_text()
     source = re.search(r"```c\n(/\* main\.c.*?)```", text, re.S).group(1)
     (tmp_path / "main.c").write_text(source)
     folder = ROOT / "generated" / "double_pendulum"

@@ -1,4 +1,4 @@
-"""The README's JAX examples (issue 32, item 5), run small: examples/jax_simulate.py (a batch of arms through
+"""The JAX examples of docs/batched.md (issue 32, item 5), run small: examples/jax_simulate.py (a batch of arms through
 jax.lax.scan) matches the NumPy module stepped the same way; examples/jax_fit_inertia.py (inertial parameters
 fitted to noisy torques with jax.grad) brings the torque error down to the noise and predicts fresh torques."""
 from __future__ import annotations

@@ -283,14 +283,14 @@ def test_bad_frames_in_yaml_are_clear_errors(frames, where, words, tmp_path):
 
 @pytest.mark.compiler
 def test_readme_controller_example_compiles_runs_and_tracks(tmp_path):
-    """README's computed-torque controller of the UR5, compiled with -Werror against the UR5's generated code: it
+    """The computed-torque controller of docs/generated-code.md of the UR5, compiled with -Werror against the UR5's generated code: it
     tracks its reference to 1e-4 rad in the second second, and the tool0 position it prints from frame_poses is
     Pinocchio's at the final q it prints."""
     import os
     import re
 
     from conftest import ROOT
-    text = (ROOT / "README.md").read_text()
+    text = (ROOT / "docs/generated-code.md").read_text()
     source = re.search(r"```c\n(/\* ctc\.c.*?)```", text, re.S).group(1)
     (tmp_path / "ctc.c").write_text(source)
     model = aggsym.load(robot_path("ur5"))

@@ -140,13 +140,13 @@ def test_good_model_loads(tmp_path):
 
 
 def test_readme_example_is_a_valid_model(tmp_path):
-    """The annotated example of README.md loads, and gives the equations of models/double_pendulum.yaml."""
+    """The annotated example of docs/model-format.md loads, and gives the equations of models/double_pendulum.yaml."""
     import re
 
     from conftest import ROOT, model_path
 
-    text = (ROOT / "README.md").read_text()
-    block = re.search(r"## The model format.*?```yaml\n(.*?)```", text, re.S).group(1)
+    text = (ROOT / "docs/model-format.md").read_text()
+    block = re.search(r"# The model format.*?```yaml\n(.*?)```", text, re.S).group(1)
     path = tmp_path / "example.yaml"
     path.write_text(block)
     model = aggsym.load(path)

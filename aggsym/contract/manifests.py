@@ -18,7 +18,7 @@ def frames_entry(model) -> list:
 
 # --scalar float: per routine the bound of the float C's error against the double twin, relative to the largest
 # value the routine returns (for FLOAT_PER_CONDITION also divided by cond(A) at the state), the inputs rounded to
-# float: at least 8x the worst seen over the bundled models and the suite's robots (README, "Single precision"); the
+# float: at least 8x the worst seen over the bundled models and the suite's robots (docs/generated-code.md, "Single precision"); the
 # issue's 1e-4 on A, the inverse dynamics and the frame poses.  Models with prescribed motions get FLOAT_TIME times
 # as much: their spin angles w t are computed in float, so the error grows with t (check draws 0 <= t <= 10).
 FLOAT_TOLERANCE = {

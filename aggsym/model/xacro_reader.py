@@ -73,7 +73,7 @@ def check_expression(text: str) -> None:
         name = node.attr if attribute else node.id if isinstance(node, ast.Name) else None
         if name is not None and (name.startswith("_") or (attribute and name in DENIED)):
             raise _Refused(f"the expression {text.strip()[:80]!r} uses {name!r}, which is refused here (it could "
-                           f"let a file run code or read files; see the README's xacro section)")
+                           f"let a file run code or read files; see the xacro section of aggsym's docs/urdf.md)")
 
 
 def check_file(path: str, roots: list) -> str:

@@ -1,6 +1,6 @@
 """The YAML model reader: every mistake is reported with the file, the YAML path, the line and the reason.
 
-The format is documented in README.md ("The model format").  Summary::
+The format is documented in docs/model-format.md.  Summary::
 
     name: NAME                       # C identifier, prefix of the generated functions (default: file stem)
     description: text                # optional
