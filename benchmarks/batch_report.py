@@ -7,6 +7,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from .tables import markdown_table, text_table
+
 ROUTINE_TITLES = {"fd": "forward dynamics", "A": "A(q)", "id": "inverse dynamics",
                   "jac": "Jacobian of forward dynamics w.r.t. (q, v)"}
 HUMANOID = "talos"
@@ -16,20 +18,11 @@ VALUE_AGREEMENT, JACOBIAN_AGREEMENT = 1e-12, 1e-8
 
 
 def _table(header, rows, left=1) -> str:
-    lines = ["| " + " | ".join(header) + " |",
-             "| " + " | ".join(["---"] * left + ["---:"] * (len(header) - left)) + " |"]
-    return "\n".join(lines + ["| " + " | ".join(str(c) for c in r) + " |" for r in rows])
+    return markdown_table(header, rows, "l" * left + "r" * (len(header) - left))
 
 
 def _text(header, rows) -> str:
-    cells = [list(map(str, header))] + [[str(c) for c in r] for r in rows]
-    widths = [max(len(r[i]) for r in cells) for i in range(len(header))]
-    out = []
-    for k, r in enumerate(cells):
-        out.append("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
-        if k == 0:
-            out.append("  ".join("-" * w for w in widths))
-    return "\n".join(out)
+    return text_table(header, rows)
 
 
 def _us(x) -> str:

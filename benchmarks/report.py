@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from . import report_plots
+from . import report_plots, tables
 
 ROBOTS = ("ur5", "panda", "hyq", "talos")
 RUNTIME_TARGET_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics",
@@ -56,25 +56,18 @@ def _mib(kib):
     return None if kib is None else kib / 1024
 
 
+def _cell(c) -> str:
+    return c if isinstance(c, str) else _fmt(c)
+
+
 def table(header, rows, align=None) -> str:
     """A Markdown table; ``align`` is a string of 'l'/'r' per column (default: first left, rest right)."""
-    align = align or "l" + "r" * (len(header) - 1)
-    sep = ["---:" if a == "r" else "---" for a in align]
-    lines = ["| " + " | ".join(map(str, header)) + " |", "| " + " | ".join(sep) + " |"]
-    lines += ["| " + " | ".join(_fmt(c) if not isinstance(c, str) else c for c in r) + " |" for r in rows]
-    return "\n".join(lines)
+    return tables.markdown_table(header, rows, align or "l" + "r" * (len(header) - 1), cell=_cell)
 
 
 def text_table(header, rows) -> str:
     """A plain-text table for stdout."""
-    cells = [list(map(str, header))] + [[c if isinstance(c, str) else _fmt(c) for c in r] for r in rows]
-    widths = [max(len(r[i]) for r in cells) for i in range(len(header))]
-    out = []
-    for k, r in enumerate(cells):
-        out.append("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
-        if k == 0:
-            out.append("  ".join("-" * w for w in widths))
-    return "\n".join(out)
+    return tables.text_table(header, rows, cell=_cell)
 
 
 def _gen_runs(results) -> dict:
