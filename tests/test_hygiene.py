@@ -95,6 +95,35 @@ def test_every_cited_document_exists():
     assert not missing, missing
 
 
+def heading_anchors(path: Path) -> set:
+    """The anchors a Markdown renderer gives the headings of ``path`` (GitHub's rule: lower case, punctuation
+    dropped, spaces to hyphens), code blocks left out."""
+    out, fence = set(), False
+    for line in path.read_text().splitlines():
+        if line.startswith("```"):
+            fence = not fence
+        elif not fence and line.startswith("#"):
+            out.add(re.sub(r"[^\w\- ]", "", line.lstrip("#").strip().lower()).replace(" ", "-"))
+    return out
+
+
+def test_every_link_of_the_readme_and_docs_reaches_its_file_and_heading():
+    """A relative link ``[text](file.md#heading)`` of README.md or docs/ names a file that exists and, with an
+    anchor, a heading of that file (the README's reference moved to docs/: links must follow)."""
+    broken = []
+    for doc in [ROOT / "README.md"] + sorted((ROOT / "docs").glob("*.md")):
+        for target in re.findall(r"\]\(([^)\s]+)\)", doc.read_text()):
+            if re.match(r"[a-z]+:", target):
+                continue
+            path, _, anchor = target.partition("#")
+            linked = (doc.parent / path) if path else doc
+            if not linked.exists():
+                broken.append((doc.name, target, "no such file"))
+            elif anchor and linked.suffix == ".md" and anchor not in heading_anchors(linked):
+                broken.append((doc.name, target, "no such heading"))
+    assert not broken, broken
+
+
 def test_the_architecture_page_names_every_module():
     """docs/architecture.md names every module of aggsym/ by its path (a subpackage's __init__ aside when it holds
     no more than a docstring and re-exports)."""
