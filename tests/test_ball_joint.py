@@ -9,7 +9,8 @@ References, each independent of the reader under test:
   dynamics (computeRNEADerivatives, computeABADerivatives, in Pinocchio's tangent space) on random states (random
   axes and placements, random unit quaternions, masses from 1e-3 to 1e2), <= 1e-9 relative; integrate against
   pin.integrate, the quaternion unit along a long walk;
-* central differences on the manifold (through our own integrate) for the derivatives;
+* central differences on the manifold (through our own integrate) for the derivatives, and for the Jacobian and
+  bias of a loop closed through ball pairs (its constrained forward dynamics against a dense KKT solve);
 * MuJoCo itself for an MJCF model with ball joints (mj_fullM, qfrc_bias - qfrc_passive, qacc with contacts and
   limits disabled; ``benchmarks/mujoco_reference.py``), <= 1e-9 relative;
 * the generated C and NumPy module against the numeric twin (``aggsym check``) and against Pinocchio.
@@ -318,6 +319,41 @@ def test_derivatives_equal_central_differences_on_the_manifold(tmp_path, rng):
         assert relative_error(dq[:, i], col, floor=np.abs(dq).max()) < 1e-7, i
         col = (twin.forward_dynamics(plus, v, tau) - twin.forward_dynamics(minus, v, tau)) / (2 * h)
         assert relative_error(fq[:, i], col, floor=np.abs(fq).max()) < 1e-7, i
+
+
+def test_a_loop_closed_through_ball_pairs(tmp_path, rng):
+    """A point constraint on the tip of two chained ball pairs (a closed loop): its Jacobian against central
+    differences of the residual along the tangent directions (through integrate), its bias gamma against the
+    central difference of J(q (+) v t) v, and the constrained forward dynamics against a dense KKT solve."""
+    text = CHAIN.split("  - name: foot")[0] + """constraints:
+  - name: tip
+    body: lower
+    point: [0, 0, -0.4]
+    medium: world
+    at: [0.3, 0.2, 0.1]
+    block: [o1, o2, o3]
+"""
+    model = yaml_model(tmp_path, text)
+    twin = aggsym.NumericTwin(model)
+    q, v, _, tau = random_state(model, rng)
+    n, h = model.nv, 1e-6
+
+    def jacobian(x):
+        return np.asarray(twin.call("constraint_jacobian", x), dtype=float).reshape(3, n)
+
+    def residual(x):
+        return np.asarray(twin.call("constraint_residual", x), dtype=float)
+
+    J = jacobian(q)
+    columns = [(residual(twin.integrate(q, e, h)) - residual(twin.integrate(q, e, -h))) / (2 * h) for e in np.eye(n)]
+    assert relative_error(J, np.array(columns).T) < 1e-8
+    gamma = np.asarray(twin.call("constraint_bias", q, v), dtype=float)
+    rate = (jacobian(twin.integrate(q, v, h)) @ v - jacobian(twin.integrate(q, v, -h)) @ v) / (2 * h)
+    assert relative_error(gamma, rate) < 1e-7
+    qdd = np.asarray(twin.call("constrained_forward_dynamics", q, v, tau)[0], dtype=float)
+    A, d = twin.inertia(q), twin.bias(q, v) + twin.gravity(q)
+    kkt = np.linalg.solve(np.block([[A, J.T], [J, np.zeros((3, 3))]]), np.concatenate([tau - d, -gamma]))
+    assert relative_error(qdd, kkt[:n]) < 1e-12
 
 
 # an MJCF model: a free torso with a ball hip (armature, damping, anchored off the body origin), a hinge knee about
