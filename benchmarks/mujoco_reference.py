@@ -7,13 +7,14 @@ fluid forces set to zero (none of them is in the equations of motion); the model
 and gravity (and their disable flags) are kept.  A free joint's velocity is converted as the reader's convention
 says (``aggsym.model.mjcf_reader.CONVENTION``): with J = I except R (the body's rotation) on each free joint's
 linear velocity, qvel = J v, MuJoCo's qacc = J qdd + c (c = R (w x v) on the free linear rows), so
-A = J^T M J, d = J^T (M c + qfrc_bias - qfrc_passive), tau = J^T qfrc_applied.
+A = J^T M J, d = J^T (M c + qfrc_bias - qfrc_passive), tau = J^T qfrc_applied.  A ball joint's quaternion is
+reordered (MuJoCo's w x y z to aggsym's x y z w); its velocity, force and acceleration are MuJoCo's.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from aggsym.model.mjcf_reader import FREE
+from aggsym.model.mjcf_reader import BALL, FREE
 
 
 def _quat(rng):
@@ -23,12 +24,15 @@ def _quat(rng):
 
 def states(m, rng):
     """A random MuJoCo (qpos, qvel, force): hinge and slide positions uniform in [-pi, pi], free joints a random
-    position and unit quaternion; velocities and forces normal."""
+    position and unit quaternion, ball joints a random unit quaternion; velocities and forces normal."""
     qpos = rng.uniform(-np.pi, np.pi, m.nq)
     for j in range(m.njnt):
         if m.jnt_type[j] == FREE:
             a = m.jnt_qposadr[j]
             qpos[a + 3:a + 7] = _quat(rng)
+        elif m.jnt_type[j] == BALL:
+            a = m.jnt_qposadr[j]
+            qpos[a:a + 4] = _quat(rng)
     return qpos, rng.normal(size=m.nv), rng.normal(size=m.nv) * 3
 
 
@@ -51,6 +55,9 @@ def to_aggsym(m, qpos, qvel, force):
             tau[d:d + 3] = R.T @ force[d:d + 3]
             q.extend([*qpos[a:a + 3], x, y, z, w])
             free.append((d, R))
+        elif m.jnt_type[j] == BALL:
+            w, x, y, z = qpos[a:a + 4]
+            q.extend([x, y, z, w])
         else:
             q.append(qpos[a])
     c = np.zeros(m.nv)

@@ -231,8 +231,11 @@ ARM = """<mujoco model="arm"><worldbody><body name="a"><joint name="j1" {attrs}/
 {extra}</body></worldbody>{after}</mujoco>"""
 
 UNSUPPORTED = {
-    "ball": (ARM.format(attrs='type="ball"', extra="", after=""),
-             ['<joint name="j1">', "ball joint", "not supported yet"]),
+    "ball-spring": (ARM.format(attrs='type="ball" stiffness="2"', extra="", after=""),
+                    ['<joint name="j1">', "stiffness=2 on a ball joint", "not supported"]),
+    "ball-before-slide": (ARM.format(attrs='type="ball"', extra="", after="").replace(
+        '<geom size=".1"/>', '<joint name="j2" type="slide"/><geom size=".1"/>', 1),
+                          ['<joint name="j1">', "a ball joint followed by other joints", "last joint"]),
     "equality": (ARM.format(attrs="", extra='<body name="b"><joint name="j2"/><geom size=".1"/></body>',
                             after='<equality><joint name="tie" joint1="j1" joint2="j2" polycoef="0 1 1 0 0"/>'
                                   '</equality>'),

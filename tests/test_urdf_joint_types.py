@@ -1,4 +1,4 @@
-"""URDF ``planar`` and ``floating`` joints against Pinocchio, and ``spherical`` refused.
+"""URDF ``planar`` and ``floating`` joints against Pinocchio (``spherical``, the ball joint: tests/test_ball_joint.py).
 
 The reference is a Pinocchio model built here by hand from the numbers of the URDF written below, not from our
 reader: each planar joint is Pinocchio's composite of its two translations and its rotation in the joint frame
@@ -147,12 +147,16 @@ def test_floating_joint_at_the_root_equals_the_euler_base(tmp_path):
         assert relative_error(a.bias(q, qd) + a.gravity(q), b.bias(q, qd) + b.gravity(q)) <= TOL
 
 
-def test_spherical_is_refused(tmp_path):
+def test_spherical_is_a_ball_pair(tmp_path):
+    """A spherical joint is read as the ball pair (compared with Pinocchio's spherical joint in test_ball_joint.py):
+    four positions, three velocities, named after the joint."""
     text = urdf((0.0, 0.0, 1.0)).replace('name="wrist" type="continuous"', 'name="wrist" type="spherical"')
     path = tmp_path / "ball.urdf"
     path.write_text(text)
-    with pytest.raises(aggsym.ModelError, match="ball joints are not supported yet"):
-        aggsym.load(path)
+    model = aggsym.load(path)
+    assert model.nq == model.nv + 1 and model.bodies[-1].pair.ball
+    assert [n for n, _, _ in model.positions][-4:] == ["wrist_qx", "wrist_qy", "wrist_qz", "wrist_qw"]
+    assert [c.name for c in model.coordinates][-3:] == ["wrist_wx", "wrist_wy", "wrist_wz"]
 
 
 def test_mimic_on_a_planar_joint_is_an_error(tmp_path):

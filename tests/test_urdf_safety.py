@@ -184,8 +184,6 @@ CASES = {
     "duplicate-joint": (arm(link("hand"), joint("elbow", "lower", "hand")), ["duplicate joint name 'elbow'"]),
     "unknown-joint-type": (arm(link("hand"), joint("wrist", "lower", "hand", jtype="ball")),
                            ['<joint name="wrist">', "unknown joint type 'ball'"]),
-    "spherical-joint": (arm(link("hand"), joint("wrist", "lower", "hand", jtype="spherical")),
-                        ["ball joints are not supported yet"]),
     "joint-without-type": (arm().replace('name="elbow" type="revolute"', 'name="elbow"'),
                            ['<joint name="elbow">', "missing attribute 'type'"]),
     "no-movable-joint": (robot(link("base"), link("tool"), joint("weld", "base", "tool", jtype="fixed")),

@@ -173,8 +173,8 @@ def test_zero_axis(write):
           'axis xyz="0 0 0" has zero length')
 
 
-@pytest.mark.parametrize("jtype, says", [("spherical", "ball joints are not supported yet"),
-                                         ("ball", "unknown joint type 'ball'")])
+@pytest.mark.parametrize("jtype, says", [("ball", "unknown joint type 'ball'"),
+                                         ("universal", "unknown joint type 'universal'")])
 def test_unsupported_joint_types(write, jtype, says):
     text = arm(link("hand"), joint("wrist", "lower", "hand", jtype=jtype))
     check(error(write(text)), '<joint name="wrist">', line_of(text, 'name="wrist"'), f"'{jtype}'", says)

@@ -35,7 +35,7 @@ def symbol_names(model) -> dict:
     names = {}
     for c, d, dd in zip(model.coordinates, qd, qdd):
         base = sp.latex(sp.Symbol(c.name, real=True))
-        if c.name in free:  # a free-flyer's velocity is no coordinate's rate: v, its rate v-dot
+        if c.name in free:  # a free-flyer's or ball's velocity is no coordinate's rate: v, its rate v-dot
             names[d], names[dd] = base, _dotted(base, "dot")
         else:
             names[d], names[dd] = _dotted(base, "dot"), _dotted(base, "ddot")

@@ -41,7 +41,7 @@ def header_macros(model, routines, scalar: str = "double") -> list:
     out = [(f"{model.name}_NQ".upper(), model.nq, "the length of q" if model.nq != model.nv else
             "coordinates: the length of q, qd, qdd, tau"),
            (f"{model.name}_NV".upper(), model.nv, "velocities: the length of qd, qdd, tau" +
-            (" (q has NQ entries: a free-flyer's quaternion)" if model.nq != model.nv else " (= NQ)")),
+            (" (q has NQ entries: quaternions)" if model.nq != model.nv else " (= NQ)")),
            (f"{model.name}_NP".upper(), len(model.parameters), "parameters: the length of p")]
     for i, p in enumerate(model.parameters):
         out.append((parameter_macro(model, p), i, "index in p"))

@@ -13,7 +13,7 @@ from .shapes import regressor_shape
 
 def sample_configurations(model, rng, size=None):
     """Random configurations q (shape (nq,), or (nq, size)): each coordinate uniform in [-pi, pi]; a free-flyer's
-    position uniform in [-pi, pi]^3 and its quaternion a random unit quaternion (the samples of the checks, the
+    position uniform in [-pi, pi]^3 and its (or a ball pair's) quaternion a random unit quaternion (the samples of the checks, the
     base parameters and the redundancy tests)."""
     import numpy as np
 
@@ -22,7 +22,7 @@ def sample_configurations(model, rng, size=None):
     for idx, b in zip(Tree(model).positions, model.bodies):
         if b.pair.quaternion:
             quat = rng.normal(size=(4,) + shape[1:])
-            q[idx[3]:idx[3] + 4] = quat / np.linalg.norm(quat, axis=0)
+            q[idx[-4]:idx[-4] + 4] = quat / np.linalg.norm(quat, axis=0)
     return q
 
 

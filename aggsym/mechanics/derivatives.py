@@ -13,7 +13,9 @@ dynamics' own q'' (and dq''/dtau = A^-1).  A^-1 is applied column by column with
 
 With a free-flyer root the directions along q are Pinocchio's tangent space (nv of them, not nq): the root moves
 as ``q (+) d = (M exp(d))``, d = (dv, dw) in the body's axes, whose first-order change of the seven positions is
-``dx = R dv`` and ``dquat = quat * (dw/2, 0)`` (quaternion product; ``d R = R hat(dw)``): those are the seeds.
+``dx = R dv`` and ``dquat = quat * (dw/2, 0)`` (quaternion product; ``d R = R hat(dw)``): those are the seeds.  A
+ball pair moves as the free-flyer's rotation, ``quat (+) dw = quat exp(dw)`` (Pinocchio's spherical joint): its
+four positions get the seeds ``quat * (dw/2, 0)`` along its three directions.
 """
 from __future__ import annotations
 
@@ -44,24 +46,25 @@ def _dual_inverse_dynamics(bound, kin, qd, qdd, directions=None) -> tuple:
 
 def tangent_seeds(kin) -> list:
     """q as duals with unit tangents along the velocity directions 0..nv-1 (a free-flyer's seven positions along
-    its six directions, see the module's text)."""
+    its six directions, a ball's four along its three, see the module's text)."""
     q = list(kin.q)
     for k, (idx, coords) in enumerate(zip(kin.tree.positions, kin.tree.coords)):
         if not kin.free[k]:
             for p, i in zip(idx, coords):
                 q[p] = Dual(kin.q[p], {i: 1})
             continue
-        R = kin.functional[k].c
-        x, y, z, w = (kin.q[p] for p in idx[3:])
+        if len(idx) == 7:
+            R = kin.functional[k].c
+            for a in range(3):  # the origin: R dv
+                q[idx[a]] = lift(kin.q[idx[a]], {coords[j]: R[a][j] for j in range(3)})
+        quat, turns = idx[-4:], coords[-3:]  # the quaternion and the directions of the angular velocity
+        x, y, z, w = (kin.q[p] for p in quat)
         half = (x / 2, y / 2, z / 2, w / 2)
-        for a in range(3):  # the origin: R dv
-            q[idx[a]] = lift(kin.q[idx[a]], {coords[j]: R[a][j] for j in range(3)})
         # quat * (e_j/2, 0) = (w e_j + v x e_j, -v_j) / 2 for v = (x, y, z)
         cross = ((0, half[2], -half[1]), (-half[2], 0, half[0]), (half[1], -half[0], 0))  # v x e_j / 2, by j
         for a in range(3):
-            q[idx[3 + a]] = lift(kin.q[idx[3 + a]],
-                                 {coords[3 + j]: (half[3] if a == j else 0) + cross[j][a] for j in range(3)})
-        q[idx[6]] = lift(kin.q[idx[6]], {coords[3 + j]: -half[j] for j in range(3)})
+            q[quat[a]] = lift(kin.q[quat[a]], {turns[j]: (half[3] if a == j else 0) + cross[j][a] for j in range(3)})
+        q[quat[3]] = lift(kin.q[quat[3]], {turns[j]: -half[j] for j in range(3)})
     return q
 
 

@@ -16,7 +16,9 @@ For the tree (1.34)-(1.43): ``V_lk = L^T V_parent + M F q'`` (2.39), the rows of
 A free-flyer pair (Pinocchio's JointModelFreeFlyer, :attr:`aggsym.model.types.Pair.positions`) is placed by seven
 entries of q, the origin (x, y, z) in the parent's axes and a unit quaternion (qx, qy, qz, qw), ``L = T(x) C(R(quat))``;
 its six coordinates are the body's quasi-velocity (v, w) itself (Def. 1.9), so ``M F`` is the unit matrix and
-``(M F)' q' = 0``: the recursions take the velocity as it is.
+``(M F)' q' = 0``: the recursions take the velocity as it is.  A ball pair (Pinocchio's JointModelSpherical) is
+the same without the translation: four entries of q, the unit quaternion (qx, qy, qz, qw), ``L = C(R(quat))``, and
+three coordinates, the body's angular velocity relative to its parent in its own axes, ``M F = (0; E)``.
 
 A pair with a prescribed motion (a rotor's spin (2.13)) has no coordinate; its relative quasi-velocity U = f theta'
 and quasi-acceleration U' = f theta'' are known at the bound time (``BoundBody.spin``) and enter wherever the
@@ -81,7 +83,11 @@ def quaternion_rotation(x, y, z, w):
 
 
 def free_flyer(qv):
-    """The functional motion of a free-flyer pair from its seven positions, and its unit M F columns."""
+    """The functional motion of a quaternion pair from its positions, and its unit M F columns: a free-flyer's
+    seven (origin, quaternion; the six columns f_1..f_6) or a ball's four (quaternion; the rotations f_4..f_6)."""
+    if len(qv) == 4:
+        return Motion(quaternion_rotation(*qv), ZERO3), [tuple(1 if j == i else 0 for j in range(6))
+                                                          for i in range(3, 6)], []
     motion = Motion(quaternion_rotation(*qv[3:7]), tuple(qv[:3]))
     psi = [tuple(1 if j == i else 0 for j in range(6)) for i in range(6)]
     return motion, psi, []
@@ -153,7 +159,7 @@ class TreeKinematics:
         self.functional = []  # the functional motion of each pair, T(o) C(c1 c2 c3)
         self.rotations = []  # its elementary rotations in order, (axis, matrix)
         self.memo = {}  # whole-tree results that several routines of one run share (the regressor)
-        self.free = [b.pair.quaternion for b in bound.model.bodies]  # free-flyer pairs: constant M F
+        self.free = [b.pair.quaternion for b in bound.model.bodies]  # free-flyer and ball pairs: constant M F
         for k, body in enumerate(bound.bodies):
             qv = [q[i] for i in self.tree.positions[k]]
             if body.offset is not None:  # internal frames (aggsym.model.reframe): c(q + offset)

@@ -9,6 +9,9 @@ that a constant (v, w) describes for the time dt, ``M_next = M exp((v, w) dt)`` 
 * origin: ``x_next = x + R V (v dt)``, ``V = E + (1 - cos theta)/theta^2 hat(w dt) + (theta - sin theta)/theta^3
   hat(w dt)^2`` (the left Jacobian of SO(3): the screw's displacement, (1.13) integrated at constant V).
 
+A ball pair (four positions: the unit quaternion, three velocities: the angular velocity w in the body's axes)
+turns as the free-flyer's rotation does, ``quat_next = quat * exp(w dt)`` normalized (Pinocchio's spherical joint).
+
 The three ratios are written without a branch: theta^2 = |w dt|^2 + 1e-30, so that at theta = 0 they take their
 limits (sin(theta/2)/theta = 1/2 exactly; the other two multiply hat(w dt) and hat(w dt)^2, which vanish).  They
 are smooth functions of theta^2, so the added 1e-30 moves them by about 1e-31 (nothing a double or a float sees),
@@ -32,9 +35,10 @@ def integrate(bound, q, v, dt) -> list:
             for p, i in zip(idx, coords):
                 out[p] = q[p] + v[i] * dt
             continue
-        x, quat = [q[p] for p in idx[:3]], [q[p] for p in idx[3:]]
-        nu = [v[i] * dt for i in coords[:3]]
-        w = [v[i] * dt for i in coords[3:]]
+        ball = len(idx) == 4
+        x, quat = [q[p] for p in idx[:-4]], [q[p] for p in idx[-4:]]
+        nu = [v[i] * dt for i in coords[:-3]]
+        w = [v[i] * dt for i in coords[-3:]]
         theta2 = dot(w, w) + TINY
         theta = backend.sqrt(theta2)
         s, c = backend.sin(theta / 2), backend.cos(theta / 2)
@@ -42,12 +46,17 @@ def integrate(bound, q, v, dt) -> list:
         e = scale(k_half, w) + (c,)  # the quaternion of exp(hat(w dt)), (vector, scalar)
         turned = _product(quat, e)
         norm = 1 / backend.sqrt(dot(turned, turned))
+        unit = tuple(norm * t for t in turned)
+        if ball:
+            for p, value in zip(idx, unit):
+                out[p] = value
+            continue
         a = 2 * k_half * k_half  # (1 - cos theta)/theta^2
         b = (1 - 2 * s * c / theta) / theta2  # (theta - sin theta)/theta^3
         wn = cross(w, nu)
         step = add(add(nu, scale(a, wn)), scale(b, cross(w, wn)))
         moved = add(x, mv(quaternion_rotation(*quat), step))
-        for p, value in zip(idx, moved + tuple(norm * t for t in turned)):
+        for p, value in zip(idx, moved + unit):
             out[p] = value
     return out
 

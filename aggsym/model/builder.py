@@ -37,6 +37,8 @@ FLOATING = (("base_x", "o1"), ("base_y", "o2"), ("base_z", "o3"), ("base_rx", "t
 FREE_FLYER = (("base_vx", "o1"), ("base_vy", "o2"), ("base_vz", "o3"), ("base_wx", "theta4"), ("base_wy", "theta5"),
               ("base_wz", "theta6"))  # velocities of the quaternion base
 FREE_FLYER_POSITIONS = ("base_x", "base_y", "base_z", "base_qx", "base_qy", "base_qz", "base_qw")
+BALL = (("wx", "theta4"), ("wy", "theta5"), ("wz", "theta6"))  # a ball joint J's velocities J_wx J_wy J_wz
+BALL_POSITIONS = ("qx", "qy", "qz", "qw")  # its positions J_qx J_qy J_qz J_qw: a unit quaternion
 MAX_ROTATIONS = 9  # elementary rotations a chain of fixed joints may pile up before they are folded into one rpy
 
 
@@ -218,6 +220,13 @@ def floating_root(kind, names: Names, pair_name: str, prefix: str = "base") -> P
     return Pair(pair_name, zero, (), coords, positions=positions)
 
 
+def ball_names(joint: str) -> tuple:
+    """(velocities, positions): the names a ball joint ``joint`` gives its three coordinates and its four entries of
+    q, ``joint_wx joint_wy joint_wz`` and ``joint_qx joint_qy joint_qz joint_qw`` (before they are made
+    identifiers)."""
+    return tuple(f"{joint}_{n}" for n, _ in BALL), tuple(f"{joint}_{n}" for n in BALL_POSITIONS)
+
+
 def link_table(place: dict, body_names: list, parts: dict, leaves) -> Links:
     """The model's links (kind ``"link"``) from each link's :class:`Place` (in tree order), the bodies' names (by
     index), each link's own inertial part and the links without a child link."""
@@ -226,14 +235,18 @@ def link_table(place: dict, body_names: list, parts: dict, leaves) -> Links:
 
 
 CODES = {"theta": ("theta4", "theta5", "theta6"), "o": ("o1", "o2", "o3")}  # a joint about / along e1, e2, e3
-KINDS = ("theta", "o", "planar", "floating")  # the motions of :meth:`TreeBuilder.joint`
+KINDS = ("theta", "o", "planar", "floating", "ball")  # the motions of :meth:`TreeBuilder.joint`
 
 
 def motions(kind: str, i: int) -> tuple:
     """The codes of a joint of ``kind`` whose axis is e_(i+1) after :func:`align`: one rotation about it
     (``"theta"``) or translation along it (``"o"``); ``"planar"``: the translations along the two other axes, then
     the rotation about it (the plane normal to the axis, as URDF defines it); ``"floating"``: all six, o1 o2 o3
-    theta4 theta5 theta6 (the book's Euler pair, as ``floating_root``), the axis unused."""
+    theta4 theta5 theta6 (the book's Euler pair, as ``floating_root``), the axis unused; ``"ball"``: the three
+    rotations theta4 theta5 theta6 of a ball pair (its coordinates the angular velocity in the child's axes, its
+    positions a unit quaternion: :func:`ball_names`), the axis unused."""
+    if kind == "ball":
+        return CODES["theta"]
     if kind == "planar":
         return tuple(CODES["o"][j] for j in range(3) if j != i) + (CODES["theta"][i],)
     if kind == "floating":
@@ -280,7 +293,7 @@ class TreeBuilder:
         self.place[child] = Place(here.body, turned, R, round_off(t))
 
     def joint(self, parent: str, child: str, body_name: str, joint_name: str, coordinate, xyz, rotation: list,
-              axis, kind: str, anchor=None, offset=()) -> Pair:
+              axis, kind: str, anchor=None, offset=(), positions=()) -> Pair:
         """A movable joint ``joint_name`` from ``parent`` to ``child``, which becomes the body ``body_name``: its
         origin ``xyz`` and ``rotation`` in the parent link's frame, then the constant rotation R_a bringing e1, e2
         or e3 onto ``axis`` (:func:`align`), so that the joint is the elementary motion of ``kind`` (``"theta"``
@@ -291,16 +304,22 @@ class TreeBuilder:
         ``anchor`` (MJCF: a joint whose axis does not pass through the child's origin): the point of the axis in
         the child link's frame; the pair then sits at the anchor, and the child link's origin at -R_a^T anchor in
         the body, so that the link turns about (or slides along) the axis through the anchor.  ``offset``: the
-        pair's :attr:`~.types.Pair.offset` (MJCF: -qpos0, so that the coordinate is MuJoCo's qpos)."""
+        pair's :attr:`~.types.Pair.offset` (MJCF: -qpos0, so that the coordinate is MuJoCo's qpos).  ``positions``:
+        a ball joint's (``kind`` ``"ball"``) four entries of q, the names of its unit quaternion qx qy qz qw
+        (:attr:`~.types.Pair.positions`)."""
         here, t = self._origin(parent, xyz)
         if anchor is not None:
             turned = here.R if not rotation else snapped(product(here.R, rotation_matrix(rotation)))
             t = round_off(add(t, turn(turned, tuple(exact(x) for x in anchor))))
         if kind not in KINDS:
             raise ValueError(f"joint kind {kind!r}: expected one of {', '.join(KINDS)}")
-        rotate, i = align(axis) if kind != "floating" else ([], 0)
+        if (kind == "ball") != (len(positions) == 4):
+            raise ValueError(f"joint {joint_name!r}: a ball joint, and only a ball joint, has the four positions of "
+                             f"a unit quaternion (got kind {kind!r} with {len(positions)})")
+        rotate, i = align(axis) if kind not in ("floating", "ball") else ([], 0)
         pair = Pair(joint_name, tuple(t), tuple(tidy(here.rotation + rotation + rotate)),
-                    tuple(coordinate(code) for code in motions(kind, i)), offset=tuple(offset))
+                    tuple(coordinate(code) for code in motions(kind, i)), offset=tuple(offset),
+                    positions=tuple(positions))
         back = inverse(rotate)
         R = rotation_matrix(back)
         origin = ORIGIN
@@ -347,6 +366,6 @@ class TreeBuilder:
         return Links(table.kind, table.frames, table.leaves, tuple(declared))
 
 
-__all__ = ["CODES", "KINDS", "motions", "FLOATING", "FREE_FLYER", "FREE_FLYER_POSITIONS", "MAX_ROTATIONS", "ANGLE_ROUND_OFF", "Names", "Place",
+__all__ = ["BALL", "BALL_POSITIONS", "ball_names", "CODES", "KINDS", "motions", "FLOATING", "FREE_FLYER", "FREE_FLYER_POSITIONS", "MAX_ROTATIONS", "ANGLE_ROUND_OFF", "Names", "Place",
            "align", "angle", "floating_root", "fold", "identifier", "inverse", "link_table", "mangle", "matrix_rpy",
            "quaternion_rotations", "right_angle", "rotations", "rpy", "tidy", "TreeBuilder"]

@@ -103,8 +103,8 @@ class Equalities:
                                         f"fixed-tendon equalities that tie one coordinate to another are)")
         self.check_couplings(couplings)
         if couplings and any(b.pair.quaternion for b in self.model.bodies):
-            self.reader.fail("<equality>", "couplings (joint or tendon equalities) in a model with a free joint are not "
-                                           "supported yet")
+            self.reader.fail("<equality>", "couplings (joint or tendon equalities) in a model with a free joint or a "
+                                           "ball joint are not supported yet")
         if constraints and couplings:
             self.reader.fail("<equality>", "loop or weld constraints (connect, weld) beside couplings (joint or tendon "
                                            "equalities) in one model are not supported together yet")

@@ -23,7 +23,12 @@ The mapping
   (qpos, qvel of the joint: x, y, z, qw, qx, qy, qz and v_world, w_body; R the body's rotation):
   q = (x, y, z, qx, qy, qz, qw); v = R^T v_world, w = w_body; generalized forces f_lin = R^T f_world (torques
   as they are); accelerations dv/dt = R^T a_world - w x v (a_world = d v_world / dt = MuJoCo's qacc).
-* ``ball`` joints: not supported yet (an error naming the joint).
+* ``ball`` joint: the ball pair (:attr:`~aggsym.model.types.Pair.positions`, Pinocchio's spherical joint) at the
+  joint's anchor, its coordinates named after the joint: positions ``J_qx J_qy J_qz J_qw`` (MuJoCo's qpos holds
+  ``qw qx qy qz``: the same unit quaternion reordered), velocities ``J_wx J_wy J_wz``, MuJoCo's qvel entry for
+  entry (the angular velocity in the body's axes), and so are its forces and accelerations.  It must be the last
+  joint of its body (MuJoCo then turns the body's frame by it last, and its velocity is in the body's axes); a
+  stiffness on it (a spring on the quaternion) is refused.  Its ``range`` (a cone) is listed with the limits.
 * What MuJoCo adds (runtime parameters, defaults from the compiled model; only where the model's value is not
   zero, so that zeros fold):  ``armature_<coordinate>`` (``dof_armature``, on A's diagonal:
   ``Model.dof_armature``), ``damping_<coordinate>`` (``dof_damping``, the viscous force D qd on the left:
@@ -57,7 +62,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ModelError, ModelWarning
-from .builder import TreeBuilder, floating_root, identifier, link_table, quaternion_rotations
+from .builder import TreeBuilder, ball_names, floating_root, identifier, link_table, quaternion_rotations
 from .frames import default_frames
 from .link_numbers import exact
 from .mjcf_equalities import with_equalities
@@ -74,7 +79,8 @@ CONVENTION = (
     "q is MuJoCo's qpos and qd its qvel entry for entry, except for a free joint J: q holds J_x J_y J_z "
     "J_qx J_qy J_qz J_qw (MuJoCo: x y z qw qx qy qz) and qd the body's own velocity J_vx J_vy J_vz (body axes: "
     "v = R^T v_world, R the body's rotation) and J_wx J_wy J_wz (body axes, as MuJoCo's); a generalized force "
-    "on its linear part is R^T f_world, and its acceleration R^T a_world - w x v (a_world: MuJoCo's qacc)")
+    "on its linear part is R^T f_world, and its acceleration R^T a_world - w x v (a_world: MuJoCo's qacc); and a ball "
+    "joint J: q holds J_qx J_qy J_qz J_qw (MuJoCo: qw qx qy qz), qd its J_wx J_wy J_wz as MuJoCo's qvel (body axes)")
 
 
 def _name(m, mujoco, kind, i: int, prefix: str) -> str:
@@ -138,7 +144,13 @@ class _Reader:
             b = int(m.jnt_bodyid[j])
             where = f'<joint name="{self.joint_name(j)}"> (body {self.body_name(b)!r})'
             if m.jnt_type[j] == BALL:
-                self.fail(where, "a ball joint; ball joints are not supported yet (hinge, slide and free are)")
+                if j != int(m.body_jntadr[b]) + int(m.body_jntnum[b]) - 1:
+                    self.fail(where, "a ball joint followed by other joints in one body is not supported (MuJoCo "
+                                     "gives its velocity in the axes the later joints turn); make it the body's "
+                                     "last joint")
+                if m.jnt_stiffness[j] != 0 and not m.opt.disableflags & DISABLE_SPRING:
+                    self.fail(where, f"stiffness={m.jnt_stiffness[j]:g} on a ball joint (a spring on the "
+                                     f"quaternion) is not supported")
             if m.jnt_type[j] == FREE:
                 if m.body_parentid[b] != 0:
                     self.fail(where, "a free joint below the top level; a free joint must be on a child of the "
@@ -259,6 +271,9 @@ class _Reader:
             else:
                 for k in range(n):
                     j = first + k
+                    if m.jnt_type[j] == BALL:
+                        self.ball(tree, ids, bodies_ids, parent, link, j, k, xyz, rotation, rate_parameters)
+                        continue
                     if m.jnt_type[j] not in KINDS:
                         self.fail(f'<joint name="{self.joint_name(j)}">', f"a {JOINT_TYPES.get(int(m.jnt_type[j]))} "
                                                                          f"joint here is not supported")
@@ -327,6 +342,25 @@ class _Reader:
         if model.nv == 0:
             self.fail("", "the model has no joint; there are no equations of motion")
         return model
+
+    def ball(self, tree, ids, bodies_ids, parent, link, j, k, xyz, rotation, rate_parameters):
+        """Ball joint ``j``, the ``k``-th and last joint of the body ``link``: a ball pair at its anchor, named
+        after it (``J_wx J_wy J_wz``, positions ``J_qx J_qy J_qz J_qw``), its three dofs' armature and damping."""
+        m = self.m
+        jname = self.joint_name(j)
+        if tuple(float(v) for v in m.qpos0[m.jnt_qposadr[j]:m.jnt_qposadr[j] + 4]) != (1.0, 0.0, 0.0, 0.0):
+            self.fail(f'<joint name="{jname}">', "a ball joint whose qpos0 is not the identity quaternion")
+        prefix = identifier(jname, set(), "q")
+        velocities, positions = ball_names(prefix)
+        velocities = [ids.own(n) for n in velocities]
+        positions = tuple(ids.own(n) for n in positions)
+        anchor = tuple(float(v) for v in m.jnt_pos[j])
+        tree.joint(parent if k == 0 else ("mjcf-joint", j - 1), link, bodies_ids.own(link), jname,
+                   lambda code, v=velocities: Coordinate(v[("theta4", "theta5", "theta6").index(code)], code, jname),
+                   xyz if k == 0 else (0.0, 0.0, 0.0), rotation if k == 0 else [], None, "ball",
+                   anchor=anchor if any(anchor) else None, positions=positions)
+        for i, coordinate in enumerate(velocities):
+            rate_parameters(coordinate, int(m.jnt_dofadr[j]) + i)
 
     def model_name(self) -> str:
         raw = bytes(self.m.names)

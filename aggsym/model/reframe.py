@@ -67,11 +67,11 @@ __all__ = ["reframe", "eligible"]
 
 def eligible(model: Model) -> bool:
     """Whether :func:`reframe` applies: a URDF model (its pairs hold one coordinate each below the root), numeric
-    constant configurations, no constraints, support, couplings, prescribed motions or added masses."""
+    constant configurations, no constraints, support, couplings, prescribed motions, added masses or ball pairs."""
     if not model.link_table.from_file or model.constraints or model.support or model.couplings:
         return False
     for k, b in enumerate(model.bodies):
-        if b.pair.prescribed or b.added_mass is not None:
+        if b.pair.prescribed or b.added_mass is not None or b.pair.ball:
             return False
         if k and len(b.pair.coordinates) != 1:
             return False

@@ -3,7 +3,8 @@
 Bodies are numbered 0..N-1 in the model's order (parents first); ``parent[k] == -1`` means the inertial frame
 E_10.  Coordinates are numbered in the same order, pair by pair, each pair's in the order of its mobility axes
 f_1..f_6 (1.40).  ``nv`` counts them (the length of qd, qdd, tau on the tree); the entries of q are the same
-except for a free-flyer pair, which has seven positions for its six coordinates (``positions``, ``nq``).
+except for a free-flyer pair, which has seven positions for its six coordinates, and a ball pair, which has four
+(a unit quaternion) for its three (``positions``, ``nq``).
 """
 from __future__ import annotations
 
@@ -33,7 +34,7 @@ class Tree:
         for k, b in enumerate(model.bodies):
             n = len(b.pair.coordinates)
             m = len(b.pair.positions) if b.pair.quaternion else n
-            if b.pair.quaternion and self.parent[k] >= 0:
+            if b.pair.free_flyer and self.parent[k] >= 0:
                 raise ValueError(f"body {self.names[k]!r}: a free-flyer pair joins a root of the tree to the world")
             self.coords.append(list(range(i, i + n)))
             self.positions.append(list(range(j, j + m)))
@@ -56,11 +57,12 @@ class Tree:
 
     @cached_property
     def neutral(self) -> list:
-        """q = 0, with a free-flyer's quaternion the identity (qw = 1): the configuration of zero coordinates."""
+        """q = 0, with a free-flyer's or a ball's quaternion the identity (qw = 1, its last entry): the
+        configuration of zero coordinates."""
         q = [0] * self.nq
         for b, idx in zip(self.model.bodies, self.positions):
             if b.pair.quaternion:
-                q[idx[6]] = 1
+                q[idx[-1]] = 1
         return q
 
     @cached_property

@@ -133,6 +133,8 @@ class Coordinate:
 
 
 QUATERNION_KINDS = ("translation",) * 3 + ("quaternion",) * 4  # the kinds of a free-flyer pair's seven positions
+BALL_KINDS = ("quaternion",) * 4  # the kinds of a ball pair's four positions
+BALL_CODES = ("theta4", "theta5", "theta6")  # a ball pair's coordinates: its angular velocity in the child's axes
 
 
 @dataclass(frozen=True)
@@ -149,14 +151,34 @@ class Pair:
     positions: tuple = ()  # a free-flyer pair (Pinocchio's JointModelFreeFlyer): the names of its seven entries of q,
     # x y z (the origin in the parent's axes) then the unit quaternion qx qy qz qw of its rotation; its six
     # coordinates o1..theta6 are then the body's own quasi-velocity (v, w) in body axes (Def. 1.9), not rates of
-    # q.  Empty for every other pair: its entries of q are its coordinates.
+    # q.  A ball pair (Pinocchio's JointModelSpherical): the four names qx qy qz qw of its unit quaternion, its
+    # three coordinates theta4 theta5 theta6 the angular velocity w of the body relative to its parent, in the
+    # body's axes.  Empty for every other pair: its entries of q are its coordinates.
     offset: tuple = ()  # per coordinate, a constant added to it in the functional configuration: the pair moves by
     # c(q + offset) (internal frames of aggsym.model.reframe); empty: none
 
     @property
     def quaternion(self) -> bool:
-        """True for a free-flyer pair (see ``positions``)."""
+        """True for a pair placed by a unit quaternion, a free-flyer or a ball pair (see ``positions``): its
+        coordinates are velocities in the body's axes, not rates of q, and its M F is constant."""
         return bool(self.positions)
+
+    @property
+    def ball(self) -> bool:
+        """True for a ball pair (four positions: a unit quaternion; coordinates theta4 theta5 theta6)."""
+        return len(self.positions) == 4
+
+    @property
+    def free_flyer(self) -> bool:
+        """True for a free-flyer pair (seven positions: the origin and a unit quaternion; six coordinates)."""
+        return len(self.positions) == 7
+
+    @property
+    def position_kinds(self) -> tuple:
+        """The kinds of the pair's entries of q: a free-flyer's or a ball's positions, else its coordinates'."""
+        if self.quaternion:
+            return QUATERNION_KINDS if self.free_flyer else BALL_KINDS
+        return tuple(c.kind for c in self.coordinates)
 
     @property
     def codes(self) -> tuple:
@@ -423,18 +445,19 @@ class Model:
 
     @functools.cached_property
     def nq(self) -> int:
-        """The length of q: nv, plus one for a free-flyer root (seven positions for its six velocities)."""
+        """The length of q: nv, plus one for each free-flyer (seven positions for its six velocities) and each ball
+        pair (four positions for its three)."""
         return self.nv + sum(1 for b in self.bodies if b.pair.quaternion)
 
     @functools.cached_property
     def positions(self) -> tuple:
-        """The entries of q as (name, joint, kind): a free-flyer pair's seven positions, every other coordinate
-        itself (in tree order)."""
+        """The entries of q as (name, joint, kind): a free-flyer pair's seven positions, a ball pair's four, every
+        other coordinate itself (in tree order)."""
         coupled = {c.coordinate for c in self.couplings}
         out = []
         for b in self.bodies:
             if b.pair.quaternion:
-                out.extend((n, b.pair.name, k) for n, k in zip(b.pair.positions, QUATERNION_KINDS))
+                out.extend((n, b.pair.name, k) for n, k in zip(b.pair.positions, b.pair.position_kinds))
             else:
                 out.extend((c.name, c.joint, c.kind) for c in b.pair.coordinates if c.name not in coupled)
         return tuple(out)

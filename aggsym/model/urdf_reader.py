@@ -31,8 +31,12 @@ The mapping
   theta6 at the joint's origin, as ``floating_base=True`` makes for the root: translations along x, y, z, then
   rotations about x, y, z in that order (R = Rx Ry Rz; Pinocchio's composite PX PY PZ RX RY RZ), coordinates
   ``<joint>_x, _y, _z, _rx, _ry, _rz``.  ``<dynamics>``, ``<limit>`` and ``<mimic>`` of a planar or floating joint
-  are not read (a mimic on one is an error).  ``spherical`` (a simulator extension: a ball joint) is refused:
-  ball joints are not supported yet.
+  are not read (a mimic on one is an error).
+* A ``spherical`` joint (a simulator extension: a ball joint; its axis is unused) is the ball pair at the joint's
+  origin (Pinocchio's JointModelSpherical): q holds its unit quaternion ``<joint>_qx, _qy, _qz, _qw`` (the child
+  link's rotation in the joint's origin frame) and qd its angular velocity ``<joint>_wx, _wy, _wz`` in the child
+  link's axes (docs/ball-joints.md).  Its ``<dynamics>``, ``<limit>`` and ``<mimic>`` are not read (a mimic on one
+  is an error), and ``mimic="couple"`` in a model with one is refused.
 * A ``fixed`` joint merges its child link into the parent's body: masses add, the centre of mass is the
   mass-weighted mean, and the inertia tensors (rotated into the body axes) are moved to the common centre of
   mass by the parallel-axis theorem; the fixed transform is composed into the origins of the child's joints
@@ -109,7 +113,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ModelError, ModelWarning
-from .builder import Names, TreeBuilder, floating_root
+from .builder import Names, TreeBuilder, ball_names, floating_root
 from .builder import identifier as _identifier
 from .builder import quaternion_rotations as _quaternion_rotations, right_angle as _right_angle
 from .builder import rpy as _rpy
@@ -123,10 +127,7 @@ GRAVITY = (sp.Integer(0), sp.Integer(0), sp.Float(-9.81))
 MOVABLE = {"revolute": "theta", "continuous": "theta", "prismatic": "o"}
 SEVERAL = {"planar": "planar", "floating": "floating"}  # joints of several coordinates (builder.motions)
 SUFFIX = {"o1": "x", "o2": "y", "o3": "z", "theta4": "rx", "theta5": "ry", "theta6": "rz"}  # their coordinates
-UNSUPPORTED = {
-    "spherical": ("ball joints are not supported yet (revolute, continuous, prismatic, planar, floating and fixed "
-                  "are)"),
-}
+BALL = "spherical"  # the ball joint (a simulator extension of URDF)
 FLOATING_BASES = (False, True, "euler", "quaternion")
 MIMIC_OPTIONS = ("independent", "couple")
 ROOT_PAIR = "root_joint"
@@ -315,11 +316,9 @@ class _Reader:
             if name in joints:
                 self.fail(el, f"duplicate joint name {name!r} (also on line {joints[name].el.line})")
             jtype = self.attribute(el, "type")
-            if jtype in UNSUPPORTED:
-                self.fail(el, f"joint type {jtype!r}: {UNSUPPORTED[jtype]}")
-            if jtype not in MOVABLE and jtype not in SEVERAL and jtype != "fixed":
+            if jtype not in MOVABLE and jtype not in SEVERAL and jtype not in (BALL, "fixed"):
                 self.fail(el, f"unknown joint type {jtype[:40]!r} (expected revolute, continuous, prismatic, "
-                              f"planar, floating or fixed)")
+                              f"planar, floating, spherical or fixed)")
             ends = {}
             for end in ("parent", "child"):
                 e = self.single(el, end, required=True)
@@ -387,7 +386,7 @@ class _Reader:
             el, wanted = joint.mimic["el"], joint.mimic["master"]
             master = joints.get(wanted)
             for which in (joint, master):
-                if which is not None and which.type in SEVERAL:
+                if which is not None and (which.type in SEVERAL or which.type == BALL):
                     self.fail(el, f"a <mimic> ties one coordinate to one other; joint {which.name!r} is {which.type} "
                                   f"(several coordinates)")
             problem = None
@@ -484,6 +483,15 @@ class _Reader:
             joint = stack.pop()
             if joint.type == "fixed":
                 tree.fixed(joint.parent, joint.child, joint.xyz, joint.rotation)
+            elif joint.type == BALL:
+                velocities, positions = ball_names(joint.name)
+                velocities = [coordinate_names.claim(n, joint.el) for n in velocities]
+                positions = tuple(coordinate_names.claim(n, joint.el) for n in positions)
+                tree.joint(joint.parent, joint.child, bodies_names.claim(joint.child, link_el[joint.child]),
+                           joint.name, lambda code, j=joint, v=velocities: Coordinate(v[("theta4", "theta5",
+                                                                                         "theta6").index(code)],
+                                                                                       code, j.name),
+                           joint.xyz, joint.rotation, None, "ball", positions=positions)
             elif joint.type in SEVERAL:
                 names = {}  # (claimed in code order: the builder makes them in that order)
 
@@ -509,6 +517,9 @@ class _Reader:
                                    float(j.mimic["multiplier"]), float(j.mimic["offset"]))
                           for j in joints.values() if j.mimic is not None) if self.mimic == "couple" else ()
         links = tree.links(link for link in place if not children[link])
+        if couplings and any(joint.type == BALL for joint in joints.values()):
+            self.fail(self.root, "mimic='couple' (--mimic couple) in a robot with a spherical joint is not "
+                                 "supported; keep the mimic joints independent")
         model = Model(couplings=couplings, name=name, bodies=bodies, gravity=GRAVITY, links=links,
                       parameters=friction_parameters(c for row in rows for c in row["pair"].coordinates),
                       source=str(self.file), description=f"URDF robot {robot_name!r}",

@@ -14,6 +14,9 @@ The format is documented in docs/model-format.md.  Summary::
           translation: [p1, p2, p3]  # constructive translation, parent axes
           rotation: [[axis, angle], ...]   # constructive rotations in order, axis 1|2|3|x|y|z
           functional: {o1|o2|o3|theta4|theta5|theta6: COORDINATE, ...}
+          type: ball                 # instead of functional: a ball pair (Pinocchio's spherical joint); q holds
+                                     # its unit quaternion NAME_qx NAME_qy NAME_qz NAME_qw, qd its angular
+                                     # velocity NAME_wx NAME_wy NAME_wz in the body's axes (docs/ball-joints.md)
           stiffness: [[...]] | [k1, ...]   # Hooke stiffness C over the pair's coordinates (1.32), (2.27):
                                            # C (q - rest) joins the left side, 1/2 (q - rest)^T C (q - rest) U
           rest: [r1, ...]            # the coordinates where the elastic force vanishes (default 0)
@@ -50,7 +53,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ModelError
-from .builder import TreeBuilder
+from .builder import TreeBuilder, ball_names
 from .expressions import ExpressionError, check_identifier, check_supported, evaluate, parse_value
 from .frames import MAX_FRAMES, default_frames
 from .types import (CONSTRAINT_KINDS, COORDINATE_CODES, TIME, WORLD, Body, Constraint, Coordinate, Frame, Inertial,
@@ -68,7 +71,8 @@ STABILIZATION_KEYS = {"kp", "kd"}
 FRICTION_LAWS = ("viscous", "coulomb")
 BODY_KEYS = {"name", "parent", "pair", "mass", "com", "inertia", "mises", "rotors", "added_mass", "description",
              "notes"}
-PAIR_KEYS = {"name", "translation", "rotation", "functional", "stiffness", "rest", "description"}
+PAIR_KEYS = {"name", "translation", "rotation", "functional", "type", "stiffness", "rest", "description"}
+PAIR_TYPES = ("ball",)  # the pairs a 'type' names (without it: the functional configuration of 'functional')
 ROTOR_KEYS = {"name", "joint", "translation", "rotation", "spin", "mass", "com", "inertia", "mises", "description",
               "notes"}
 SPIN_KEYS = {"coordinate", "prescribed"}
@@ -562,6 +566,8 @@ class _Reader:
         translation = self.vector(value["translation"], path + ("translation",)) if "translation" in value \
             else (sp.Integer(0),) * 3
         rotation = self.rotation(value.get("rotation", []), path + ("rotation",))
+        if "type" in value:
+            return self.typed_pair(value, path, jname, translation, rotation, coordinates)
         functional = value.get("functional", {})
         fpath = path + ("functional",)
         if not isinstance(functional, dict):
@@ -589,6 +595,32 @@ class _Reader:
                 self.fail(path + ("rest",), "a rest position needs a stiffness (the pair is not elastic)")
             rest = self.vector(value["rest"], path + ("rest",), len(coords))
         return Pair(jname, translation, rotation, tuple(coords), stiffness, rest)
+
+    def typed_pair(self, value, path, jname, translation, rotation, coordinates) -> Pair:
+        """A pair given by ``type``: ``ball``, the ball pair of :attr:`~.types.Pair.positions` (coordinates
+        theta4 theta5 theta6, the angular velocity in the body's axes, named ``<name>_wx ..``; positions the unit
+        quaternion ``<name>_qx .. <name>_qw``)."""
+        tpath = path + ("type",)
+        if value["type"] not in PAIR_TYPES:
+            self.fail(tpath, f"unknown pair type {value['type']!r} (known: {', '.join(PAIR_TYPES)}; without 'type' "
+                             f"the pair is its 'functional' coordinates)")
+        for key in ("functional", "stiffness", "rest"):
+            if key in value:
+                self.fail(path + (key,), f"a ball pair takes no {key!r}: its coordinates are its angular velocity "
+                                         f"and its position a unit quaternion, both named after the pair")
+        velocities, positions = ball_names(jname)
+        for cname in velocities + positions:
+            if cname in coordinates:
+                self.fail(tpath, f"the ball pair's coordinate {cname!r} is already a coordinate (also "
+                                 f"{_path(coordinates[cname])})")
+            if cname in self.symbols:
+                self.fail(tpath, f"the ball pair's coordinate {cname!r} is also a parameter")
+            problem = check_identifier(cname)
+            if problem:
+                self.fail(path + ("name",), f"the ball pair's coordinate {cname!r}: {problem}")
+            coordinates[cname] = tpath
+        coords = tuple(Coordinate(n, code, jname) for n, code in zip(velocities, ("theta4", "theta5", "theta6")))
+        return Pair(jname, translation, rotation, coords, positions=positions)
 
     def stiffness(self, value, path, n):
         if n == 0:

@@ -78,7 +78,7 @@ def custom_directions(model, role: str, roles) -> dict | None:
     for name, (source, index) in spec[1].items():
         if source not in roles or name not in signature(ROUTINES[role], model):
             continue
-        if name == "q" and model.nq != model.nv:  # tangent space (a quaternion free-flyer): traced instead
+        if name == "q" and model.nq != model.nv:  # tangent space (quaternions): traced instead
             continue
         out[name] = (source, index, ", ".join(signature(ROUTINES[source], model)))
     return out
