@@ -111,6 +111,15 @@ def constraints_entry(model) -> dict:
     """The manifest's description of the constraints (chapter 4): each one's rows and its slice of lambda."""
     items, start = [], 0
     for c in model.constraints:
+        if c.joint_row is not None:
+            r = c.joint_row
+            items.append({"name": c.name, "kind": "joint", "rows": list(c.rows), "lambda": [start, start + 1],
+                          "first": [[name, str(x)] for name, x in r.first],
+                          "second": [[name, str(x)] for name, x in r.second],
+                          "reference": [str(x) for x in r.reference], "polynomial": [str(x) for x in r.polynomial],
+                          "free": []})
+            start += 1
+            continue
         items.append({"name": c.name, "body": c.body, "link": c.link or None, "medium": c.medium,
                       "kind": c.kind or None, "rows": list(c.rows), "lambda": [start, start + len(c.rows)],
                       "point": [str(x) for x in c.point], "at": None if c.at is None else [str(x) for x in c.at],
@@ -128,7 +137,10 @@ def constraints_entry(model) -> dict:
                  "(theta4 theta5 theta6) the axes of its reference frame, fixed in the medium at the contact "
                  "point; translational rows: the contact point's velocity relative to the medium, rotational: the "
                  "relative angular velocity; for ground contacts without rotation, Pinocchio's "
-                 "LOCAL_WORLD_ALIGNED"),
+                 "LOCAL_WORLD_ALIGNED; a joint-space row (kind 'joint', an MJCF joint or fixed-tendon equality): "
+                 "phi = (L1 - ref1) - P(L2 - ref2) with L1 = sum first's c q, L2 = sum second's c q, P the "
+                 "polynomial y0 + a1 x + ... + a4 x^4 ('polynomial'), J = c1 - P'(x) c2, gamma = -P''(x) (c2 qd)^2, "
+                 "lambda the generalized force J^T lambda along it"),
         "lambda": ("the wrench (f, mu) the medium exerts on the body about the contact point, in the reference "
                    "axes, the entries of the blocked rows; a loop's medium body gets -lambda"),
         "phi": ("translational rows: the contact point's offset from 'at' (default: where it is at q = 0); "
