@@ -129,7 +129,7 @@ def constraints_entry(model) -> dict:
                       "wheel": None if c.wheel is None else {"radius": str(c.wheel[0]),
                                                              "axle": [str(x) for x in c.wheel[1]]}})
         start += len(c.rows)
-    return {
+    out = {
         "m": model.constraint_rows,
         "equations": ("A(q) qdd + b + g + c = tau + J^T lambda,  J qdd + gamma = -(kd J qd + kp phi) "
                       "(4.25)-(4.28); bilateral (no complementarity: a contact may pull)"),
@@ -137,10 +137,7 @@ def constraints_entry(model) -> dict:
                  "(theta4 theta5 theta6) the axes of its reference frame, fixed in the medium at the contact "
                  "point; translational rows: the contact point's velocity relative to the medium, rotational: the "
                  "relative angular velocity; for ground contacts without rotation, Pinocchio's "
-                 "LOCAL_WORLD_ALIGNED; a joint-space row (kind 'joint', an MJCF joint or fixed-tendon equality): "
-                 "phi = (L1 - ref1) - P(L2 - ref2) with L1 = sum first's c q, L2 = sum second's c q, P the "
-                 "polynomial y0 + a1 x + ... + a4 x^4 ('polynomial'), J = c1 - P'(x) c2, gamma = -P''(x) (c2 qd)^2, "
-                 "lambda the generalized force J^T lambda along it"),
+                 "LOCAL_WORLD_ALIGNED"),
         "lambda": ("the wrench (f, mu) the medium exerts on the body about the contact point, in the reference "
                    "axes, the entries of the blocked rows; a loop's medium body gets -lambda"),
         "phi": ("translational rows: the contact point's offset from 'at' (default: where it is at q = 0); "
@@ -157,6 +154,12 @@ def constraints_entry(model) -> dict:
                      "body gets -W)"),
         "constraints": items,
     }
+    if any(c.joint_row is not None for c in model.constraints):
+        out["joint_rows"] = ("a joint-space row (kind 'joint', an MJCF joint or fixed-tendon equality): phi = (L1 - "
+                             "ref1) - P(L2 - ref2) with L1 = sum of first's c q, L2 = sum of second's c q, P the "
+                             "polynomial y0 + a1 x + ... + a4 x^4 ('polynomial'), J = c1 - P'(x) c2, gamma = -P''(x) "
+                             "(c2 qd)^2; lambda the generalized force J^T lambda along it")
+    return out
 
 
 def time_entry(model, scalar: str = "double") -> dict:

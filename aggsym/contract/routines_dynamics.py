@@ -156,9 +156,8 @@ register(Routine("kinetic_energy", ("q", "qd", "p"), (Output("T", scalar),),
                  "Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins", coupled="tree", frame_free=True))
 register(Routine("potential_energy", ("q", "p"), (Output("U", scalar),),
                  lambda bound, kin, x: ([potential_energy(bound, kin) + elastic.elastic_energy(bound, kin.q)
-                                         + joint_space.tendon_energy(bound, kin.q)],),
-                 "U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs (and "
-                 "1/2 k s^2 of the tendon springs, s the stretch beyond the rest length or dead band)",
+                                         + joint_space.tendon_energy(bound, kin.q)],),  # (tendons: 1/2 k s^2)
+                 "U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs",
                  coupled="tree", frame_free=True))
 register(Routine("momentum", ("q", "qd", "p"), (Output("h", momentum_shape),),
                  lambda bound, kin, x: (momentum(bound, kin, x["qd"]),),
