@@ -341,3 +341,11 @@ def test_frictionloss_option_is_for_mjcf_only(tmp_path, capsys):
     code = cli.main(["generate", str(yaml), "-o", str(tmp_path / "o"), "-q",
                      "--frictionloss", "coulomb"])
     assert code == 2 and "--frictionloss" in capsys.readouterr().err
+
+
+def test_latex_lists_a_joint_space_row(tmp_path, capsys):
+    path = write(tmp_path, CHAIN.format(free="", after=TRIPLE))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert cli.main(["latex", str(path)]) == 0
+    assert r"tie3 & (joint space) &  & row in j1, j2, j4" in capsys.readouterr().out
