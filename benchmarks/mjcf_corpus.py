@@ -56,6 +56,17 @@ def reason(message: str) -> str:
     return message
 
 
+def kind_of(became: str) -> str:
+    """What an equality became, in short: a coupling, a joint-space row, a point or weld constraint, or nothing."""
+    if became.startswith("coupling"):
+        return "coupling"
+    if "joint-space row" in became:
+        return "joint-space row"
+    if became.startswith("constraint"):
+        return became.split("(", 1)[1].split(":", 1)[0] + " constraint"
+    return "left out"
+
+
 def run(samples: int) -> list:
     from aggsym.errors import ModelError
     from aggsym.model import load
@@ -86,7 +97,7 @@ def run(samples: int) -> list:
             row.update(nq=model.nq, nv=model.nv, free=len(model.meta["mjcf"]["free_joints"]),
                        worst={k: float(v) for k, v in worst.items()},
                        constrained={k: float(v) for k, v in kkt.items()},
-                       equalities=[e["became"].split(" (")[0] for e in model.meta["mjcf"].get("equalities", [])],
+                       equalities=[kind_of(e["became"]) for e in model.meta["mjcf"].get("equalities", [])],
                        tendons=len(model.tendons), passive=has_passive(model),
                        status="agrees" if agrees else "DIFFERS",
                        notes="fluid forces left out (warned)" if any("fluid" in str(w.message) for w in said)
@@ -113,9 +124,10 @@ def table(rows) -> str:
             kkt = f"{r['constrained']['qdd']:.1e}" if r.get("constrained") else ""
             passive = f"{w['passive']:.1e}" if r.get("passive") else "none"
             notes = [r["notes"]] if r["notes"] else []
-            made = sorted(set(r.get("equalities", [])))
+            made = r.get("equalities", [])
             if made:
-                notes.append("equalities: " + ", ".join(made))
+                notes.append("equalities: " + ", ".join(f"{made.count(k)} {k}{'s' if made.count(k) > 1 else ''}"
+                                                         for k in sorted(set(made))))
             if r.get("tendons"):
                 notes.append(f"{r['tendons']} tendon spring(s)/damper(s)")
             note = f" ({'; '.join(notes)})" if notes else ""

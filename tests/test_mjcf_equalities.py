@@ -1,5 +1,6 @@
 """MJCF equalities (issue 33, item 4): ``connect`` and ``weld`` as loop and weld constraints, linear ``joint`` and
-fixed-tendon equalities as couplings, the rest refused by name.
+fixed-tendon equalities as couplings (those that are no coupling become joint-space rows:
+``tests/test_mjcf_tendons.py``), equalities on spatial tendons refused by name.
 
 MuJoCo's equalities are soft (solref/solimp), so its ``qacc`` is not the reference: the reference is a dense KKT
 solve written here from MuJoCo's own mass matrix (``mj_fullM``, armature included), ``qfrc_bias`` and
