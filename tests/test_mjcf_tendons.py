@@ -349,3 +349,42 @@ def test_latex_lists_a_joint_space_row(tmp_path, capsys):
         warnings.simplefilter("ignore")
         assert cli.main(["latex", str(path)]) == 0
     assert r"tie3 & (joint space) &  & row in j1, j2, j4" in capsys.readouterr().out
+
+
+def test_tendon_parameters_are_runtime_parameters(tmp_path):
+    """Stiffness, rest lengths and damping of the tendons changed through p (over decades) give MuJoCo's
+    qfrc_passive with the same values set in its compiled model."""
+    path = write(tmp_path, CHAIN.format(free="", after=TENDONS))
+    model = quiet_load(path)
+    twin = NumericTwin(model)
+    m = mujoco_model(path)
+    d = mujoco.MjData(m)
+    index = {p.name: i for i, p in enumerate(model.parameters)}
+    spring, band, damper = (mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, n) for n in ("spring", "band", "damper"))
+    rng = np.random.default_rng(9)
+    for k_scale, d_scale in ((1e-3, 1e2), (1e2, 1e-3), (10.0, 10.0)):
+        p = np.array(model.parameter_values)
+        values = {"tendon_stiffness_spring": 3 * k_scale, "tendon_springlength_spring": -.25,
+                  "tendon_damping_spring": .7 * d_scale, "tendon_stiffness_band": 5 * k_scale,
+                  "tendon_springlower_band": -.05, "tendon_springupper_band": .15, "tendon_damping_damper": 1.1 * d_scale}
+        for name, value in values.items():
+            p[index[name]] = value
+        m.tendon_stiffness[spring], m.tendon_lengthspring[spring] = values["tendon_stiffness_spring"], (-.25, -.25)
+        m.tendon_damping[spring] = values["tendon_damping_spring"]
+        m.tendon_stiffness[band], m.tendon_lengthspring[band] = values["tendon_stiffness_band"], (-.05, .15)
+        m.tendon_damping[damper] = values["tendon_damping_damper"]
+        for _ in range(3):
+            qpos, qvel, _ = states(m, rng)
+            d.qpos[:], d.qvel[:] = qpos, qvel
+            mujoco.mj_forward(m, d)
+            ref = np.array(d.qfrc_passive)
+            mine = twin.call("passive_forces", qpos, qvel, p=p)
+            assert np.max(np.abs(mine - ref)) <= 1e-12 * np.max(np.abs(ref)), (k_scale, d_scale)
+
+
+def test_coulomb_frictionloss_on_a_free_joint_is_refused(tmp_path):
+    text = CHAIN.format(free=FREE_BODY.replace('<freejoint name="fly"/>', '<joint name="fly" type="free" '
+                                                                         'frictionloss="1"/>'), after="")
+    with pytest.raises(ModelError, match=r'<joint name="fly">.*frictionloss on a free joint'):
+        quiet_load(write(tmp_path, text), frictionloss="coulomb")
+    assert quiet_load(write(tmp_path, text)).meta["mjcf"]["frictionloss"] == "list"
