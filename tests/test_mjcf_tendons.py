@@ -31,7 +31,8 @@ CHAIN = """<mujoco model="chain"><worldbody>
 <body name="b" pos="0 0 -.3"><joint name="j2" axis="0 1 0"/><geom type="capsule" size=".04" fromto="0 0 0 .2 0 -.3"/>
 <body name="c" pos=".2 0 -.3"><joint name="j3" axis="1 0 0"/><geom size=".05"/>
 <body name="d" pos="0 .1 -.1"><joint name="j4" axis="0 0 1"/><geom size=".04"/>
-<body name="e" pos="0 .1 0"><joint name="j5" type="slide" axis="1 1 0"/><geom size=".03"/></body></body></body></body></body>
+<body name="e" pos="0 .1 0"><joint name="j5" type="slide" axis="1 1 0"/><geom size=".03"/></body>
+</body></body></body></body>
 {free}</worldbody>{after}</mujoco>"""
 
 FREE_BODY = ('<body name="f" pos="1 0 0"><freejoint name="fly"/><geom size=".1"/>'
@@ -146,8 +147,8 @@ def test_quadruped_loads_with_its_three_joint_tendon_equalities():
 
 def test_a_row_without_coordinates_is_left_out_with_a_warning(tmp_path):
     """t1 = j1 + j2 held at twice t2 = (j1 + j2)/2: the row's coefficients cancel."""
-    text = CHAIN.format(free="", after='<tendon><fixed name="t1"><joint joint="j1" coef="1"/><joint joint="j2" coef="1"/>'
-                                       '</fixed><fixed name="t2"><joint joint="j1" coef=".5"/><joint joint="j2" '
+    text = CHAIN.format(free="", after='<tendon><fixed name="t1"><joint joint="j1" coef="1"/>'
+                                       '<joint joint="j2" coef="1"/></fixed><fixed name="t2"><joint joint="j1" coef=".5"/><joint joint="j2" '
                                        'coef=".5"/></fixed></tendon><equality><tendon name="self" tendon1="t1" '
                                        'tendon2="t2" polycoef="0 2 0 0 0"/></equality>')
     with pytest.warns(UserWarning, match="no coordinate appears in its row"):
@@ -284,7 +285,8 @@ def test_spatial_tendon_spring_is_refused_by_name(tmp_path):
 
 
 # frictionloss ----------------------------------------------------------------------------------------------------
-FRICTION = CHAIN.replace('<joint name="j2" axis="0 1 0"/>', '<joint name="j2" axis="0 1 0" frictionloss=".8"/>').replace(
+FRICTION = CHAIN.replace('<joint name="j2" axis="0 1 0"/>',
+                         '<joint name="j2" axis="0 1 0" frictionloss=".8"/>').replace(
     '<joint name="j5" type="slide" axis="1 1 0"/>', '<joint name="j5" type="slide" axis="1 1 0" frictionloss="1.5"/>')
 FRICTION_TENDON = ('<tendon><fixed name="rub" frictionloss=".6"><joint joint="j1" coef="1"/>'
                    '<joint joint="j4" coef="-.5"/></fixed></tendon>')
@@ -366,7 +368,8 @@ def test_tendon_parameters_are_runtime_parameters(tmp_path):
         p = np.array(model.parameter_values)
         values = {"tendon_stiffness_spring": 3 * k_scale, "tendon_springlength_spring": -.25,
                   "tendon_damping_spring": .7 * d_scale, "tendon_stiffness_band": 5 * k_scale,
-                  "tendon_springlower_band": -.05, "tendon_springupper_band": .15, "tendon_damping_damper": 1.1 * d_scale}
+                  "tendon_springlower_band": -.05, "tendon_springupper_band": .15,
+                  "tendon_damping_damper": 1.1 * d_scale}
         for name, value in values.items():
             p[index[name]] = value
         m.tendon_stiffness[spring], m.tendon_lengthspring[spring] = values["tendon_stiffness_spring"], (-.25, -.25)

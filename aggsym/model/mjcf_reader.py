@@ -369,8 +369,9 @@ class _Reader:
     def tendons(self, params: list, coordinate_of: dict, springs: bool, dampers: bool) -> tuple:
         """The fixed tendons with a spring, a damper (or, with ``frictionloss="coulomb"``, a frictionloss) as
         :class:`~aggsym.model.types.Tendon` s, their runtime parameters appended to ``params``:
-        ``tendon_stiffness_<tendon>`` and ``tendon_springlength_<tendon>`` (a dead band: ``tendon_springlower_<tendon>``,
-        ``tendon_springupper_<tendon>``), ``tendon_damping_<tendon>``, ``tendon_friction_<tendon>``."""
+        ``tendon_stiffness_<tendon>`` and ``tendon_springlength_<tendon>`` (a dead band:
+        ``tendon_springlower_<tendon>``, ``tendon_springupper_<tendon>``), ``tendon_damping_<tendon>``,
+        ``tendon_friction_<tendon>``."""
         m = self.m
         out, used = [], set()
         for t in range(m.ntendon):
@@ -385,8 +386,8 @@ class _Reader:
             for w in range(int(m.tendon_adr[t]), int(m.tendon_adr[t] + m.tendon_num[t])):
                 j = int(m.wrap_objid[w])
                 if j not in coordinate_of:
-                    self.fail(f'<tendon name="{name}">', f"the tendon wraps joint {self.joint_name(j)!r}, which is not a "
-                                                         f"hinge or slide joint")
+                    self.fail(f'<tendon name="{name}">',
+                              f"the tendon wraps joint {self.joint_name(j)!r}, which is not a hinge or slide joint")
                 terms.append((coordinate_of[j], exact(float(m.wrap_prm[w]))))
             values: dict = {"stiffness": 0, "lower": 0, "upper": 0, "damping": 0}
             if k:
@@ -489,8 +490,9 @@ class _Reader:
             "frictionloss": "coulomb" if self.coulomb else "list",
             "springs": springs, "dampers": dampers, "gravity_disabled": bool(flags & DISABLE_GRAVITY),
             "not_in_the_equations": (
-                ("" if self.coulomb else "frictionloss (a constraint in MuJoCo; --frictionloss coulomb takes it as "
-                                         "Coulomb friction), ") + "joint and tendon limits, contacts, inactive equalities "
+                ("" if self.coulomb else "frictionloss (a constraint in MuJoCo; --frictionloss coulomb takes it "
+                                         "as Coulomb friction), ")
+                + "joint and tendon limits, contacts, inactive equalities "
                 "(active ones are constraints or couplings: equalities), actuators (their forces are tau's to "
                 "give: actuators lists each with its "
                 "transmission target and gear), fluid forces" + (" (this model has some)" if m.opt.density or
