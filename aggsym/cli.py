@@ -80,6 +80,12 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--package-path", metavar="PKG=DIR", action="append", type=_package_path, default=[],
                        help=_only("--package-path", ": ") + "$(find PKG) is DIR, and files there may be included "
                             "(repeat for several; else the folders of ROS_PACKAGE_PATH)")
+        p.add_argument("--frictionloss", choices=["list", "coulomb"], default=None,
+                       help=_only("--frictionloss", ": ")
+                            + "MuJoCo's frictionloss (a constraint in MuJoCo) is listed in the manifest and left out "
+                            "of the equations (list, the default), or taken as Coulomb friction f sign(qd) on the "
+                            "left side of forward and inverse dynamics and in passive_forces (coulomb: runtime "
+                            "parameters friction_<coordinate>, tendon_friction_<tendon>; not conservative)")
         p.add_argument("--armature", metavar="VALUE", type=_armature, default=0.0,
                        help="add a rotor inertia VALUE (kg m^2, or kg for a prismatic joint) on every coordinate, as "
                             "Pinocchio's armature: A(q) + VALUE E (makes A regular where a joint moves no mass)")
@@ -158,12 +164,15 @@ def _load(args):
         options["xacro_args"] = dict(args.xacro_arg)
     if args.package_path:
         options["package_paths"] = dict(args.package_path)
+    if args.frictionloss:
+        options["frictionloss"] = args.frictionloss
     given = [flag for flag, value in (("--floating-base", args.floating_base), ("--mimic", "mimic" in options),
                                       ("--xacro-arg", args.xacro_arg), ("--package-path", args.package_path),
                                       ("--snap-angles", args.snap_angles), ("--constraints", args.constraints),
                                       ("--support", args.support),
                                       ("--inertial-parameters", args.inertial_parameters is not None),
-                                      ("--payload", args.payload is not None)) if value]
+                                      ("--payload", args.payload is not None),
+                                      ("--frictionloss", args.frictionloss)) if value]
     check_cli_options(path, given)  # the reader's name and the option it does not accept
     if args.support and not args.floating_base:
         raise AggsymError(f"{path}: --support needs --floating-base (the support is the free root)")

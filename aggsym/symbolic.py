@@ -18,7 +18,7 @@ from .errors import AggsymError
 from .mechanics.bias import bias_vector, gravity_vector
 from .mechanics.bound import bind
 from .mechanics.elastic import elastic_forces
-from .mechanics.passive import damping_forces
+from .mechanics.passive import has_passive, left_forces
 from .mechanics.inertia import inertia_matrix
 from .mechanics.kinematics import TreeKinematics
 from .mechanics.sweeps import inverse_dynamics
@@ -115,10 +115,11 @@ class Equations:
     def u_star(self) -> sp.Matrix:
         """The preplanned control u* = tau for the motion (q, q', q'') by the forward and backward sweeps
         (2.39)-(2.42), without assembling A, b, g; with the elastic forces C (q - q0) of (2.27) where there are
-        springs, and the damping D qd where the model has joint damping (MJCF)."""
-        tau = self._matrix(inverse_dynamics(self._bound, self._kin, self._qd, self._qdd), self.model.nv, 1) + self.c
-        if self._bound.damping:  # a joint damping D qd (MJCF) on the left side too
-            tau = tau + self._matrix(damping_forces(self._bound, self._qd), self.model.nv, 1)
+        springs, and the damping D qd, the fixed tendons' springs and dampers and the Coulomb friction asked for where
+        the model has them (MJCF)."""
+        tau = self._matrix(inverse_dynamics(self._bound, self._kin, self._qd, self._qdd), self.model.nv, 1)
+        if has_passive(self.model):  # C (q - q0), and a joint damping D qd, tendon forces, friction (MJCF) too
+            tau = tau + self._matrix(left_forces(self._bound, self._q, self._qd), self.model.nv, 1)
         return tau
 
     @cached_property

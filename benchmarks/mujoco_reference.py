@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from aggsym.mechanics.passive import has_passive
 from aggsym.model.mjcf_reader import BALL, FREE
 
 
@@ -156,11 +157,91 @@ def compare(path, model=None, samples: int = 3, seed: int = 0) -> dict:
         d = twin.call("nonlinear_effects", q, qd)
         for key, mine, ref in (("A", A, A_ref), ("d", d, d_ref), ("qdd", qacc, qacc_ref)):
             worst[key] = max(worst[key], float(np.max(np.abs(mine - ref)) / max(np.max(np.abs(ref)), 1e-300)))
-        if model.has_damping or any(b.pair.elastic for b in model.bodies):
-            mine = twin.call("passive_forces", q, qd) if model.has_damping else -twin.call("elastic", q)
+        if has_passive(model):
+            mine = (twin.call("passive_forces", q, qd) if model.has_damping or model.tendons else
+                    -twin.call("elastic", q))
             ref = J.T @ data.qfrc_passive
             if coupled is not None:
                 ref = coupled.Jc.T @ ref
             worst["passive"] = max(worst["passive"], float(np.max(np.abs(mine - ref)) /
                                                            max(np.max(np.abs(ref)), 1e-300)))
+    return worst
+
+
+def equality_model(path):
+    """The compiled model with only its equalities active (contacts, limits, frictionloss and actuation disabled, no
+    fluid) and a dense constraint Jacobian: MuJoCo's ``efc_J`` rows of type equality are J."""
+    import mujoco
+
+    m = mujoco_model(path)
+    m.opt.disableflags &= ~(int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mujoco.mjtDisableBit.mjDSBL_EQUALITY))
+    m.opt.disableflags |= (int(mujoco.mjtDisableBit.mjDSBL_CONTACT) | int(mujoco.mjtDisableBit.mjDSBL_LIMIT) |
+                           int(mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS))
+    m.opt.jacobian = int(mujoco.mjtJacobian.mjJAC_DENSE)
+    return m
+
+
+def equality_jacobian(m, data, qpos):
+    """MuJoCo's rows of the active equalities at qpos (efc_J of type equality, nv columns)."""
+    import mujoco
+
+    data.qpos[:] = qpos
+    data.qvel[:] = 0
+    mujoco.mj_forward(m, data)
+    J = np.array(data.efc_J[:data.nefc * m.nv]).reshape(data.nefc, m.nv)
+    return J[np.array(data.efc_type[:data.nefc]) == int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)]
+
+
+def compare_constrained(path, model=None, samples: int = 3, seed: int = 0, step: float = 1e-5) -> dict:
+    """The hard equalities against a dense KKT solve from MuJoCo's own data: the largest relative differences
+    {A, J, qdd, lambda} over ``samples`` random states.  A is ``mj_fullM``; J MuJoCo's equality rows (``efc_J``,
+    in aggsym's velocity convention); gamma = J' qd by central differences of MuJoCo's J along qd (0 for linear rows);
+    the reference solves [A J^T; J 0] [qdd; -lambda] = [tau - d; -gamma] with d = qfrc_bias - qfrc_passive, and is
+    compared with aggsym's constrained_forward_dynamics (J and lambda where every constraint is a joint-space row, which
+    aggsym writes as MuJoCo does and in its order; qdd always, since it does not depend on how the rows are written:
+    a connect's or weld's rows are in other axes than MuJoCo's).  MuJoCo's own qacc is not the reference: its
+    equalities are soft."""
+    import mujoco
+
+    from aggsym.model import load
+    from aggsym.twin import NumericTwin
+
+    model = load(path) if model is None else model
+    twin = NumericTwin(model)
+    free = mujoco_model(path)
+    m = equality_model(path)
+    d_free, d_eq = mujoco.MjData(free), mujoco.MjData(m)
+    rng = np.random.default_rng(seed)
+    worst = {"A": 0.0, "J": 0.0, "qdd": 0.0, "lambda": 0.0}
+
+    def rel(mine, ref):
+        return float(np.max(np.abs(mine - ref)) / max(np.max(np.abs(ref)), 1e-300))
+
+    for _ in range(samples):
+        qpos, qvel, force = states(free, rng)
+        d_free.qpos[:], d_free.qvel[:], d_free.qfrc_applied[:] = qpos, qvel, force
+        d_free.ctrl[:] = 0
+        mujoco.mj_forward(free, d_free)
+        M = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(free, d_free, M)
+        q, qd, tau, Jm, c = to_aggsym(free, qpos, qvel, force)
+        A_ref = Jm.T @ M @ Jm
+        d_ref = Jm.T @ (M @ c + d_free.qfrc_bias - d_free.qfrc_passive)
+        Jq = equality_jacobian(m, d_eq, qpos)
+        ahead, behind = qpos.copy(), qpos.copy()
+        mujoco.mj_integratePos(m, ahead, qvel, step)
+        mujoco.mj_integratePos(m, behind, qvel, -step)
+        gamma = (equality_jacobian(m, d_eq, ahead) - equality_jacobian(m, d_eq, behind)) @ qvel / (2 * step)
+        J_ref = Jq @ Jm  # (MuJoCo's rows in aggsym's velocities; gamma: the free rows' J c is in it through M c)
+        gamma = gamma + Jq @ c
+        k = len(J_ref)
+        K = np.block([[A_ref, J_ref.T], [J_ref, np.zeros((k, k))]])
+        x = np.linalg.solve(K, np.concatenate([tau - d_ref, -gamma]))
+        qdd, lam = twin.call("constrained_forward_dynamics", q, qd, tau)  # (raises when G is singular)
+        J = np.array(twin.call("constraint_jacobian", q)).reshape(model.constraint_rows, model.nv)
+        worst["A"] = max(worst["A"], rel(twin.call("inertia", q), A_ref))
+        worst["qdd"] = max(worst["qdd"], rel(qdd, x[:m.nv]))
+        if all(con.joint_row is not None for con in model.constraints):  # rows as MuJoCo writes them, in order
+            worst["J"] = max(worst["J"], rel(J, J_ref))
+            worst["lambda"] = max(worst["lambda"], rel(lam, -x[m.nv:]))
     return worst

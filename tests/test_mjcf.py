@@ -236,13 +236,19 @@ UNSUPPORTED = {
     "ball-before-slide": (ARM.format(attrs='type="ball"', extra="", after="").replace(
         '<geom size=".1"/>', '<joint name="j2" type="slide"/><geom size=".1"/>', 1),
                           ['<joint name="j1">', "a ball joint followed by other joints", "last joint"]),
-    "equality": (ARM.format(attrs="", extra='<body name="b"><joint name="j2"/><geom size=".1"/></body>',
-                            after='<equality><joint name="tie" joint1="j1" joint2="j2" polycoef="0 1 1 0 0"/>'
-                                  '</equality>'),
-                 ['<joint name="tie">', "nonlinear polynomial", "not supported"]),
-    "tendon-spring": (ARM.format(attrs="", extra="", after='<tendon><fixed name="t" stiffness="3"><joint joint="j1" '
-                                                          'coef="1"/></fixed></tendon>'),
-                      ['<tendon name="t">', "stiffness", "tendon springs, dampers and armature are not supported yet"]),
+    "equality": (ARM.format(attrs="", extra='<site name="s1"/><body name="b" pos="0 0 -.5"><joint name="j2"/>'
+                                            '<geom size=".1"/><site name="s2"/></body>',
+                            after='<tendon><spatial name="rope"><site site="s1"/><site site="s2"/></spatial></tendon>'
+                                  '<equality><tendon name="tie" tendon1="rope"/></equality>'),
+                 ['<tendon name="tie">', "spatial tendon", "not supported"]),
+    "tendon-spring": (ARM.format(attrs="", extra='<site name="s1"/><body name="b" pos="0 0 -.5"><joint name="j2"/>'
+                                                 '<geom size=".1"/><site name="s2"/></body>',
+                                 after='<tendon><spatial name="t" stiffness="3"><site site="s1"/><site site="s2"/>'
+                                       '</spatial></tendon>'),
+                      ['<tendon name="t">', "spatial tendon", "stiffness or damping", "not supported"]),
+    "tendon-armature": (ARM.format(attrs="", extra="", after='<tendon><fixed name="t" armature="3"><joint joint="j1" '
+                                                            'coef="1"/></fixed></tendon>'),
+                        ['<tendon name="t">', "armature", "not supported yet"]),
     "gravcomp": (ARM.replace('<body name="a">', '<body name="a" gravcomp="1">').format(attrs="", extra="", after=""),
                  ['<body name="a">', "gravity compensation"]),
     "parameter-clash": ('<mujoco><worldbody><body name="f"><joint name="a-b" type="free" damping="1"/><geom size=".1"/>'

@@ -1,5 +1,6 @@
 """MJCF equalities (issue 33, item 4): ``connect`` and ``weld`` as loop and weld constraints, linear ``joint`` and
-fixed-tendon equalities as couplings, the rest refused by name.
+fixed-tendon equalities as couplings (those that are no coupling become joint-space rows:
+``tests/test_mjcf_tendons.py``), equalities on spatial tendons refused by name.
 
 MuJoCo's equalities are soft (solref/solimp), so its ``qacc`` is not the reference: the reference is a dense KKT
 solve written here from MuJoCo's own mass matrix (``mj_fullM``, armature included), ``qfrc_bias`` and
@@ -264,24 +265,13 @@ ARM = """<mujoco><worldbody><body name="a"><joint name="j1"/><geom size=".1"/><s
 <body name="c" pos="1 0 0"><joint name="j4" type="ball"/><geom size=".1"/></body>
 <body name="w" pos="0 1 0"><geom size=".1"/></body></worldbody>{after}</mujoco>"""
 
-REFUSED = {
-    "nonlinear": ('<equality><joint name="poly" joint1="j1" joint2="j2" polycoef="0 1 .5 0 0"/></equality>',
-                  ['<joint name="poly">', "nonlinear polynomial", "0 1 0.5 0 0"]),
-    "fixed-value": ('<equality><joint name="lock" joint1="j1"/></equality>',
-                    ['<joint name="lock">', "fixes the coordinate of joint 'j1'"]),
-    "three-joints": ('<tendon><fixed name="t"><joint joint="j1" coef="1"/><joint joint="j2" coef="1"/>'
-                     '<joint joint="j3" coef="1"/></fixed></tendon><equality><tendon name="tri" tendon1="t"/>'
-                     '</equality>', ['<tendon name="tri">', "ties 3 coordinates (j1, j2, j3)"]),
+REFUSED = {  # (nonlinear, one-coordinate, three-coordinate, chained, free-joint and mixed equalities are joint-space
+    # constraint rows: tests/test_mjcf_tendons.py)
     "spatial": ('<tendon><spatial name="rope"><site site="s1"/><site site="s2"/></spatial></tendon>'
                 '<equality><tendon name="len" tendon1="rope"/></equality>',
                 ['<tendon name="len">', "'rope' is a spatial tendon"]),
-    "chained": ('<equality><joint name="e1" joint1="j2" joint2="j1"/><joint name="e2" joint1="j3" joint2="j2"/>'
-                '</equality>', ["'j2' follows 'j1' and is followed by another"]),
-    "free-coupled": ('<equality><joint name="e1" joint1="j2" joint2="j1"/></equality>',
-                     ["couplings (joint or tendon equalities) in a model with a free joint"]),
-    "mixed": ('<equality><joint name="e1" joint1="j2" joint2="j1"/><connect body1="b" body2="world" anchor="0 0 0"/>'
-              '</equality>', ["beside couplings", "not supported together yet"]),    "ball-coupled": ('<equality><joint name="e1" joint1="j2" joint2="j1"/></equality>',
-                     ["couplings (joint or tendon equalities) in a model with a free joint or a ball joint"]),
+    "on-free": ('<equality><joint name="b" joint1="j4" joint2="j1"/></equality>',
+                ["only HINGE and SLIDE joint allowed in constraint"]),  # (MuJoCo's compiler refuses it)
 }
 
 
@@ -289,9 +279,8 @@ REFUSED = {
 def test_refused(tmp_path, capsys, case):
     after, fragments = REFUSED[case]
     text = ARM.format(after=after)
-    if case != "ball-coupled":  # (the ball joint j4 stays where the case is about it)
-        text = text.replace('<joint name="j4" type="ball"/>', '<freejoint name="j4"/>' if case == "free-coupled"
-                            else '<joint name="j4"/>')
+    text = text.replace('<joint name="j4" type="ball"/>', '<freejoint name="j4"/>' if case == "on-free" else
+                        '<joint name="j4"/>')
     path = write(tmp_path, text)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -348,15 +337,6 @@ def test_manipulator_loads_with_its_tendon_coupling():
         ("finger", "thumb", 1.0, 0.0)]
     worst = compare(path, model=model, samples=2, seed=3)
     assert max(worst.values()) <= 1e-9, worst
-
-
-def test_quadruped_is_refused_naming_its_equality():
-    from aggsym.errors import ModelError
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        with pytest.raises(ModelError, match=r'<tendon name="coupling_front_left">.*ties 3 coordinates'):
-            load(_suite("quadruped.xml"))
 
 
 def test_a_side_file_adds_to_the_equalities(tmp_path):

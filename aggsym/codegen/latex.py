@@ -288,6 +288,10 @@ def constraint_section(model, prog, outputs, small: bool):
         return None
     rows = []
     for c in model.constraints:
+        if c.joint_row is not None:  # a joint-space row: no body or medium; the coordinates it ties
+            names = [name for name, _ in c.joint_row.first + c.joint_row.second]
+            rows.append((c.name, "(joint space)", "", "row in " + ", ".join(dict.fromkeys(names)), ""))
+            continue
         law = "" if c.friction is None else f"{c.friction[0]} {c.friction[1]}"
         rows.append((c.name, c.body, c.medium, " ".join(c.rows), law))
     entries = []

@@ -111,6 +111,15 @@ def constraints_entry(model) -> dict:
     """The manifest's description of the constraints (chapter 4): each one's rows and its slice of lambda."""
     items, start = [], 0
     for c in model.constraints:
+        if c.joint_row is not None:
+            r = c.joint_row
+            items.append({"name": c.name, "kind": "joint", "rows": list(c.rows), "lambda": [start, start + 1],
+                          "first": [[name, str(x)] for name, x in r.first],
+                          "second": [[name, str(x)] for name, x in r.second],
+                          "reference": [str(x) for x in r.reference], "polynomial": [str(x) for x in r.polynomial],
+                          "free": []})
+            start += 1
+            continue
         items.append({"name": c.name, "body": c.body, "link": c.link or None, "medium": c.medium,
                       "kind": c.kind or None, "rows": list(c.rows), "lambda": [start, start + len(c.rows)],
                       "point": [str(x) for x in c.point], "at": None if c.at is None else [str(x) for x in c.at],
@@ -120,7 +129,7 @@ def constraints_entry(model) -> dict:
                       "wheel": None if c.wheel is None else {"radius": str(c.wheel[0]),
                                                              "axle": [str(x) for x in c.wheel[1]]}})
         start += len(c.rows)
-    return {
+    out = {
         "m": model.constraint_rows,
         "equations": ("A(q) qdd + b + g + c = tau + J^T lambda,  J qdd + gamma = -(kd J qd + kp phi) "
                       "(4.25)-(4.28); bilateral (no complementarity: a contact may pull)"),
@@ -145,6 +154,12 @@ def constraints_entry(model) -> dict:
                      "body gets -W)"),
         "constraints": items,
     }
+    if any(c.joint_row is not None for c in model.constraints):
+        out["joint_rows"] = ("a joint-space row (kind 'joint', an MJCF joint or fixed-tendon equality): phi = (L1 - "
+                             "ref1) - P(L2 - ref2) with L1 = sum of first's c q, L2 = sum of second's c q, P the "
+                             "polynomial y0 + a1 x + ... + a4 x^4 ('polynomial'), J = c1 - P'(x) c2, gamma = -P''(x) "
+                             "(c2 qd)^2; lambda the generalized force J^T lambda along it")
+    return out
 
 
 def time_entry(model, scalar: str = "double") -> dict:

@@ -3,7 +3,7 @@ g, d, tau, c, the energies, the momentum, the joint wrenches and friction, the f
 the elastic partition (Prop. 2.14); with the layouts the manifest gives their outputs."""
 from __future__ import annotations
 
-from ..mechanics import elastic, passive, sweeps, transvective
+from ..mechanics import elastic, joint_space, passive, sweeps, transvective
 from ..mechanics.bias import coriolis_matrix, gravity_vector
 from ..mechanics.energy import kinetic_energy, momentum, potential_energy
 from ..mechanics.inertia import inertia_matrix
@@ -155,7 +155,8 @@ register(Routine("kinetic_energy", ("q", "qd", "p"), (Output("T", scalar),),
                  "T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, "
                  "Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins", coupled="tree", frame_free=True))
 register(Routine("potential_energy", ("q", "p"), (Output("U", scalar),),
-                 lambda bound, kin, x: ([potential_energy(bound, kin) + elastic.elastic_energy(bound, kin.q)],),
+                 lambda bound, kin, x: ([potential_energy(bound, kin) + elastic.elastic_energy(bound, kin.q)
+                                         + joint_space.tendon_energy(bound, kin.q)],),  # (tendons: 1/2 k s^2)
                  "U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs",
                  coupled="tree", frame_free=True))
 register(Routine("momentum", ("q", "qd", "p"), (Output("h", momentum_shape),),
@@ -172,9 +173,11 @@ register(Routine("joint_friction", ("qd", "p"), (Output("tau_f", nq_vector),), _
                  "A qdd + b + g = tau + tau_f", applies=lambda model: model.has_joint_dynamics, coupled=None))
 register(Routine("passive_forces", ("q", "qd", "p"), (Output("tau_p", nq_vector),),
                  lambda bound, kin, x: (passive.passive_forces(bound, kin.q, x["qd"]),),
-                 "tau_p = -(C (q - q0) + D qd), the springs (2.27) and the viscous joint damping as a generalized "
-                 "force on the right side (MuJoCo's qfrc_passive): A qdd + b + g = tau + tau_p",
-                 applies=lambda model: bool(model.damping), frame_free=True))
+                 "tau_p = -(C (q - q0) + D qd + t + F sign(qd)), the springs (2.27), the viscous joint damping, the "
+                 "fixed tendons' springs and dampers (t) and the Coulomb joint friction asked for (F) as a "
+                 "generalized force on the right side (MuJoCo's qfrc_passive, without F): A qdd + b + g = tau + "
+                 "tau_p",
+                 applies=lambda model: bool(model.damping or model.tendons or model.coulomb), frame_free=True))
 register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_vector),),
                  lambda bound, kin, x: (transvective.forward_dynamics(
                      bound, kin, minus(x["tau"], passive.left_forces(bound, kin.q, x["qd"])), x["qd"]),),

@@ -30,6 +30,10 @@ where P is at q = 0); rotational rows the rotation vector (log map) of ``Q = B R
 vee(Q - Q^T)/2`` with theta = atan2(|vee|, (tr Q - 1)/2), evaluated as ``(theta + eps)/(|vee| + eps)`` (exact in
 doubles at theta = 0 and everywhere else, no branch).
 
+A joint-space row (``Constraint.joint_row``: an MJCF joint or fixed-tendon equality) is one row whose phi, J and
+gamma are those of a polynomial relation of linear forms of the coordinates (:mod:`aggsym.mechanics.joint_space`);
+it has no point, axes, slip or friction, and enters G and the constrained dynamics like any other row.
+
 A prescribed motion of the world-side frame (``motion:``, Prop. 4.5-4.8) makes the world a moving medium with
 known pose, velocity and acceleration (:class:`MovingFrame`): J is unchanged, the rows' relative velocity is
 ``J qd + F(t)`` (4.35) (:meth:`ConstraintKinematics.time_terms`), and gamma holds every time term.
@@ -49,6 +53,7 @@ from ..core.program import is_zero
 from ..model.types import WORLD, code_index
 from .bound import constant_axes
 from .group import Motion, rotation
+from .joint_space import BoundJointRow, bind_joint_row, places
 from .kinematics import TreeKinematics, point_motion, point_rows, world_poses
 from .linalg import EYE3, add, cross, dot, mm, mtv, mul, mv, scale, sub, transpose
 from .transvective import apply_T_transpose_tree, apply_T_tree, articulated_factors, transvected_forces
@@ -81,7 +86,12 @@ class BoundConstraint:
 def bind_constraints(bound) -> list:
     index = {name: k for k, name in enumerate(bound.tree.names)}
     out = []
+    where = None
     for c in bound.model.constraints:
+        if c.joint_row is not None:  # a joint-space row (aggsym.mechanics.joint_space)
+            where = places(bound) if where is None else where
+            out.append(bind_joint_row(bound, c.joint_row, where))
+            continue
         R = constant_axes(bound, c.medium_axes, c.rotation)
         R = EYE3 if R is None else R
         out.append(BoundConstraint(
@@ -146,6 +156,11 @@ class ConstraintKinematics:
         self.poses = world_poses(kin)
         self.P, self.B, self.discs = [], [], []
         for c in self.items:
+            if isinstance(c, BoundJointRow):
+                self.P.append(None)
+                self.B.append(None)
+                self.discs.append(None)
+                continue
             pose = self.poses[c.k]
             B = transpose(mm(self.medium_pose(c).c, c.R_ref))  # world vector -> reference axes
             self.B.append(B)
@@ -169,11 +184,13 @@ class ConstraintKinematics:
     def jacobian(self) -> list:
         """J (D_lambda^T of (4.27)): one row (n entries) per blocked motion, constraints in order."""
         return [row for c, P, B in zip(self.items, self.P, self.B)
-                for row in self._selected(self.motion_rows(c, P, B), c.rows)]
+                for row in ([c.jacobian(self.kin.q)] if isinstance(c, BoundJointRow) else
+                            self._selected(self.motion_rows(c, P, B), c.rows))]
 
     def slip_jacobians(self) -> list:
         """Per constraint, the rows of its free translations (D_k+^T of (4.33)-(4.34): the permitted motions)."""
-        return [self._selected(self.motion_rows(c, P, B), c.free) for c, P, B in zip(self.items, self.P, self.B)]
+        return [[] if isinstance(c, BoundJointRow) else self._selected(self.motion_rows(c, P, B), c.free)
+                for c, P, B in zip(self.items, self.P, self.B)]
 
     @staticmethod
     def _selected(rows, indices) -> list:
@@ -185,6 +202,9 @@ class ConstraintKinematics:
         X = self.kin.velocity_products(qd, V)
         out = []
         for c, P, B, disc in zip(self.items, self.P, self.B, self.discs):
+            if isinstance(c, BoundJointRow):
+                out.append(c.bias(self.kin.q, qd))
+                continue
             vP, aP, wk, alk = self._point_motion(c.k, c.r, V, X)
             if disc is not None:  # the material point at the contact: d/dt (v_C + w x r u) at qdd = 0
                 lin, ang = add(add(aP, cross(alk, disc.offset)), cross(wk, disc.offset_rate(wk))), alk
@@ -231,6 +251,9 @@ class ConstraintKinematics:
         backend = self.bound.backend
         out = []
         for c, P, B, P0 in zip(self.items, self.P, self.B, rest.P):
+            if isinstance(c, BoundJointRow):
+                out.append(c.residual(self.kin.q))
+                continue
             pm, pm0 = self.medium_pose(c), rest.medium_pose(c)
             local = c.at if c.at is not None else mtv(pm0.c, sub(P0, pm0.o))  # A in the medium's axes
             lin = mv(B, sub(P, add(pm.o, mv(pm.c, local))))

@@ -1,20 +1,24 @@
-"""The passive joint forces on the left side of the equations of motion: the springs of elastic pairs (2.27) and
-viscous joint damping (MuJoCo's ``stiffness``/``springref`` and ``damping``).
+"""The passive joint forces on the left side of the equations of motion: the springs of elastic pairs (2.27),
+viscous joint damping (MuJoCo's ``stiffness``/``springref`` and ``damping``), the springs and dampers of fixed
+tendons (:func:`~.joint_space.tendon_forces`) and, on request, Coulomb joint friction (MuJoCo's ``frictionloss``
+taken as ``f sign(q')``).
 
-With both, the equations read
+With them, the equations read
 
-    A(q) q'' + b(q, q') + g(q) + C (q - q0) + D q' = tau,
+    A(q) q'' + b(q, q') + g(q) + C (q - q0) + D q' + t(q, q') + F sign(q') = tau,
 
-D diagonal (``model.damping``, one entry per coordinate, expressions of the model).  :func:`left_forces` is
-C (q - q0) + D q' (what forward and inverse dynamics move to the left, and what their derivatives differentiate),
-:func:`passive_forces` its negative: the force on the right side, MuJoCo's ``qfrc_passive`` sign.  Without damping
-:func:`left_forces` is exactly :func:`~.elastic.elastic_forces` (the same scalars: models without damping give the
-same programs).
+D and F diagonal (``model.damping``, ``model.coulomb``: one entry per coordinate, expressions of the model),
+t the tendons' ``-c f``.  :func:`left_forces` is the sum of these passive terms (what forward and inverse dynamics
+move to the left, and what their derivatives differentiate), :func:`passive_forces` its negative: the force on
+the right side, MuJoCo's ``qfrc_passive`` sign (which holds no Coulomb term: MuJoCo's frictionloss is a
+constraint).  Without damping, tendons and friction :func:`left_forces` is exactly
+:func:`~.elastic.elastic_forces` (the same scalars: such models give the same programs).
 """
 from __future__ import annotations
 
 from ..core.program import is_zero
 from .elastic import elastic_forces
+from .joint_space import tendon_forces
 from .linalg import mul
 
 
@@ -25,22 +29,43 @@ def damping_forces(bound, qd) -> list:
     return [0 if is_zero(d) else mul(d, rate) for d, rate in zip(bound.damping, qd)]
 
 
+def coulomb_forces(bound, qd) -> list:
+    """F sign(q'): per coordinate its Coulomb friction times the sign of its rate (0 where there is none)."""
+    coulomb = bound.model.coulomb
+    if not coulomb:
+        return [0] * len(qd)
+    return [0 if is_zero(f := bound.scalar(c)) else mul(f, bound.backend.call("sign", rate))
+            for c, rate in zip(coulomb, qd)]
+
+
+def _plus(a: list, b: list) -> list:
+    return [x if is_zero(f) else (f if is_zero(x) else x + f) for x, f in zip(a, b)]
+
+
 def left_forces(bound, q, qd) -> list:
-    """C (q - q0) + D q': the passive forces on the left side of the equations of motion."""
+    """C (q - q0) + D q' + t(q, q') + F sign(q'): the passive forces on the left side of the equations of
+    motion."""
     c = elastic_forces(bound, q)
-    if not bound.damping:
-        return c
-    return [x if is_zero(f) else (f if is_zero(x) else x + f) for x, f in zip(c, damping_forces(bound, qd))]
+    if bound.damping:
+        c = _plus(c, damping_forces(bound, qd))
+    if bound.model.tendons:
+        c = _plus(c, tendon_forces(bound, q, qd))
+    if bound.model.coulomb:
+        c = _plus(c, coulomb_forces(bound, qd))
+    return c
 
 
 def passive_forces(bound, q, qd) -> list:
-    """-(C (q - q0) + D q'): the passive forces as a generalized force on the right side (MuJoCo's sign)."""
+    """-(C (q - q0) + D q' + t + F sign(q')): the passive forces as a generalized force on the right side
+    (MuJoCo's sign)."""
     return [0 if is_zero(x) else -x for x in left_forces(bound, q, qd)]
 
 
 def has_passive(model) -> bool:
-    """Whether the model has springs or damping: some elastic pair, or a damping not exactly zero."""
-    return model.has_damping or any(b.pair.elastic for b in model.bodies)
+    """Whether the model has springs, damping, tendon forces or Coulomb friction: some elastic pair, a damping not
+    exactly zero, a tendon with a spring or damper, a friction."""
+    return model.has_damping or any(b.pair.elastic for b in model.bodies) or bool(model.tendons) or \
+        bool(model.coulomb)
 
 
-__all__ = ["damping_forces", "has_passive", "left_forces", "passive_forces"]
+__all__ = ["coulomb_forces", "damping_forces", "has_passive", "left_forces", "passive_forces"]

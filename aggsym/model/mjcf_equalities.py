@@ -20,18 +20,19 @@ MuJoCo's conventions (checked against its ``efc_pos``: the residual rows it stab
   manifest lists the equality as left out.
 * Between sites (``site1``, ``site2``): site1's frame coincides with site2's (``connect``: their origins), as
   MuJoCo's residual (site positions, and neg(q_site2) q_site1) says; the reference axes are site2's.
-* ``joint`` (joint1, joint2, polycoef y0 a1..a4): ``q1 - q1_0 = y0 + a1 (q2 - q2_0) + a2 (q2 - q2_0)^2 + ...``
-  (q_0: ``qpos0``).  Linear (a2 = a3 = a4 = 0, a1 != 0): a :class:`~aggsym.model.types.Coupling`
-  ``q1 = a1 q2 + (q1_0 + y0 - a1 q2_0)``.
-* ``tendon`` on fixed tendons (every wrap of type joint: ``L = sum coef_j q_j``, qpos itself), polycoef as above on
-  ``L - tendon_length0``: linear in the joints, ``sum r_j q_j + c = 0``; with exactly two joints it is a coupling
-  (the later joint in MuJoCo's order follows the earlier one).
+* ``joint`` (joint1, joint2, polycoef y0 a1..a4) and ``tendon`` (tendon1, tendon2) on fixed tendons (every wrap
+  of type joint: ``L = sum coef_j q_j``, qpos itself): MuJoCo's residual ``(L1 - L1_0) - P(L2 - L2_0)``, P the
+  polynomial y0 + a1 x + ... + a4 x^4 (q_0: ``qpos0``, L_0: ``tendon_length0``; without joint2/tendon2 P = y0).
+  Where every joint and tendon equality of the model ties one coordinate to another linearly (a2 = a3 = a4 = 0,
+  exactly two coordinates in ``L1 - a1 L2``), none is tied twice or chained, and the model has neither connect
+  nor weld constraints nor a free joint, they are :class:`~aggsym.model.types.Coupling` s (the later joint in
+  MuJoCo's order follows the earlier one: ``q_f = k q_m + offset``; the coupled coordinate leaves q).  Otherwise
+  every one of them is a joint-space constraint row (kind ``joint``, :class:`~aggsym.model.types.JointRow`: the
+  residual above exactly, its Jacobian and rate term from :mod:`aggsym.mechanics.joint_space`), beside the
+  connect and weld constraints, in the constrained dynamics of chapter 4; a row in which no coordinate appears
+  constrains nothing (a warning, listed as left out).
 
-Refused with an error naming the equality: a nonlinear polynomial, a joint or tendon equality that fixes one
-coordinate or ties more than two (aggsym's constraints are motions of body points, its couplings one coordinate
-following another: a general joint-space row has no place yet), an equality on a spatial tendon, on a flex, on a free or ball joint, couplings that chain or collide (a coordinate coupled
-twice, or coupled and master), constraints beside couplings in one model (not supported together yet), and
-couplings in a model with a free joint (not yet).
+Refused with an error naming the equality: an equality on a spatial tendon, on a flex, on a free or ball joint.
 """
 from __future__ import annotations
 
@@ -40,7 +41,8 @@ import dataclasses
 import numpy as np
 import sympy as sp
 
-from .types import WORLD, Constraint, Coupling, CONSTRAINT_KINDS
+from .link_numbers import exact
+from .types import JOINT_ROW, WORLD, CONSTRAINT_KINDS, Constraint, Coupling, JointRow
 
 CONNECT, WELD, JOINT, TENDON, FLEX = 0, 1, 2, 3, 4  # mjtEq
 WRAP_JOINT = 1  # mjtWrap
@@ -72,7 +74,15 @@ class Equalities:
         self.coordinate_of = {c.joint: c.name for c in model.pair_coordinates}
         roots = {b.name for b in model.bodies if b.parent == WORLD and not b.pair.coordinates}
         self.world_bodies = roots  # the fixed root (worldbody): the world itself
-        self.listing: list = []
+        self.notes: dict = {}  # equality id -> what it became
+
+    def note(self, e: int, entry: dict):
+        self.notes[e] = entry
+
+    @property
+    def listing(self) -> list:
+        """The manifest's entries in the file's order of the equalities."""
+        return [self.notes[e] for e in sorted(self.notes)]
 
     def name(self, e: int) -> str:
         return self.reader.equality_name(e)
@@ -82,14 +92,15 @@ class Equalities:
 
     def apply(self):
         """(constraints, couplings, listing): the active equalities as the model's constraints and couplings, and
-        the manifest's list of what each equality became."""
+        the manifest's list of what each equality became.  Joint and tendon equalities are couplings where every
+        one of them can be (see :meth:`couplings_possible`), joint-space constraint rows otherwise."""
         m = self.m
-        constraints, couplings = [], []
+        constraints, items = [], []
         for e in range(m.neq):
             kind = {CONNECT: "connect", WELD: "weld", JOINT: "joint", TENDON: "tendon", FLEX: "flex"}.get(
                 int(m.eq_type[e]), str(int(m.eq_type[e])))
             if not m.eq_active0[e]:
-                self.listing.append({"equality": self.name(e), "type": kind, "became": "nothing (inactive)"})
+                self.note(e, {"equality": self.name(e), "type": kind, "became": "nothing (inactive)"})
                 continue
             where = self.where(e, kind)
             if kind in ("connect", "weld"):
@@ -97,17 +108,18 @@ class Equalities:
                 if constraint is not None:
                     constraints.append(constraint)
             elif kind in ("joint", "tendon"):
-                couplings.append(self.coupling(e, kind, where))
+                items.append((e, kind, where, self.forms(e, kind, where)))
             else:
-                self.reader.fail(where, f"an active {kind} equality is not supported (connect, weld, and joint or "
-                                        f"fixed-tendon equalities that tie one coordinate to another are)")
-        self.check_couplings(couplings)
-        if couplings and any(b.pair.quaternion for b in self.model.bodies):
-            self.reader.fail("<equality>", "couplings (joint or tendon equalities) in a model with a free joint or a "
-                                           "ball joint are not supported yet")
-        if constraints and couplings:
-            self.reader.fail("<equality>", "loop or weld constraints (connect, weld) beside couplings (joint or tendon "
-                                           "equalities) in one model are not supported together yet")
+                self.reader.fail(where, f"an active {kind} equality is not supported (connect, weld, joint and "
+                                        f"fixed-tendon equalities are)")
+        couplings = []
+        if items and self.couplings_possible(items, constraints):
+            couplings = [self.coupling(e, kind, f) for e, kind, _, f in items]
+        else:
+            for e, kind, where, f in items:
+                row = self.joint_row(e, kind, where, f)
+                if row is not None:
+                    constraints.append(row)
         return tuple(constraints), tuple(couplings), self.listing
 
     # connect and weld -------------------------------------------------------------------------------------
@@ -142,7 +154,7 @@ class Equalities:
             why = (f"joins two points of one rigid body ({self.reader.body_name(b1)!r} and "
                    f"{self.reader.body_name(b2)!r} move together): it constrains no motion and is left out")
             self.reader.warn(where, f"the {kind} equality {why}")
-            self.listing.append({"equality": self.name(e), "type": kind, "became": f"nothing ({why})"})
+            self.note(e, {"equality": self.name(e), "type": kind, "became": f"nothing ({why})"})
             return None
         if placed[0][0] == WORLD:
             placed.reverse()
@@ -158,7 +170,7 @@ class Equalities:
             became += "; torquescale 0: no rotational rows"
         elif kind == "weld" and data[10] != 1:
             became += f"; torquescale {data[10]:g} scales only MuJoCo's soft rows, not the hard constraint"
-        self.listing.append({"equality": self.name(e), "type": kind, "became": became})
+        self.note(e, {"equality": self.name(e), "type": kind, "became": became})
         return constraint
 
     # joint and tendon ---------------------------------------------------------------------------------------
@@ -182,58 +194,102 @@ class Equalities:
             row[j] = row.get(j, 0.0) + float(m.wrap_prm[w])
         return row
 
-    def coupling(self, e: int, kind: str, where: str) -> Coupling:
+    def forms(self, e: int, kind: str, where: str) -> dict:
+        """MuJoCo's residual of a joint or tendon equality as linear forms: ``first``, ``second`` ({joint id:
+        coefficient}; second None without joint2/tendon2), ``ref1``, ``ref2`` and ``poly`` (y0 a1 a2 a3 a4):
+        phi = (L1 - ref1) - P(L2 - ref2)."""
         m = self.m
         data = np.array(m.eq_data[e], dtype=float)
-        y0, a1 = data[0], data[1]
-        if np.any(data[2:5]):
-            self.reader.fail(where, f"a {kind} equality with a nonlinear polynomial (polycoef {' '.join(f'{x:g}' for x in data[:5])}) "
-                                    f"is not supported (only its linear case y0 + a1 x becomes a coupling)")
         o1, o2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
-        if kind == "joint":  # q1 - q1_0 - y0 - a1 (q2 - q2_0) = 0
-            self.scalar_joint(o1, where)
-            row = {o1: 1.0}
-            constant = -float(m.qpos0[m.jnt_qposadr[o1]]) - y0
-            if o2 >= 0:
-                self.scalar_joint(o2, where)
-                row[o2] = row.get(o2, 0.0) - a1
-                constant += a1 * float(m.qpos0[m.jnt_qposadr[o2]])
-        else:  # L1 - L1_0 - y0 - a1 (L2 - L2_0) = 0
-            row = self.tendon_row(o1, where)
-            constant = -float(m.tendon_length0[o1]) - y0
-            if o2 >= 0:
-                for j, c in self.tendon_row(o2, where).items():
-                    row[j] = row.get(j, 0.0) - a1 * c
-                constant += a1 * float(m.tendon_length0[o2])
-        joints = sorted(j for j, c in row.items() if c != 0)
-        names = [self.reader.joint_name(j) for j in joints]
+
+        def form(o):
+            if kind == "tendon":
+                return self.tendon_row(o, where)
+            self.scalar_joint(o, where)
+            return {o: 1.0}
+
+        def ref(o):
+            return float(m.tendon_length0[o]) if kind == "tendon" else float(m.qpos0[m.jnt_qposadr[o]])
+
+        return {"first": form(o1), "second": form(o2) if o2 >= 0 else None, "ref1": ref(o1),
+                "ref2": ref(o2) if o2 >= 0 else 0.0, "poly": tuple(float(x) for x in data[:5])}
+
+    @staticmethod
+    def combined(f: dict) -> tuple:
+        """(row {joint id: coefficient}, constant): the linear case's ``sum r q + constant`` (a2 = a3 = a4 = 0)."""
+        y0, a1 = f["poly"][:2]
+        row = dict(f["first"])
+        constant = -f["ref1"] - y0
+        if f["second"] is not None:
+            for j, c in f["second"].items():
+                row[j] = row.get(j, 0.0) - a1 * c
+            constant += a1 * f["ref2"]
+        return {j: c for j, c in row.items() if c != 0}, constant
+
+    def as_coupling(self, f: dict):
+        """The equality as a coupling (follower, master, multiplier, offset), or None when it is not one coordinate
+        following another (a nonlinear polynomial, or a row on one coordinate or more than two)."""
+        if f["second"] is not None and any(f["poly"][2:]):
+            return None
+        row, constant = self.combined(f)
+        joints = sorted(row)
         if len(joints) != 2:
-            what = ("fixes the coordinate of joint " + repr(names[0]) if len(joints) == 1 else
-                    "ties no coordinate" if not joints else f"ties {len(joints)} coordinates ({', '.join(names)})")
-            self.reader.fail(where, f"the {kind} equality {what}: a linear row in joint space, which aggsym's "
-                                    f"constraints (motions of body points) and couplings (one coordinate following "
-                                    f"another) cannot hold yet")
+            return None
         master, follower = joints  # r_m q_m + r_f q_f + constant = 0
         multiplier = float(-row[master] / row[follower]) + 0.0
         offset = float(-constant / row[follower]) + 0.0  # (+ 0.0: no negative zero)
-        coupling = Coupling(self.coordinate_of[self.reader.joint_name(follower)],
-                            self.coordinate_of[self.reader.joint_name(master)], multiplier, offset)
-        self.listing.append({"equality": self.name(e), "type": kind,
+        return (self.coordinate_of[self.reader.joint_name(follower)],
+                self.coordinate_of[self.reader.joint_name(master)], multiplier, offset)
+
+    def couplings_possible(self, items, constraints) -> bool:
+        """Whether every joint and tendon equality can be a coupling: each ties one coordinate to another, none is
+        coupled twice or chained, and the model has no connect or weld constraint and no free or ball joint."""
+        if constraints or any(b.pair.quaternion for b in self.model.bodies):
+            return False
+        ties = [self.as_coupling(f) for _, _, _, f in items]
+        if any(t is None for t in ties):
+            return False
+        followers = [t[0] for t in ties]
+        return len(set(followers)) == len(followers) and not set(followers) & {t[1] for t in ties}
+
+    def coupling(self, e: int, kind: str, f: dict) -> Coupling:
+        follower, master, multiplier, offset = self.as_coupling(f)
+        coupling = Coupling(follower, master, multiplier, offset)
+        self.note(e, {"equality": self.name(e), "type": kind,
                              "became": f"coupling {coupling.coordinate} = {multiplier!r} * {coupling.master} + "
                                        f"{offset!r}"})
         return coupling
 
-    def check_couplings(self, couplings):
-        seen: dict = {}
-        masters = {c.master for c in couplings}
-        for c in couplings:
-            if c.coordinate in seen:
-                self.reader.fail("<equality>", f"coordinate {c.coordinate!r} is tied twice by equalities (to "
-                                               f"{seen[c.coordinate]!r} and {c.master!r}); not supported")
-            seen[c.coordinate] = c.master
-            if c.coordinate in masters:
-                self.reader.fail("<equality>", f"coordinate {c.coordinate!r} follows {c.master!r} and is followed by "
-                                               f"another: chained couplings are not supported")
+    def joint_row(self, e: int, kind: str, where: str, f: dict):
+        """The equality as a joint-space constraint row (kind ``joint``), or None (with a warning) when no
+        coordinate appears in it."""
+        def terms(form):
+            return tuple((self.coordinate_of[self.reader.joint_name(j)], exact(c)) for j, c in sorted(form.items())
+                         if c != 0)
+
+        first = terms(f["first"])
+        second = terms(f["second"]) if f["second"] is not None else ()
+        poly = f["poly"] if second else (f["poly"][0], 0.0, 0.0, 0.0, 0.0)
+        if not second or not any(poly[2:]):  # linear: the combined row decides whether it constrains anything
+            row, _ = self.combined(f)
+            if not row:
+                why = "no coordinate appears in its row (its coefficients cancel): it constrains no motion"
+                self.reader.warn(where, f"the {kind} equality: {why}; left out")
+                self.note(e, {"equality": self.name(e), "type": kind, "became": f"nothing ({why})"})
+                return None
+        row = JointRow(first=first, second=second, reference=(exact(f["ref1"]), exact(f["ref2"])),
+                       polynomial=tuple(exact(a) for a in poly))
+        constraint = Constraint(name=self.reader.ids_constraint(self.name(e)), body="", point=(), rows=(JOINT_ROW,),
+                                kind="joint", source=str(self.reader.file), path=where, joint_row=row)
+        shown = " + ".join(f"{float(c)!r} {name}" for name, c in first)
+        became = f"constraint {constraint.name!r} (joint-space row: ({shown}) - {f['ref1']!r}"
+        if second:
+            shown2 = " + ".join(f"{float(c)!r} {name}" for name, c in second)
+            became += f" - P(({shown2}) - {f['ref2']!r}), P with polycoef {' '.join(repr(a) for a in poly)})"
+        else:
+            became += f" - {poly[0]!r} = 0)"
+        self.note(e, {"equality": self.name(e), "type": kind, "became": became})
+        return constraint
 
 
 def with_equalities(reader, model):

@@ -35,17 +35,26 @@ The mapping
   ``Model.damping``), ``stiffness_<coordinate>`` and ``springref_<coordinate>`` (``jnt_stiffness`` and
   ``qpos_spring``: an elastic pair, C (q - q0) of (2.27)), and always ``gravity_x gravity_y gravity_z``
   (``opt.gravity``, 0 when ``<flag gravity="disable">``).  ``<flag spring/damper="disable">`` leave those out.
+  Fixed tendons with a ``stiffness`` or ``damping`` (``Model.tendons``, :mod:`aggsym.mechanics.joint_space`):
+  ``tendon_stiffness_<tendon>``, ``tendon_springlength_<tendon>`` (``tendon_lengthspring``; a dead band lower <
+  upper: ``tendon_springlower_<tendon>``, ``tendon_springupper_<tendon>``), ``tendon_damping_<tendon>``: the force
+  ``f = -k s - d L'`` along the tendon (s the stretch beyond the rest length or dead band), ``-c f`` on the left.
   Forward and inverse dynamics then include the passive forces as MuJoCo's ``qacc`` and ``qfrc_passive`` do:
-  A qdd + b + g + C (q - q0) + D qd = tau (``passive_forces`` gives -(C (q - q0) + D qd), MuJoCo's sign).
-* Not in the equations, listed in ``model.meta["mjcf"]`` (and the manifest): ``frictionloss`` (a constraint in
-  MuJoCo), joint limits (also on the coordinates' limits), contacts, actuators (with their joint and gear),
-  tendons that change nothing but constraints or actuation, inactive equalities, fluid forces (``density``,
-  ``viscosity``: a warning).  Active equalities (:mod:`aggsym.model.mjcf_equalities`): ``connect`` and ``weld``
-  become constraints (``model.constraints``), linear ``joint`` and fixed-tendon equalities couplings
-  (``model.couplings``), each listed in ``meta["mjcf"]["equalities"]``; the others are refused there by name.
-  Refused with an error naming them, since they would change the equations: tendons with a stiffness, damping or
-  armature, flexes, gravity compensation, actuators with
-  damping or armature, polynomial damping or stiffness.
+  A qdd + b + g + C (q - q0) + D qd + t = tau (``passive_forces`` gives -(C (q - q0) + D qd + t), MuJoCo's sign).
+* ``frictionloss`` (a constraint in MuJoCo, not a smooth force): listed per joint and tendon in the manifest; with
+  ``frictionloss="coulomb"`` (``--frictionloss coulomb``, on request) taken as Coulomb friction: ``F sign(qd)`` on
+  the left (``friction_<coordinate>``, ``Model.coulomb``) and ``-F sign(L')`` along a fixed tendon
+  (``tendon_friction_<tendon>``), in forward and inverse dynamics and ``passive_forces``; the model is then not
+  conservative.  Refused then on a free joint (MuJoCo's friction acts on the world-axes velocity there).
+* Not in the equations, listed in ``model.meta["mjcf"]`` (and the manifest): ``frictionloss`` (unless asked for as
+  above), joint and tendon limits (also on the coordinates' limits), contacts, actuators (with their joint and
+  gear), tendons that change nothing but constraints or actuation, inactive equalities, fluid forces
+  (``density``, ``viscosity``: a warning).  Active equalities (:mod:`aggsym.model.mjcf_equalities`): ``connect``
+  and ``weld`` become constraints (``model.constraints``), ``joint`` and fixed-tendon equalities couplings
+  (``model.couplings``) or joint-space constraint rows, each listed in ``meta["mjcf"]["equalities"]``; the others
+  are refused there by name.  Refused with an error naming them, since they would change the equations: spatial
+  tendons with a stiffness or damping, tendons with armature, polynomial or yielding tendon springs, flexes,
+  gravity compensation, actuators with damping or armature, polynomial damping or stiffness.
 * ``model.links`` (kind ``"link"``): every MuJoCo body (``world`` included when ``worldbody`` is there) and every
   site (a site sharing a body's name is listed as ``site:<name>``) as a frame on the body it belongs to, for
   ``--frames``, ``--payload``, ``--inertial-parameters`` and ``--constraints``; the leaves are the moving bodies
@@ -65,14 +74,15 @@ from ..errors import ModelError, ModelWarning
 from .builder import TreeBuilder, ball_names, floating_root, identifier, link_table, quaternion_rotations
 from .frames import default_frames
 from .link_numbers import exact
-from .mjcf_equalities import with_equalities
+from .mjcf_equalities import WRAP_JOINT, with_equalities
 from .mjcf_source import screen
-from .types import Coordinate, JointLimits, Links, Model, Parameter
+from .types import Coordinate, JointLimits, Links, Model, Parameter, Tendon
 
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3  # mjtJoint
 KINDS = {HINGE: "theta", SLIDE: "o"}
 JOINT_TYPES = {FREE: "free", BALL: "ball", SLIDE: "slide", HINGE: "hinge"}
-DISABLE_SPRING, DISABLE_DAMPER, DISABLE_GRAVITY = 32, 64, 128  # mjtDisableBit
+DISABLE_FRICTIONLOSS, DISABLE_SPRING, DISABLE_DAMPER, DISABLE_GRAVITY = 4, 32, 64, 128  # mjtDisableBit
+FRICTIONLOSS_OPTIONS = ("list", "coulomb")
 WORLD_BODY = "worldbody"
 EQUALITY_TYPES = {0: "connect", 1: "weld", 2: "joint", 3: "tendon", 4: "flex"}
 CONVENTION = (
@@ -107,8 +117,10 @@ class _Ids:
 
 
 class _Reader:
-    def __init__(self, file: Path, m, mujoco):
+    def __init__(self, file: Path, m, mujoco, frictionloss: str = "list"):
         self.file, self.m, self.mj = file, m, mujoco
+        self.frictionloss = frictionloss
+        self.coulomb = frictionloss == "coulomb" and not m.opt.disableflags & DISABLE_FRICTIONLOSS
         self.warnings: list[str] = []
         self.constraint_ids: set = set()
 
@@ -176,15 +188,26 @@ class _Reader:
                 continue  # (aggsym.model.mjcf_equalities: a constraint, a coupling or an error naming it)
             self.warn(f'<equality> <{kind} name="{name}">', f"an inactive {kind} equality is not in the equations "
                                                             f"of motion (listed in the manifest)")
+        springs = not m.opt.disableflags & DISABLE_SPRING
+        dampers = not m.opt.disableflags & DISABLE_DAMPER
         for t in range(m.ntendon):
-            name = _name(m, mj, mj.mjtObj.mjOBJ_TENDON, t, "tendon")
-            for field, what in (("tendon_stiffness", "stiffness"), ("tendon_damping", "damping"),
-                                ("tendon_armature", "armature")):
-                value = getattr(m, field)[t] if hasattr(m, field) else 0
-                if np.any(value):
-                    self.fail(f'<tendon name="{name}">', f"a tendon with {what} (a force along the tendon: it "
-                                                         f"changes the equations of motion); tendon springs, "
-                                                         f"dampers and armature are not supported yet")
+            where = f'<tendon name="{self.tendon_name(t)}">'
+            if hasattr(m, "tendon_armature") and m.tendon_armature[t]:
+                self.fail(where, "a tendon with armature (an inertia along the tendon: it changes A) is not "
+                                 "supported yet (tendon springs and dampers are)")
+            for field, what in (("tendon_stiffnesspoly", "a polynomial stiffness (stiffnesspoly)"),
+                                ("tendon_dampingpoly", "a polynomial damping (dampingpoly)"),
+                                ("tendon_springyield", "a spring with a yield (springyield)")):
+                if hasattr(m, field) and np.any(getattr(m, field)[t]):
+                    self.fail(where, f"{what} on a tendon is not supported (stiffness and damping are)")
+            acts = ((springs and m.tendon_stiffness[t] != 0) or (dampers and m.tendon_damping[t] != 0) or
+                    (self.coulomb and m.tendon_frictionloss[t] != 0))
+            if acts and any(int(m.wrap_type[w]) != WRAP_JOINT for w in range(int(m.tendon_adr[t]),
+                                                                             int(m.tendon_adr[t] + m.tendon_num[t]))):
+                self.fail(where, "a spatial tendon (it wraps sites or geoms) with a stiffness or damping"
+                                 + (" or (--frictionloss coulomb) a frictionloss" if self.coulomb else "")
+                                 + ": its length is not a linear form of the coordinates; not supported (fixed "
+                                   "tendons are)")
         if m.nflex:
             self.fail("<deformable>", f"{m.nflex} flex object(s); flexes are not supported")
         heavy = [self.body_name(i) for i in range(m.nbody) if m.body_gravcomp[i] != 0]
@@ -218,9 +241,10 @@ class _Reader:
         params: list = []
         gravity = np.zeros(3) if flags & DISABLE_GRAVITY else np.array(m.opt.gravity, dtype=float)
         dof_of: list = []  # MuJoCo's dof of each coordinate, in tree order
-        armature, damping = [], []
+        armature, damping, coulomb = [], [], []
         pending_stiffness: dict = {}  # row index -> (stiffness symbol, rest symbol)
         free_joints = []
+        coordinate_of: dict = {}  # MuJoCo joint id -> its coordinate (hinge and slide)
         added_mass: dict = {}  # row index of a free body -> its armature symbol
 
         def rate_parameters(coordinate: str, dof: int):
@@ -236,6 +260,12 @@ class _Reader:
                 damping.append(params[-1].symbol)
             else:
                 damping.append(sp.Integer(0))
+            f = float(m.dof_frictionloss[dof]) if self.coulomb else 0.0
+            if f:
+                params.append(Parameter(f"friction_{coordinate}", f))
+                coulomb.append(params[-1].symbol)
+            else:
+                coulomb.append(sp.Integer(0))
             dof_of.append(dof)
 
         if needs_world:
@@ -264,8 +294,13 @@ class _Reader:
                     added_mass[len(tree.rows) - 1] = params[-1].symbol
                 if d:
                     params.append(Parameter(f"damping_{prefix}", d))
+                if self.coulomb and np.any(m.dof_frictionloss[dof:dof + 6]):
+                    self.fail(f'<joint name="{jname}">', "frictionloss on a free joint with --frictionloss coulomb: "
+                                                         "MuJoCo's friction acts on the world-axes velocity there; not "
+                                                         "supported (leave out --frictionloss coulomb to list it)")
                 for k in range(6):
                     armature.append(sp.Integer(0))
+                    coulomb.append(sp.Integer(0))
                     damping.append(params[-1].symbol if d else sp.Integer(0))
                     dof_of.append(dof + k)
             else:
@@ -279,6 +314,7 @@ class _Reader:
                                                                          f"joint here is not supported")
                     jname = self.joint_name(j)
                     coordinate = ids.own(jname)
+                    coordinate_of[j] = coordinate
                     last = k == n - 1
                     child = link if last else ("mjcf-joint", j)
                     body_id = bodies_ids.own(link if last else f"{link}_{jname}")
@@ -309,6 +345,7 @@ class _Reader:
             tree.rows[k]["pair"] = dataclasses.replace(pair, stiffness=((stiffness,),), rest=(rest,))
         body_links = set(names) if needs_world else set(names[1:])
         sites = self.sites(tree, names, welded, needs_world, body_links)
+        tendons = self.tendon_forces = self.tendons(params, coordinate_of, springs, dampers)
         for axis, value in zip("xyz", gravity):
             params.append(Parameter(f"gravity_{axis}", float(value)))
         seen: dict = {}
@@ -334,6 +371,7 @@ class _Reader:
                       links=Links(table.kind, table.frames, table.leaves),
                       dof_armature=tuple(armature) if any(a != 0 for a in armature) else (),
                       damping=tuple(damping) if any(d != 0 for d in damping) or pending_stiffness else (),
+                      tendons=tendons, coulomb=tuple(coulomb) if any(f != 0 for f in coulomb) else (),
                       meta={"floating_base": "quaternion" if free_joints else False,
                             "warnings": list(self.warnings),
                             "mjcf": self.summary(free_joints, sites, springs, dampers, flags)})
@@ -361,6 +399,50 @@ class _Reader:
                    anchor=anchor if any(anchor) else None, positions=positions)
         for i, coordinate in enumerate(velocities):
             rate_parameters(coordinate, int(m.jnt_dofadr[j]) + i)
+
+    def tendons(self, params: list, coordinate_of: dict, springs: bool, dampers: bool) -> tuple:
+        """The fixed tendons with a spring, a damper (or, with ``frictionloss="coulomb"``, a frictionloss) as
+        :class:`~aggsym.model.types.Tendon` s, their runtime parameters appended to ``params``:
+        ``tendon_stiffness_<tendon>`` and ``tendon_springlength_<tendon>`` (a dead band:
+        ``tendon_springlower_<tendon>``, ``tendon_springupper_<tendon>``), ``tendon_damping_<tendon>``,
+        ``tendon_friction_<tendon>``."""
+        m = self.m
+        out, used = [], set()
+        for t in range(m.ntendon):
+            k = float(m.tendon_stiffness[t]) if springs else 0.0
+            d = float(m.tendon_damping[t]) if dampers else 0.0
+            f = float(m.tendon_frictionloss[t]) if self.coulomb else 0.0
+            if not (k or d or f):
+                continue
+            name = self.tendon_name(t)
+            tag = identifier(name, used, "tendon")
+            terms = []
+            for w in range(int(m.tendon_adr[t]), int(m.tendon_adr[t] + m.tendon_num[t])):
+                j = int(m.wrap_objid[w])
+                if j not in coordinate_of:
+                    self.fail(f'<tendon name="{name}">',
+                              f"the tendon wraps joint {self.joint_name(j)!r}, which is not a hinge or slide joint")
+                terms.append((coordinate_of[j], exact(float(m.wrap_prm[w]))))
+            values: dict = {"stiffness": 0, "lower": 0, "upper": 0, "damping": 0}
+            if k:
+                params.append(Parameter(f"tendon_stiffness_{tag}", k))
+                values["stiffness"] = params[-1].symbol
+                lower, upper = (float(x) for x in m.tendon_lengthspring[t])
+                if lower == upper:
+                    params.append(Parameter(f"tendon_springlength_{tag}", lower))
+                    values["lower"] = values["upper"] = params[-1].symbol
+                else:
+                    params.append(Parameter(f"tendon_springlower_{tag}", lower))
+                    params.append(Parameter(f"tendon_springupper_{tag}", upper))
+                    values["lower"], values["upper"] = params[-2].symbol, params[-1].symbol
+            if d:
+                params.append(Parameter(f"tendon_damping_{tag}", d))
+                values["damping"] = params[-1].symbol
+            if f:
+                params.append(Parameter(f"tendon_friction_{tag}", f))
+                values["friction"] = params[-1].symbol
+            out.append(Tendon(name, tuple(terms), **values))
+        return tuple(out)
 
     def model_name(self) -> str:
         raw = bytes(self.m.names)
@@ -405,21 +487,46 @@ class _Reader:
                               "transmission": {0: "joint", 1: "joint", 2: "slider-crank", 3: "tendon",
                                                4: "site", 5: "body"}.get(kind, str(kind)),
                               "target": on, "gear": [float(v) for v in m.actuator_gear[a]]})
-        tendons = [_name(m, mj, mj.mjtObj.mjOBJ_TENDON, t, "tendon") for t in range(m.ntendon)]
+        tendons = []
+        in_model = {t.name for t in self.tendon_forces}
+        for t in range(m.ntendon):
+            fixed = all(int(m.wrap_type[w]) == WRAP_JOINT for w in range(int(m.tendon_adr[t]),
+                                                                        int(m.tendon_adr[t] + m.tendon_num[t])))
+            entry = {"tendon": self.tendon_name(t), "type": "fixed" if fixed else "spatial",
+                     "in_the_equations": self.tendon_name(t) in in_model}
+            for field, key in (("tendon_stiffness", "stiffness"), ("tendon_damping", "damping"),
+                               ("tendon_frictionloss", "frictionloss")):
+                if getattr(m, field)[t]:
+                    entry[key] = float(getattr(m, field)[t])
+            if m.tendon_stiffness[t]:
+                entry["springlength"] = [float(x) for x in m.tendon_lengthspring[t]]
+            if m.tendon_limited[t]:
+                entry["range"] = [float(x) for x in m.tendon_range[t]]
+            tendons.append(entry)
         inactive = [_name(m, mj, mj.mjtObj.mjOBJ_EQUALITY, e, "equality") for e in range(m.neq) if not m.eq_active0[e]]
         return {
             "source": "MuJoCo's compiled model (mujoco " + mj.__version__ + ")",
             "convention": CONVENTION,
             "free_joints": list(free_joints),
             "in_the_equations": (
-                "A(q) qdd + b + g + C (q - q0) + D qd = tau: armature on A's diagonal (armature_<coordinate>), "
-                "viscous damping D (damping_<coordinate>), springs C (stiffness_<coordinate>, rest "
-                "springref_<coordinate>), gravity (gravity_x, gravity_y, gravity_z); forward and inverse dynamics "
-                "include the passive forces as MuJoCo's qacc and qfrc_passive do; passive_forces gives "
-                "-(C (q - q0) + D qd) (MuJoCo's qfrc_passive sign)"),
+                "A(q) qdd + b + g + C (q - q0) + D qd + t(q, qd) = tau: armature on A's diagonal "
+                "(armature_<coordinate>), viscous damping D (damping_<coordinate>), springs C (stiffness_<coordinate>, "
+                "rest springref_<coordinate>), the fixed tendons' springs and dampers t = -c f, f = -k s - d L' "
+                "along the tendon (L = sum c q, s the stretch beyond springlength or its dead band; "
+                "tendon_stiffness_<tendon>, tendon_springlength_<tendon> or tendon_springlower_/tendon_springupper_"
+                "<tendon>, tendon_damping_<tendon>), gravity (gravity_x, gravity_y, gravity_z); forward and inverse "
+                "dynamics include the passive forces as MuJoCo's qacc and qfrc_passive do; passive_forces gives "
+                "-(C (q - q0) + D qd + t) (MuJoCo's qfrc_passive sign)" + (
+                    "; frictionloss as Coulomb friction (--frictionloss coulomb): + F sign(qd) on the left "
+                    "(friction_<coordinate>) and -F sign(L') along a tendon (tendon_friction_<tendon>), in "
+                    "forward and inverse dynamics and passive_forces; zero at qd = 0 (MuJoCo's frictionloss is a "
+                    "constraint that can hold the joint still: not the same)" if self.coulomb else "")),
+            "frictionloss": "coulomb" if self.coulomb else "list",
             "springs": springs, "dampers": dampers, "gravity_disabled": bool(flags & DISABLE_GRAVITY),
             "not_in_the_equations": (
-                "frictionloss (a constraint in MuJoCo), joint and tendon limits, contacts, inactive equalities "
+                ("" if self.coulomb else "frictionloss (a constraint in MuJoCo; --frictionloss coulomb takes it "
+                                         "as Coulomb friction), ")
+                + "joint and tendon limits, contacts, inactive equalities "
                 "(active ones are constraints or couplings: equalities), actuators (their forces are tau's to "
                 "give: actuators lists each with its "
                 "transmission target and gear), fluid forces" + (" (this model has some)" if m.opt.density or
@@ -429,9 +536,13 @@ class _Reader:
         }
 
 
-def load_mjcf(path) -> Model:
+def load_mjcf(path, frictionloss: str = "list") -> Model:
     """Read an MJCF file through MuJoCo's compiler (the ``mujoco`` package: ``pip install 'aggsym[mjcf]'``); raises
-    :class:`ModelError` with the file and the compiler's message, or naming what is not supported."""
+    :class:`ModelError` with the file and the compiler's message, or naming what is not supported.
+    ``frictionloss``: ``"list"`` (MuJoCo's frictionloss listed in the manifest, out of the equations) or
+    ``"coulomb"`` (taken as Coulomb friction f sign(qd) in the equations, on request)."""
+    if frictionloss not in FRICTIONLOSS_OPTIONS:
+        raise ValueError(f"frictionloss must be one of {', '.join(FRICTIONLOSS_OPTIONS)}, got {frictionloss!r}")
     path = Path(path)
     screen(path)
     try:
@@ -449,7 +560,7 @@ def load_mjcf(path) -> Model:
         raise ModelError(path, "", f"MuJoCo's compiler refuses the file: {text[:2000]}") from None
     finally:
         mujoco.set_mju_user_warning(previous)
-    reader = _Reader(path, m, mujoco)
+    reader = _Reader(path, m, mujoco, frictionloss)
     for text in said:
         reader.warn("", f"MuJoCo's compiler warns: {' '.join(str(text).split())[:2000]}")
     return reader.read()

@@ -69,7 +69,7 @@ URDF_CLI_OPTIONS = ("--floating-base", "--mimic", "--snap-angles", "--constraint
 
 XACRO_CLI_OPTIONS = URDF_CLI_OPTIONS + ("--xacro-arg", "--package-path")
 
-MJCF_CLI_OPTIONS = ("--constraints", "--inertial-parameters", "--payload")
+MJCF_CLI_OPTIONS = ("--constraints", "--inertial-parameters", "--payload", "--frictionloss")
 
 READERS: list = [
     Reader("YAML", (".yaml", ".yml"), _load_yaml,
@@ -81,7 +81,7 @@ READERS: list = [
            options=("floating_base", "mimic", "snap_angles", "xacro_args", "package_paths"),
            cli_options=XACRO_CLI_OPTIONS,
            note="a xacro file is expanded by the xacro package, then read as URDF with the URDF options"),
-    Reader("MJCF", (".mjcf",), _load_mjcf, cli_options=MJCF_CLI_OPTIONS, sniffed=(".xml",), sniff=_is_mjcf,
+    Reader("MJCF", (".mjcf",), _load_mjcf, options=("frictionloss",), cli_options=MJCF_CLI_OPTIONS, sniffed=(".xml",), sniff=_is_mjcf,
            note="an MJCF model's joints come from its file (a free joint is the quaternion free-flyer), as do its "
                 "angles"),
 ]

@@ -39,6 +39,11 @@ def code_index(code: str) -> int:
     return COORDINATE_CODES.index(code)
 
 
+def _zero(x) -> bool:
+    """Whether an expression of the model is exactly zero."""
+    return bool(getattr(x, "is_zero", False)) or x == 0
+
+
 def _snap(x: sp.Expr) -> sp.Expr:
     """Round float entries within 1e-14 of 0 or +-1 to exact values (e.g. cos(1.5707963267948966))."""
     if isinstance(x, sp.Float):
@@ -253,6 +258,59 @@ class Body:
     carrier: str | None = None  # for a rotor (2.13): the body that carries it (its parent)
 
 
+JOINT_ROW = "joint"  # the row code of a joint-space constraint (one row: phi, J, gamma, lambda)
+
+
+@dataclass(frozen=True)
+class JointRow:
+    """A holonomic constraint in joint space (an MJCF joint or fixed-tendon equality): with the linear forms
+    ``L1 = sum c q`` over ``first`` and ``L2`` over ``second`` (pairs (coordinate name, coefficient); the
+    coordinates of hinge and slide pairs, q their positions), the residual is
+
+        phi = (L1 - ref1) - (y0 + a1 x + a2 x^2 + a3 x^3 + a4 x^4),   x = L2 - ref2
+
+    (``polynomial`` = (y0, a1, a2, a3, a4); without ``second`` x is 0 and phi = L1 - ref1 - y0).  Its Jacobian row
+    is ``c1 - P'(x) c2``, its bias ``gamma = -P''(x) (c2 . qd)^2``; the multiplier is the generalized force
+    ``J^T lambda`` it adds along the row."""
+
+    first: tuple  # ((coordinate name, coefficient expression), ...)
+    second: tuple = ()
+    reference: tuple = (0, 0)  # (ref1, ref2) expressions
+    polynomial: tuple = (0, 0, 0, 0, 0)  # (y0, a1, a2, a3, a4) expressions
+
+    @property
+    def linear(self) -> bool:
+        """Whether phi is linear in q (a2 = a3 = a4 = 0): then J is constant and gamma is 0."""
+        return all(sp.sympify(a) == 0 for a in self.polynomial[2:]) or not self.second
+
+
+@dataclass(frozen=True)
+class Tendon:
+    """A fixed tendon with a spring or a damper (MJCF ``<fixed>`` tendon with ``stiffness``/``springlength`` and
+    ``damping``): its length ``L = sum c q`` over ``terms`` (pairs (coordinate name, coefficient); hinge and slide
+    coordinates, q their positions) and velocity ``L' = sum c qd``; the force along it
+
+        f = -k (L - lower)  below ``lower``,  0 between,  -k (L - upper)  above ``upper``   (lower = upper: a
+        linear spring about its rest length),  minus d L',  minus F sign(L') (Coulomb friction, on request)
+
+    acts on the coordinates as ``c f`` (a force on the right side; on the left of the equations of motion
+    ``-c f``).  ``stiffness``, ``lower``, ``upper``, ``damping`` and ``friction`` are expressions (runtime
+    parameters)."""
+
+    name: str
+    terms: tuple
+    stiffness: object = 0
+    lower: object = 0
+    upper: object = 0
+    damping: object = 0
+    friction: object = 0
+
+    @property
+    def deadband(self) -> bool:
+        """Whether the spring has a dead band (lower < upper): then its force is piecewise linear."""
+        return sp.sympify(self.lower) != sp.sympify(self.upper)
+
+
 CONSTRAINT_KINDS = {  # block: kind -> the forbidden relative motions, in the reference frame (ch. 4)
     "point": ("o1", "o2", "o3"),
     "weld": COORDINATE_CODES,
@@ -289,16 +347,22 @@ class Constraint:
     motion: tuple = ()  # ((code, expression in TIME), ...): the world-side frame's prescribed functional motion
     orientation: tuple | None = None  # 3x3 (rows): C0 of the rotational residual, the body's axes in the reference
     # axes transposed where the residual vanishes (an MJCF weld's relpose); None: the relative orientation at q = 0
+    joint_row: JointRow | None = None  # a joint-space constraint (kind "joint", rows (JOINT_ROW,)): no body, point
+    # or medium; see JointRow
 
     @property
     def free_translations(self) -> tuple:
         """The translations the constraint leaves free (the permitted motions f_k+ of (4.34) among o1 o2 o3):
         the contact point's slip velocities are its relative velocity along these reference axes."""
+        if self.joint_row is not None:
+            return ()
         return tuple(code for code in COORDINATE_CODES[:3] if code not in self.rows)
 
     @property
     def normal(self) -> str | None:
         """The one blocked translation (the normal of a sliding contact), or None."""
+        if self.joint_row is not None:
+            return None
         blocked = [code for code in COORDINATE_CODES[:3] if code in self.rows]
         return blocked[0] if len(blocked) == 1 else None
 
@@ -402,6 +466,9 @@ class Model:
     # ``armature`` (MJCF ``armature``; expressions, usually runtime parameters); empty: none
     damping: tuple = ()  # per pair coordinate (tree order): viscous damping d, the force d qd on the left side of the
     # equations of motion beside the elastic C (q - q0) (MJCF ``damping``; expressions); empty: none
+    coulomb: tuple = ()  # per pair coordinate (tree order): Coulomb friction f, the force f sign(qd) on the left side
+    # (MJCF ``frictionloss`` on request; expressions); empty: none
+    tendons: tuple = ()  # Tendon: fixed tendons with springs or dampers, their forces on the left side
 
     @property
     def link_table(self) -> Links:
@@ -506,12 +573,13 @@ class Model:
         pairs and added masses keep it (U holds 1/2 q^T C q, T the medium's 1/2 V^T Lambda V); friction on a
         sliding contact (chapter 4) dissipates it, and so does viscous joint damping (``damping``).  The armature's
         rotors keep it (T holds their 1/2 a qd^2)."""
-        return not self.time_dependent and not self.has_friction and not self.has_damping
+        return (not self.time_dependent and not self.has_friction and not self.has_damping and not self.coulomb
+                and not any(not (_zero(t.damping) and _zero(t.friction)) for t in self.tendons))
 
     @property
     def has_damping(self) -> bool:
         """True when some coordinate has a viscous damping that is not exactly zero (``damping``)."""
-        return any(not (getattr(d, "is_zero", False) or d == 0) for d in self.damping)
+        return any(not _zero(d) for d in self.damping)
 
     @functools.cached_property
     def parameter_symbols(self) -> tuple:
