@@ -109,7 +109,8 @@ def heading_anchors(path: Path) -> set:
 
 def test_every_link_of_the_readme_and_docs_reaches_its_file_and_heading():
     """A relative link (text in brackets, then a file and an optional ``#heading`` in parentheses) of README.md
-    or docs/ names a file that exists and, with an anchor, a heading of that file (the README's reference moved to docs/: links must follow)."""
+    or docs/ names a file that exists and, with an anchor, a heading of that file (the README's reference moved
+    to docs/: links must follow)."""
     broken = []
     for doc in [ROOT / "README.md"] + sorted((ROOT / "docs").glob("*.md")):
         for target in re.findall(r"\]\(([^)\s]+)\)", doc.read_text()):
