@@ -232,3 +232,23 @@ def test_hostile_names_stay_text_and_the_document_compiles(tmp_path):
     assert "\\input{" not in text and "\\write18" not in text and "q_{1} & j\\_" in text
     code, overfull, out = pdflatex(tex)
     assert code == 0 and overfull == [], out
+
+
+def test_parameter_symbols_are_short_and_unique():
+    """Book-style names stay (m, l, w, g); other names are p_k (their index in p); a link's inertial parameters
+    are m_l, (m c_x)_l, I_xx,l and a payload's m_P ...; the intermediates take a letter no symbol uses (the
+    spacecraft's coordinates include x_11, so its intermediates are w_k)."""
+    from aggsym.model.inertials import with_inertial_parameters
+
+    cart = Notation(aggsym.load(model_path("cart_on_moving_platform")))
+    assert [(p.name, p.symbol) for p in cart.parameters] == [
+        ("m", "m"), ("mp", "p_{2}"), ("l", "l"), ("heave", "p_{4}"), ("roll", "p_{5}"), ("w", "w"), ("g", "g")]
+    assert [c.symbol for c in cart.coordinates] == ["q_{1}", "q_{2}", "q_{3}", "q_{4}"]
+    arm = with_inertial_parameters(load_robot(robot_path("panda")), ["panda_link3"], "panda_link7")
+    symbols = {p.name: (p.symbol, p.what, p.whose) for p in Notation(arm).parameters}
+    assert symbols["m_panda_link3"] == ("m_{1}", "mass of link", "panda_link3")
+    assert symbols["mcx_panda_link3"][0] == "(m c_{x})_{1}" and symbols["Ixy_panda_link3"][0] == "I_{xy,1}"
+    assert symbols["payload_m"][0] == "m_{P}" and symbols["payload_Izz"][0] == "I_{zz,P}"
+    assert len({s for s, _, _ in symbols.values()}) == len(symbols)
+    assert Notation(aggsym.load(model_path("spacecraft"))).letter == "w"
+    assert Notation(aggsym.load(model_path("manipulator6"))).letter == "x"
