@@ -3,7 +3,7 @@
 Model files come from strangers: a URDF joint called ``*/ #define double float /*`` must stay a comment in C,
 a description holding ``\"\"\"; import os`` must stay a string in Python, and ``\\input{/etc/passwd}`` must stay
 text in LaTeX.  Templates receive user text only through these functions (registered as Jinja filters
-``c_comment``, ``py_str``, ``py_doc``, ``latex``); identifiers are checked, never escaped
+``c_comment``, ``py_str``, ``py_doc``, ``latex``, ``latex_breakable``); identifiers are checked, never escaped
 (:func:`check_c_identifier`).
 """
 from __future__ import annotations
@@ -66,6 +66,20 @@ def latex(text) -> str:
     return "".join(_LATEX.get(ch, ch) for ch in _visible(text))
 
 
+def latex_breakable(text) -> str:
+    """:func:`latex`, with a line allowed to break after every ``_ - / .`` and within any run of 16 characters
+    without one (for names in narrow table columns: ``panda_finger_joint1`` may wrap, nothing runs into the
+    margin)."""
+    out, run = [], 0
+    for ch in _visible(text):
+        out.append(_LATEX.get(ch, ch))
+        run += 1
+        if ch in "_-/." or run >= 16:
+            out.append("\\allowbreak{}")
+            run = 0
+    return "".join(out)
+
+
 def check_c_identifier(name: str) -> str | None:
     """Why ``name`` cannot be a C identifier of the generated code (a prefix, a function, a macro part), or
     None."""
@@ -92,4 +106,5 @@ def check_module_name(name: str) -> str | None:
     return None
 
 
-FILTERS = {"c_comment": c_comment, "py_str": py_str, "py_doc": py_doc, "latex": latex}
+FILTERS = {"c_comment": c_comment, "py_str": py_str, "py_doc": py_doc, "latex": latex,
+           "latex_breakable": latex_breakable}

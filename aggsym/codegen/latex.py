@@ -1,129 +1,94 @@
-"""The LaTeX document of a model's equations of motion.
+"""The LaTeX document of a model's equations of motion, to be read and printed.
 
 Small models (at most :data:`CLOSED_FORM_MAX_NQ` coordinates, :data:`CLOSED_FORM_MAX_NODES` program nodes and
-:data:`CLOSED_FORM_MAX_TERMS` expanded terms (:func:`expanded_terms`) in
-A, b and g) get closed forms: every entry of A, b and g
-simplified by SymPy, written as the scalar equations ``sum_j A_ij q''_j + b_i + g_i = tau_i`` (for the double
-pendulum these are (2.26)).  Larger models get the intermediate-variable form: the straight-line programs of
-A, b and g, one named intermediate per line, as the C code computes them.
+:data:`CLOSED_FORM_MAX_TERMS` expanded terms (:func:`expanded_terms`) in A, b and g) get closed forms: every entry
+of A, b and g simplified by SymPy, the inverse dynamics as the scalar equations ``sum_j A_ij q''_j + b_i + g_i =
+tau_i`` (for the double pendulum these are (2.26)) and the forward dynamics in the transvective Cauchy form
+(3.20).  Larger models get the intermediate-variable form: the straight-line programs of A, b, g and of the
+transvective factors, one named intermediate per line as the C code computes them, then the inverse dynamics
+tau_i = sum_j A_ij q''_j + b_i + g_i and the forward dynamics q'' = T^T diag(1/(beta,beta)) T (tau - b - g)
+written out coordinate by coordinate (3.9), (3.10), (3.20).
+
+The notation (q_1..q_n for names that are not the book's, short parameter symbols, their tables) is
+:mod:`.latex_symbols`; the breaking of long lines to the page is :mod:`.latex_layout`, of pieces printed by
+:mod:`.latex_terms`.  A is symmetric; only its upper triangle is shown, and the document says so.
 """
 from __future__ import annotations
 
 import sympy as sp
-from sympy.printing.latex import LatexPrinter
 
 from ..core.program import expanded_terms, straight_line, to_sympy
+from ..mechanics.transvective import transvection_pairs
+from ..model.tree import Tree
 from ..model.types import TIME
 from ..symbolic import Equations, coordinate_symbols
-from .printing import _TREE, Converter, LinComb, Num, Prod, Ref
+from .latex_layout import SAFETY, TEXT_WIDTH, Piece, align_rows, matrix, paren
+from .latex_symbols import Notation
+from .latex_terms import TreePieces, sympy_latex, sympy_terms
+from .printing import Converter
 
 CLOSED_FORM_MAX_NQ = 4
 CLOSED_FORM_MAX_NODES = 300  # and at most this many program nodes in A, b, g (SymPy's simplification of the
 # flywheel on a spherical pair, 3 coordinates but ~570 nodes, does not finish in minutes)
 CLOSED_FORM_MAX_TERMS = 1000  # and at most this many terms in the expansion of any entry (see expanded_terms)
+ROOM = TEXT_WIDTH * SAFETY - 60.0  # pt a closed-form term may take before it is opened (a guess at the left column)
 
 
-def _dotted(name_latex: str, accent: str) -> str:
-    base, sep, sub = name_latex.partition("_")
-    return f"\\{accent}{{{base}}}{sep}{sub}"
+def _rows(rows) -> list:
+    """align* rows (lhs, pieces, tail) broken to the page."""
+    return align_rows(rows)
 
 
-def symbol_names(model) -> dict:
-    """LaTeX for the coordinate symbols and their derivatives: theta36 -> \\theta_{36}, \\dot{\\theta}_{36}."""
-    _, qd, qdd = coordinate_symbols(model)
-    free = {c.name for b in model.bodies if b.pair.quaternion for c in b.pair.coordinates}
-    names = {}
-    for c, d, dd in zip(model.coordinates, qd, qdd):
-        base = sp.latex(sp.Symbol(c.name, real=True))
-        if c.name in free:  # a free-flyer's or ball's velocity is no coordinate's rate: v, its rate v-dot
-            names[d], names[dd] = base, _dotted(base, "dot")
-        else:
-            names[d], names[dd] = _dotted(base, "dot"), _dotted(base, "ddot")
-    return names
-
-
-def _latex(expr, names):
-    return sp.latex(expr, symbol_names=names, long_frac_ratio=2, mul_symbol=None)
-
-
-def _terms(expr, names) -> list:
-    """LaTeX of the top-level terms of a sum, each with its sign: ['+ a', '- b c', ...]."""
-    terms = sp.Add.make_args(expr) if expr.is_Add else (expr,)
-    out = []
-    for t in terms:
-        negative = t.could_extract_minus_sign()
-        text = _latex(-t if negative else t, names)
-        out.append(("- " if negative else "+ ") + text)
-    return out
-
-
-def broken(lhs: str, terms: list, rhs: str | None = None, width: int = 150) -> str:
-    """An align* row ``lhs &= t1 + t2 ...`` broken into several lines of at most ``width`` LaTeX characters;
-    with ``rhs`` the row is ``&t1 + ... = rhs`` instead."""
-    lines, current = [], ""
-    for t in terms or ["+ 0"]:
-        if current and len(current) + len(t) > width:
-            lines.append(current)
-            current = ""
-        current += (" " if current else "") + t
-    lines.append(current)
-    first = lines[0][2:] if lines[0].startswith("+ ") else lines[0]
-    rows = [first] + lines[1:]
-    if rhs is None:
-        head = f"{lhs} &= {rows[0]}"
-        tail = [f"&\\quad {r}" for r in rows[1:]]
-    else:
-        head = f"&{rows[0]}"
-        tail = [f"&\\quad {r}" for r in rows[1:]]
-        if tail:
-            tail[-1] += f" = {rhs}"
-        else:
-            head += f" = {rhs}"
-    return " \\\\\n".join([head] + tail)
-
-
-def closed_form(model):
-    """Closed forms: the nonzero entries of A (upper triangle), b and g, and the scalar equations (2.26)."""
+def closed_form(model, notation):
+    """Closed forms: the nonzero entries of A (upper triangle), b, g (and c), the inverse dynamics by the sweeps
+    (2.39)-(2.42) per coordinate; as sections (title, align* rows)."""
     eq = Equations(model, simplify=True)
-    names = symbol_names(model)
+    names = notation.names
     n = model.nv
-    sections = []
-    rows = [broken(f"A_{{{i + 1}{j + 1}}}", _terms(eq.A[i, j], names))
-            for i in range(n) for j in range(i, n) if eq.A[i, j] != 0]
-    sections.append(("Inertia matrix $A(q)$ (upper triangle; the other entries are zero)", rows))
-    rows = [broken(f"b_{{{i + 1}}}", _terms(eq.b[i], names)) for i in range(n) if eq.b[i] != 0]
-    sections.append(("Velocity terms $b(q,\\dot q)$", rows))
-    rows = [broken(f"g_{{{i + 1}}}", _terms(eq.g[i], names)) for i in range(n) if eq.g[i] != 0]
-    sections.append(("Gravity $g(q)$", rows))
+
+    def entries(label, values):
+        return _rows([(label(i), sympy_terms(x, names, ROOM), None) for i, x in values if x != 0])
+
+    sections = [("Inertia matrix $A(q)$", entries(lambda ij: f"A_{{{ij[0] + 1}{ij[1] + 1}}}",
+                                                  [((i, j), eq.A[i, j]) for i in range(n) for j in range(i, n)])),
+                ("Velocity terms $b(q,\\dot q)$", entries(lambda i: f"b_{{{i + 1}}}", enumerate(eq.b))),
+                ("Gravity $g(q)$", entries(lambda i: f"g_{{{i + 1}}}", enumerate(eq.g)))]
     if any(x != 0 for x in eq.c):
-        rows = [broken(f"c_{{{i + 1}}}", _terms(eq.c[i], names)) for i in range(n) if eq.c[i] != 0]
-        sections.append(("Elastic forces $c(q) = C\\,(q - q_0)$ (2.27)", rows))
+        sections.append(("Elastic forces $c(q) = C\\,(q - q_0)$ (2.27)", entries(lambda i: f"c_{{{i + 1}}}",
+                                                                                     enumerate(eq.c))))
     rows = []
     for i in range(n):  # u*_i by the sweeps, its q'' coefficients and the rest d_i (2.45)
         u = sp.expand(eq.u_star[i])
-        terms = []
+        pieces = []
         for j in range(n):
             a = eq.closed_form(u.coeff(eq.qdd[j]))
             if a == 0:
                 continue
+            qdd = names[eq.qdd[j]]
+            inner = sympy_terms(a, names, ROOM)
             if a.is_Add:
-                terms.append(f"+ \\left({_latex(a, names)}\\right) {names[eq.qdd[j]]}")
+                left, right = paren(1)
+                first = inner[0].text[2:] if inner[0].text.startswith("+ ") else inner[0].text
+                inner[0] = Piece(f"+ {left}{first}", True)
+                inner[-1] = Piece(f"{inner[-1].text}{right} {qdd}", inner[-1].brk)
+            elif len(inner) == 1 and inner[0].text[2:] == "1":
+                inner[0] = Piece(f"{inner[0].text[:2]}{qdd}", True)
             else:
-                (sign, text), = [(t[0], t[2:]) for t in _terms(a, names)]
-                terms.append(f"{sign} {text} {names[eq.qdd[j]]}" if text != "1" else f"{sign} {names[eq.qdd[j]]}")
+                inner[-1] = Piece(f"{inner[-1].text} {qdd}", inner[-1].brk)
+            pieces.extend(inner)
         rest = eq.closed_form(u.subs({x: 0 for x in eq.qdd}))
-        terms += _terms(rest, names) if rest != 0 else []
-        rows.append(broken("", terms, rhs=f"u^*_{{{i + 1}}}"))
-    sections.append(("The preplanned control $u^* = \\tau$ by the forward and backward sweeps (2.39)-(2.42), "
-                     "one equation per coordinate (for the double pendulum: (2.26))", rows))
+        pieces += sympy_terms(rest, names, ROOM) if rest != 0 else []
+        rows.append((None, pieces, f"= u^*_{{{i + 1}}}"))
+    sections.append(("Inverse dynamics: $u^* = \\tau$ by the sweeps (2.39)-(2.42) (for the double pendulum: (2.26))",
+                     _rows(rows)))
     return sections
 
 
-def cauchy_form(model):
+def cauchy_form(model, notation):
     """The transvective Cauchy form (3.20) in the book's matrix-product form: the arguments <t,k>, the pivots
     (beta,beta)_k, and q'' = T^T diag(1/(beta,beta)) T F with T the product of the transvections (3.9)."""
     eq = Equations(model)
-    names = symbol_names(model)
+    names = notation.names
     n = model.nv
     factors, diag = eq.transvective_factors(simplify=False)
 
@@ -138,13 +103,9 @@ def cauchy_form(model):
         if value == 0:
             continue
         args.append((t, k))
-        rows.append(broken(f"\\langle {t + 1},{k + 1}\\rangle", _terms(value, names)))
+        rows.append((f"\\langle {t + 1},{k + 1}\\rangle", sympy_terms(value, names, ROOM), None))
     for k in range(n):
-        rows.append(broken(f"(\\beta,\\beta)_{{{k + 1}}}", _terms(readable(diag[k, k]), names)))
-
-    def matrix(entries):
-        body = " \\\\ ".join(" & ".join(entries(i, j) for j in range(n)) for i in range(n))
-        return f"\\begin{{pmatrix}} {body} \\end{{pmatrix}}"
+        rows.append((f"(\\beta,\\beta)_{{{k + 1}}}", sympy_terms(readable(diag[k, k]), names, ROOM), None))
 
     def factor(t, k, transpose=False):
         def entry(i, j):
@@ -153,95 +114,44 @@ def cauchy_form(model):
             if (i, j) == ((k, t) if transpose else (t, k)):
                 return f"-\\langle {t + 1},{k + 1}\\rangle"
             return "0"
-        return matrix(entry)
+        return matrix([[entry(i, j) for j in range(n)] for i in range(n)])
 
-    inv_diag = matrix(lambda i, j: f"\\frac{{1}}{{(\\beta,\\beta)_{{{i + 1}}}}}" if i == j else "0")
-    T = " ".join(factor(t, k) for t, k in args) or "E"
-    Tt = " ".join(factor(t, k, True) for t, k in reversed(args)) or "E"
-    product = f"\\ddot q = {Tt} \\, {inv_diag} \\, {T} \\, F, \\qquad F = \\tau - b(q,\\dot q) - g(q)"
-    return rows, product
-
-
-class _TreePrinter:
-    """The dispatch, names and sums of the LaTeX printer of aggsym's expression trees (:mod:`.printing`)."""
-
-    def _print(self, expr, **kwargs):
-        """The ``_print_<Class>`` method of an expression tree node, looked up once per printer and class (SymPy's
-        own dispatch walks the class's MRO by name on every call); anything else goes to SymPy's dispatch."""
-        methods = self.__dict__.get("_tree_methods")
-        if methods is None:
-            methods = self._tree_methods = {cls: getattr(self, "_print_" + cls.__name__) for cls in _TREE}
-        method = methods.get(expr.__class__)
-        if method is None or kwargs:
-            return super()._print(expr, **kwargs)
-        return method(expr)
-
-    def _print_Ref(self, e):
-        return str(e.symbol)
-
-    def _print_LinComb(self, e):
-        parts = []
-        for k, (sign, term) in enumerate(e.terms):
-            cls = term.__class__
-            text = str(term.symbol) if cls is Ref else self._print(term)
-            if cls is LinComb and (sign < 0 or len(term.terms) > 1 and k > 0):
-                text = f"({text})"
-            if k == 0:
-                parts.append(f"-{text}" if sign < 0 else text)
-            else:
-                parts.append(f" - {text}" if sign < 0 else f" + {text}")
-        return "".join(parts)
+    inv_diag = matrix([[f"\\frac{{1}}{{(\\beta,\\beta)_{{{i + 1}}}}}" if i == j else "0" for j in range(n)]
+                       for i in range(n)])
+    product = ([factor(t, k, True) for t, k in reversed(args)] or [Piece("E")]) + [inv_diag] + (
+        [factor(t, k) for t, k in args] or [Piece("E", True)]) + [Piece("F", True)]
+    return _rows(rows), _rows([("\\ddot q", product, None)]) + _rows(
+        [("F", [Piece("\\tau - b(q,\\dot q) - g(q)")], None)])
 
 
-class IntermediatePrinter(_TreePrinter, LatexPrinter):
-    """LaTeX of aggsym's expression trees (a SymPy LaTeX printer subclass); names are LaTeX already."""
-
-    functions = {"sin": "\\sin", "cos": "\\cos", "tan": "\\tan", "exp": "\\exp", "log": "\\log",
-                 "asin": "\\arcsin", "acos": "\\arccos", "atan": "\\arctan", "atan2": "\\operatorname{atan2}",
-                 "sign": "\\operatorname{sign}"}
-
-    def _print_Num(self, e):
-        # SymPy's LaTeX of a number costs tens of microseconds; a large model repeats its constants many times
-        key = (e.value.__class__, e.value)
-        cache = self.__dict__.setdefault("_numbers", {})
-        text = cache.get(key)
-        if text is None:
-            text = cache[key] = sp.latex(sp.nsimplify(e.value) if not isinstance(e.value, float)
-                                         else sp.Float(e.value, 6))
-        return text
-
-    def _print_Call(self, e):
-        arg = ", ".join(self._print(a) for a in e.args)
-        if e.name == "sqrt":
-            return f"\\sqrt{{{arg}}}"
-        if e.name == "abs":
-            return f"\\left|{arg}\\right|"
-        return f"{self.functions[e.name]}{{\\left({arg}\\right)}}"
-
-    def _operand(self, e):
-        text = self._print(e)
-        if isinstance(e, LinComb) or (isinstance(e, Prod) and e.sign < 0):
-            return f"\\left({text}\\right)"
-        return text
-
-    def _print_Prod(self, e):
-        factors = [self._operand(f) for f in e.factors]
-        body = " ".join(f if not (k and isinstance(e.factors[k], Num)) else f"\\cdot {f}"
-                        for k, f in enumerate(factors))
-        return f"-{body}" if e.sign < 0 else body
-
-    def _print_Ratio(self, e):
-        return f"\\frac{{{self._print(e.num)}}}{{{self._print(e.den)}}}"
+LATEX_ROLES = ("inertia", "bias", "gravity")  # the routines whose programs the document sizes the closed forms by
+PRINTED_ROLES = LATEX_ROLES + ("transvective_factors",)  # the programs the intermediate form prints
+_TITLES = {"inertia": "Inertia matrix $A(q)$", "bias": "Velocity terms $b(q,\\dot q)$",
+           "gravity": "Gravity $g(q)$",
+           "transvective_factors": "Transvective factors: the arguments $\\langle t,k\\rangle$ and pivots "
+                                   "$(\\beta,\\beta)_k$ of $T A(q) T^T = \\mathrm{diag}\\,(\\beta,\\beta)_k$ "
+                                   "(3.7)-(3.11)"}
 
 
-LATEX_ROLES = ("inertia", "bias", "gravity")  # the routines whose programs the document prints (and sizes by)
+def _output_labels(model, role):
+    """The LaTeX name of every entry of a routine's flat outputs (None: not shown: A's lower triangle)."""
+    n = model.nv
+    if role == "inertia":
+        return [[f"A_{{{i + 1},{j + 1}}}" if j >= i else None for i in range(n) for j in range(n)]]
+    if role == "transvective_factors":
+        pairs = transvection_pairs(Tree(model))
+        return [[f"\\langle {t + 1},{k + 1}\\rangle" for t, k in pairs],
+                [f"(\\beta,\\beta)_{{{k + 1}}}" for k in range(n)]]
+    return [[f"{ {'bias': 'b', 'gravity': 'g'}[role]}_{{{i + 1}}}" for i in range(n)]]
 
 
-def intermediate_form(model, prog, outputs, roles=LATEX_ROLES, straight=None):
-    """The straight-line programs of A, b, g as LaTeX assignments (x_k = ...); ``straight``: {role: its
-    :func:`straight_line`} where already formed (the C's)."""
+def intermediate_form(model, prog, outputs, notation, roles=PRINTED_ROLES, straight=None):
+    """The straight-line programs of the ``roles`` as LaTeX: [(role, rows, nonzero)] with the intermediates
+    x_1, x_2, ... (each block numbers its own) and one row per nonzero output entry shown; ``nonzero`` {label:
+    True} of those entries.  ``straight``: {role: its :func:`straight_line`} where already formed (the C's)."""
+    names = notation.names
     q, qd, _ = coordinate_symbols(model)
-    names = symbol_names(model)
+    letter = notation.letter
     blocks = []
     for role in roles:
         if role not in outputs:
@@ -251,37 +161,76 @@ def intermediate_form(model, prog, outputs, roles=LATEX_ROLES, straight=None):
         for kind, i in sl.inputs:
             node = prog.inputs[(kind, i)]
             if kind == "q":
-                sym[node.id] = sp.latex(q[i])
+                sym[node.id] = names[q[i]]
             elif kind == "qd":
                 sym[node.id] = names[qd[i]]
             elif kind == "t":
                 sym[node.id] = "t"
             else:
-                sym[node.id] = sp.latex(model.parameter_symbols[i])
+                sym[node.id] = names[model.parameter_symbols[i]]
         for k, i in enumerate(sl.temps):
-            sym[i] = f"x_{{{k}}}"
+            sym[i] = f"{letter}_{{{k + 1}}}"
         conv = Converter(prog, sym)
-        printer = IntermediatePrinter()
-        lines = [f"{sym[i]} &= {printer._print(conv(prog.nodes[i]))}" for i in sl.temps]
-        label = {"inertia": "A", "bias": "b", "gravity": "g"}[role]
-        flat = outputs[role][0]
-        for k, x in enumerate(flat):
-            named = getattr(x, "id", None) in sym
-            value = printer._print(conv(x, top=not named))
-            if role == "inertia":
-                i, j = divmod(k, model.nv)
-                if j < i:
+        printer = TreePieces()
+        rows = [(sym[i], printer.print(conv(prog.nodes[i]))[0], None) for i in sl.temps]
+        shown = {}
+        for flat, labels in zip(outputs[role], _output_labels(model, role)):
+            for x, label in zip(flat, labels):
+                if label is None:
                     continue
-                target = f"{label}_{{{i + 1},{j + 1}}}"
-            else:
-                target = f"{label}_{{{k + 1}}}"
-            if value != "0":
-                lines.append(f"{target} &= {value}")
-        blocks.append((role, lines))
+                named = getattr(x, "id", None) in sym
+                pieces = printer.print(conv(x, top=not named))[0]
+                if len(pieces) == 1 and pieces[0].text == "0":
+                    continue
+                shown[label] = True
+                rows.append((label, pieces, None))
+        blocks.append((_TITLES[role], _rows(rows), shown))
     return blocks
 
 
-def constraint_section(model, prog, outputs, small: bool):
+def dynamics_rows(model, notation, shown, elastic: bool):
+    """The inverse dynamics tau_i = sum_j A_ij q''_j + b_i + g_i (+ c_i with elastic pairs), A_ij = A_ji below
+    the diagonal, with the entries ``shown`` nonzero (the others are zero); and F_i = tau_i - b_i - g_i (- c_i)
+    of the forward dynamics."""
+    n = model.nv
+    rows, forces = [], []
+    for i in range(n):
+        pieces = []
+        for j in range(n):
+            a, b = min(i, j), max(i, j)
+            if shown.get(f"A_{{{a + 1},{b + 1}}}"):
+                pieces.append(Piece(f"+ A_{{{a + 1},{b + 1}}} {notation.accelerations[j]}", True))
+        rest = [label for label in (f"b_{{{i + 1}}}", f"g_{{{i + 1}}}") if shown.get(label)]
+        rest += [f"c_{{{i + 1}}}"] if elastic else []
+        pieces += [Piece(f"+ {label}", True) for label in rest]
+        rows.append((f"\\tau_{{{i + 1}}}", pieces, None))
+        forces.append((f"F_{{{i + 1}}}", [Piece(f"\\tau_{{{i + 1}}}")] + [Piece(f"- {x}", True) for x in rest], None))
+    return _rows(rows), _rows(forces)
+
+
+def cauchy_rows(model, notation, shown_factors):
+    """q'' = T^T diag(1/(beta,beta)) T F (3.20) coordinate by coordinate: (T F)_t = F_t - sum_{k below t}
+    <t,k> (T F)_k for t descending (3.9), then q''_k = (T F)_k / (beta,beta)_k - sum_{t above k} <t,k> q''_t for
+    k ascending (3.10); only the arguments ``shown_factors`` nonzero enter."""
+    n = model.nv
+    pairs = [(t, k) for t, k in transvection_pairs(Tree(model))
+             if shown_factors.get(f"\\langle {t + 1},{k + 1}\\rangle")]
+    TF = []
+    for t in reversed(range(n)):
+        pieces = [Piece(f"F_{{{t + 1}}}")]
+        pieces += [Piece(f"- \\langle {t + 1},{k + 1}\\rangle (TF)_{{{k + 1}}}", True)
+                   for tt, k in sorted(pairs, key=lambda p: -p[1]) if tt == t]
+        TF.append((f"(TF)_{{{t + 1}}}", pieces, None))
+    acc = []
+    for k in range(n):
+        pieces = [Piece(f"\\frac{{(TF)_{{{k + 1}}}}}{{(\\beta,\\beta)_{{{k + 1}}}}}")]
+        pieces += [Piece(f"- \\langle {t + 1},{k + 1}\\rangle {notation.accelerations[t]}", True)
+                   for t, kk in pairs if kk == k]
+        acc.append((notation.accelerations[k], pieces, None))
+    return _rows(TF), _rows(acc)
+
+
+def constraint_section(model, prog, outputs, small: bool, notation):
     """The constraints (chapter 4): a table of them and, for small models, the nonzero entries of
     D_lambda^T = J (4.27) and of gamma = J' qd, simplified."""
     if not model.constraints:
@@ -296,7 +245,7 @@ def constraint_section(model, prog, outputs, small: bool):
         rows.append((c.name, c.body, c.medium, " ".join(c.rows), law))
     entries = []
     if small and "constraint_jacobian" in outputs and "constraint_bias" in outputs:
-        names = symbol_names(model)
+        names = notation.names
         q, qd, _ = coordinate_symbols(model)
         symbols = {("p", i): s for i, s in enumerate(model.parameter_symbols)}
         symbols.update({("q", i): s for i, s in enumerate(q)})
@@ -305,22 +254,25 @@ def constraint_section(model, prog, outputs, small: bool):
         J = to_sympy(prog, outputs["constraint_jacobian"][0], symbols)
         gamma = to_sympy(prog, outputs["constraint_bias"][0], symbols)
         n = model.nv
+        lines = []
         for r in range(model.constraint_rows):
             for j in range(n):
                 x = sp.trigsimp(J[r * n + j])
                 if x != 0:
-                    entries.append(broken(f"(D_\\lambda^T)_{{{r + 1}{j + 1}}}", _terms(x, names)))
+                    lines.append((f"(D_\\lambda^T)_{{{r + 1}{j + 1}}}", sympy_terms(x, names, ROOM), None))
         for r in range(model.constraint_rows):
             x = sp.expand(gamma[r]) if model.time_dependent else sp.trigsimp(sp.expand(gamma[r]))
             if x != 0:
-                entries.append(broken(f"\\gamma_{{{r + 1}}}", _terms(x, names)))
+                lines.append((f"\\gamma_{{{r + 1}}}", sympy_terms(x, names, ROOM), None))
+        entries = _rows(lines)
     return {"table": rows, "entries": entries, "m": model.constraint_rows, "moving": model.time_dependent,
-            "stabilization": [sp.latex(x) for x in model.stabilization]}
+            "stabilization": [sympy_latex(x, notation.names) for x in model.stabilization]}
 
 
-def latex_document(model, template, prog, outputs, straight=None) -> str:
-    """The standalone LaTeX document (rendered through ``template``, the LaTeX target's latex/model.tex.j2); ``straight``: {role: straight line}
-    of routines already emitted, not formed again."""
+def latex_document(model, template, prog, outputs, straight=None, omitted=None) -> str:
+    """The standalone LaTeX document (rendered through ``template``, the LaTeX target's latex/model.tex.j2);
+    ``straight``: {role: straight line} of routines already emitted, not formed again; ``omitted``: {role: why}
+    of the routines left out (a singular A: no forward dynamics)."""
     # the closed forms are sized by the programs of A, b and g: without all three emitted there is no measure of
     # what SymPy would be asked to simplify (a 4-link chain's derivatives alone once ran it for many minutes)
     sized = all(role in outputs for role in LATEX_ROLES)
@@ -328,19 +280,30 @@ def latex_document(model, template, prog, outputs, straight=None) -> str:
     small = (sized and not model.couplings and model.nv <= CLOSED_FORM_MAX_NQ
              and len(prog.reachable(flat)) <= CLOSED_FORM_MAX_NODES
              and expanded_terms(prog, flat) <= CLOSED_FORM_MAX_TERMS)
-    names = symbol_names(model)
-    q, qd, qdd = coordinate_symbols(model)
+    notation = Notation(model)
+    elastic = any(b.pair.elastic for b in model.bodies)
     ctx = {
         "name": model.name,
         "description": model.description or "",
-        "coordinates": [(sp.latex(s), joint, kind) for s, (_, joint, kind) in zip(q, model.positions)],
-        "parameters": [(sp.latex(p.symbol), repr(p.value)) for p in model.parameters],
-        "gravity": ", ".join(sp.latex(g) for g in model.gravity),
-        "closed": closed_form(model) if small else None,
-        "cauchy": cauchy_form(model) if small and "forward_dynamics" in outputs else None,
-        "blocks": None if small else intermediate_form(model, prog, outputs, straight=straight),
-        "constraints": constraint_section(model, prog, outputs, small),
-        "nq": model.nq,
-        "qdd": [names[s] for s in qdd],
+        "notation": notation,
+        "gravity": ", ".join(sympy_latex(g, notation.names) for g in model.gravity),
+        "closed": closed_form(model, notation) if small else None,
+        "cauchy": cauchy_form(model, notation) if small and "forward_dynamics" in outputs else None,
+        "constraints": constraint_section(model, prog, outputs, small, notation),
+        "elastic": elastic,
+        "friction": model.has_joint_dynamics,
+        "forward_omitted": (omitted or {}).get("forward_dynamics"),
+        "forward": "forward_dynamics" in outputs,
+        "coupled": bool(model.couplings),
+        "nv": model.nv,
+        "blocks": None, "inverse": None, "forces": None, "transvected": None, "accelerations": None,
     }
+    if not small:
+        blocks = intermediate_form(model, prog, outputs, notation, straight=straight)
+        shown = {k: v for _, _, s in blocks for k, v in s.items()}
+        ctx["blocks"] = [(title, rows) for title, rows, _ in blocks]
+        if sized:
+            ctx["inverse"], ctx["forces"] = dynamics_rows(model, notation, shown, elastic)
+        if sized and "transvective_factors" in outputs and "forward_dynamics" in outputs:
+            ctx["transvected"], ctx["accelerations"] = cauchy_rows(model, notation, shown)
     return template.render(ctx)

@@ -2,7 +2,7 @@
 the intermediate form otherwise: :mod:`aggsym.codegen.latex`, its own tree printer).  Nothing to run."""
 from __future__ import annotations
 
-from ..latex import LATEX_ROLES, latex_document
+from ..latex import PRINTED_ROLES, latex_document
 from .base import Target, file_pattern
 
 
@@ -12,7 +12,7 @@ class LatexTarget(Target):
     stage = "latex"
     folder = "latex"
     templates = ("model.tex.j2",)
-    lines = frozenset(LATEX_ROLES)  # the straight lines of A, b and g (latex.intermediate_form)
+    lines = frozenset(PRINTED_ROLES)  # the straight lines of A, b, g and the factors (latex.intermediate_form)
 
     def file_names(self, job):
         return [f"{job.model.name}.tex"]
@@ -21,4 +21,5 @@ class LatexTarget(Target):
         return bool(file_pattern(name, ("tex",)).fullmatch(file))
 
     def render(self, job):
-        return {f"{job.model.name}.tex": latex_document(job.model, self.template("model.tex.j2"), job.prog, job.outputs, job.lines)}
+        return {f"{job.model.name}.tex": latex_document(job.model, self.template("model.tex.j2"), job.prog, job.outputs,
+                                                        job.lines, job.omitted)}
