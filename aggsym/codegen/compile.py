@@ -170,6 +170,8 @@ def random_inputs(model, role, rng):
             args.append(rng.uniform(-np.pi, np.pi, size))
         elif name == "t":
             args.append(float(rng.uniform(0, 10)))
+        elif name == "r":  # a restitution coefficient
+            args.append(float(rng.uniform(0, 1)))
         else:
             args.append(rng.normal(size=size))
     return args
