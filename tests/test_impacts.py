@@ -5,6 +5,7 @@ Pinocchio (tests/test_impacts_pinocchio.py compares with it).
 * ``constrained_forward_dynamics_derivatives`` and ``impulse_dynamics_derivatives`` against central differences
   (fourth order, h = 1e-4: truncation about h^4, rounding about 1e-16 / h) of the routines themselves: the
   four-bar (a loop, Baumgarte terms, a medium that turns), the sliding double pendulum with viscous friction,
+  a cart tied to a platform in prescribed motion, the rolling disc,
   and a small legged body (tests/data/impact_hopper.urdf) on a quaternion free-flyer with two point contacts (q moved on the manifold by our own ``integrate``).
 * The generated C and NumPy module of the four-bar: the new routines against the numeric twin, the NumPy module's
   derivatives against its own central differences, the status where G is singular.
@@ -141,6 +142,17 @@ def test_derivatives_of_a_loop_with_baumgarte_terms(rng):
         q, qd, tau = rng.uniform(-np.pi, np.pi, 3), rng.normal(size=3), rng.normal(size=3)
         errors = difference_errors(model, twin, q, qd, tau, r=0.4)
         assert max(errors.values()) < DIFFERENCE_TOLERANCE, errors
+
+
+@pytest.mark.parametrize("name", ["cart_on_moving_platform", "rolling_disc"])
+def test_derivatives_with_a_moving_frame_and_a_rolling_wheel(name, rng):
+    """A constraint to a frame in prescribed motion (F(t) of (4.35), at t = 0) and a rolling disc (its contact
+    point moves on the wheel)."""
+    model = with_routines(aggsym.load(model_path(name)))
+    twin = NumericTwin(model)
+    q, qd, tau = rng.uniform(-1, 1, model.nq), rng.normal(size=model.nv), rng.normal(size=model.nv)
+    errors = difference_errors(model, twin, q, qd, tau, r=0.5)
+    assert max(errors.values()) < DIFFERENCE_TOLERANCE, errors
 
 
 def test_derivatives_with_viscous_friction(tmp_path, rng):
