@@ -6,7 +6,8 @@ Pinocchio (tests/test_impacts_pinocchio.py compares with it).
   (fourth order, h = 1e-4: truncation about h^4, rounding about 1e-16 / h) of the routines themselves: the
   four-bar (a loop, Baumgarte terms, a medium that turns), the sliding double pendulum with viscous friction,
   a cart tied to a platform in prescribed motion, the rolling disc,
-  and a small legged body (tests/data/impact_hopper.urdf) on a quaternion free-flyer with two point contacts (q moved on the manifold by our own ``integrate``).
+  and a small legged body (tests/data/impact_hopper.urdf) on a quaternion free-flyer with two point contacts
+  (q moved on the manifold by our own ``integrate``).
 * The generated C and NumPy module of the four-bar: the new routines against the numeric twin, the NumPy module's
   derivatives against its own central differences, the status where G is singular.
 * The damped solve (``proximal:``): within its stated bound of the exact solve for a full-rank J; finite and
