@@ -195,6 +195,10 @@ def _support_matrices(twin, role, args):
 
 CONDITIONING = {  # role -> (twin, role, args) -> the condition number that the routine's solve multiplies rounding by
     "constrained_forward_dynamics": lambda twin, role, args: float(np.linalg.cond(twin.call("delassus", args[0]))),
+    "impulse_dynamics": lambda twin, role, args: float(np.linalg.cond(twin.call("delassus", args[0]))),
+    "constrained_forward_dynamics_derivatives":
+        lambda twin, role, args: float(np.linalg.cond(twin.call("delassus", args[0]))),
+    "impulse_dynamics_derivatives": lambda twin, role, args: float(np.linalg.cond(twin.call("delassus", args[0]))),
     "support_direct": lambda twin, role, args: float(np.linalg.cond(_support_matrices(twin, role, args)[0])),
     "support_inverse": lambda twin, role, args: float(np.linalg.cond(_support_matrices(twin, role, args)[1])) ** 2,
 }
