@@ -28,7 +28,8 @@ What is compared (ours: the numeric twin, which the generated code is checked ag
   A weld's drift in Pinocchio is the spatial acceleration (no omega x v term), ours the classical one: they agree
   where J v = 0 and so do their derivatives (the difference, omega_k x v_P, is a product of two terms that vanish
   there), so welds are compared at such velocities; point contacts at any.
-Measured (this host): 1e-15 to 1e-12 relative for all of them.
+Measured (worst over 2-3 states each): impulse_dynamics 3e-15 to 6e-14; derivatives against Pinocchio 1.5e-14
+(Panda) to 6.7e-12 (solo12 welded); on the loop 4e-10 against the central differences (their own error).
 """
 from __future__ import annotations
 
