@@ -47,14 +47,15 @@ def routines(module) -> list:
 
 
 def arguments(module, role, rng, batch=()):
-    """Random arguments (without p) of a routine of a generated module: q within +-1.5, the rest normal; t in [0, 1]."""
+    """Random arguments (without p) of a routine of a generated module: q within +-1.5, the rest normal; t, dt, r
+    in [0, 1]."""
     out = []
     for name in inspect.signature(getattr(module, role)).parameters:
         if name == "p":
             continue
         if name == "q":
             out.append(rng.uniform(-1.5, 1.5, batch + (module.NQ,)))
-        elif name in ("t", "dt"):
+        elif name in ("t", "dt", "r"):  # one number each (r: a restitution coefficient)
             out.append(rng.uniform(0.0, 1.0, batch))
         else:
             out.append(rng.normal(size=batch + (module.NV,)))

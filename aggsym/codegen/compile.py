@@ -170,6 +170,8 @@ def random_inputs(model, role, rng):
             args.append(rng.uniform(-np.pi, np.pi, size))
         elif name == "t":
             args.append(float(rng.uniform(0, 10)))
+        elif name == "r":  # a restitution coefficient
+            args.append(float(rng.uniform(0, 1)))
         else:
             args.append(rng.normal(size=size))
     return args
@@ -193,6 +195,10 @@ def _support_matrices(twin, role, args):
 
 CONDITIONING = {  # role -> (twin, role, args) -> the condition number that the routine's solve multiplies rounding by
     "constrained_forward_dynamics": lambda twin, role, args: float(np.linalg.cond(twin.call("delassus", args[0]))),
+    "impulse_dynamics": lambda twin, role, args: float(np.linalg.cond(twin.call("delassus", args[0]))),
+    "constrained_forward_dynamics_derivatives":
+        lambda twin, role, args: float(np.linalg.cond(twin.call("delassus", args[0]))),
+    "impulse_dynamics_derivatives": lambda twin, role, args: float(np.linalg.cond(twin.call("delassus", args[0]))),
     "support_direct": lambda twin, role, args: float(np.linalg.cond(_support_matrices(twin, role, args)[0])),
     "support_inverse": lambda twin, role, args: float(np.linalg.cond(_support_matrices(twin, role, args)[1])) ** 2,
 }

@@ -144,14 +144,15 @@ def check_constraints(model) -> None:
     """Redundant constraint rows make J A^-1 J^T singular everywhere: an error naming them, with a hint."""
     from ..errors import ModelError
 
-    found = [] if model.regularization != 0 else redundant_constraints(model)
+    found = [] if model.regularization != 0 or model.proximal else redundant_constraints(model)
     if found:
         c, codes = found[0]
         raise ModelError(c.source, c.path, f"constraint {c.name!r}: its row(s) {', '.join(codes)} depend on the rows "
                                            f"before them (J is rank-deficient at every configuration tried), so J "
                                            f"A^-1 J^T is singular: block only the independent motions (e.g. "
                                            f"[o1, o2] for a point closing a planar loop), or give the model a "
-                                           f"'regularization: epsilon' (J A^-1 J^T + epsilon E)", c.line)
+                                           f"'regularization: epsilon' (J A^-1 J^T + epsilon E) or a damped solve "
+                                           f"'proximal: {{mu: MU, iterations: N}}'", c.line)
 
 
 @collector_paused()

@@ -21,7 +21,8 @@ The equations are ``A(q) q'' + b(q, q') + g(q) + c(q) = tau`` (2.17), (2.27):
 
 The package, one concern a module: :mod:`.registry` (Routine, Output, ROUTINES, signatures, running a routine),
 :mod:`.shapes` (the outputs' shapes), the registrations by domain (:mod:`.routines_dynamics`,
-:mod:`.routines_constraints`, :mod:`.routines_support`, :mod:`.routines_integrate`, :mod:`.routines_derivatives`,
+:mod:`.routines_constraints`, :mod:`.routines_support`, :mod:`.routines_integrate`, :mod:`.routines_impacts`,
+:mod:`.routines_derivatives`,
 :mod:`.routines_frames`, :mod:`.routines_regressor`: imported below in that order, which is the order of
 registration, hence of emission and of the manifest), :mod:`.analyses` (numerical analyses of a model),
 :mod:`.selection` (the routines left out, ``--routines``) and :mod:`.manifests` (the manifest, the float
@@ -45,6 +46,7 @@ from .routines_constraints import (
 )
 from .routines_support import SUPPORT_FAILURE, SUPPORT_OUTPUTS, support_layout
 from . import routines_integrate  # noqa: F401  (registers integrate)
+from . import routines_impacts  # noqa: F401  (registers impulse_dynamics)
 from . import routines_derivatives  # noqa: F401  (registers the derivatives of the dynamics)
 from .routines_frames import COM_CONVENTION, frame_layout
 from .routines_regressor import base_regressor_layout, regressor_layout, standard_parameter_names

@@ -145,6 +145,11 @@ def constraints_entry(model) -> dict:
                 "q = 0, both in the reference axes"),
         "stabilization": {"kp": str(model.stabilization[0]), "kd": str(model.stabilization[1])},
         "regularization": str(model.regularization),
+        **({"proximal": {"mu": str(model.proximal[0]), "iterations": int(model.proximal[1]),
+                         "solve": ("x_0 = 0, (G + mu E) x_{k+1} = b + mu x_k for k < iterations, G = J A^-1 J^T "
+                                   "(+ regularization): Pinocchio's proximal iteration with a fixed count; "
+                                   "|x_N - G^-1 b| <= (mu / (sigma_min(G) + mu))^N |G^-1 b| when J has full "
+                                   "row rank, |x_N| <= N |b| / mu always")}} if model.proximal else {}),
         "rolling": ("a wheel (kind 'rolling'): its rows are the velocity of the disc's material point at the "
                     "contact, centre + radius * (axle x e), e = (axle x normal)/|axle x normal|; only o3 is "
                     "holonomic (phi: the contact point's height over the plane; the o1, o2 entries of phi are 0)"),

@@ -13,9 +13,11 @@ from ..mechanics.coupling import Coupler
 from ..mechanics.kinematics import TreeKinematics
 
 
-INPUT_KINDS = ("q", "qd", "qdd", "tau", "gamma", "gammad", "gammadd", "T", "t", "v", "dt")  # t: the time of models
-# with prescribed motions; gamma, gammad, gammadd (the mechanism's coordinates) and T (a wrench) of the support
-# routines; v (a velocity, nv) and dt (a time step) of integrate
+INPUT_KINDS = ("q", "qd", "qdd", "tau", "gamma", "gammad", "gammadd", "T", "t", "v", "dt", "qd_minus", "r")  # t: the
+# time of models with prescribed motions; gamma, gammad, gammadd (the mechanism's coordinates) and T (a wrench) of
+# the support routines; v (a velocity, nv) and dt (a time step) of integrate; qd_minus (the velocity before an
+# impact, nv) and r (the restitution coefficient, one number) of the impulse dynamics
+SCALAR_INPUTS = ("t", "dt", "r")  # the inputs that are one number
 
 
 @dataclass(frozen=True)
@@ -98,7 +100,7 @@ def input_length(model, name: str, routine: Routine | None = None) -> int:
         return model.mechanism_coordinates
     if name == "q":
         return model.nq
-    return len(model.parameters) if name == "p" else 1 if name in ("t", "dt") else 6 if name == "T" else model.nv
+    return len(model.parameters) if name == "p" else 1 if name in SCALAR_INPUTS else 6 if name == "T" else model.nv
 
 
 def routines_for(model, roles=None, omitted=()) -> list:

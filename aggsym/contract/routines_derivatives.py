@@ -1,10 +1,12 @@
 """The derivatives of the dynamics (on request): d tau / d(q, qd) by forward-mode differentiation of the sweeps,
-d qdd / d(q, qd) through A^-1 by the transvective factors."""
+d qdd / d(q, qd) through A^-1 by the transvective factors; those of the constrained forward dynamics and of
+impulse dynamics by implicit differentiation of their constrained system."""
 from __future__ import annotations
 
-from ..mechanics import derivatives, passive
+from ..mechanics import constraint_derivatives, derivatives, passive
 from .registry import Output, Routine, flat, minus, register
-from .shapes import nq_square
+from .routines_constraints import CONSTRAINT_FAILURE
+from .shapes import nq_square, scalar
 
 
 def _inverse_dynamics_derivatives(bound, kin, x):
@@ -28,3 +30,36 @@ register(Routine("forward_dynamics_derivatives", ("q", "qd", "tau", "p"),
                  "d qdd / d q and d qdd / d qd, n*n row-major (d qdd / d tau is A^-1): -A^-1 d tau_ID / d x at the "
                  "forward dynamics' qdd, A^-1 applied column by column by the transvective factors (3.19)-(3.20)",
                  coupled=None, regular=True, on_request=True, frame_free=True, slice_size=80))
+
+
+def _no_coulomb(model) -> bool:
+    return bool(model.constraints) and not any(c.friction is not None and c.friction[0] == "coulomb"
+                                               for c in model.constraints)
+
+
+def _constrained_forward_dynamics_derivatives(bound, kin, x):
+    *mats, status = constraint_derivatives.constrained_forward_dynamics_derivatives(bound, kin, x["qd"], x["tau"])
+    return (*(flat(m) for m in mats), [status])
+
+
+def _impulse_dynamics_derivatives(bound, kin, x):
+    *mats, status = constraint_derivatives.impulse_dynamics_derivatives(bound, kin, x["qd_minus"], x["r"][0])
+    return (*(flat(m) for m in mats), [status])
+
+
+register(Routine("constrained_forward_dynamics_derivatives", ("q", "qd", "tau", "p"),
+                 tuple(Output(f"d{y}_d{v}", nq_square) for y in ("qdd", "Jtlambda") for v in ("q", "qd", "tau"))
+                 + (Output("status", scalar, returned=True, failure=CONSTRAINT_FAILURE),),
+                 _constrained_forward_dynamics_derivatives,
+                 "d qdd / d(q, qd, tau) and d (J^T lambda) / d(q, qd, tau) of constrained_forward_dynamics, n*n "
+                 "row-major: the system (4.25)-(4.28) differentiated implicitly, its terms' tangents by forward mode, "
+                 "each column one more solve on the same factors (3.19) and G; q in the tangent space",
+                 applies=_no_coulomb, coupled=None, regular=True, on_request=True))
+register(Routine("impulse_dynamics_derivatives", ("q", "qd_minus", "r", "p"),
+                 (Output("dqd_plus_dq", nq_square), Output("dqd_plus_dqd_minus", nq_square),
+                  Output("dimpulse_dq", nq_square), Output("dimpulse_dqd_minus", nq_square),
+                  Output("status", scalar, returned=True, failure=CONSTRAINT_FAILURE)),
+                 _impulse_dynamics_derivatives,
+                 "d qd+ / d(q, qd-) and d (J^T Lambda) / d(q, qd-) of impulse_dynamics, n*n row-major: the impact "
+                 "law differentiated implicitly on the factors of its solve; q in the tangent space",
+                 applies=_no_coulomb, coupled=None, regular=True, on_request=True))

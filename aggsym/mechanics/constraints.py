@@ -43,7 +43,8 @@ lambda is the wrench the medium exerts on body k about P in the reference axes (
 With the transvective factors (3.19), A^-1 = T^T D^-1 T: ``P = T J^T`` (one O(n) product per row,
 :func:`~aggsym.mechanics.transvective.apply_T_tree`), ``G = J A^-1 J^T = P^T D^-1 P`` (the Delassus matrix),
 ``y = T (tau - b - g - c)`` from the sweeps, ``G lambda = -gamma - stab - P^T D^-1 y``,
-``qdd = T^T D^-1 (y + P lambda)``; G by an LDL^T factorization of m x m (no n x n inverse or LU).
+``qdd = T^T D^-1 (y + P lambda)``; G by an LDL^T factorization of m x m (no n x n inverse or LU), or damped by
+the model's ``proximal`` setting (:mod:`aggsym.mechanics.damped`).
 """
 from __future__ import annotations
 
@@ -52,6 +53,7 @@ from dataclasses import dataclass
 from ..core.program import is_zero
 from ..model.types import WORLD, code_index
 from .bound import constant_axes
+from .damped import DelassusSolver, model_proximal
 from .group import Motion, rotation
 from .joint_space import BoundJointRow, bind_joint_row, places
 from .kinematics import TreeKinematics, point_motion, point_rows, world_poses
@@ -467,7 +469,12 @@ def constrained_forward_dynamics(bound, kin, qd, tau) -> tuple:
         rhs = [x - mul(kd, dot(row, qd) + f) for x, row, f in zip(rhs, J, ck.time_terms())]
     if not is_zero(kp):
         rhs = [x - mul(kp, f) for x, f in zip(rhs, ck.residual(rest_kinematics(bound)))]
-    lam, status = ldl_solve(G, rhs, backend)
+    proximal = model_proximal(bound)
+    if proximal is None:
+        lam, status = ldl_solve(G, rhs, backend)
+    else:  # the damped solve (aggsym.mechanics.damped): N proximal iterations on G + mu E
+        solver = DelassusSolver(G, backend, proximal)
+        lam, status = solver.solve(rhs), solver.status
     coulomb, offset = [], 0
     for c, Jf in zip(ck.items, slips):
         if c.law == "coulomb":

@@ -461,6 +461,8 @@ class Model:
     frames: tuple = ()  # Frame: the frames of the frame routines, in output order (see aggsym.model.frames)
     routines: tuple | None = None  # the routines to emit (--routines), None: the contract's default set
     regularization: object = 0  # epsilon: constrained forward dynamics solves (J A^-1 J^T + epsilon E) lambda = ...
+    proximal: tuple = ()  # (mu expression, iterations): the damped (proximal) solve of the Delassus system
+    # (aggsym.mechanics.damped); empty: the exact solve
     links: Links | None = None  # the file's links (see Links); None: each body is its own link (see link_table)
     dof_armature: tuple = ()  # per pair coordinate (tree order): a rotor inertia of its own on A's diagonal, added to
     # ``armature`` (MJCF ``armature``; expressions, usually runtime parameters); empty: none

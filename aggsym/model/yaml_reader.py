@@ -62,12 +62,14 @@ from .validate import inertia_problem, mass_problem, order_tree, support_problem
 from .yaml_source import _Doc, _path
 
 TOP_KEYS = {"name", "description", "source", "notes", "gravity", "parameters", "bodies", "contacts", "loops",
-            "constraints", "stabilization", "support", "regularization", "frames"}
+            "constraints", "stabilization", "support", "regularization", "proximal", "frames"}
 FRAME_KEYS = {"name", "body", "point", "rotation", "description", "notes"}
 CONSTRAINT_KEYS = {"name", "body", "point", "medium", "at", "rotation", "motion", "block", "friction", "wheel",
                    "description", "notes"}
-SIDE_FILE_KEYS = {"constraints", "stabilization", "regularization", "description", "notes"}
+SIDE_FILE_KEYS = {"constraints", "stabilization", "regularization", "proximal", "description", "notes"}
 STABILIZATION_KEYS = {"kp", "kd"}
+PROXIMAL_KEYS = {"mu", "iterations"}
+MAX_PROXIMAL_ITERATIONS = 100  # each iteration is one more pair of triangular solves per right-hand side
 FRICTION_LAWS = ("viscous", "coulomb")
 BODY_KEYS = {"name", "parent", "pair", "mass", "com", "inertia", "mises", "rotors", "added_mass", "description",
              "notes"}
@@ -189,7 +191,8 @@ class _Reader:
         stabilization = self.stabilization(top.get("stabilization"), constraints)
         model = Model(name=name, bodies=bodies, gravity=gravity, parameters=parameters, source=str(self.file),
                       description=description.strip(), constraints=constraints, stabilization=stabilization,
-                      regularization=self.regularization(top.get("regularization"), constraints), links=links)
+                      regularization=self.regularization(top.get("regularization"), constraints),
+                      proximal=self.proximal(top.get("proximal"), constraints), links=links)
         model = dataclasses.replace(model, frames=default_frames(model))
         if "support" in top:
             support = top["support"]
@@ -370,6 +373,23 @@ class _Reader:
         if self.number(eps, ("regularization",)) < 0:
             self.fail(("regularization",), "the regularization must not be negative")
         return eps
+
+    def proximal(self, value, constraints) -> tuple:
+        """``proximal: {mu: MU, iterations: N}``: the damped solve of the Delassus system (aggsym.mechanics.damped),
+        N fixed proximal iterations on G + mu E (redundant rows allowed); absent: the exact solve."""
+        if value is None:
+            return ()
+        path = ("proximal",)
+        self.mapping(value, path, PROXIMAL_KEYS, required=("mu", "iterations"))
+        if not constraints:
+            self.fail(path, "proximal is given but the model has no constraints")
+        mu = self.expr(value["mu"], path + ("mu",))
+        if not self.number(mu, path + ("mu",)) > 0:
+            self.fail(path + ("mu",), "the proximal mu must be positive")
+        n = value["iterations"]
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_PROXIMAL_ITERATIONS:
+            self.fail(path + ("iterations",), f"iterations must be a whole number from 1 to {MAX_PROXIMAL_ITERATIONS}")
+        return (mu, n)
 
     def stabilization(self, value, constraints) -> tuple:
         if value is None:
@@ -768,4 +788,5 @@ def load_constraints(path, model: Model) -> Model:
     constraints = tuple(model.constraints) + tuple(constraints)
     stabilization = reader.stabilization(top.get("stabilization"), constraints)
     return dataclasses.replace(model, constraints=constraints, stabilization=stabilization,
-                               regularization=reader.regularization(top.get("regularization"), constraints))
+                               regularization=reader.regularization(top.get("regularization"), constraints),
+                               proximal=reader.proximal(top.get("proximal"), constraints))

@@ -144,8 +144,8 @@ class TorchTarget(Target):
         routines = []
         for e in job.emitted:
             body = e.bodies[self.name]
-            arrays = [i for i in e.inputs if i not in ("p", "t", "dt")]
-            scalars = [i for i in e.inputs if i in ("t", "dt")]
+            arrays = [i for i in e.inputs if i not in ("p", "t", "dt", "r")]
+            scalars = [i for i in e.inputs if i in ("t", "dt", "r")]
             wired = analytic.get(e.routine.role)
             if wired:
                 by_role = {x.routine.role: x for x in job.emitted}
