@@ -117,7 +117,7 @@ class Equations:
         (2.39)-(2.42), without assembling A, b, g; with the elastic forces C (q - q0) of (2.27) where there are
         springs, and the damping D qd where the model has joint damping (MJCF)."""
         tau = self._matrix(inverse_dynamics(self._bound, self._kin, self._qd, self._qdd), self.model.nv, 1) + self.c
-        if self._bound.damping:  # a joint damping D qd (MJCF) on the left side too
+        if self._bound.damping or self._bound.coulomb:  # joint damping D qd and friction F sign(qd) on the left too
             tau = tau + self._matrix(damping_forces(self._bound, self._qd), self.model.nv, 1)
         return tau
 
