@@ -95,9 +95,11 @@ def _parser() -> argparse.ArgumentParser:
                        help=_only("--inertial-parameters", ": ")
                             + "the named links' inertial data (or every link's: all) become entries of p, "
                             "ten per link (m, m c, inertia about the link origin in link axes; defaults from the file)")
-        p.add_argument("--payload", metavar="LINK",
+        p.add_argument("--payload", metavar="LINK[,LINK...]",
                        help=_only("--payload", ": ")
-                            + "a payload fixed to LINK, its ten inertial parameters in p (zero by default)")
+                            + "a payload fixed to LINK, its ten inertial parameters in p (zero by default; several "
+                              "links: a payload on each), and a helper NAME_set_payload_<LINK> that writes them from "
+                              "mass, centre of mass and inertia about it")
         p.add_argument("--gravity-parameter", action="store_true",
                        help=_only("--gravity-parameter", ": ")
                             + "the gravity vector becomes the last three entries of p (gravity_x, gravity_y, "
@@ -202,7 +204,10 @@ def _load(args):
         from .model.inertials import with_inertial_parameters
 
         links = [x.strip() for x in (args.inertial_parameters or "").split(",") if x.strip()]
-        model = with_inertial_parameters(model, links, args.payload)
+        payloads = None if args.payload is None else [x.strip() for x in args.payload.split(",") if x.strip()]
+        if payloads == []:
+            raise AggsymError(f"{path}: --payload: no link named (e.g. --payload tool0)")
+        model = with_inertial_parameters(model, links, payloads)
     if args.gravity_parameter:  # (after the inertial parameters: p keeps their indices, gravity comes last)
         from .model.gravity import with_gravity_parameters
 

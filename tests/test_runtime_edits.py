@@ -188,6 +188,35 @@ def test_the_batched_modules_helpers_write_what_numpys_writes(target, tmp_path, 
         < TOLERANCE
 
 
+@pytest.mark.pinocchio
+def test_a_payload_on_each_of_several_links(tmp_path, rng):
+    """--payload tool0,forearm_link: ten parameters each (payload_<param>_<link>), a helper each; both set through
+    the helpers agree with Pinocchio's model with both payloads as fixed links."""
+    path = robot_path("ur5")
+    model = with_inertial_parameters(aggsym.load(path), payload=["tool0", "forearm_link"])
+    assert [b.helper for b in model.inertial_blocks] == ["set_payload_tool0", "set_payload_forearm_link"]
+    assert [p.name for p in model.parameters][-20:-18] == ["payload_m_tool0", "payload_mcx_tool0"]
+    assert [p.name for p in model.parameters][-1] == "payload_Izz_forearm_link"
+    from aggsym.contract import select_routines
+
+    write(generate(select_routines(model, ["gravity"]), latex=False, targets="numpy"), tmp_path)
+    module = import_module(tmp_path / "ur5.py")
+    J = np.array([[0.02, -0.003, 0.001], [-0.003, 0.03, 0.002], [0.001, 0.002, 0.025]])
+    loads = {"tool0": (4.0, np.array([0.01, 0.02, 0.1]), J), "forearm_link": (0.3, np.array([0.2, -0.05, 0.0]), J / 7)}
+    p = np.array(model.parameter_values)
+    text = path.read_text()
+    for link, (mass, com, inertia) in loads.items():
+        p = getattr(module, f"set_payload_{link}")(mass, com, urdf_inertia_order(inertia), p)
+        text = with_payload_link(text, link, mass, com, inertia).replace('"payload"', f'"payload_{link}"') \
+            .replace('"payload_fix"', f'"payload_fix_{link}"')
+    pm = pin.buildModelFromXML(text)
+    twin = NumericTwin(model)
+    for _ in range(2):
+        q, v, a, tau = rng.uniform(-1.5, 1.5, model.nq), *rng.normal(size=(3, model.nq))
+        for role, (want, args) in pinocchio_reference(pm, q, v, a, tau).items():
+            assert relative_error(getattr(twin, role)(*args, p=p), want, floor=1.0) < TOLERANCE, role
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # refusals
 
@@ -227,6 +256,9 @@ def test_the_options_are_refused_where_they_mean_nothing(tmp_path, capsys):
     model = with_gravity_parameters(aggsym.load(robot_path("ur5")))
     with pytest.raises(AggsymError, match="already has a parameter named 'gravity_x'"):
         with_gravity_parameters(model)
+    for payload, message in (("tool0,tool0", "--payload names a link twice"), (",", "--payload: no link named")):
+        code, err = _run(capsys, "generate", robot_path("ur5"), "-o", tmp_path / "o", "--payload", payload)
+        assert code == 2 and message in err, err
     with pytest.raises(SystemExit) as stop:  # (argparse)
         cli.main(["generate", str(robot_path("ur5")), "-o", str(tmp_path / "o"), "--passive", "sometimes"])
     assert stop.value.code == 2 and "invalid choice: 'sometimes'" in capsys.readouterr().err

@@ -5,8 +5,9 @@ parameters, and ``--payload LINK`` adds a payload fixed to LINK (massless by def
 change a tool or a load without generating again.  Each gets ten parameters in the regressor's form
 (:mod:`aggsym.mechanics.regressor`): ``m``, the first moment ``mcx mcy mcz`` (m times the centre of mass) and the
 inertia ``Ixx Ixy Iyy Ixz Iyz Izz`` about the link frame's origin, in link axes, named ``<param>_<link>`` (the link
-made an identifier) and ``payload_<param>``; the links' defaults are their URDF values, the payload's zero.  They
-are appended to p in the order named, the payload last.
+made an identifier) and ``payload_<param>`` (``--payload A,B``: a payload on each, ``payload_<param>_<link>``); the
+links' defaults are their URDF values, the payloads' zero.  They are appended to p in the order named, the payloads
+last.
 
 The body a link was merged into keeps its other links as numbers: its Mises matrix (2.3) at the body origin is the
 merged one less the link's own part plus the parametrized part, moved from the link frame (R, t: x_body = R x_link
@@ -122,10 +123,13 @@ def _welded_refusal(model: Model, link: str, body: str, option: str) -> AggsymEr
         f"generate with --floating-base")
 
 
-def with_inertial_parameters(model: Model, links=(), payload: str | None = None) -> Model:
+def with_inertial_parameters(model: Model, links=(), payload=None) -> Model:
     """The model with the named links' inertial data (``links``: names, or ``["all"]`` for every link with an
-    ``<inertial>`` that moves) and a payload on ``payload`` as runtime parameters (see the module's text); an
-    error for a link welded to the world."""
+    ``<inertial>`` that moves) and a payload on ``payload`` (a link's name, or a list of them: a payload on each)
+    as runtime parameters (see the module's text); an error for a link welded to the world."""
+    payloads = [] if payload is None else [payload] if isinstance(payload, str) else list(payload)
+    if len(set(payloads)) != len(payloads):
+        raise AggsymError(f"{model.source}: --payload names a link twice")
     table = model.link_table
     if not table.from_file:
         raise AggsymError(f"{model.source}: --inertial-parameters and --payload apply to URDF robots (a YAML model "
@@ -143,7 +147,7 @@ def with_inertial_parameters(model: Model, links=(), payload: str | None = None)
             raise AggsymError(f"{model.source}: --inertial-parameters all: no link that moves has an <inertial>")
     frames = {f.name: (f.body, f.rotation, f.translation) for f in table.frames}
     for name, option in [(n, "--inertial-parameters") for n in links] + \
-            ([(payload, "--payload")] if payload is not None else []):
+            [(n, "--payload") for n in payloads]:
         if name not in frames:
             shown = name if len(name) <= 80 else name[:80] + "..."
             some = ", ".join(repr(n) for n in list(frames)[:8]) + (", ..." if len(frames) > 8 else "")
@@ -207,9 +211,11 @@ def with_inertial_parameters(model: Model, links=(), payload: str | None = None)
         if own is not None:
             add(k, _origin_form(*own), -1)
         add(k, part)
-    if payload is not None:
-        k, part = parametrized(payload, symbols(lambda n: f"payload_{n}", [0.0] * 10))
-        record("payload", payload, [f"payload_{n}" for n in NAMES])
+    for link in payloads:  # (one payload keeps the names it always had: payload_m, ...)
+        name = (lambda n: f"payload_{n}") if len(payloads) == 1 else \
+            (lambda n, link=link: f"payload_{n}_{_identifier(link)}")
+        k, part = parametrized(link, symbols(name, [0.0] * 10))
+        record("payload", link, [name(n) for n in NAMES])
         add(k, part)
     defaults = {p.symbol: p.value for p in parameters}
     bodies = list(model.bodies)
