@@ -217,6 +217,36 @@ def test_a_payload_on_each_of_several_links(tmp_path, rng):
             assert relative_error(getattr(twin, role)(*args, p=p), want, floor=1.0) < TOLERANCE, role
 
 
+@pytest.mark.pinocchio
+def test_a_links_own_inertial_data_through_its_helper(tmp_path, rng):
+    """--inertial-parameters wrist_3_link: set_inertial_wrist_3_link(m, c, I) gives Pinocchio's model of the URDF
+    whose <inertial> of that link says the same (mass 0.5 to 50 kg, a full tensor)."""
+    import re
+
+    from aggsym.contract import select_routines
+
+    path = robot_path("ur5")
+    model = with_inertial_parameters(aggsym.load(path), ["wrist_3_link"])
+    write(generate(select_routines(model, ["gravity"]), latex=False, targets="numpy"), tmp_path)
+    module = import_module(tmp_path / "ur5.py")
+    twin = NumericTwin(model)
+    text = path.read_text()
+    start = text.index('<link name="wrist_3_link"')
+    end = text.index("</link>", start)
+    for mass in (0.5, 50.0):
+        com = rng.normal(size=3) * 0.05
+        J = np.array([[0.02, 0.004, -0.001], [0.004, 0.03, 0.002], [-0.001, 0.002, 0.025]]) * mass
+        p = module.set_inertial_wrist_3_link(mass, com, urdf_inertia_order(J))
+        own = with_payload_link("<robot></robot>", "x", mass, com, J)
+        inertial = re.search(r"<inertial>.*</inertial>", own).group(0)
+        body = re.sub(r"<inertial>.*?</inertial>", inertial, text[start:end], flags=re.S)
+        pm = pin.buildModelFromXML(text[:start] + body + text[end:])
+        for _ in range(2):
+            q, v, a, tau = rng.uniform(-1.5, 1.5, model.nq), *rng.normal(size=(3, model.nq))
+            for role, (want, args) in pinocchio_reference(pm, q, v, a, tau).items():
+                assert relative_error(getattr(twin, role)(*args, p=p), want, floor=1.0) < TOLERANCE, (mass, role)
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # refusals
 
