@@ -101,9 +101,21 @@ def _parser() -> argparse.ArgumentParser:
                        help=_only("--inertial-parameters", ": ")
                             + "the named links' inertial data (or every link's: all) become entries of p, "
                             "ten per link (m, m c, inertia about the link origin in link axes; defaults from the file)")
-        p.add_argument("--payload", metavar="LINK",
+        p.add_argument("--payload", metavar="LINK[,LINK...]",
                        help=_only("--payload", ": ")
-                            + "a payload fixed to LINK, its ten inertial parameters in p (zero by default)")
+                            + "a payload fixed to LINK, its ten inertial parameters in p (zero by default; several "
+                              "links: a payload on each), and a helper NAME_set_payload_<LINK> that writes them from "
+                              "mass, centre of mass and inertia about it")
+        p.add_argument("--gravity-parameter", action="store_true",
+                       help=_only("--gravity-parameter", ": ")
+                            + "the gravity vector becomes the last three entries of p (gravity_x, gravity_y, "
+                            "gravity_z, m/s^2 in the root frame; default the file's (0, 0, -9.81)), for a wall- or "
+                            "ceiling-mounted robot without generating again")
+        p.add_argument("--passive", choices=["exclude", "include"], default=None,
+                       help=_only("--passive", ": ")
+                            + "the joints' <dynamics damping friction> in forward and inverse dynamics: exclude "
+                            "(default; as Pinocchio: they are in p and in joint_friction, the header says so) or "
+                            "include (A qdd + b + g + D qd + F sign(qd) = tau; the manifest's conservative is false)")
         p.add_argument("--frames", metavar="A,B,...",
                        help="the frames of the frame routines, in this order: URDF link names, or a YAML model's "
                             "bodies and 'frames:' (default: the links or bodies without a child, then 'frames:')")
@@ -172,7 +184,9 @@ def _load(args):
                                       ("--support", args.support),
                                       ("--inertial-parameters", args.inertial_parameters is not None),
                                       ("--payload", args.payload is not None),
-                                      ("--frictionloss", args.frictionloss)) if value]
+                                      ("--frictionloss", args.frictionloss),
+                                      ("--gravity-parameter", args.gravity_parameter),
+                                      ("--passive", args.passive is not None)) if value]
     check_cli_options(path, given)  # the reader's name and the option it does not accept
     if args.support and not args.floating_base:
         raise AggsymError(f"{path}: --support needs --floating-base (the support is the free root)")
@@ -199,7 +213,18 @@ def _load(args):
         from .model.inertials import with_inertial_parameters
 
         links = [x.strip() for x in (args.inertial_parameters or "").split(",") if x.strip()]
-        model = with_inertial_parameters(model, links, args.payload)
+        payloads = None if args.payload is None else [x.strip() for x in args.payload.split(",") if x.strip()]
+        if payloads == []:
+            raise AggsymError(f"{path}: --payload: no link named (e.g. --payload tool0)")
+        model = with_inertial_parameters(model, links, payloads)
+    if args.gravity_parameter:  # (after the inertial parameters: p keeps their indices, gravity comes last)
+        from .model.gravity import with_gravity_parameters
+
+        model = with_gravity_parameters(model)
+    if args.passive == "include":
+        from .model.joint_dynamics import with_passive_included
+
+        model = with_passive_included(model)
     if args.frames is not None:
         from .model.frames import select_frames
 

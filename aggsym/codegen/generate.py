@@ -31,11 +31,13 @@ from ..core.backend import Symbolic
 from ..core.program import straight_line
 from ..mechanics.bound import bind, program_operations
 from ..mechanics.kinematics import TreeKinematics
+from ..model.joint_dynamics import passive_entry, routine_notes
 from ..model.reframe import reframe
 from ..model.tree import Tree
 from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
 from .escape import check_c_identifier, check_module_name
+from .inertial_helpers import inertial_helpers
 from .names import header_macros
 from .printing import SCALARS, _number
 from .slicing import SLICE_SIZE, SLICE_THRESHOLD
@@ -221,6 +223,10 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         "zero_width": ZERO_BYTES // SCALAR_BYTES[scalar],
         "time": model.time_dependent,
         "elastic": any(b.pair.elastic for b in model.bodies),
+        "omitted": dict(omitted),  # role -> why it is left out (the header says so where it would be)
+        "passive": passive_entry(model),  # the joints' damping and friction: in forward/inverse dynamics or not
+        "passive_notes": routine_notes(model),  # role -> what it holds of them (the header's comment)
+        "inertial_helpers": inertial_helpers(model),  # NAME_set_payload_<link>, set_inertial_<link>
     }
     gen = Generated(model, emitted, targets=tuple(t.name for t in chosen))
     job = Job(model, ctx, emitted, prog, outputs, lines, split, scalar, omitted, chosen)

@@ -94,6 +94,9 @@ def regressor_problem(model) -> str | None:
         return "the elastic force C (q - q0) of (2.27) is in tau and not linear in the inertial parameters"
     if any(b.added_mass is not None for b in model.bodies):
         return "added masses (Prop. 2.8) act in tau and are not among the inertial parameters"
+    if model.has_damping:
+        return ("the joints' damping D qd and friction F sign(qd) are in tau and are not inertial parameters "
+                "(a URDF robot: generate with --passive exclude, the default, for the regressor)")
     return None
 
 

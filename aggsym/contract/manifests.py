@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from .. import __version__
 from ..mechanics import elastic
+from ..model.joint_dynamics import passive_entry
 from .registry import ROUTINES, input_length, signature
 
 
@@ -98,6 +99,9 @@ def manifest(model, routines, ops: dict, omitted=None, scalar: str = "double", l
         out["constraints"] = constraints_entry(model)
     if any(r.role.startswith("frame_") for r in routines):
         out["frames"] = frames_entry(model)
+    passive = passive_entry(model)
+    if passive is not None:  # the joints' damping and friction: in forward and inverse dynamics or not
+        out["passive"] = passive
     if model.meta.get("mjcf"):  # an MJCF model: its conventions and what MuJoCo has beside the equations
         out["mjcf"] = model.meta["mjcf"]
     if model.meta.get("snapped_angles"):  # an approximation the user asked for (--snap-angles), recorded

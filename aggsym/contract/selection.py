@@ -13,7 +13,7 @@ def omitted_routines(model) -> dict:
     mass, e.g. a massless finger joint), forward dynamics, A^-1 and the factors, undefined there (A, b, g, inverse
     dynamics and the joint wrenches stay defined and are emitted)."""
     out = {}
-    wanted = {r.role for r in routines_for(model)}
+    wanted = [r.role for r in routines_for(model)]  # (a list: the order of emission, the same in every run)
     problem = regressor_problem(model)
     if problem:
         out.update({role: f"tau = Y pi does not hold: {problem}" for role in ("regressor", "base_regressor")

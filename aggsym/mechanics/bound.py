@@ -56,6 +56,7 @@ class Bound:
     armature: object = 0  # the rotor inertia added on every coordinate's own axis (model.armature)
     rotors: tuple = ()  # per coordinate: armature plus its own (model.dof_armature); empty: armature on every one
     damping: tuple = ()  # per coordinate: the viscous damping (model.damping); empty: none
+    coulomb: tuple = ()  # per coordinate: the Coulomb friction (model.coulomb); empty: none
 
     def rotor(self, j: int):
         """The rotor inertia on coordinate j's own axis (the diagonal entry it adds to A)."""
@@ -142,7 +143,8 @@ def bind(model: Model, backend, p=None, tree: Tree | None = None, t=None) -> Bou
     armature = fold(model.armature) if backend.symbolic else float(model.armature)
     rotors = tuple(s(a + model.armature if model.armature else a) for a in model.dof_armature)
     damping = tuple(s(d) for d in model.damping)
-    return Bound(model, tree, backend, bodies, gravity, params, t, armature, rotors, damping)
+    coulomb = tuple(s(f) for f in model.coulomb)
+    return Bound(model, tree, backend, bodies, gravity, params, t, armature, rotors, damping, coulomb)
 
 
 def _steps(rotation, s):

@@ -1,7 +1,7 @@
 """The passive joint forces on the left side of the equations of motion: the springs of elastic pairs (2.27),
 viscous joint damping (MuJoCo's ``stiffness``/``springref`` and ``damping``), the springs and dampers of fixed
 tendons (:func:`~.joint_space.tendon_forces`) and, on request, Coulomb joint friction (MuJoCo's ``frictionloss``
-taken as ``f sign(q')``).
+taken as ``f sign(q')``; URDF ``<dynamics damping friction>`` under ``--passive include``).
 
 With them, the equations read
 
@@ -23,10 +23,20 @@ from .linalg import mul
 
 
 def damping_forces(bound, qd) -> list:
-    """D q': per coordinate its damping times its rate (0 where there is none)."""
-    if not bound.damping:
-        return [0] * len(qd)
-    return [0 if is_zero(d) else mul(d, rate) for d, rate in zip(bound.damping, qd)]
+    """D q' + F sign(q'): per coordinate its damping times its rate plus its Coulomb friction times the rate's sign
+    (0 where there is none)."""
+    out = [0] * len(qd)
+    if bound.damping:
+        out = [0 if is_zero(d) else mul(d, rate) for d, rate in zip(bound.damping, qd)]
+    if bound.coulomb:
+        out = [x if is_zero(f) else (_coulomb(bound, f, rate) if is_zero(x) else x + _coulomb(bound, f, rate))
+               for x, f, rate in zip(out, bound.coulomb, qd)]
+    return out
+
+
+def _coulomb(bound, f, rate):
+    """f sign(rate): the Coulomb force on the left side (0 when the rate is 0)."""
+    return mul(f, bound.backend.call("sign", rate))
 
 
 def coulomb_forces(bound, qd) -> list:

@@ -65,7 +65,7 @@ def _is_mjcf(head: bytes) -> bool:
 
 
 URDF_CLI_OPTIONS = ("--floating-base", "--mimic", "--snap-angles", "--constraints", "--support",
-                    "--inertial-parameters", "--payload")
+                    "--inertial-parameters", "--payload", "--gravity-parameter", "--passive")
 
 XACRO_CLI_OPTIONS = URDF_CLI_OPTIONS + ("--xacro-arg", "--package-path")
 

@@ -86,7 +86,8 @@ class Parameter:
 class JointDynamics:
     """A URDF joint's ``<dynamics damping= friction=>``: viscous damping d (N m s/rad, or N s/m for a prismatic
     joint) and Coulomb friction f (N m, or N), each None where the file gives none.  They describe the generalized
-    force tau_f = -d qd - f sign(qd) along the coordinate (not yet emitted)."""
+    force tau_f = -d qd - f sign(qd) along the coordinate: the routine ``joint_friction``, and in forward and inverse
+    dynamics under ``--passive include`` (:mod:`aggsym.model.joint_dynamics`)."""
 
     damping: float | None = None
     friction: float | None = None
@@ -94,6 +95,19 @@ class JointDynamics:
     @property
     def given(self) -> bool:
         return self.damping is not None or self.friction is not None
+
+
+@dataclass(frozen=True)
+class InertialBlock:
+    """A link whose ten inertial parameters (``m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz``: mass, first moment
+    and inertia tensor about the link frame's origin, link axes) are entries of p: a payload (``kind``
+    ``"payload"``) or the link's own inertial data (``"link"``).  ``helper`` is the generated helper's name
+    (``set_payload_<link>``, ``set_inertial_<link>``), ``parameters`` the ten parameter names in that order."""
+
+    kind: str
+    link: str
+    helper: str
+    parameters: tuple
 
 
 @dataclass(frozen=True)
@@ -467,10 +481,14 @@ class Model:
     dof_armature: tuple = ()  # per pair coordinate (tree order): a rotor inertia of its own on A's diagonal, added to
     # ``armature`` (MJCF ``armature``; expressions, usually runtime parameters); empty: none
     damping: tuple = ()  # per pair coordinate (tree order): viscous damping d, the force d qd on the left side of the
-    # equations of motion beside the elastic C (q - q0) (MJCF ``damping``; expressions); empty: none
+    # equations of motion beside the elastic C (q - q0) (MJCF ``damping``, URDF ``<dynamics damping>`` under
+    # ``--passive include``; expressions); empty: none
     coulomb: tuple = ()  # per pair coordinate (tree order): Coulomb friction f, the force f sign(qd) on the left side
-    # (MJCF ``frictionloss`` on request; expressions); empty: none
+    # (MJCF ``frictionloss`` under ``--frictionloss coulomb``, URDF ``<dynamics friction>`` under ``--passive include``;
+    # expressions); empty: none
     tendons: tuple = ()  # Tendon: fixed tendons with springs or dampers, their forces on the left side
+    inertial_blocks: tuple = ()  # InertialBlock: links whose ten inertial parameters are entries of p (--payload,
+    # --inertial-parameters), each with a generated helper that writes them
 
     @property
     def link_table(self) -> Links:
@@ -580,8 +598,9 @@ class Model:
 
     @property
     def has_damping(self) -> bool:
-        """True when some coordinate has a viscous damping that is not exactly zero (``damping``)."""
-        return any(not _zero(d) for d in self.damping)
+        """True when some coordinate has a viscous damping or a Coulomb friction in the equations that is not
+        exactly zero (``damping``, ``coulomb``)."""
+        return any(not (getattr(d, "is_zero", False) or d == 0) for d in self.damping + self.coulomb)
 
     @functools.cached_property
     def parameter_symbols(self) -> tuple:

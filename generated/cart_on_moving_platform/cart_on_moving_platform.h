@@ -3,8 +3,8 @@
  *   A(q) qdd + b(q, qd) + g(q) = tau     (Konoplev 1996, (2.17), with g = -S G moved to the left)
  *   with prescribed motions (rotors, (2.13)): every function takes the time t (one double) before p
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
- * p is the parameter vector (7 entries).
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
+ * p is the parameter vector (7 entries; NULL: the defaults CART_ON_MOVING_PLATFORM_P_DEFAULTS).
  *
  * Coordinates (q order):
  *   q[0]  x  (translation, joint cart)
@@ -24,6 +24,8 @@
  */
 #ifndef CART_ON_MOVING_PLATFORM_H
 #define CART_ON_MOVING_PLATFORM_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

@@ -2,8 +2,8 @@
  *
  *   A(q) qdd + b(q, qd) + g(q) = tau     (Konoplev 1996, (2.17), with g = -S G moved to the left)
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
- * p is the parameter vector (9 entries).
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
+ * p is the parameter vector (9 entries; NULL: the defaults DELTA_ROBOT_P_DEFAULTS).
  *
  * Coordinates (q order):
  *   q[0]  q1  (rotation, joint motor1)
@@ -34,6 +34,8 @@
  */
 #ifndef DELTA_ROBOT_H
 #define DELTA_ROBOT_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

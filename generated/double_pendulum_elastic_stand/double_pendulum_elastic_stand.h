@@ -4,8 +4,8 @@
  *   with Hooke-elastic pairs: A(q) qdd + b(q, qd) + g(q) + C (q - q0) = tau (2.27); c = C (q - q0) is
  *   double_pendulum_elastic_stand_elastic, included in inverse_dynamics, nonlinear_effects and forward_dynamics
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
- * p is the parameter vector (15 entries).
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
+ * p is the parameter vector (15 entries; NULL: the defaults DOUBLE_PENDULUM_ELASTIC_STAND_P_DEFAULTS).
  *
  * Coordinates (q order):
  *   q[0]  delta12  (translation, joint stand)
@@ -32,6 +32,8 @@
  */
 #ifndef DOUBLE_PENDULUM_ELASTIC_STAND_H
 #define DOUBLE_PENDULUM_ELASTIC_STAND_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

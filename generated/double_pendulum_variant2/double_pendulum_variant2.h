@@ -2,8 +2,8 @@
  *
  *   A(q) qdd + b(q, qd) + g(q) = tau     (Konoplev 1996, (2.17), with g = -S G moved to the left)
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
- * p is the parameter vector (12 entries).
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
+ * p is the parameter vector (12 entries; NULL: the defaults DOUBLE_PENDULUM_VARIANT2_P_DEFAULTS).
  *
  * Coordinates (q order):
  *   q[0]  o12  (translation, joint hanger)
@@ -27,6 +27,8 @@
  */
 #ifndef DOUBLE_PENDULUM_VARIANT2_H
 #define DOUBLE_PENDULUM_VARIANT2_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

@@ -3,8 +3,8 @@
  *   A(q) qdd + b(q, qd) + g(q) = tau     (Konoplev 1996, (2.17), with g = -S G moved to the left)
  *   with prescribed motions (rotors, (2.13)): every function takes the time t (one double) before p
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
- * p is the parameter vector (2 entries).
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
+ * p is the parameter vector (2 entries; NULL: the defaults FLYWHEEL_ON_BODY_P_DEFAULTS).
  *
  * Coordinates (q order):
  *   q[0]  psi1  (rotation, joint pivot)
@@ -18,6 +18,8 @@
  */
 #ifndef FLYWHEEL_ON_BODY_H
 #define FLYWHEEL_ON_BODY_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

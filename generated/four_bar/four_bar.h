@@ -2,8 +2,8 @@
  *
  *   A(q) qdd + b(q, qd) + g(q) = tau     (Konoplev 1996, (2.17), with g = -S G moved to the left)
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
- * p is the parameter vector (4 entries).
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
+ * p is the parameter vector (4 entries; NULL: the defaults FOUR_BAR_P_DEFAULTS).
  *
  * Coordinates (q order):
  *   q[0]  q1  (rotation, joint crank)
@@ -19,6 +19,8 @@
  */
 #ifndef FOUR_BAR_H
 #define FOUR_BAR_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

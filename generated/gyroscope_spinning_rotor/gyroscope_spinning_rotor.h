@@ -3,8 +3,8 @@
  *   A(q) qdd + b(q, qd) + g(q) = tau     (Konoplev 1996, (2.17), with g = -S G moved to the left)
  *   with prescribed motions (rotors, (2.13)): every function takes the time t (one double) before p
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
- * p is the parameter vector (1 entries).
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
+ * p is the parameter vector (1 entries; NULL: the defaults GYROSCOPE_SPINNING_ROTOR_P_DEFAULTS).
  *
  * Coordinates (q order):
  *   q[0]  theta14  (rotation, joint outer_axis)
@@ -16,6 +16,8 @@
  */
 #ifndef GYROSCOPE_SPINNING_ROTOR_H
 #define GYROSCOPE_SPINNING_ROTOR_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

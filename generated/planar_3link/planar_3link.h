@@ -2,8 +2,8 @@
  *
  *   A(q) qdd + b(q, qd) + g(q) = tau     (Konoplev 1996, (2.17), with g = -S G moved to the left)
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
- * p is the parameter vector (7 entries).
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
+ * p is the parameter vector (7 entries; NULL: the defaults PLANAR_3LINK_P_DEFAULTS).
  *
  * Coordinates (q order):
  *   q[0]  theta1  (rotation, joint joint1)
@@ -22,6 +22,8 @@
  */
 #ifndef PLANAR_3LINK_H
 #define PLANAR_3LINK_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

@@ -2,8 +2,8 @@
  *
  *   A(q) qdd + b(q, qd) + g(q) = tau     (Konoplev 1996, (2.17), with g = -S G moved to the left)
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
- * p is the parameter vector (3 entries).
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
+ * p is the parameter vector (3 entries; NULL: the defaults ROLLING_DISC_P_DEFAULTS).
  *
  * Coordinates (q order):
  *   q[0]  x  (translation, joint carriage)
@@ -21,6 +21,8 @@
  */
 #ifndef ROLLING_DISC_H
 #define ROLLING_DISC_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

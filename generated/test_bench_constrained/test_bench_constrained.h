@@ -2,8 +2,8 @@
  *
  *   A(q) qdd + b(q, qd) + g(q) = tau     (Konoplev 1996, (2.17), with g = -S G moved to the left)
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
- * p is the parameter vector (1 entries).
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
+ * p is the parameter vector (1 entries; NULL: the defaults TEST_BENCH_CONSTRAINED_P_DEFAULTS).
  *
  * Coordinates (q order):
  *   q[0]  o1_11  (translation, joint platform_o1)
@@ -66,6 +66,8 @@
  */
 #ifndef TEST_BENCH_CONSTRAINED_H
 #define TEST_BENCH_CONSTRAINED_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

@@ -2,7 +2,7 @@
  *
  *   A(q) qdd + b(q, qd) + g(q) = tau     (Konoplev 1996, (2.17), with g = -S G moved to the left)
  *
- * C99, <math.h> only, no globals, no allocation, reentrant.  Matrices row-major.
+ * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
  * p is the parameter vector (0 entries; pass NULL).
  *
  * Coordinates (q order):
@@ -40,6 +40,8 @@
  */
 #ifndef WALKING_MACHINE_ON_GROUND_H
 #define WALKING_MACHINE_ON_GROUND_H
+
+#include <stddef.h>  /* NULL, which p may be */
 
 #ifdef __cplusplus
 extern "C" {

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 
 from ...contract import manifest
+from ..inertial_helpers import manifest_entry
 from ..names import c_symbol
 from .base import Target, file_pattern
 from .c import split_layout
@@ -28,4 +29,6 @@ class ManifestTarget(Target):
         data = manifest(job.model, [e.routine for e in emitted], {e.routine.role: e.ops for e in emitted},
                         job.omitted, job.scalar, layout=layout,
                         functions={e.routine.role: c_symbol(job.model, e.routine) for e in emitted})
+        if job.model.inertial_blocks:  # the helpers that write a link's ten inertial parameters (C and Python)
+            data["inertial_helpers"] = manifest_entry(job.model)
         return {f"{job.model.name}.json": json.dumps(data, indent=2) + "\n"}
