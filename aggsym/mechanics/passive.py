@@ -23,29 +23,18 @@ from .linalg import mul
 
 
 def damping_forces(bound, qd) -> list:
-    """D q' + F sign(q'): per coordinate its damping times its rate plus its Coulomb friction times the rate's sign
-    (0 where there is none)."""
-    out = [0] * len(qd)
-    if bound.damping:
-        out = [0 if is_zero(d) else mul(d, rate) for d, rate in zip(bound.damping, qd)]
-    if bound.coulomb:
-        out = [x if is_zero(f) else (_coulomb(bound, f, rate) if is_zero(x) else x + _coulomb(bound, f, rate))
-               for x, f, rate in zip(out, bound.coulomb, qd)]
-    return out
-
-
-def _coulomb(bound, f, rate):
-    """f sign(rate): the Coulomb force on the left side (0 when the rate is 0)."""
-    return mul(f, bound.backend.call("sign", rate))
+    """D q': per coordinate its damping times its rate (0 where there is none)."""
+    if not bound.damping:
+        return [0] * len(qd)
+    return [0 if is_zero(d) else mul(d, rate) for d, rate in zip(bound.damping, qd)]
 
 
 def coulomb_forces(bound, qd) -> list:
-    """F sign(q'): per coordinate its Coulomb friction times the sign of its rate (0 where there is none)."""
-    coulomb = bound.model.coulomb
-    if not coulomb:
+    """F sign(q'): per coordinate its Coulomb friction times the sign of its rate (0 where there is none, and at a
+    rate of exactly 0)."""
+    if not bound.coulomb:
         return [0] * len(qd)
-    return [0 if is_zero(f := bound.scalar(c)) else mul(f, bound.backend.call("sign", rate))
-            for c, rate in zip(coulomb, qd)]
+    return [0 if is_zero(f) else mul(f, bound.backend.call("sign", rate)) for f, rate in zip(bound.coulomb, qd)]
 
 
 def _plus(a: list, b: list) -> list:
@@ -60,7 +49,7 @@ def left_forces(bound, q, qd) -> list:
         c = _plus(c, damping_forces(bound, qd))
     if bound.model.tendons:
         c = _plus(c, tendon_forces(bound, q, qd))
-    if bound.model.coulomb:
+    if bound.coulomb:
         c = _plus(c, coulomb_forces(bound, qd))
     return c
 
