@@ -10,18 +10,21 @@ what identification reports, so it is computed, never a least-squares value roun
   analyses take it) and the parameters' defaults are rational too, and the model's constants are doubles, i.e.
   dyadic rationals, kept as Fractions while the program is recorded (:class:`~aggsym.core.backend.ExactSymbolic`:
   constants folded without rounding): every value of the program is then the exact value of the model's
-  equations at that state (:func:`exact_rows`).  A program that needs anything else (a sine of another expression, an irrational root)
-  raises :class:`Inexact`.
+  equations at that state (:func:`exact_rows`).  An irrational root (a constant such as sqrt(3)) is the double
+  the generated code computes; a program that needs anything else (a sine of another expression) raises
+  :class:`Inexact`, and every relation is then judged on the floating-point samples alone.
 * Coefficients (:func:`exact_coefficients`): the support of a dependent column (the independent columns it
   combines) is chosen from the floating-point least squares by a tolerance; on it, the square system of the exact
-  rows that a pivoted QR picks is solved in rationals (first modulo a large prime and reconstructed, a candidate
-  kept only when it satisfies every exact row; else by exact Gaussian elimination), and the relation is checked
-  on every exact row: exact when every residual is exactly 0.  Where the model's numbers are not exactly those of a rigid-body system (a constant
-  rotation by an angle that is not right, its entries rounded doubles: UR5's 1.570796325 rad), a column has no
-  exact relation;
-  there is no exact value to compute: the column keeps the least squares on the samples, is reported, and the
-  residual is reported too.  The tolerances choose (the support, the rows, which least squares); they replace
-  no value.
+  rows that a pivoted QR picks is solved in rationals (first modulo a large prime and reconstructed, else by
+  exact Gaussian elimination), and the relation is checked on every exact row: exact when every residual is
+  exactly 0.
+* Relations that are not exact: where the model's numbers are not exactly those of a rigid-body system (a
+  constant rotation by an angle that is not right has rounded cosine and sine: UR5's 1.570796325 rad), a column
+  has no exact relation and there is no exact value to compute.  It is reported with its residual on the
+  floating-point samples, and keeps the first of the exact solution of the chosen rows, the least squares on its
+  support, whose residual is below :data:`INEXACT_RESIDUAL`, else the least squares on every independent column.
+
+The tolerances choose (the support, the rows, which solution); they replace no value.
 """
 from __future__ import annotations
 
@@ -30,8 +33,8 @@ from fractions import Fraction
 
 SUPPORT_TOLERANCE = 1e-10  # a term of the least-squares relation below this times the largest is taken for a
 # structural zero (its coefficient for the rounding of the least squares)
-INEXACT_RESIDUAL = 1e-9  # a relation that is not exact keeps the least squares on its support when the relative
-# residual on the samples is below this, else on every independent column
+INEXACT_RESIDUAL = 1e-9  # a relation that is not exact keeps a solution on its support when the residual on the
+# samples (relative to the largest column) is below this, else the least squares on every independent column
 
 
 class Inexact(ArithmeticError):
