@@ -240,7 +240,8 @@ def test_on_request_through_the_command_line(rubbing_path, tmp_path):
 
 
 def test_sign_is_branch_free_and_zero_at_rest_in_jax_and_pytorch(rubbing_path, tmp_path, rng):
-    """The Coulomb column in the JAX and PyTorch modules equals the NumPy module's, sign(0) = 0 included."""
+    """The Coulomb column is the table's sign in every target: the C calls aggsym_sign (no branch in the routine),
+    and the JAX and PyTorch modules equal the NumPy module's, sign(0) = 0 included."""
     jax = pytest.importorskip("jax")
     torch = pytest.importorskip("torch")
     from aggsym.codegen.compile import import_module
@@ -255,6 +256,10 @@ def test_sign_is_branch_free_and_zero_at_rest_in_jax_and_pytorch(rubbing_path, t
     q, qd, qdd = rng.normal(size=(4, 3)), rng.normal(size=(4, 3)), rng.normal(size=(4, 3))
     qd[1] = 0.0
     qd[2, 1] = 0.0
+    c = (tmp_path / "rubbing.c").read_text()
+    body = c[c.index("void rubbing_friction_regressor("):]
+    body = body[:body.index("\n}\n")]
+    assert body.count("aggsym_sign(") == 3 and "if" not in body.replace("aggsym_", "")  # one call per joint, no branch
     expected = npm.friction_regressor(q, qd, qdd)
     assert np.array_equal(expected[1][:, 33:36], np.zeros((3, 3)))
     got = np.asarray(jax.jit(jm.friction_regressor)(q, qd, qdd))
