@@ -122,7 +122,7 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--routines", metavar="A,B,...",
                        help="emit only these routines (names as --list-routines shows them, without the model's "
                             "prefix; 'default': those emitted when none are named; 'all': every routine, with those "
-                            "on request: derivatives, regressor)")
+                            "on request: derivatives, regressor, friction_regressor)")
         p.add_argument("--name", metavar="NAME",
                        help="the name of the generated code (C prefix, module and file names) instead of the model's")
         p.add_argument("--scalar", choices=["double", "float"], default="double",

@@ -25,6 +25,7 @@ The package, one concern a module: :mod:`.registry` (Routine, Output, ROUTINES, 
 :mod:`.routines_derivatives`,
 :mod:`.routines_frames`, :mod:`.routines_regressor`: imported below in that order, which is the order of
 registration, hence of emission and of the manifest), :mod:`.analyses` (numerical analyses of a model),
+:mod:`.exact_relations` (the base parameters' exact coefficients),
 :mod:`.selection` (the routines left out, ``--routines``) and :mod:`.manifests` (the manifest, the float
 tolerances).  The C names (``NAME_role``, prototypes, header macros) are the C target's:
 :mod:`aggsym.codegen.names`.
@@ -35,6 +36,7 @@ from .registry import INPUT_KINDS, ROUTINES, Output, Routine, input_length, regi
 from .shapes import (
     constraint_jacobian_shape, constraint_rows_vector, constraint_square, frame_count, joint_wrench_shape,
     mechanism_vector, momentum_shape, nq_square, nq_vector, partition_block_shape, positions_vector, regressor_shape,
+    friction_regressor_shape,
     scalar, six, slip_vector, support_block, support_lengths, transvection_count,
 )
 # the registrations, in the order of emission
@@ -49,7 +51,9 @@ from . import routines_integrate  # noqa: F401  (registers integrate)
 from . import routines_impacts  # noqa: F401  (registers impulse_dynamics)
 from . import routines_derivatives  # noqa: F401  (registers the derivatives of the dynamics)
 from .routines_frames import COM_CONVENTION, frame_layout
-from .routines_regressor import base_regressor_layout, regressor_layout, standard_parameter_names
+from .routines_regressor import (
+    base_regressor_layout, drive_parameter_names, friction_regressor_layout, regressor_layout, standard_parameter_names,
+)
 from .analyses import (
     BASE_RANK_TOLERANCE, BASE_SEED, base_parameters, massless_coordinates, pivoted_columns, redundant_constraints,
     regressor_problem, sample_configurations,
@@ -65,11 +69,11 @@ __all__ = [
     "nq_vector", "nq_square", "positions_vector", "scalar", "momentum_shape", "joint_wrench_shape",
     "transvection_count", "partition_block_shape", "constraint_rows_vector", "constraint_jacobian_shape",
     "constraint_square", "slip_vector", "support_lengths", "support_block", "six", "mechanism_vector", "frame_count",
-    "regressor_shape",
+    "regressor_shape", "friction_regressor_shape",
     "momentum_layout", "JOINT_WRENCH_CONVENTION", "joint_wrench_layout", "transvective_layout", "partition_layout",
     "constraint_row_labels", "constraint_layout", "slip_labels", "slip_layout", "CONSTRAINT_FAILURE",
     "SUPPORT_OUTPUTS", "SUPPORT_FAILURE", "support_layout", "frame_layout", "COM_CONVENTION", "regressor_layout",
-    "standard_parameter_names", "base_regressor_layout",
+    "standard_parameter_names", "base_regressor_layout", "friction_regressor_layout", "drive_parameter_names",
     "regressor_problem", "BASE_SEED", "BASE_RANK_TOLERANCE", "base_parameters", "pivoted_columns",
     "sample_configurations", "massless_coordinates", "redundant_constraints",
     "omitted_routines", "select_routines",

@@ -1,14 +1,14 @@
 """Numerical analyses of a model at generation, on the numeric twin: random configurations, the coordinates that
 move no mass (A(q) singular), structurally redundant constraint rows, why the regressor does not hold, and the
-base-parameter reduction of the regressor."""
+base-parameter reduction of the regressor (its exact coefficients: :mod:`.exact_relations`)."""
 from __future__ import annotations
 
 import functools
 
 from ..mechanics import elastic
 from ..model.tree import Tree
+from .exact_relations import candidate_supports, pivoted_columns
 from .registry import ROUTINES, run
-from .shapes import regressor_shape
 
 
 def sample_configurations(model, rng, size=None):
@@ -100,31 +100,38 @@ def regressor_problem(model) -> str | None:
     return None
 
 
-BASE_SEED = 0  # the random states of the base-parameter reduction
+BASE_SEED = 0  # the random states of the base-parameter reduction (the exact ones: BASE_SEED + 1)
 BASE_RANK_TOLERANCE = "max(rows, columns) * 2.2e-16 * the largest singular value (numpy.linalg.matrix_rank's)"
 
 
 @functools.lru_cache(maxsize=8)
-def base_parameters(model) -> tuple:
-    """The base-parameter reduction at the default parameters: (independent columns of Y, beta, samples) such that
-    ``Y[:, dependent] = Y[:, independent] beta`` on every state, so that tau = Y_b pi_b with ``Y_b = Y[:, independent]``
-    and ``pi_b = pi[independent] + beta pi[dependent]``.  Found numerically as identification practice does: Y at
-    ``samples`` random states (seed :data:`BASE_SEED`: q uniform in [-pi, pi], qd and qdd standard normal) stacked,
-    its rank r with the tolerance of :data:`BASE_RANK_TOLERANCE`, and the first r pivots of a QR factorization
-    with column pivoting (Householder, largest remaining column first: Gautier's choice), listed in column
-    order; beta by least squares, entries below 1e-10 of the largest set to 0, the others rounded to 12 digits."""
+def base_parameters(model, role: str = "regressor") -> tuple:
+    """The base-parameter reduction of the regressor ``role`` (``regressor``, or ``friction_regressor`` with the
+    friction and armature columns) at the default parameters: (independent columns, dependent columns, beta,
+    samples, inexact, residual) such that ``Y[:, dependent] = Y[:, independent] beta`` on every state, so that tau = Y_b pi_b
+    with ``Y_b = Y[:, independent]`` and ``pi_b = pi[independent] + beta pi[dependent]``.
+
+    Which columns: as identification practice does, Y at ``samples`` random states (seed :data:`BASE_SEED`: q
+    uniform in [-pi, pi], qd and qdd standard normal) stacked, its rank r with the tolerance of
+    :data:`BASE_RANK_TOLERANCE`, and the first r pivots of a QR factorization with column pivoting (Householder,
+    largest remaining column first: Gautier's choice), listed in column order.  beta: exact rationals
+    (:mod:`.exact_relations`: the program in rational arithmetic at rational states, each dependent column solved
+    on a support that the least squares chooses), given as the doubles nearest them; ``inexact`` lists the
+    dependent columns whose relation is not exact in the model's own numbers (their coefficients are then the
+    least squares on the samples), ``residual`` the largest relative residual of those on the samples."""
     import numpy as np
 
     from ..core.backend import Numeric
     from ..mechanics.bound import bind
+    from .exact_relations import Inexact, exact_coefficients, exact_rows
 
-    n, P = regressor_shape(model)
+    n, P = ROUTINES[role].outputs[0].shape(model)
     samples = max(8, -(-4 * P // max(n, 1)))
     rng = np.random.default_rng(BASE_SEED)
     bound = bind(model, Numeric())
     x = {"q": list(sample_configurations(model, rng, samples)), "qd": list(rng.normal(size=(n, samples))),
          "qdd": list(rng.normal(size=(n, samples)))}
-    flat = run(ROUTINES["regressor"], bound, x)[0]
+    flat = run(ROUTINES[role], bound, x)[0]
     Y = np.stack([np.broadcast_to(np.asarray(v, dtype=float), (samples,)) for v in flat]).reshape(n, P, samples)
     Y = Y.transpose(2, 0, 1).reshape(samples * n, P)
     sv = np.linalg.svd(Y, compute_uv=False)
@@ -132,34 +139,14 @@ def base_parameters(model) -> tuple:
     rank = int((sv > tol).sum())
     independent = sorted(pivoted_columns(Y)[:rank])
     dependent = [j for j in range(P) if j not in set(independent)]
-    if rank and dependent:
-        beta = np.linalg.lstsq(Y[:, independent], Y[:, dependent], rcond=None)[0]
-    else:  # nothing to express, or nothing identifiable (a tree whose moving bodies do no work)
-        beta = np.zeros((rank, len(dependent)))
-    scale = max(float(np.abs(beta).max()), 1.0) if beta.size else 1.0
-    beta[np.abs(beta) < 1e-10 * scale] = 0.0
-    beta = np.vectorize(lambda v: float(f"{v:.12g}"))(beta) if beta.size else beta  # least squares' last digits
-    return tuple(independent), tuple(dependent), beta, samples
-
-
-def pivoted_columns(Y) -> list:
-    """The column order of a Householder QR factorization of Y with column pivoting (at each step the column of
-    largest norm in the remaining rows first): its first r entries are r well-conditioned independent columns."""
-    import numpy as np
-
-    R = np.array(Y, dtype=float, copy=True)
-    rows, cols = R.shape
-    order = list(range(cols))
-    for k in range(min(rows, cols)):
-        norms = np.einsum("ij,ij->j", R[k:, k:], R[k:, k:])
-        j = k + int(np.argmax(norms))
-        R[:, [k, j]] = R[:, [j, k]]
-        order[k], order[j] = order[j], order[k]
-        x = R[k:, k]
-        alpha = -np.copysign(np.linalg.norm(x), x[0]) if x[0] != 0 else -np.linalg.norm(x)
-        v = x.copy()
-        v[0] -= alpha
-        vv = v @ v
-        if vv > 0:
-            R[k:, k:] -= np.outer(v, (2.0 / vv) * (v @ R[k:, k:]))
-    return order
+    if not (rank and dependent):  # nothing to express, or nothing identifiable (moving bodies that do no work)
+        return tuple(independent), tuple(dependent), np.zeros((rank, len(dependent))), samples, (), 0.0
+    least = np.linalg.lstsq(Y[:, independent], Y[:, dependent], rcond=None)[0]
+    largest = max((len(s) for s in candidate_supports(least, independent, dependent, Y)), default=0)
+    try:
+        rows = exact_rows(model, role, max(3, -(-3 * (largest + 1) // max(n, 1))), BASE_SEED + 1)
+    except Inexact:  # (the program needs a value that is not rational: every relation judged on the samples)
+        rows = None
+    exact, inexact, residual = exact_coefficients(rows, Y, independent, dependent, least)
+    beta = np.array([[float(v) for v in row] for row in exact], dtype=float).reshape(rank, len(dependent))
+    return tuple(independent), tuple(dependent), beta, samples, tuple(inexact), residual

@@ -1,11 +1,14 @@
-"""The identification routines (on request): the regressor Y (tau = Y pi) and the base regressor Yb, with the
-layouts that name their columns (the base parameters: :func:`~.analyses.base_parameters`)."""
+"""The identification routines (on request): the regressor Y (tau = Y pi) and the base regressor Yb, the same with
+joint friction and armature (tau = Y_f pi_f, issue 34), with the layouts that name their columns (the base
+parameters: :func:`~.analyses.base_parameters`)."""
 from __future__ import annotations
 
 from ..mechanics import regressor
 from .analyses import BASE_RANK_TOLERANCE, BASE_SEED, base_parameters
 from .registry import Output, Routine, flat, register
-from .shapes import regressor_shape
+from .shapes import friction_regressor_shape, regressor_shape
+
+DRIVE_PARAMETERS = ("fv", "fc", "ia")  # viscous friction, Coulomb friction, armature: the names PARAM_COORDINATE
 
 
 def regressor_layout(model) -> dict:
@@ -36,9 +39,58 @@ def standard_parameter_names(model) -> list:
     return [f"{name}_{model.bodies[k].name}" for k in regressor.blocks(model) for name in regressor.PARAMETERS]
 
 
-def base_regressor_layout(model) -> dict:
-    independent, dependent, beta, samples = base_parameters(model)
-    names = standard_parameter_names(model)
+def drive_parameter_names(model) -> list:
+    """The names of the friction regressor's columns after the standard ones: fv_, fc_ per joint, ia_ per rotor."""
+    joints, rotors = regressor.drives(model)
+    coords = model.coordinates
+    return ([f"fv_{coords[j].name}" for j in joints] + [f"fc_{coords[j].name}" for j in joints]
+            + [f"ia_{coords[j].name}" for j in rotors])
+
+
+def drive_values(model) -> list:
+    """Per column after the standard ones (:func:`drive_parameter_names`): (value at the default parameters, the
+    expression where it is one).  Viscous: the URDF ``damping_<joint>`` parameter plus MJCF's ``damping``;
+    Coulomb: the URDF ``friction_<joint>`` parameter; armature: ``armature`` plus MJCF's own."""
+    import sympy as sp
+
+    joints, rotors = regressor.drives(model)
+    symbols = {p.name: sym for p, sym in zip(model.parameters, model.parameter_symbols)}
+    defaults = dict(zip(model.parameter_symbols, model.parameter_values))
+
+    def own(table, j):
+        return sp.sympify(table[j]) if table else sp.Integer(0)
+
+    def urdf(prefix, j):
+        return symbols.get(f"{prefix}_{model.coordinates[j].name}", sp.Integer(0))
+
+    exprs = ([urdf("damping", j) + own(model.damping, j) for j in joints] + [urdf("friction", j) for j in joints]
+             + [sp.sympify(model.armature) + own(model.dof_armature, j) for j in rotors])
+    return [(float(sp.sympify(e).subs(defaults)), str(e) if sp.sympify(e).free_symbols else None) for e in exprs]
+
+
+def friction_regressor_layout(model) -> dict:
+    base = regressor_layout(model)
+    first = base["Y"]["shape"][1]
+    drives = []
+    for k, (name, (value, expr)) in enumerate(zip(drive_parameter_names(model), drive_values(model))):
+        item = {"name": name, "column": first + k, "value": value}
+        if expr is not None:
+            item["expression"] = expr
+        drives.append(item)
+    return {**base, "Y": {**base["Y"], "shape": list(friction_regressor_shape(model))},
+            "drives": drives,
+            "convention": ("tau = Y_f pi_f (inverse_dynamics, less joint_friction where the model has it): the "
+                           "regressor's blocks (see 'blocks', as layouts.regressor), then per joint (a coordinate "
+                           "of a pair that is not free) its viscous friction fv (column qd_j), then per joint its "
+                           "Coulomb friction fc (column sign(qd_j), 0 at qd_j = 0), then the armature ia (column "
+                           "qdd_j) per joint and per free coordinate the model gives one; 'drives' names them "
+                           "PARAM_COORDINATE with the model's values (URDF damping_<joint> and friction_<joint>, "
+                           "MJCF damping and armature, --armature)")}
+
+
+def base_regressor_layout(model, role: str = "regressor") -> dict:
+    independent, dependent, beta, samples, inexact, residual = base_parameters(model, role)
+    names = standard_parameter_names(model) + (drive_parameter_names(model) if role == "friction_regressor" else [])
     items = []
     for r, j in enumerate(independent):
         combination = {names[j]: 1.0}
@@ -48,12 +100,18 @@ def base_regressor_layout(model) -> dict:
         items.append({"name": names[j], "column": j, "combination": combination})
     return {"Yb": {"shape": [model.nv, len(independent)], "order": "row-major"},
             "base_parameters": items,
-            "convention": ("tau = Yb pi_b; pi_b[r] = sum of coefficient * standard parameter over 'combination' (names "
-                           "PARAM_BODY of the regressor's blocks: see layouts.regressor); Yb is the regressor's columns "
-                           "'column'.  Computed at generation from the regressor at the default parameters: a change of "
-                           "the geometry in p may change the combinations"),
+            "convention": (f"tau = Yb pi_b; pi_b[r] = sum of coefficient * standard parameter over 'combination' (names "
+                           f"PARAM_BODY or PARAM_COORDINATE of the columns of layouts.{role}); Yb is the columns "
+                           "'column' of that regressor.  Computed at generation from the regressor at the default "
+                           "parameters: a change of the geometry in p may change the combinations.  The coefficients "
+                           "are exact rationals of the model's own numbers (rational states), given as the nearest "
+                           "doubles; 'inexact' names the dependent parameters whose relation does not hold exactly "
+                           "in the model's numbers (e.g. constant rotations by angles that are not right): their "
+                           "coefficients are least squares on the samples, 'inexact_residual' the largest relative "
+                           "residual there"),
             "samples": samples, "seed": BASE_SEED, "rank_tolerance": BASE_RANK_TOLERANCE,
-            "unidentifiable": [names[j] for j in dependent]}
+            "unidentifiable": [names[j] for j in dependent], "inexact": [names[j] for j in inexact],
+            "inexact_residual": residual}
 
 
 register(Routine("regressor", ("q", "qd", "qdd", "p"), (Output("Y", regressor_shape),),
@@ -63,14 +121,31 @@ register(Routine("regressor", ("q", "qd", "qdd", "p"), (Output("Y", regressor_sh
                  "wrench (2.10) is linear in pi, carried by the backward sweep (2.41)-(2.42), projected by (2.15)",
                  layout=regressor_layout, coupled="columns", on_request=True))
 register(Routine("base_regressor", ("q", "qd", "qdd", "p"),
-                 (Output("Yb", lambda model: (model.nv, len(base_parameters(model)[0]))),),
+                 (Output("Yb", lambda model: (model.nv, len(base_parameters(model, "regressor")[0]))),),
                  lambda bound, kin, x: (_base_columns(bound, kin, x),),
                  "the base regressor Yb, n x r row-major: the regressor's r independent columns, tau = Yb pi_b with "
                  "the base parameters of the manifest (each a combination of standard parameters, found at "
                  "generation from random samples of Y)", layout=base_regressor_layout, coupled=None, on_request=True))
+register(Routine("friction_regressor", ("q", "qd", "qdd", "p"), (Output("Y", friction_regressor_shape),),
+                 lambda bound, kin, x: (flat(regressor.friction_regressor(bound, kin, x["qd"], x["qdd"])),),
+                 "the identification regressor with joint friction and drives, n x (10B + 2J + R) row-major: "
+                 "tau = Y_f pi_f, pi_f the 10 standard inertial parameters of each of the B moving bodies, then per "
+                 "joint the viscous friction (column qd_j), per joint the Coulomb friction (column sign(qd_j)), per "
+                 "joint the armature (column qdd_j): tau is inverse dynamics less joint_friction",
+                 layout=friction_regressor_layout, coupled=None, on_request=True))
+register(Routine("friction_base_regressor", ("q", "qd", "qdd", "p"),
+                 (Output("Yb", lambda model: (model.nv, len(base_parameters(model, "friction_regressor")[0]))),),
+                 lambda bound, kin, x: (_base_columns(bound, kin, x, "friction_regressor"),),
+                 "the base regressor with joint friction and drives, n x r row-major: friction_regressor's r "
+                 "independent columns, tau = Yb pi_b with the base parameters of the manifest (e.g. a first joint's "
+                 "armature grouped with the link's inertia about its axis)",
+                 layout=lambda model: base_regressor_layout(model, "friction_regressor"), coupled=None,
+                 on_request=True))
+
+_BUILDS = {"regressor": regressor.regressor, "friction_regressor": regressor.friction_regressor}
 
 
-def _base_columns(bound, kin, x):
-    """The independent columns of the regressor."""
-    Y = regressor.regressor(bound, kin, x["qd"], x["qdd"])
-    return [row[j] for row in Y for j in base_parameters(bound.model)[0]]
+def _base_columns(bound, kin, x, role="regressor"):
+    """The independent columns of the regressor ``role``."""
+    Y = _BUILDS[role](bound, kin, x["qd"], x["qdd"])
+    return [row[j] for row in Y for j in base_parameters(bound.model, role)[0]]

@@ -16,7 +16,7 @@ def omitted_routines(model) -> dict:
     wanted = [r.role for r in routines_for(model)]  # (a list: the order of emission, the same in every run)
     problem = regressor_problem(model)
     if problem:
-        out.update({role: f"tau = Y pi does not hold: {problem}" for role in ("regressor", "base_regressor")
+        out.update({role: f"tau = Y pi does not hold: {problem}" for role in ("regressor", "base_regressor", "friction_regressor", "friction_base_regressor")
                     if role in wanted})
     if not any(ROUTINES[role].regular for role in wanted):
         return out

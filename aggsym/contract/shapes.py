@@ -91,3 +91,9 @@ def frame_count(model) -> int:
 
 def regressor_shape(model):
     return (model.nv, 10 * len(regressor.blocks(model)))
+
+
+def friction_regressor_shape(model):
+    """The regressor with drives: 10 per moving body, then viscous and Coulomb friction per joint, then armature."""
+    joints, rotors = regressor.drives(model)
+    return (model.nv, 10 * len(regressor.blocks(model)) + 2 * len(joints) + len(rotors))

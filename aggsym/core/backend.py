@@ -61,6 +61,13 @@ class Symbolic:
         return Fraction(num, den)
 
 
+class ExactSymbolic(Symbolic):
+    """A :class:`Symbolic` backend whose constants are the model's doubles as exact Fractions, so that the program
+    folds them without rounding (the exact relations of :mod:`aggsym.contract.exact_relations`); never printed."""
+
+    exact = True
+
+
 class Numeric:
     """Compute with floats (or NumPy arrays, element-wise over a batch); a :class:`Backend`."""
 
@@ -117,8 +124,8 @@ def _leaf(e, values, backend):
     if e.is_Rational:
         q = Fraction(int(e.p), int(e.q))
         return q if backend.symbolic else float(q)
-    if e.is_Number or e.is_NumberSymbol:
-        return normalize_const(float(e))
+    if e.is_Number or e.is_NumberSymbol:  # (a backend that keeps constants exact: the double as a Fraction)
+        return Fraction(float(e)) if getattr(backend, "exact", False) else normalize_const(float(e))
     if e.is_Symbol:
         return values[e]
     return None

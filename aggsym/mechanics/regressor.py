@@ -16,6 +16,14 @@ link frame (Pinocchio's joint frame): Phi is built from the motion in link axes 
 body's (x_body = R x_link).  One block per moving body (a body welded to the
 world has none), bodies in tree order (the order of the coordinates); links welded by fixed joints are in their
 body, as Pinocchio merges them.
+
+With friction and drives (:func:`friction_regressor`, issue 34): the generalized force a motor supplies against
+joint friction and its own rotor is tau = Y pi + diag(qd) f_v + diag(sign qd) f_c + diag(qdd) I_a (the columns
+SymPyBotics and OpenSYMORO append per joint: viscous friction FV, Coulomb friction FS, rotor inertia IA): the
+friction of ``joint_friction`` moved to the left (tau = inverse dynamics - tau_f) and the armature on the joint's
+own axis (Pinocchio's ``armature``, ``--armature``; MJCF's ``armature``; MJCF's viscous ``damping`` is in f_v).
+The joints are the coordinates of pairs that are not free (a free root's six coordinates have no drive); a free
+root's coordinate gets an armature column only where the model gives it an armature.
 """
 from __future__ import annotations
 
@@ -84,6 +92,40 @@ def _regressor(bound, kin, qd, qdd) -> list:
     return rows
 
 
+def _free(model) -> list:
+    """Per velocity coordinate (tree order): whether it is one of a free pair's six (a floating base)."""
+    return [len(b.pair.coordinates) == 6 for b in model.bodies for _ in b.pair.coordinates]
+
+
+def _nonzero(x) -> bool:
+    return not (getattr(x, "is_zero", False) is True or (isinstance(x, (int, float)) and x == 0))
+
+
+def drives(model) -> tuple:
+    """(joints, rotors): the velocity coordinates with friction columns (every coordinate of a pair that is not
+    free) and those with an armature column (the joints, and a free pair's coordinates where the model gives them
+    an armature: ``armature``, ``dof_armature``)."""
+    free = _free(model)
+    joints = [j for j, f in enumerate(free) if not f]
+    own = list(model.dof_armature) or [0] * len(free)
+    rotors = [j for j, f in enumerate(free) if not f or _nonzero(model.armature) or _nonzero(own[j])]
+    return joints, rotors
+
+
+def friction_regressor(bound, kin, qd, qdd) -> list:
+    """[Y | diag(qd) | diag(sign qd) | diag(qdd)]: n rows of 10 B + 2 J + R entries (J joints, R rotors of
+    :func:`drives`), sign(0) = 0 (branch-free in every target: the table's ``sign``)."""
+    joints, rotors = drives(bound.model)
+    Y = regressor(bound, kin, qd, qdd)
+    sign = [bound.backend.call("sign", qd[j]) for j in joints]
+    out = []
+    for i, row in enumerate(Y):
+        out.append(list(row) + [qd[i] if j == i else 0 for j in joints]
+                   + [s if j == i else 0 for j, s in zip(joints, sign)]
+                   + [qdd[i] if j == i else 0 for j in rotors])
+    return out
+
+
 def standard_parameters(model) -> list:
     """pi of the model as SymPy expressions (its own inertial data), block by block: (m, m c, Theta about the
     origin in link axes) in :data:`PARAMETERS` order."""
@@ -106,4 +148,5 @@ def standard_parameters(model) -> list:
     return out
 
 
-__all__ = ["PARAMETERS", "blocks", "regressor", "standard_parameters", "wrench_columns"]
+__all__ = ["PARAMETERS", "blocks", "drives", "friction_regressor", "regressor", "standard_parameters",
+           "wrench_columns"]
