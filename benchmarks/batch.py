@@ -328,17 +328,20 @@ def section(cfg=None) -> dict:
 
 
 def keep_earlier(data: dict, earlier: dict) -> dict:
-    """A run on some of the robots keeps the other robots' rows of the earlier batch.json, each marked
-    ``earlier_run`` (the report says so); the batch sizes are the union of both runs'."""
-    kept = {k: v for k, v in earlier.get("robots", {}).items() if k not in data["robots"]}
-    if not kept:
+    """A run on some robots, or on some entries, keeps the earlier batch.json's rows of every (robot, entry) it
+    did not run, each marked ``earlier_run`` (the report says so); the batch sizes and routines are the union of
+    both runs'."""
+    ran = {(r["robot"], r["entry"]) for r in data["rows"]}
+    rows = [dict(r, earlier_run=True) for r in earlier.get("rows", []) if (r["robot"], r["entry"]) not in ran]
+    if not rows:
         return data
-    data["robots"].update(kept)
-    data["rows"] += [dict(r, earlier_run=True) for r in earlier.get("rows", []) if r["robot"] in kept]
+    kept = sorted({r["robot"] for r in rows})
+    data["robots"].update({k: v for k, v in earlier.get("robots", {}).items() if k not in data["robots"]})
+    data["rows"] += rows
     data["config"]["sizes"] = sorted(set(data["config"]["sizes"]) | set(earlier.get("config", {}).get("sizes", [])))
     data["config"]["routines"] = [r for r in ROUTINES if r in set(data["config"]["routines"])
                                   | set(earlier.get("config", {}).get("routines", []))]
-    data["kept_from_earlier_run"] = sorted(kept)
+    data["kept_from_earlier_run"] = kept
     return data
 
 

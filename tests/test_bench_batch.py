@@ -119,6 +119,17 @@ def test_a_run_on_one_robot_keeps_the_other_robots_rows():
     assert "aggsym JAX (an earlier run)" in batch_report.markdown(merged)
 
 
+def test_a_run_of_some_entries_keeps_the_other_entries_rows_of_the_same_robot():
+    earlier = fake_results()
+    now = fake_results()
+    entry = now["rows"][0]["entry"]
+    now["rows"] = [r for r in now["rows"] if r["entry"] == entry]
+    merged = batch.keep_earlier(now, earlier)
+    assert len(merged["rows"]) == len(earlier["rows"])
+    assert all(r.get("earlier_run") is None for r in merged["rows"] if r["entry"] == entry)
+    assert all(r.get("earlier_run") for r in merged["rows"] if r["entry"] != entry)
+
+
 URDF = """<robot name="r">
  <link name="base"><inertial><mass value="2"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>
   <visual><geometry><mesh filename="package://x/base.stl"/></geometry></visual></link>
