@@ -103,10 +103,12 @@ def _parser() -> argparse.ArgumentParser:
                             "bodies and 'frames:' (default: the links or bodies without a child, then 'frames:')")
         p.add_argument("--routines", metavar="A,B,...",
                        help="emit only these routines (names as --list-routines shows them, without the model's "
-                            "prefix; 'default': those emitted when none are named; 'all': every routine, with those "
+                            "prefix, or with it as it prints them; 'default': those emitted when none are named; "
+                            "'all': every routine, with those "
                             "on request: derivatives, regressor)")
         p.add_argument("--name", metavar="NAME",
-                       help="the name of the generated code (C prefix, module and file names) instead of the model's")
+                       help="the name of the generated code (C prefix, module and file names); default: the model "
+                            "file's name without its suffix (a YAML model's 'name:' where it gives one)")
         p.add_argument("--scalar", choices=["double", "float"], default="double",
                        help="the C type of the generated C (default double; float: single precision for "
                             "microcontrollers, each routine's error bound in the manifest's float_tolerance; the "
@@ -164,7 +166,7 @@ def _load(args):
                                       ("--support", args.support),
                                       ("--inertial-parameters", args.inertial_parameters is not None),
                                       ("--payload", args.payload is not None)) if value]
-    check_cli_options(path, given)  # the reader's name and the option it does not accept
+    reader = check_cli_options(path, given)  # the reader's name and the option it does not accept
     if args.support and not args.floating_base:
         raise AggsymError(f"{path}: --support needs --floating-base (the support is the free root)")
     if args.support and args.floating_base == "quaternion":
@@ -174,6 +176,9 @@ def _load(args):
         raise AggsymError(f"{path}: --mimic couple with --floating-base quaternion is not supported; use "
                           f"--floating-base euler, or independent mimic joints")
     model = load(path, **options)
+    name = _output_name(args, path, reader)
+    if name is not None:
+        model = dataclasses.replace(model, name=name)
     if args.constraints:
         from .model.yaml_reader import load_constraints
 
@@ -199,16 +204,41 @@ def _load(args):
         from .contract import select_routines
 
         model = select_routines(model, [name.strip() for name in args.routines.split(",") if name.strip()])
-    if args.name is not None:
-        from .codegen.escape import check_c_identifier, check_module_name
-
-        problem = check_c_identifier(args.name) or check_module_name(args.name)
-        if problem:
-            raise AggsymError(f"--name: {problem}")
-        model = dataclasses.replace(model, name=args.name)
     if args.armature:
         model = dataclasses.replace(model, armature=args.armature)
     return model
+
+
+def _output_name(args, path: Path, reader) -> str | None:
+    """The name of the generated code (C prefix, module and file names): ``--name``, else the model file's own
+    name without its suffix (``laikago_toes.urdf`` writes ``laikago_toes.h``, whatever its ``<robot name>``),
+    made an identifier; None for a YAML model, whose ``name:`` is the file's name unless it says otherwise.
+    ``args.name_origin`` records where it came from, for the messages about a name too long."""
+    from .codegen.escape import check_c_identifier, check_module_name
+
+    if args.name is not None:
+        problem = check_c_identifier(args.name) or check_module_name(args.name)
+        if problem:
+            raise AggsymError(f"--name: {problem}")
+        args.name_origin = "the option --name"
+        return args.name
+    args.name_origin = None  # (the model's own name: codegen.generate.name_origin says where it is written)
+    if reader.name == "YAML":
+        return None
+    from .model.builder import mangle
+
+    from .model.readers import known_suffixes
+
+    stem = path.name
+    while Path(stem).suffix.lower() in known_suffixes() and Path(stem).stem:  # (robot.urdf.xacro: robot)
+        stem = Path(stem).stem
+    name = mangle(stem, "model")
+    problem = check_c_identifier(name) or check_module_name(name)
+    if problem:
+        raise AggsymError(f"{path}: the generated code is named after the file, and {problem}; give it a name "
+                          f"with --name NAME")
+    args.name_origin = f"{path} (the file's name; --name NAME gives another)"
+    return name
 
 
 def _armature(text: str) -> float:
@@ -284,7 +314,7 @@ def cmd_generate(args) -> int:
     from .codegen.generate import check_file_names, generate, write
 
     outdir = Path(args.output) if args.output else Path("generated") / model.name
-    origin = "the option --name" if args.name is not None else None  # (else the model file: name_origin)
+    origin = args.name_origin  # (None: the model's own name, codegen.generate.name_origin)
     check_file_names(outdir, [f"{model.name}.json"], model, origin)  # (before the work: write checks every file)
     gen = generate(model, progress=_progress(args.quiet, model.name), scalar=args.scalar, split=args.split,
                    targets=targets)

@@ -1,8 +1,8 @@
 """The package's layers: imports only run downward, no module imports one that imports it back, and the mechanics
 never load the code generator; the same for the benchmark (``benchmarks/``), which sits above the package.
 
-Layers, bottom to top (docs/architecture.md, "Layers"): ``errors`` and ``collector`` (the garbage
-collector paused); ``model`` (readers, the immutable model)
+Layers, bottom to top (docs/architecture.md, "Layers"): ``errors``, ``suggest`` ("did you mean") and ``collector``
+(the garbage collector paused); ``model`` (readers, the immutable model)
 and ``core`` (straight-line programs, backends), which do not know each other; ``mechanics`` (the book's
 recursions); ``contract`` (a package: the registry, the routines by domain, shapes, analyses, manifest); ``twin`` and ``symbolic`` (floats, SymPy);
 ``codegen`` (printers, templates, compiling); ``cli``.
@@ -19,7 +19,7 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "aggsym"
 BENCHMARKS = PACKAGE.parent / "benchmarks"
-LAYERS = {"errors": 0, "collector": 0, "model": 1, "core": 1, "mechanics": 2, "contract": 3, "twin": 4, "symbolic": 4,
+LAYERS = {"errors": 0, "collector": 0, "suggest": 0, "model": 1, "core": 1, "mechanics": 2, "contract": 3, "twin": 4, "symbolic": 4,
           "codegen": 5, "templates": 5, "cli": 6, "__main__": 7}  # (templates: the targets' Jinja files, no import)
 # modules whose import must not bring the code generator (or jinja2) along
 LIGHT = ["aggsym", "aggsym.errors", "aggsym.contract", "aggsym.twin", "aggsym.symbolic"] + sorted(

@@ -22,6 +22,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import AggsymError
+from ..suggest import did_you_mean
 from .types import Inertial, Model, Parameter
 
 NAMES = ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
@@ -107,7 +108,8 @@ def with_inertial_parameters(model: Model, links=(), payload: str | None = None)
         if name not in frames:
             shown = name if len(name) <= 80 else name[:80] + "..."
             some = ", ".join(repr(n) for n in list(frames)[:8]) + (", ..." if len(frames) > 8 else "")
-            raise AggsymError(f"{model.source}: no link named {shown!r} (the robot's links: {some})")
+            raise AggsymError(f"{model.source}: no link named {shown!r}{did_you_mean(name, frames)} (the robot's "
+                              f"links: {some})")
     if len(set(links)) != len(links):
         raise AggsymError(f"{model.source}: --inertial-parameters names a link twice")
     taken = {p.name for p in model.parameters}

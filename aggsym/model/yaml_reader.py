@@ -50,6 +50,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ModelError
+from ..suggest import did_you_mean
 from .builder import TreeBuilder
 from .expressions import ExpressionError, check_identifier, check_supported, evaluate, parse_value
 from .frames import MAX_FRAMES, default_frames
@@ -110,7 +111,8 @@ class _Reader:
             self.fail(path, f"expected a mapping, got {_kind(value)}")
         for key in value:
             if key not in allowed:
-                self.fail(path + (key,), f"unknown key {key!r} (allowed: {', '.join(sorted(map(str, allowed)))})")
+                self.fail(path + (key,), f"unknown key {key!r}{did_you_mean(key, allowed)} (allowed: "
+                                         f"{', '.join(sorted(map(str, allowed)))})")
         for key in required:
             if key not in value:
                 self.fail(path, f"missing field {key!r}")
