@@ -106,3 +106,25 @@ def test_check_runs_the_ext_target_against_the_twin(capsys):
     assert cli.main(["check", str(model_path("planar_2link")), "--targets", "c,numpy,ext", "--trials", "3"]) == 0
     out = capsys.readouterr().out
     assert "ext" in out and "ok:" in out
+
+
+def test_the_jax_and_torch_modules_name_a_wrong_length_too(tmp_path):
+    import jax
+    import torch
+
+    model = aggsym.load(model_path("double_pendulum"))
+    write(generate(model, latex=False, targets=["numpy", "manifest", "jax", "torch"]), tmp_path)
+    jm = import_module(tmp_path / f"{model.name}_jax.py")
+    tm = import_module(tmp_path / f"{model.name}_torch.py")
+    q = np.zeros(3)
+    with pytest.raises(ValueError, match=r"inertia: q must have 3 entries .*not shape \(2,\)"):
+        jm.inertia(q[:2])
+    with pytest.raises(ValueError, match=r"forward_dynamics: tau must have 3 entries .*\(4, 2\)"):
+        jax.jit(jm.forward_dynamics)(np.zeros((4, 3)), q, np.zeros((4, 2)))  # (shapes are static under jit)
+    with pytest.raises(ValueError, match=r"inertia: q must have 3 entries .*\(2,\)"):
+        jax.vmap(jm.inertia)(np.zeros((5, 2)))
+    with pytest.raises(ValueError, match=rf"gravity: p must have {len(model.parameters)} entries .*\(3,\)"):
+        tm.gravity(torch.zeros(3), torch.zeros(3))
+    with pytest.raises(ValueError, match=r"bias: qd must have 3 entries .*\(4,\)"):
+        tm.bias(torch.zeros(3), torch.zeros(4))
+    assert tuple(jm.inertia(np.zeros((2, 3))).shape) == (2, 3, 3) and tuple(tm.inertia(torch.zeros(3)).shape) == (3, 3)
