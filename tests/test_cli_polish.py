@@ -134,3 +134,14 @@ def test_nothing_close_means_no_suggestion():
     assert did_you_mean("zzzz", ["inertia", "bias"]) == ""
     assert did_you_mean("bais", ["inertia", "bias"]) == "; did you mean 'bias'?"
     assert close_names("GRAVITY", ["gravity", "gravity_x"])[0] == "gravity"  # letter case alone comes first
+
+
+def test_a_misspelled_parent_or_constraint_link_gets_did_you_mean(arm, tmp_path, capsys):
+    path = tmp_path / "planar_2link.yaml"
+    path.write_text(model_path("planar_2link").read_text().replace("parent: link1", "parent: lnk1", 1))
+    code, _, err = run(capsys, "generate", path, "--list-routines")
+    assert code == 2 and "unknown parent 'lnk1'; did you mean 'link1'?" in err, err
+    side = tmp_path / "constraints.yaml"
+    side.write_text("constraints:\n  - {name: tip, body: forearm, block: point}\n")
+    code, _, err = run(capsys, "generate", arm, "--constraints", side, "--list-routines")
+    assert code == 2 and "unknown body 'forearm'; did you mean 'fore_arm'?" in err, err

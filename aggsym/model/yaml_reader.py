@@ -277,7 +277,8 @@ class _Reader:
             return WORLD, None, None
         if value not in frames:
             close = sorted(frames)[:8]
-            self.fail(path, f"unknown {what} {value!r} (the names are {', '.join(close)}{', ...' if len(frames) > 8 else ''})")
+            self.fail(path, f"unknown {what} {value!r}{did_you_mean(value, frames)} (the names are {', '.join(close)}"
+                            f"{', ...' if len(frames) > 8 else ''})")
         return frames[value]
 
     def block(self, value, path) -> tuple:
