@@ -141,7 +141,7 @@ def _parser() -> argparse.ArgumentParser:
                         "errors and --opt), and that library is what runs")
     c.add_argument("--targets", metavar="A,B,...",
                    help="check only these targets (default: every target with something to run here: c, numpy, and jax "
-                        "and torch where they import)")
+                        "and torch where they import; ext when named)")
     command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
     return parser
 
@@ -343,7 +343,8 @@ def cmd_check(args) -> int:
 
     targets = _targets(args)
     model = _load(args)
-    generated = [n for n in (targets or TARGETS) if n != "latex"]  # (the manifest: always, check reads it)
+    generated = [n for n in (targets or [n for n, t in TARGETS.items() if t.checked_by_default]) if n != "latex"]
+    # (the manifest: always, check reads it)
     gen = generate(model, latex=False, scalar=args.scalar, split=args.split,
                    targets=sorted(set(generated) | {"manifest"}))
     checked, skipped = checked_targets(model, gen.files, targets)

@@ -156,7 +156,7 @@ def test_an_xml_declaration_after_white_space_is_read_with_a_warning(before, tmp
     assert_same_dynamics(model, aggsym.load(plain))
     out = tmp_path / "out"
     code, err = run(capsys, "generate", quirk, "-o", out, "-q")
-    assert code == 0 and "preceded by white space" in err and str(quirk) in err and (out / "r.c").exists(), err
+    assert code == 0 and "preceded by white space" in err and str(quirk) in err and (out / "quirk.c").exists(), err
 
 
 def test_lines_keep_their_numbers_after_a_moved_declaration(tmp_path):

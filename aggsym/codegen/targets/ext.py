@@ -34,6 +34,7 @@ class ExtensionTarget(Target):
 
     name = "ext"
     column = "ext"
+    checked_by_default = False  # (a second compile of NAME.c: ``aggsym check --targets c,numpy,ext`` asks for it)
     folder = "ext"
     templates = ("model_ext.c.j2", "model_ext.py.j2")
 
