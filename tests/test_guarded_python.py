@@ -128,3 +128,22 @@ def test_the_jax_and_torch_modules_name_a_wrong_length_too(tmp_path):
     with pytest.raises(ValueError, match=r"bias: qd must have 3 entries .*\(4,\)"):
         tm.bias(torch.zeros(3), torch.zeros(4))
     assert tuple(jm.inertia(np.zeros((2, 3))).shape) == (2, 3, 3) and tuple(tm.inertia(torch.zeros(3)).shape) == (3, 3)
+
+
+@pytest.mark.compiler
+def test_a_singular_system_raises_in_the_ext_module_as_in_the_numpy_module(tmp_path):
+    """The four-bar's constrained forward dynamics with every length zero: J A^-1 J^T is singular, the C returns
+    its status, and the ext module's call ends in the NumPy module's LinAlgError; a regular state is computed."""
+    from aggsym.contract import select_routines
+
+    model = select_routines(aggsym.load(model_path("four_bar")), ["constrained_forward_dynamics"])
+    write(generate(model, latex=False, targets=["c", "numpy", "manifest", "ext"]), tmp_path)
+    m = import_module(tmp_path / f"{model.name}.py")
+    ext = import_module(tmp_path / f"{model.name}_ext.py")
+    q, zero = np.array([0.3, 0.2, -0.4]), np.zeros(3)
+    for got, expected in zip(ext.constrained_forward_dynamics(q, zero, zero), m.constrained_forward_dynamics(q, zero, zero)):
+        np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12 * np.max(np.abs(expected)))
+    singular = np.zeros(len(m.PARAMETERS))
+    assert not ext._c.constrained_forward_dynamics(q, zero, zero, singular, np.empty(3), np.empty(2))  # the status
+    with np.errstate(all="ignore"), pytest.raises(np.linalg.LinAlgError, match="the constraints are singular"):
+        ext.constrained_forward_dynamics(q, zero, zero, singular)
