@@ -124,7 +124,9 @@ def _parser() -> argparse.ArgumentParser:
                         "Makefile building libNAME.a (make -j2; CC, CFLAGS default -O2 -std=c99) instead of NAME.c")
     g.add_argument("--targets", metavar="A,B,...",
                    help="write only these targets' files: c (NAME.h, NAME.c or the --split files), numpy (NAME.py), "
-                        "manifest (NAME.json), latex (NAME.tex), jax (NAME_jax.py), torch (NAME_torch.py); default: c, numpy, manifest, latex")
+                        "manifest (NAME.json), latex (NAME.tex), jax (NAME_jax.py), torch (NAME_torch.py), ext "
+                        "(NAME_ext.c, NAME_ext.py: one state per call through the compiled C; with c and numpy); "
+                        "default: c, numpy, manifest, latex")
     g.add_argument("--list-routines", action="store_true",
                    help="print the routines this model gets, one line each (what each computes), and write nothing")
     command("latex", "print the LaTeX document of the equations of motion")
