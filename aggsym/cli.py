@@ -121,10 +121,12 @@ def _parser() -> argparse.ArgumentParser:
                             "bodies and 'frames:' (default: the links or bodies without a child, then 'frames:')")
         p.add_argument("--routines", metavar="A,B,...",
                        help="emit only these routines (names as --list-routines shows them, without the model's "
-                            "prefix; 'default': those emitted when none are named; 'all': every routine, with those "
+                            "prefix, or with it as it prints them; 'default': those emitted when none are named; "
+                            "'all': every routine, with those "
                             "on request: derivatives, regressor, friction_regressor)")
         p.add_argument("--name", metavar="NAME",
-                       help="the name of the generated code (C prefix, module and file names) instead of the model's")
+                       help="the name of the generated code (C prefix, module and file names); default: the model "
+                            "file's name without its suffix (a YAML model's 'name:' where it gives one)")
         p.add_argument("--scalar", choices=["double", "float"], default="double",
                        help="the C type of the generated C (default double; float: single precision for "
                             "microcontrollers, each routine's error bound in the manifest's float_tolerance; the "
@@ -140,7 +142,9 @@ def _parser() -> argparse.ArgumentParser:
                         "Makefile building libNAME.a (make -j2; CC, CFLAGS default -O2 -std=c99) instead of NAME.c")
     g.add_argument("--targets", metavar="A,B,...",
                    help="write only these targets' files: c (NAME.h, NAME.c or the --split files), numpy (NAME.py), "
-                        "manifest (NAME.json), latex (NAME.tex), jax (NAME_jax.py), torch (NAME_torch.py); default: c, numpy, manifest, latex")
+                        "manifest (NAME.json), latex (NAME.tex), jax (NAME_jax.py), torch (NAME_torch.py), ext "
+                        "(NAME_ext.c, NAME_ext.py: one state per call through the compiled C; with c and numpy); "
+                        "default: c, numpy, manifest, latex")
     g.add_argument("--list-routines", action="store_true",
                    help="print the routines this model gets, one line each (what each computes), and write nothing")
     command("latex", "print the LaTeX document of the equations of motion")
@@ -157,7 +161,7 @@ def _parser() -> argparse.ArgumentParser:
                         "errors and --opt), and that library is what runs")
     c.add_argument("--targets", metavar="A,B,...",
                    help="check only these targets (default: every target with something to run here: c, numpy, and jax "
-                        "and torch where they import)")
+                        "and torch where they import; ext when named)")
     command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
     return parser
 
@@ -187,7 +191,7 @@ def _load(args):
                                       ("--frictionloss", args.frictionloss),
                                       ("--gravity-parameter", args.gravity_parameter),
                                       ("--passive", args.passive is not None)) if value]
-    check_cli_options(path, given)  # the reader's name and the option it does not accept
+    reader = check_cli_options(path, given)  # the reader's name and the option it does not accept
     if args.support and not args.floating_base:
         raise AggsymError(f"{path}: --support needs --floating-base (the support is the free root)")
     if args.support and args.floating_base == "quaternion":
@@ -197,6 +201,9 @@ def _load(args):
         raise AggsymError(f"{path}: --mimic couple with --floating-base quaternion is not supported; use "
                           f"--floating-base euler, or independent mimic joints")
     model = load(path, **options)
+    name = _output_name(args, path, reader)
+    if name is not None:
+        model = dataclasses.replace(model, name=name)
     if args.constraints:
         from .model.yaml_reader import load_constraints
 
@@ -233,16 +240,41 @@ def _load(args):
         from .contract import select_routines
 
         model = select_routines(model, [name.strip() for name in args.routines.split(",") if name.strip()])
-    if args.name is not None:
-        from .codegen.escape import check_c_identifier, check_module_name
-
-        problem = check_c_identifier(args.name) or check_module_name(args.name)
-        if problem:
-            raise AggsymError(f"--name: {problem}")
-        model = dataclasses.replace(model, name=args.name)
     if args.armature:
         model = dataclasses.replace(model, armature=args.armature)
     return model
+
+
+def _output_name(args, path: Path, reader) -> str | None:
+    """The name of the generated code (C prefix, module and file names): ``--name``, else the model file's own
+    name without its suffix (``laikago_toes.urdf`` writes ``laikago_toes.h``, whatever its ``<robot name>``),
+    made an identifier; None for a YAML model, whose ``name:`` is the file's name unless it says otherwise.
+    ``args.name_origin`` records where it came from, for the messages about a name too long."""
+    from .codegen.escape import check_c_identifier, check_module_name
+
+    if args.name is not None:
+        problem = check_c_identifier(args.name) or check_module_name(args.name)
+        if problem:
+            raise AggsymError(f"--name: {problem}")
+        args.name_origin = "the option --name"
+        return args.name
+    args.name_origin = None  # (the model's own name: codegen.generate.name_origin says where it is written)
+    if reader.name == "YAML":
+        return None
+    from .model.builder import mangle
+
+    from .model.readers import known_suffixes
+
+    stem = path.name
+    while Path(stem).suffix.lower() in known_suffixes() and Path(stem).stem:  # (robot.urdf.xacro: robot)
+        stem = Path(stem).stem
+    name = mangle(stem, "model")
+    problem = check_c_identifier(name) or check_module_name(name)
+    if problem:
+        raise AggsymError(f"{path}: the generated code is named after the file, and {problem}; give it a name "
+                          f"with --name NAME")
+    args.name_origin = f"{path} (the file's name; --name NAME gives another)"
+    return name
 
 
 def _armature(text: str) -> float:
@@ -318,7 +350,7 @@ def cmd_generate(args) -> int:
     from .codegen.generate import check_file_names, generate, write
 
     outdir = Path(args.output) if args.output else Path("generated") / model.name
-    origin = "the option --name" if args.name is not None else None  # (else the model file: name_origin)
+    origin = args.name_origin  # (None: the model's own name, codegen.generate.name_origin)
     check_file_names(outdir, [f"{model.name}.json"], model, origin)  # (before the work: write checks every file)
     gen = generate(model, progress=_progress(args.quiet, model.name), scalar=args.scalar, split=args.split,
                    targets=targets)
@@ -347,7 +379,8 @@ def cmd_check(args) -> int:
 
     targets = _targets(args)
     model = _load(args)
-    generated = [n for n in (targets or TARGETS) if n != "latex"]  # (the manifest: always, check reads it)
+    generated = [n for n in (targets or [n for n, t in TARGETS.items() if t.checked_by_default]) if n != "latex"]
+    # (the manifest: always, check reads it)
     gen = generate(model, latex=False, scalar=args.scalar, split=args.split,
                    targets=sorted(set(generated) | {"manifest"}))
     checked, skipped = checked_targets(model, gen.files, targets)

@@ -24,6 +24,8 @@ def generate_measured(label: str, model_path, outdir, timeout: float | None = No
     ``--floating-base quaternion --name ur5_ff``)."""
     outdir = Path(outdir)
     extra = (["--routines", routines] if routines else []) + list(options)
+    if "--name" not in extra:  # the code named after the label (the CLI names a URDF robot's after its file)
+        extra += ["--name", label]
     run = run_measured([python(), "-m", "aggsym", "generate", str(model_path), "-o", str(outdir), *extra],
                        timeout=timeout, env=child_env())
     stages, internal = {}, None

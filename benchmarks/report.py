@@ -695,13 +695,15 @@ def _targets(results) -> str:
 def _extras(results) -> str:
     """Scaling of generation, the sincos helper, --split's compile time and the batched benchmark (each when
     measured)."""
-    from . import batch_report, compile_split, scaling, trig
+    from . import batch_report, compile_split, python_call, scaling, trig
 
     parts = []
     for key, title, module in (("scaling", "Scaling of generation (benchmarks/scaling.py)", scaling),
                                ("trig", "sin and cos (benchmarks/trig.py)", trig),
                                ("split", "Compiling with --split (benchmarks/compile_split.py)", compile_split),
-                               ("batch", "Batched: JAX, PyTorch and their peers (benchmarks/batch.py)", batch_report)):
+                               ("batch", "Batched: JAX, PyTorch and their peers (benchmarks/batch.py)", batch_report),
+                               ("python_call", "One state from Python: the generated modules beside Pinocchio's Python "
+                                               "call (benchmarks/python_call.py)", python_call)):
         data = results.get(key)
         if data:
             parts += [f"## {title}", "", module.markdown(data), ""]

@@ -1,6 +1,7 @@
 """``make bench``: the whole benchmark, then benchmarks/REPORT.md, benchmarks/*.json, the plots and the targets table.
 
     python -m benchmarks.run        # from the repository root (make bench does this in .venv)
+    python -m benchmarks.run --report-only   # REPORT.md again from the JSONs of the last runs, nothing measured
 
 Settings (environment variables; defaults in brackets):
 
@@ -19,7 +20,7 @@ Settings (environment variables; defaults in brackets):
                                                                                          talos,chain24,chain48]
     AGGSYM_BENCH_CPU               the CPU the harness is pinned to                      [the last allowed]
     AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane,inputs,     [all]
-                                   opsn,scaling,trig,split,batch
+                                   opsn,scaling,trig,split,batch,python
                                    (a section left out is read back from its JSON of an earlier run)
     AGGSYM_BENCH_BATCH_PYTHON      the interpreter of the batch section's own venv      [.venv-batch/bin/python]
                                    (the AGGSYM_BENCH_BATCH_* settings: benchmarks/batch.py)
@@ -86,7 +87,7 @@ def config() -> dict:
         "AGGSYM_BENCH_STATES": int(env.get("AGGSYM_BENCH_STATES", "1000")),
         "AGGSYM_BENCH_CALLS": int(env.get("AGGSYM_BENCH_CALLS", "100")),
         "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS",
-                                         "generation,runtime,kane,inputs,opsn,scaling,trig,split,batch"),
+                                         "generation,runtime,kane,inputs,opsn,scaling,trig,split,batch,python"),
         "AGGSYM_BENCH_BATCH_PYTHON": env.get("AGGSYM_BENCH_BATCH_PYTHON", str(ROOT / ".venv-batch" / "bin" / "python")),
         "AGGSYM_BENCH_RUNTIME_ROBOTS": env.get("AGGSYM_BENCH_RUNTIME_ROBOTS", ""),
         "AGGSYM_BENCH_PEER_ROBOTS": env.get("AGGSYM_BENCH_PEER_ROBOTS", PEER_ROBOTS),
@@ -364,7 +365,9 @@ def section_batch(cfg) -> dict:
 def section_extras(sections) -> dict:
     """Issue 18's sections: scaling (chains of 6..192 bodies and a 200-body tree, :mod:`benchmarks.scaling`, which
     writes scaling.json and scaling.png itself), trig (the sincos helper against libm, :mod:`benchmarks.trig`) and
-    split (Talos' compile time in one file and with --split, :mod:`benchmarks.compile_split`)."""
+    split (Talos' compile time in one file and with --split, :mod:`benchmarks.compile_split`); issue 35's python
+    (the generated Python's per-call time for one state beside Pinocchio's Python call,
+    :mod:`benchmarks.python_call`, python_call.json)."""
     out = {}
     if "scaling" in sections:
         from . import scaling
@@ -380,10 +383,35 @@ def section_extras(sections) -> dict:
             _save(name, out[name])
         else:
             out[name] = _load(name)
+    if "python" in sections:
+        from . import python_call
+
+        out["python_call"] = python_call.run(log=log)
+        _save("python_call", out["python_call"])
+    else:
+        out["python_call"] = _load("python_call")
     return out
 
 
+SECTION_FILES = ("generation", "kane", "opcounts", "runtime", "inputs", "opsn", "scaling", "trig", "split", "batch",
+                 "python_call")
+
+
+def report_only() -> int:
+    """``python -m benchmarks.run --report-only``: REPORT.md and the plots written again from the JSONs of the last
+    runs, measuring nothing (so a section run on its own, e.g. ``python -m benchmarks.python_call``, joins the
+    report beside the others' figures and their host)."""
+    saved = _load("environment")
+    results = {"environment": saved.get("environment", {}), "config": saved.get("config", {}),
+               **{name: _load(name) for name in SECTION_FILES}}
+    path = report.write_report(results, HERE)
+    log(f"wrote {path.relative_to(ROOT)} from the JSONs of the last runs")
+    return 0
+
+
 def main() -> int:
+    if "--report-only" in sys.argv[1:]:
+        return report_only()
     t_start = time.perf_counter()
     cfg = config()
     sections = {s.strip() for s in cfg["AGGSYM_BENCH_SECTIONS"].split(",") if s.strip()}

@@ -1,8 +1,8 @@
 """The package's layers: imports only run downward, no module imports one that imports it back, and the mechanics
 never load the code generator; the same for the benchmark (``benchmarks/``), which sits above the package.
 
-Layers, bottom to top (docs/architecture.md, "Layers"): ``errors`` and ``collector`` (the garbage
-collector paused); ``model`` (readers, the immutable model)
+Layers, bottom to top (docs/architecture.md, "Layers"): ``errors``, ``suggest`` ("did you mean") and ``collector``
+(the garbage collector paused); ``model`` (readers, the immutable model)
 and ``core`` (straight-line programs, backends), which do not know each other; ``mechanics`` (the book's
 recursions); ``contract`` (a package: the registry, the routines by domain, shapes, analyses, manifest); ``twin`` and ``symbolic`` (floats, SymPy);
 ``codegen`` (printers, templates, compiling); ``cli``.
@@ -19,7 +19,7 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "aggsym"
 BENCHMARKS = PACKAGE.parent / "benchmarks"
-LAYERS = {"errors": 0, "collector": 0, "model": 1, "core": 1, "mechanics": 2, "contract": 3, "twin": 4, "symbolic": 4,
+LAYERS = {"errors": 0, "collector": 0, "suggest": 0, "model": 1, "core": 1, "mechanics": 2, "contract": 3, "twin": 4, "symbolic": 4,
           "codegen": 5, "templates": 5, "cli": 6, "__main__": 7}  # (templates: the targets' Jinja files, no import)
 # modules whose import must not bring the code generator (or jinja2) along
 LIGHT = ["aggsym", "aggsym.errors", "aggsym.contract", "aggsym.twin", "aggsym.symbolic"] + sorted(
@@ -68,7 +68,7 @@ BENCH_GRAPH = graph(BENCHMARKS)
 # the benchmark, bottom to top: shared pieces (0), the sections (1), the report (2), the runner (3)
 BENCH_LAYERS = {"measure": 0, "chain": 0, "environment": 0, "robots": 0, "generation": 0, "mujoco_reference": 0,
                 "casadi_peer": 1, "mjcf_corpus": 1, "compile_split": 1, "constrained": 1, "inputs": 1, "kane": 1, "opcounts": 1,
-                "runtime": 1, "scaling": 1, "slicing_runtime": 1, "trig": 1,
+                "runtime": 1, "scaling": 1, "slicing_runtime": 1, "trig": 1, "python_call": 1,
                 "batch_peers": 0, "batch_report": 0, "tables": 0, "report_plots": 0, "batch_engines": 1, "batch_worker": 2,
                 "batch": 2, "report": 2, "run": 3}
 

@@ -342,6 +342,6 @@ def test_a_urdf_side_file_names_links_and_is_checked(tmp_path):
     good = side_file(tmp_path, FEET["solo12"][0], "point", extra="stabilization: {kp: 10, kd: 5}\n")
     code, err = run_cli(["generate", str(urdf), "--floating-base", "--constraints", str(good), "-o", str(out), "-q"])
     assert code == 0, err
-    manifest = json.loads((out / "solo.json").read_text())
+    manifest = json.loads((out / "solo12.json").read_text())  # (named after solo12.urdf)
     assert [c["link"] for c in manifest["constraints"]["constraints"]] == FEET["solo12"][0]
     assert manifest["constraints"]["m"] == 12 and manifest["constraints"]["stabilization"] == {"kp": "10", "kd": "5"}

@@ -228,13 +228,13 @@ def test_frame_routines_in_the_manifest_and_selected_by_name(tmp_path):
     cmd = [sys.executable, "-m", "aggsym", "generate", str(robot_path("ur5")), "-o", str(out), "-q", "--frames",
            "tool0,shoulder_link, base_link"]
     subprocess.run(cmd, check=True, capture_output=True, text=True)
-    manifest = json.loads((out / "ur5.json").read_text())
+    manifest = json.loads((out / "ur5_robot.json").read_text())  # (named after ur5_robot.urdf)
     assert [f["name"] for f in manifest["frames"]] == ["tool0", "shoulder_link", "base_link"]
     assert manifest["signatures"]["frame_jacobians"]["outputs"] == [{"name": "J", "shape": [3, 6, 6]}]
     assert manifest["layouts"]["frame_poses"]["frames"] == ["tool0", "shoulder_link", "base_link"]
     assert "centroidal_map" not in manifest["functions"]  # fixed base
-    header = (out / "ur5.h").read_text()
-    assert "UR5_FRAME_POSES_SIZE 36" in header
+    header = (out / "ur5_robot.h").read_text()
+    assert "UR5_ROBOT_FRAME_POSES_SIZE 36" in header
 
 
 def test_default_frames():

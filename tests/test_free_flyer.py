@@ -235,27 +235,27 @@ def test_manifest_header_and_module_describe_positions_and_velocities(solo_code,
     assert (module.NQ, module.NV) == (19, 18) and module.VELOCITIES[0] == "base_vx"
     assert cli.main(["generate", str(robot_path("solo12")), "--floating-base", "quaternion", "-o", str(tmp_path),
                      "-q"]) == 0
-    header = (tmp_path / "solo.h").read_text()
-    assert "#define SOLO_NQ 19" in header and "#define SOLO_NV 18" in header
-    assert "void solo_integrate(const double *q, const double *v, const double *dt, double *q_next);" in header
+    header = (tmp_path / "solo12.h").read_text()  # (named after solo12.urdf, not its <robot name="solo">)
+    assert "#define SOLO12_NQ 19" in header and "#define SOLO12_NV 18" in header
+    assert "void solo12_integrate(const double *q, const double *v, const double *dt, double *q_next);" in header
     assert "qd[0]  base_vx" in header
-    assert json.loads((tmp_path / "solo.json").read_text())["functions"]["integrate"] == "solo_integrate"
+    assert json.loads((tmp_path / "solo12.json").read_text())["functions"]["integrate"] == "solo12_integrate"
 
 
 def test_fixed_and_euler_bases_keep_their_layout(tmp_path):
     """A bare --floating-base stays the six-coordinate Euler root (nq = nv, no integrate); a fixed base has NV = NQ."""
     assert cli.main(["generate", str(robot_path("ur5")), "--floating-base", "-o", str(tmp_path / "e"), "-q"]) == 0
-    euler = json.loads((tmp_path / "e" / "ur5.json").read_text())
+    euler = json.loads((tmp_path / "e" / "ur5_robot.json").read_text())  # (named after ur5_robot.urdf)
     assert euler["nq"] == euler["nv"] == 12 and "integrate" not in euler["functions"]
     assert euler["coordinates"][3]["name"] == "base_rx"
     assert cli.main(["generate", str(robot_path("ur5")), "--floating-base", "euler", "-o", str(tmp_path / "f"),
                      "-q"]) == 0
-    assert json.loads((tmp_path / "f" / "ur5.json").read_text())["nq"] == 12
+    assert json.loads((tmp_path / "f" / "ur5_robot.json").read_text())["nq"] == 12
     assert cli.main(["generate", "--floating-base", str(robot_path("ur5")), "-o", str(tmp_path / "h"), "-q"]) == 0
-    assert json.loads((tmp_path / "h" / "ur5.json").read_text())["nq"] == 12  # the path is not read as the kind
+    assert json.loads((tmp_path / "h" / "ur5_robot.json").read_text())["nq"] == 12  # the path is not read as the kind
     assert cli.main(["generate", str(robot_path("ur5")), "-o", str(tmp_path / "g"), "-q"]) == 0
-    assert "#define UR5_NV 6  /* velocities: the length of qd, qdd, tau (= NQ) */" in \
-        (tmp_path / "g" / "ur5.h").read_text()
+    assert "#define UR5_ROBOT_NV 6  /* velocities: the length of qd, qdd, tau (= NQ) */" in \
+        (tmp_path / "g" / "ur5_robot.h").read_text()
 
 
 @pytest.mark.parametrize("extra, words", [

@@ -215,7 +215,7 @@ def test_a_massless_floating_root_is_a_warning_not_an_internal_error(tmp_path, c
     assert cli.main(["generate", str(path), "--floating-base", "-o", str(out), "-q"]) == 0
     err = capsys.readouterr().err
     assert "singular" in err and "internal error" not in err
-    manifest = json.loads((out / "evil.json").read_text())
+    manifest = json.loads((out / "floater.json").read_text())  # (named after the file, not <robot name="evil">)
     assert "forward_dynamics" in manifest["omitted"] and "inverse_dynamics" in manifest["functions"]
 
 

@@ -313,7 +313,7 @@ def test_generate_writes_the_equalities_in_the_manifest(tmp_path):
 
     path = write(tmp_path, FOUR_BAR)
     assert cli.main(["generate", str(path), "-o", str(tmp_path / "out"), "-q", "--targets", "manifest"]) == 0
-    manifest = json.loads((tmp_path / "out" / "fourbar.json").read_text())
+    manifest = json.loads((tmp_path / "out" / "m.json").read_text())  # (named after m.xml)
     assert "constraint 'loop'" in json.dumps(manifest)
 
 

@@ -38,9 +38,9 @@ def solo(tmp_path_factory):
     assert code == 0, err
     from aggsym.codegen.compile import CLibrary, compile_shared, import_module
     import json
-    manifest = json.loads((out / "solo.json").read_text())
-    lib = CLibrary(compile_shared(out / "solo.c", out / "libsolo.so", extra=("-O2",)), manifest)
-    return lib, import_module(out / "solo.py"), manifest
+    manifest = json.loads((out / "solo12.json").read_text())  # (named after solo12.urdf)
+    lib = CLibrary(compile_shared(out / "solo12.c", out / "libsolo12.so", extra=("-O2",)), manifest)
+    return lib, import_module(out / "solo12.py"), manifest
 
 
 def support_forces(pm, q, qd, qdd, T):

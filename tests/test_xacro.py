@@ -83,7 +83,7 @@ def test_generate_arm_numpy(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["generate", str(ARM), "--xacro-arg", "length:=0.45", "--floating-base", "--targets", "numpy",
                  "-o", str(out), "-q"]) == 0
-    module = import_module(out / "xacro_arm.py")
+    module = import_module(out / "arm.py")  # (named after arm.urdf.xacro, not its <robot name="xacro_arm">)
     reference = aggsym.NumericTwin(aggsym.load(xacro_command(ARM, tmp_path / "arm.urdf", "length:=0.45"),
                                                floating_base=True))
     rng = np.random.default_rng(3)
@@ -96,7 +96,7 @@ def test_generate_scara_is_deterministic(tmp_path):
     for folder in ("a", "b"):
         assert main(["generate", str(SCARA), "--package-path", f"parts={PARTS}", "--targets", "numpy,manifest",
                      "-o", str(tmp_path / folder), "-q"]) == 0
-    for name in ("xacro_scara.py", "xacro_scara.json"):
+    for name in ("robot.py", "robot.json"):  # (named after robot.urdf.xacro)
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
 
 

@@ -32,7 +32,8 @@ tolerances).  The C names (``NAME_role``, prototypes, header macros) are the C t
 """
 from __future__ import annotations
 
-from .registry import INPUT_KINDS, ROUTINES, Output, Routine, input_length, register, routines_for, run, signature
+from .registry import (INPUT_KINDS, ROUTINES, SCALAR_INPUTS, Output, Routine, input_length, register, routines_for, run,
+                       signature)
 from .shapes import (
     constraint_jacobian_shape, constraint_rows_vector, constraint_square, frame_count, joint_wrench_shape,
     mechanism_vector, momentum_shape, nq_square, nq_vector, partition_block_shape, positions_vector, regressor_shape,
@@ -65,7 +66,7 @@ from .manifests import (
 )
 
 __all__ = [
-    "INPUT_KINDS", "Output", "Routine", "ROUTINES", "register", "signature", "input_length", "routines_for", "run",
+    "INPUT_KINDS", "Output", "Routine", "ROUTINES", "SCALAR_INPUTS", "register", "signature", "input_length", "routines_for", "run",
     "nq_vector", "nq_square", "positions_vector", "scalar", "momentum_shape", "joint_wrench_shape",
     "transvection_count", "partition_block_shape", "constraint_rows_vector", "constraint_jacobian_shape",
     "constraint_square", "slip_vector", "support_lengths", "support_block", "six", "mechanism_vector", "frame_count",

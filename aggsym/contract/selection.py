@@ -29,14 +29,26 @@ def omitted_routines(model) -> dict:
     return {**out, **{role: reason for role in wanted if ROUTINES[role].regular}}
 
 
+def unprefixed(model, name: str) -> str:
+    """A routine's name as the contract spells it: ``NAME_role`` (the C symbol, as ``--list-routines`` prints it,
+    NAME the model's name) becomes ``role``; any other name is returned as it is."""
+    prefix = f"{model.name}_"
+    if name not in ROUTINES and name.startswith(prefix) and name[len(prefix):] in ROUTINES:
+        return name[len(prefix):]
+    return name
+
+
 def select_routines(model, names):
-    """The model emitting the named routines (``--routines``: names of the contract, ``default`` for the routines
-    emitted when none are named, ``all`` for every routine that applies); an unknown name, or one that does not
-    apply to the model, is an error that lists the choices."""
+    """The model emitting the named routines (``--routines``: names of the contract, with or without the model's
+    prefix ``NAME_`` of the C symbols, ``default`` for the routines emitted when none are named, ``all`` for every
+    routine that applies); an unknown name (with the closest names offered), or one that does not apply to the
+    model, is an error that lists the choices."""
     import dataclasses
 
     from ..errors import AggsymError
+    from ..suggest import did_you_mean
 
+    names = [unprefixed(model, name) for name in names]
     chosen = []
     for name in names:
         if name == "all":
@@ -45,7 +57,10 @@ def select_routines(model, names):
             picked = [r.role for r in ROUTINES.values() if r.exists_for(model) and not r.on_request]
         elif name not in ROUTINES:
             shown = name if len(name) <= 80 else name[:80] + "..."
-            raise AggsymError(f"{model.source}: --routines: no routine named {shown!r} (the routines are "
+            bare = name.removeprefix(f"{model.name}_")  # (a misspelled name may carry the prefix)
+            applying = [role for role, r in ROUTINES.items() if r.exists_for(model)]
+            hint = did_you_mean(bare, [*applying, "default", "all"]) or did_you_mean(bare, ROUTINES)
+            raise AggsymError(f"{model.source}: --routines: no routine named {shown!r}{hint} (the routines are "
                               f"{', '.join(ROUTINES)}; or 'default', 'all')")
         elif not ROUTINES[name].exists_for(model):
             raise AggsymError(f"{model.source}: --routines: {name!r} does not apply to this model (the ones that do: "

@@ -14,6 +14,7 @@ import dataclasses
 import sympy as sp
 
 from ..errors import AggsymError
+from ..suggest import did_you_mean
 from .types import Frame, Model
 
 MAX_FRAMES = 10_000  # frames of a YAML model's frames: list, and names given to --frames (as MAX_LINKS)
@@ -60,7 +61,8 @@ def select_frames(model: Model, names) -> Model:
             some = ", ".join(repr(n) for n in list(offered)[:8]) + (", ..." if len(offered) > 8 else "")
             shown = name if len(name) <= 80 else name[:80] + "..."
             kind = "link" if model.link_table.from_file else "body or frame"
-            raise AggsymError(f"{model.source}: --frames: no {kind} named {shown!r} (the model has {some})")
+            raise AggsymError(f"{model.source}: --frames: no {kind} named {shown!r}{did_you_mean(name, offered)} "
+                              f"(the model has {some})")
         if name in seen:
             raise AggsymError(f"{model.source}: --frames: {name!r} is named twice")
         seen.add(name)

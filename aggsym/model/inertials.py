@@ -33,6 +33,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import AggsymError, ModelWarning
+from ..suggest import did_you_mean
 from .types import WORLD, Inertial, InertialBlock, Model, Parameter
 
 NAMES = ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
@@ -151,7 +152,8 @@ def with_inertial_parameters(model: Model, links=(), payload=None) -> Model:
         if name not in frames:
             shown = name if len(name) <= 80 else name[:80] + "..."
             some = ", ".join(repr(n) for n in list(frames)[:8]) + (", ..." if len(frames) > 8 else "")
-            raise AggsymError(f"{model.source}: no link named {shown!r} (the robot's links: {some})")
+            raise AggsymError(f"{model.source}: no link named {shown!r}{did_you_mean(name, frames)} (the robot's "
+                              f"links: {some})")
         if frames[name][0] in welded:
             raise _welded_refusal(model, name, frames[name][0], option)
     if len(set(links)) != len(links):

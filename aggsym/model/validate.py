@@ -15,6 +15,8 @@ import math
 
 import numpy as np
 
+from ..suggest import did_you_mean
+
 TOL = 1e-9
 PHYSICAL_TOL = 1e-6  # relative to the largest principal moment: how far a body's inertia may be from physical
 
@@ -209,7 +211,8 @@ def order_tree(names: list, parents: list, world: str):
     roots = [i for i, p in enumerate(parents) if p == world]
     for i, p in enumerate(parents):
         if p != world and p not in index:
-            return None, f"unknown parent {p!r} (no body has that name; the root's parent is {world!r})", i
+            return None, (f"unknown parent {p!r}{did_you_mean(p, list(names) + [world])} (no body has that name; the "
+                          f"root's parent is {world!r})"), i
         if p == names[i]:
             return None, f"body {names[i]!r} is its own parent", i
     parent = [-1 if p == world else index[p] for p in parents]

@@ -53,6 +53,7 @@ import numpy as np
 import sympy as sp
 
 from ..errors import ModelError
+from ..suggest import did_you_mean
 from .builder import TreeBuilder, ball_names
 from .expressions import ExpressionError, check_identifier, check_supported, evaluate, parse_value
 from .frames import MAX_FRAMES, default_frames
@@ -116,7 +117,8 @@ class _Reader:
             self.fail(path, f"expected a mapping, got {_kind(value)}")
         for key in value:
             if key not in allowed:
-                self.fail(path + (key,), f"unknown key {key!r} (allowed: {', '.join(sorted(map(str, allowed)))})")
+                self.fail(path + (key,), f"unknown key {key!r}{did_you_mean(key, allowed)} (allowed: "
+                                         f"{', '.join(sorted(map(str, allowed)))})")
         for key in required:
             if key not in value:
                 self.fail(path, f"missing field {key!r}")
@@ -282,7 +284,8 @@ class _Reader:
             return WORLD, None, None
         if value not in frames:
             close = sorted(frames)[:8]
-            self.fail(path, f"unknown {what} {value!r} (the names are {', '.join(close)}{', ...' if len(frames) > 8 else ''})")
+            self.fail(path, f"unknown {what} {value!r}{did_you_mean(value, frames)} (the names are {', '.join(close)}"
+                            f"{', ...' if len(frames) > 8 else ''})")
         return frames[value]
 
     def block(self, value, path) -> tuple:

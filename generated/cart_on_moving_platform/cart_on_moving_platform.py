@@ -18,11 +18,21 @@ PARAMETER_NAMES = ('m', 'mp', 'l', 'heave', 'roll', 'w', 'g', )
 PARAMETERS = np.array([2.0, 0.5, 0.6, 0.05, 0.1, 3.0, 9.81, ], dtype=float)
 
 
+def _vector(x, n, name, routine):
+    """x as an array of floats whose last dimension has n entries (one state: shape (n,); a batch: (..., n));
+    else a ValueError naming the argument and the length expected."""
+    x = np.asarray(x, dtype=float)
+    if x.shape[-1:] != (n,):
+        raise ValueError(f"{routine}: {name} must have {n} entries (shape ({n},), or (..., {n}) for a batch), "
+                         f"not shape {x.shape}")
+    return x
+
+
 def inertia(q, t, p=None):
     """A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'inertia')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'inertia')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     A = np.empty(batch + (4, 4))
     q_3 = q[..., 3]
@@ -56,10 +66,10 @@ def inertia(q, t, p=None):
 
 def bias(q, qd, t, p=None):
     """b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
+    q = _vector(q, 4, 'q', 'bias')
+    qd = _vector(qd, 4, 'qd', 'bias')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'bias')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], t.shape[:-1], )
     b = np.empty(batch + (4,))
     q_3 = q[..., 3]
@@ -78,10 +88,10 @@ def bias(q, qd, t, p=None):
 
 def coriolis(q, qd, t, p=None):
     """C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
+    q = _vector(q, 4, 'q', 'coriolis')
+    qd = _vector(qd, 4, 'qd', 'coriolis')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'coriolis')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], t.shape[:-1], )
     C = np.empty(batch + (4, 4))
     q_3 = q[..., 3]
@@ -121,9 +131,9 @@ def coriolis(q, qd, t, p=None):
 
 def gravity(q, t, p=None):
     """g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'gravity')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'gravity')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     g = np.empty(batch + (4,))
     q_3 = q[..., 3]
@@ -141,10 +151,10 @@ def gravity(q, t, p=None):
 
 def nonlinear_effects(q, qd, t, p=None):
     """d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
+    q = _vector(q, 4, 'q', 'nonlinear_effects')
+    qd = _vector(qd, 4, 'qd', 'nonlinear_effects')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'nonlinear_effects')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], t.shape[:-1], )
     d = np.empty(batch + (4,))
     q_3 = q[..., 3]
@@ -166,11 +176,11 @@ def nonlinear_effects(q, qd, t, p=None):
 
 def inverse_dynamics(q, qd, qdd, t, p=None):
     """tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
+    q = _vector(q, 4, 'q', 'inverse_dynamics')
+    qd = _vector(qd, 4, 'qd', 'inverse_dynamics')
+    qdd = _vector(qdd, 4, 'qdd', 'inverse_dynamics')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'inverse_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], t.shape[:-1], )
     tau = np.empty(batch + (4,))
     q_3 = q[..., 3]
@@ -199,10 +209,10 @@ def inverse_dynamics(q, qd, qdd, t, p=None):
 
 def kinetic_energy(q, qd, t, p=None):
     """T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
+    q = _vector(q, 4, 'q', 'kinetic_energy')
+    qd = _vector(qd, 4, 'qd', 'kinetic_energy')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'kinetic_energy')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], t.shape[:-1], )
     T = np.empty(batch + (1,))
     q_3 = q[..., 3]
@@ -224,9 +234,9 @@ def kinetic_energy(q, qd, t, p=None):
 
 def potential_energy(q, t, p=None):
     """U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'potential_energy')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'potential_energy')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     U = np.empty(batch + (1,))
     q_2 = q[..., 2]
@@ -243,10 +253,10 @@ def potential_energy(q, t, p=None):
 
 def momentum(q, qd, t, p=None):
     """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
+    q = _vector(q, 4, 'q', 'momentum')
+    qd = _vector(qd, 4, 'qd', 'momentum')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'momentum')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], t.shape[:-1], )
     h = np.empty(batch + (6,))
     q_0 = q[..., 0]
@@ -284,11 +294,11 @@ def momentum(q, qd, t, p=None):
 
 def joint_wrenches(q, qd, qdd, t, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
+    q = _vector(q, 4, 'q', 'joint_wrenches')
+    qd = _vector(qd, 4, 'qd', 'joint_wrenches')
+    qdd = _vector(qdd, 4, 'qdd', 'joint_wrenches')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'joint_wrenches')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], t.shape[:-1], )
     W = np.empty(batch + (2, 6))
     q_3 = q[..., 3]
@@ -327,11 +337,11 @@ def joint_wrenches(q, qd, qdd, t, p=None):
 
 def forward_dynamics(q, qd, tau, t, p=None):
     """qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    tau = np.asarray(tau, dtype=float)
+    q = _vector(q, 4, 'q', 'forward_dynamics')
+    qd = _vector(qd, 4, 'qd', 'forward_dynamics')
+    tau = _vector(tau, 4, 'tau', 'forward_dynamics')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'forward_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], tau.shape[:-1], t.shape[:-1], )
     qdd = np.empty(batch + (4,))
     q_3 = q[..., 3]
@@ -370,9 +380,9 @@ def forward_dynamics(q, qd, tau, t, p=None):
 
 def inertia_inverse(q, t, p=None):
     """A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'inertia_inverse')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'inertia_inverse')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     Ainv = np.empty(batch + (4, 4))
     q_3 = q[..., 3]
@@ -418,9 +428,9 @@ def inertia_inverse(q, t, p=None):
 
 def transvective_factors(q, t, p=None):
     """the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'transvective_factors')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'transvective_factors')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     targs = np.empty(batch + (6,))
     diag = np.empty(batch + (4,))
@@ -453,9 +463,9 @@ def transvective_factors(q, t, p=None):
 
 def constraint_residual(q, t, p=None):
     """phi(q): the constraints' holonomic residual, m rows (ch. 4): the contact point's offset from its attachment and the rotation vector of the relative orientation, in the reference axes"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'constraint_residual')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'constraint_residual')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     phi = np.empty(batch + (2,))
     q_1 = q[..., 1]
@@ -477,9 +487,9 @@ def constraint_residual(q, t, p=None):
 
 def constraint_jacobian(q, t, p=None):
     """J(q) = D_lambda^T, m*n row-major: the forbidden relative motions per unit rate of each coordinate, rows of the parastrophic matrix S moved to the contact points (4.5)-(4.12)"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'constraint_jacobian')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'constraint_jacobian')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     J = np.empty(batch + (2, 4))
     t_0 = t[..., 0]
@@ -502,10 +512,10 @@ def constraint_jacobian(q, t, p=None):
 
 def constraint_bias(q, qd, t, p=None):
     """gamma(q, qd) = J' qd: the relative accelerations at qdd = 0 (S'^T qd of (2.37) at the contact points), so that J qdd + gamma is the constraints' acceleration"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
+    q = _vector(q, 4, 'q', 'constraint_bias')
+    qd = _vector(qd, 4, 'qd', 'constraint_bias')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'constraint_bias')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], t.shape[:-1], )
     gamma = np.empty(batch + (2,))
     q_1 = q[..., 1]
@@ -543,10 +553,10 @@ def constraint_bias(q, qd, t, p=None):
 
 def slip_velocities(q, qd, t, p=None):
     """w(q, qd) = D_k+^T V (4.33)-(4.34): each contact point's velocity relative to the medium along the free translations of its constraint (the sliding velocities friction acts on)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
+    q = _vector(q, 4, 'q', 'slip_velocities')
+    qd = _vector(qd, 4, 'qd', 'slip_velocities')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'slip_velocities')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], t.shape[:-1], )
     w = np.empty(batch + (1,))
     qd_0 = qd[..., 0]
@@ -556,9 +566,9 @@ def slip_velocities(q, qd, t, p=None):
 
 def delassus(q, t, p=None):
     """G = J A^-1 J^T, m*m row-major, by the transvective factors: P = T J^T, G = P^T diag(1/(beta,beta)) P (3.19)"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'delassus')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'delassus')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     G = np.empty(batch + (2, 2))
     q_3 = q[..., 3]
@@ -597,11 +607,11 @@ def delassus(q, t, p=None):
 
 def constrained_forward_dynamics(q, qd, tau, t, p=None):
     """qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    tau = np.asarray(tau, dtype=float)
+    q = _vector(q, 4, 'q', 'constrained_forward_dynamics')
+    qd = _vector(qd, 4, 'qd', 'constrained_forward_dynamics')
+    tau = _vector(tau, 4, 'tau', 'constrained_forward_dynamics')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'constrained_forward_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], tau.shape[:-1], t.shape[:-1], )
     qdd = np.empty(batch + (4,))
     lambda_ = np.empty(batch + (2,))
@@ -703,9 +713,9 @@ def constrained_forward_dynamics(q, qd, tau, t, p=None):
 
 def frame_poses(q, t, p=None):
     """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'frame_poses')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'frame_poses')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     X = np.empty(batch + (1, 12))
     q_0 = q[..., 0]
@@ -731,9 +741,9 @@ def frame_poses(q, t, p=None):
 
 def frame_jacobians(q, t, p=None):
     """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'frame_jacobians')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'frame_jacobians')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     J = np.empty(batch + (1, 6, 4))
     J[..., 0, 0, 0] = 1
@@ -765,11 +775,11 @@ def frame_jacobians(q, t, p=None):
 
 def frame_accelerations(q, qd, qdd, t, p=None):
     """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
+    q = _vector(q, 4, 'q', 'frame_accelerations')
+    qd = _vector(qd, 4, 'qd', 'frame_accelerations')
+    qdd = _vector(qdd, 4, 'qdd', 'frame_accelerations')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'frame_accelerations')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], t.shape[:-1], )
     a = np.empty(batch + (1, 6))
     q_3 = q[..., 3]
@@ -792,9 +802,9 @@ def frame_accelerations(q, qd, qdd, t, p=None):
 
 def center_of_mass(q, t, p=None):
     """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'center_of_mass')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'center_of_mass')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     c = np.empty(batch + (3,))
     q_0 = q[..., 0]
@@ -816,9 +826,9 @@ def center_of_mass(q, t, p=None):
 
 def com_jacobian(q, t, p=None):
     """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
-    q = np.asarray(q, dtype=float)
+    q = _vector(q, 4, 'q', 'com_jacobian')
     t = np.asarray(t, dtype=float)[..., None]
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    p = PARAMETERS if p is None else _vector(p, 7, 'p', 'com_jacobian')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     Jc = np.empty(batch + (3, 4))
     q_3 = q[..., 3]

@@ -16,10 +16,20 @@ PARAMETER_NAMES = ('R', 'r', 'la', 'lf', 'w', 'ma', 'mf', 'mp', 'g', )
 PARAMETERS = np.array([0.2, 0.05, 0.3, 0.8, 0.1, 0.5, 0.2, 0.4, 9.81, ], dtype=float)
 
 
+def _vector(x, n, name, routine):
+    """x as an array of floats whose last dimension has n entries (one state: shape (n,); a batch: (..., n));
+    else a ValueError naming the argument and the length expected."""
+    x = np.asarray(x, dtype=float)
+    if x.shape[-1:] != (n,):
+        raise ValueError(f"{routine}: {name} must have {n} entries (shape ({n},), or (..., {n}) for a batch), "
+                         f"not shape {x.shape}")
+    return x
+
+
 def inertia(q, p=None):
     """A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'inertia')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'inertia')
     batch = np.broadcast_shapes(q.shape[:-1], )
     A = np.empty(batch + (11, 11))
     q_1 = q[..., 1]
@@ -256,9 +266,9 @@ def inertia(q, p=None):
 
 def bias(q, qd, p=None):
     """b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'bias')
+    qd = _vector(qd, 11, 'qd', 'bias')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'bias')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     b = np.empty(batch + (11,))
     q_1 = q[..., 1]
@@ -421,9 +431,9 @@ def bias(q, qd, p=None):
 
 def coriolis(q, qd, p=None):
     """C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'coriolis')
+    qd = _vector(qd, 11, 'qd', 'coriolis')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'coriolis')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     C = np.empty(batch + (11, 11))
     q_1 = q[..., 1]
@@ -823,8 +833,8 @@ def coriolis(q, qd, p=None):
 
 def gravity(q, p=None):
     """g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'gravity')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'gravity')
     batch = np.broadcast_shapes(q.shape[:-1], )
     g = np.empty(batch + (11,))
     q_0 = q[..., 0]
@@ -938,9 +948,9 @@ def gravity(q, p=None):
 
 def nonlinear_effects(q, qd, p=None):
     """d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'nonlinear_effects')
+    qd = _vector(qd, 11, 'qd', 'nonlinear_effects')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'nonlinear_effects')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     d = np.empty(batch + (11,))
     q_0 = q[..., 0]
@@ -1127,10 +1137,10 @@ def nonlinear_effects(q, qd, p=None):
 
 def inverse_dynamics(q, qd, qdd, p=None):
     """tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'inverse_dynamics')
+    qd = _vector(qd, 11, 'qd', 'inverse_dynamics')
+    qdd = _vector(qdd, 11, 'qdd', 'inverse_dynamics')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'inverse_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
     tau = np.empty(batch + (11,))
     q_0 = q[..., 0]
@@ -1335,9 +1345,9 @@ def inverse_dynamics(q, qd, qdd, p=None):
 
 def kinetic_energy(q, qd, p=None):
     """T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'kinetic_energy')
+    qd = _vector(qd, 11, 'qd', 'kinetic_energy')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'kinetic_energy')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     T = np.empty(batch + (1,))
     q_1 = q[..., 1]
@@ -1434,8 +1444,8 @@ def kinetic_energy(q, qd, p=None):
 
 def potential_energy(q, p=None):
     """U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'potential_energy')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'potential_energy')
     batch = np.broadcast_shapes(q.shape[:-1], )
     U = np.empty(batch + (1,))
     q_0 = q[..., 0]
@@ -1502,9 +1512,9 @@ def potential_energy(q, p=None):
 
 def momentum(q, qd, p=None):
     """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'momentum')
+    qd = _vector(qd, 11, 'qd', 'momentum')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'momentum')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     h = np.empty(batch + (6,))
     q_0 = q[..., 0]
@@ -1741,10 +1751,10 @@ def momentum(q, qd, p=None):
 
 def joint_wrenches(q, qd, qdd, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'joint_wrenches')
+    qd = _vector(qd, 11, 'qd', 'joint_wrenches')
+    qdd = _vector(qdd, 11, 'qdd', 'joint_wrenches')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'joint_wrenches')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
     W = np.empty(batch + (8, 6))
     q_0 = q[..., 0]
@@ -2022,10 +2032,10 @@ def joint_wrenches(q, qd, qdd, p=None):
 
 def forward_dynamics(q, qd, tau, p=None):
     """qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    tau = np.asarray(tau, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'forward_dynamics')
+    qd = _vector(qd, 11, 'qd', 'forward_dynamics')
+    tau = _vector(tau, 11, 'tau', 'forward_dynamics')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'forward_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], tau.shape[:-1], )
     qdd = np.empty(batch + (11,))
     q_0 = q[..., 0]
@@ -2393,8 +2403,8 @@ def forward_dynamics(q, qd, tau, p=None):
 
 def inertia_inverse(q, p=None):
     """A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'inertia_inverse')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'inertia_inverse')
     batch = np.broadcast_shapes(q.shape[:-1], )
     Ainv = np.empty(batch + (11, 11))
     q_1 = q[..., 1]
@@ -2754,8 +2764,8 @@ def inertia_inverse(q, p=None):
 
 def transvective_factors(q, p=None):
     """the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'transvective_factors')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'transvective_factors')
     batch = np.broadcast_shapes(q.shape[:-1], )
     targs = np.empty(batch + (16,))
     diag = np.empty(batch + (11,))
@@ -2988,8 +2998,8 @@ def transvective_factors(q, p=None):
 
 def constraint_residual(q, p=None):
     """phi(q): the constraints' holonomic residual, m rows (ch. 4): the contact point's offset from its attachment and the rotation vector of the relative orientation, in the reference axes"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'constraint_residual')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'constraint_residual')
     batch = np.broadcast_shapes(q.shape[:-1], )
     phi = np.empty(batch + (8,))
     q_0 = q[..., 0]
@@ -3129,8 +3139,8 @@ def constraint_residual(q, p=None):
 
 def constraint_jacobian(q, p=None):
     """J(q) = D_lambda^T, m*n row-major: the forbidden relative motions per unit rate of each coordinate, rows of the parastrophic matrix S moved to the contact points (4.5)-(4.12)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'constraint_jacobian')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'constraint_jacobian')
     batch = np.broadcast_shapes(q.shape[:-1], )
     J = np.empty(batch + (8, 11))
     q_0 = q[..., 0]
@@ -3457,9 +3467,9 @@ def constraint_jacobian(q, p=None):
 
 def constraint_bias(q, qd, p=None):
     """gamma(q, qd) = J' qd: the relative accelerations at qdd = 0 (S'^T qd of (2.37) at the contact points), so that J qdd + gamma is the constraints' acceleration"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'constraint_bias')
+    qd = _vector(qd, 11, 'qd', 'constraint_bias')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'constraint_bias')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     gamma = np.empty(batch + (8,))
     q_0 = q[..., 0]
@@ -3716,9 +3726,9 @@ def constraint_bias(q, qd, p=None):
 
 def slip_velocities(q, qd, p=None):
     """w(q, qd) = D_k+^T V (4.33)-(4.34): each contact point's velocity relative to the medium along the free translations of its constraint (the sliding velocities friction acts on)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'slip_velocities')
+    qd = _vector(qd, 11, 'qd', 'slip_velocities')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'slip_velocities')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     w = np.empty(batch + (3,))
     q_0 = q[..., 0]
@@ -3797,8 +3807,8 @@ def slip_velocities(q, qd, p=None):
 
 def delassus(q, p=None):
     """G = J A^-1 J^T, m*m row-major, by the transvective factors: P = T J^T, G = P^T diag(1/(beta,beta)) P (3.19)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'delassus')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'delassus')
     batch = np.broadcast_shapes(q.shape[:-1], )
     G = np.empty(batch + (8, 8))
     q_0 = q[..., 0]
@@ -4451,10 +4461,10 @@ def delassus(q, p=None):
 
 def constrained_forward_dynamics(q, qd, tau, p=None):
     """qdd and lambda of A qdd + b + g + c = tau + J^T lambda, J qdd + gamma = -(kd J qd + kp phi) (4.25)-(4.28): G lambda = -gamma - stab - P^T D^-1 T F with P = T J^T, then qdd = T^T D^-1 (T F + P lambda) (3.20); friction on sliding contacts from the slip velocities (4.5), (4.33); returns nonzero when G is singular (or Coulomb friction has no consistent solution)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    tau = np.asarray(tau, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'constrained_forward_dynamics')
+    qd = _vector(qd, 11, 'qd', 'constrained_forward_dynamics')
+    tau = _vector(tau, 11, 'tau', 'constrained_forward_dynamics')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'constrained_forward_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], tau.shape[:-1], )
     qdd = np.empty(batch + (11,))
     lambda_ = np.empty(batch + (8,))
@@ -5391,8 +5401,8 @@ def constrained_forward_dynamics(q, qd, tau, p=None):
 
 def frame_poses(q, p=None):
     """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'frame_poses')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'frame_poses')
     batch = np.broadcast_shapes(q.shape[:-1], )
     X = np.empty(batch + (3, 12))
     q_0 = q[..., 0]
@@ -5530,8 +5540,8 @@ def frame_poses(q, p=None):
 
 def frame_jacobians(q, p=None):
     """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'frame_jacobians')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'frame_jacobians')
     batch = np.broadcast_shapes(q.shape[:-1], )
     J = np.empty(batch + (3, 6, 11))
     q_0 = q[..., 0]
@@ -5827,10 +5837,10 @@ def frame_jacobians(q, p=None):
 
 def frame_accelerations(q, qd, qdd, p=None):
     """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'frame_accelerations')
+    qd = _vector(qd, 11, 'qd', 'frame_accelerations')
+    qdd = _vector(qdd, 11, 'qdd', 'frame_accelerations')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'frame_accelerations')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
     a = np.empty(batch + (3, 6))
     q_0 = q[..., 0]
@@ -6070,8 +6080,8 @@ def frame_accelerations(q, qd, qdd, p=None):
 
 def center_of_mass(q, p=None):
     """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'center_of_mass')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'center_of_mass')
     batch = np.broadcast_shapes(q.shape[:-1], )
     c = np.empty(batch + (3,))
     q_0 = q[..., 0]
@@ -6162,8 +6172,8 @@ def center_of_mass(q, p=None):
 
 def com_jacobian(q, p=None):
     """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 11, 'q', 'com_jacobian')
+    p = PARAMETERS if p is None else _vector(p, 9, 'p', 'com_jacobian')
     batch = np.broadcast_shapes(q.shape[:-1], )
     Jc = np.empty(batch + (3, 11))
     q_0 = q[..., 0]

@@ -17,10 +17,20 @@ PARAMETER_NAMES = ('m2', 'm3', 'r21', 'r31', 'p21', 'I244', 'I255', 'I266', 'I34
 PARAMETERS = np.array([1.0, 0.8, 0.25, 0.2, 0.5, 0.001, 0.02, 0.02, 0.001, 0.012, 0.012, 9.81, 400.0, 20.0, 150.0, ], dtype=float)
 
 
+def _vector(x, n, name, routine):
+    """x as an array of floats whose last dimension has n entries (one state: shape (n,); a batch: (..., n));
+    else a ValueError naming the argument and the length expected."""
+    x = np.asarray(x, dtype=float)
+    if x.shape[-1:] != (n,):
+        raise ValueError(f"{routine}: {name} must have {n} entries (shape ({n},), or (..., {n}) for a batch), "
+                         f"not shape {x.shape}")
+    return x
+
+
 def inertia(q, p=None):
     """A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'inertia')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'inertia')
     batch = np.broadcast_shapes(q.shape[:-1], )
     A = np.empty(batch + (3, 3))
     q_2 = q[..., 2]
@@ -52,9 +62,9 @@ def inertia(q, p=None):
 
 def bias(q, qd, p=None):
     """b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'bias')
+    qd = _vector(qd, 3, 'qd', 'bias')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'bias')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     b = np.empty(batch + (3,))
     q_2 = q[..., 2]
@@ -87,9 +97,9 @@ def bias(q, qd, p=None):
 
 def coriolis(q, qd, p=None):
     """C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'coriolis')
+    qd = _vector(qd, 3, 'qd', 'coriolis')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'coriolis')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     C = np.empty(batch + (3, 3))
     q_2 = q[..., 2]
@@ -133,8 +143,8 @@ def coriolis(q, qd, p=None):
 
 def gravity(q, p=None):
     """g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'gravity')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'gravity')
     batch = np.broadcast_shapes(q.shape[:-1], )
     g = np.empty(batch + (3,))
     q_1 = q[..., 1]
@@ -159,9 +169,9 @@ def gravity(q, p=None):
 
 def nonlinear_effects(q, qd, p=None):
     """d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'nonlinear_effects')
+    qd = _vector(qd, 3, 'qd', 'nonlinear_effects')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'nonlinear_effects')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     d = np.empty(batch + (3,))
     q_0 = q[..., 0]
@@ -205,10 +215,10 @@ def nonlinear_effects(q, qd, p=None):
 
 def inverse_dynamics(q, qd, qdd, p=None):
     """tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'inverse_dynamics')
+    qd = _vector(qd, 3, 'qd', 'inverse_dynamics')
+    qdd = _vector(qdd, 3, 'qdd', 'inverse_dynamics')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'inverse_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
     tau = np.empty(batch + (3,))
     q_0 = q[..., 0]
@@ -258,8 +268,8 @@ def inverse_dynamics(q, qd, qdd, p=None):
 
 def elastic(q, p=None):
     """c(q) = C (q - q0), the generalized force of the Hooke-elastic pairs on the left side of (2.27)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'elastic')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'elastic')
     batch = np.broadcast_shapes(q.shape[:-1], )
     c = np.empty(batch + (3,))
     q_0 = q[..., 0]
@@ -275,9 +285,9 @@ def elastic(q, p=None):
 
 def kinetic_energy(q, qd, p=None):
     """T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'kinetic_energy')
+    qd = _vector(qd, 3, 'qd', 'kinetic_energy')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'kinetic_energy')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     T = np.empty(batch + (1,))
     q_2 = q[..., 2]
@@ -308,8 +318,8 @@ def kinetic_energy(q, qd, p=None):
 
 def potential_energy(q, p=None):
     """U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'potential_energy')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'potential_energy')
     batch = np.broadcast_shapes(q.shape[:-1], )
     U = np.empty(batch + (1,))
     q_0 = q[..., 0]
@@ -333,9 +343,9 @@ def potential_energy(q, p=None):
 
 def momentum(q, qd, p=None):
     """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'momentum')
+    qd = _vector(qd, 3, 'qd', 'momentum')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'momentum')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     h = np.empty(batch + (6,))
     q_0 = q[..., 0]
@@ -393,10 +403,10 @@ def momentum(q, qd, p=None):
 
 def joint_wrenches(q, qd, qdd, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'joint_wrenches')
+    qd = _vector(qd, 3, 'qd', 'joint_wrenches')
+    qdd = _vector(qdd, 3, 'qdd', 'joint_wrenches')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'joint_wrenches')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
     W = np.empty(batch + (2, 6))
     q_1 = q[..., 1]
@@ -461,10 +471,10 @@ def joint_wrenches(q, qd, qdd, p=None):
 
 def forward_dynamics(q, qd, tau, p=None):
     """qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    tau = np.asarray(tau, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'forward_dynamics')
+    qd = _vector(qd, 3, 'qd', 'forward_dynamics')
+    tau = _vector(tau, 3, 'tau', 'forward_dynamics')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'forward_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], tau.shape[:-1], )
     qdd = np.empty(batch + (3,))
     q_0 = q[..., 0]
@@ -519,8 +529,8 @@ def forward_dynamics(q, qd, tau, p=None):
 
 def inertia_inverse(q, p=None):
     """A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'inertia_inverse')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'inertia_inverse')
     batch = np.broadcast_shapes(q.shape[:-1], )
     Ainv = np.empty(batch + (3, 3))
     q_2 = q[..., 2]
@@ -561,8 +571,8 @@ def inertia_inverse(q, p=None):
 
 def transvective_factors(q, p=None):
     """the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'transvective_factors')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'transvective_factors')
     batch = np.broadcast_shapes(q.shape[:-1], )
     targs = np.empty(batch + (3,))
     diag = np.empty(batch + (3,))
@@ -597,9 +607,9 @@ def transvective_factors(q, p=None):
 
 def elastic_partition(q, qd, p=None):
     """the slow/fast partition of Prop. 2.14: blocks of A(q), B(q, qd) (b = B qd) and C, slow (+) and fast (-, elastic) coordinates, see the manifest's layout"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'elastic_partition')
+    qd = _vector(qd, 3, 'qd', 'elastic_partition')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'elastic_partition')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     A_pp = np.empty(batch + (1, 1))
     A_mp = np.empty(batch + (1, 2))
@@ -670,8 +680,8 @@ def elastic_partition(q, qd, p=None):
 
 def frame_poses(q, p=None):
     """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'frame_poses')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'frame_poses')
     batch = np.broadcast_shapes(q.shape[:-1], )
     X = np.empty(batch + (1, 12))
     q_0 = q[..., 0]
@@ -699,8 +709,8 @@ def frame_poses(q, p=None):
 
 def frame_jacobians(q, p=None):
     """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'frame_jacobians')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'frame_jacobians')
     batch = np.broadcast_shapes(q.shape[:-1], )
     J = np.empty(batch + (1, 6, 3))
     q_1 = q[..., 1]
@@ -730,10 +740,10 @@ def frame_jacobians(q, p=None):
 
 def frame_accelerations(q, qd, qdd, p=None):
     """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'frame_accelerations')
+    qd = _vector(qd, 3, 'qd', 'frame_accelerations')
+    qdd = _vector(qdd, 3, 'qdd', 'frame_accelerations')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'frame_accelerations')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
     a = np.empty(batch + (1, 6))
     q_1 = q[..., 1]
@@ -772,8 +782,8 @@ def frame_accelerations(q, qd, qdd, p=None):
 
 def center_of_mass(q, p=None):
     """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'center_of_mass')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'center_of_mass')
     batch = np.broadcast_shapes(q.shape[:-1], )
     c = np.empty(batch + (3,))
     q_0 = q[..., 0]
@@ -799,8 +809,8 @@ def center_of_mass(q, p=None):
 
 def com_jacobian(q, p=None):
     """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 3, 'q', 'com_jacobian')
+    p = PARAMETERS if p is None else _vector(p, 15, 'p', 'com_jacobian')
     batch = np.broadcast_shapes(q.shape[:-1], )
     Jc = np.empty(batch + (3, 3))
     q_0 = q[..., 0]

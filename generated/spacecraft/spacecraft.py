@@ -16,10 +16,20 @@ PARAMETER_NAMES = ()
 PARAMETERS = np.array([], dtype=float)
 
 
+def _vector(x, n, name, routine):
+    """x as an array of floats whose last dimension has n entries (one state: shape (n,); a batch: (..., n));
+    else a ValueError naming the argument and the length expected."""
+    x = np.asarray(x, dtype=float)
+    if x.shape[-1:] != (n,):
+        raise ValueError(f"{routine}: {name} must have {n} entries (shape ({n},), or (..., {n}) for a batch), "
+                         f"not shape {x.shape}")
+    return x
+
+
 def inertia(q, p=None):
     """A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'inertia')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'inertia')
     batch = np.broadcast_shapes(q.shape[:-1], )
     A = np.empty(batch + (12, 12))
     q_3 = q[..., 3]
@@ -373,9 +383,9 @@ def inertia(q, p=None):
 
 def bias(q, qd, p=None):
     """b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'bias')
+    qd = _vector(qd, 12, 'qd', 'bias')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'bias')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     b = np.empty(batch + (12,))
     q_3 = q[..., 3]
@@ -568,9 +578,9 @@ def bias(q, qd, p=None):
 
 def coriolis(q, qd, p=None):
     """C(q, qd), n*n row-major: the Coriolis matrix with C qd = b and A' - 2C skew (S (Phi(V) A + A phi(V)) S^T + S A S'^T, from the book's B of (2.17), (2.36)), for passivity-based control"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'coriolis')
+    qd = _vector(qd, 12, 'qd', 'coriolis')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'coriolis')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     C = np.empty(batch + (12, 12))
     q_3 = q[..., 3]
@@ -1559,8 +1569,8 @@ def coriolis(q, qd, p=None):
 
 def gravity(q, p=None):
     """g(q) = -S G, the generalized gravity force on the left side (the sweeps at rest)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'gravity')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'gravity')
     batch = np.broadcast_shapes(q.shape[:-1], )
     g = np.empty(batch + (12,))
     g[..., 0] = 0
@@ -1580,9 +1590,9 @@ def gravity(q, p=None):
 
 def nonlinear_effects(q, qd, p=None):
     """d(q, qd) = b(q, qd) + g(q) + c(q): the sweeps with qdd = 0 (2.44)-(2.46), (2.52), plus the elastic force C (q - q0) of (2.27)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'nonlinear_effects')
+    qd = _vector(qd, 12, 'qd', 'nonlinear_effects')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'nonlinear_effects')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     d = np.empty(batch + (12,))
     q_3 = q[..., 3]
@@ -1775,10 +1785,10 @@ def nonlinear_effects(q, qd, p=None):
 
 def inverse_dynamics(q, qd, qdd, p=None):
     """tau = u* by the forward and backward sweeps (2.39)-(2.42) plus C (q - q0) (2.27); equals A(q) qdd + b(q, qd) + g(q) + c(q)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'inverse_dynamics')
+    qd = _vector(qd, 12, 'qd', 'inverse_dynamics')
+    qdd = _vector(qdd, 12, 'qdd', 'inverse_dynamics')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'inverse_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
     tau = np.empty(batch + (12,))
     q_3 = q[..., 3]
@@ -1991,9 +2001,9 @@ def inverse_dynamics(q, qd, qdd, p=None):
 
 def kinetic_energy(q, qd, p=None):
     """T = 1/2 sum V^T A_lk V over the bodies (Def. 2.4; with added masses the medium's 1/2 V^T Lambda V, Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'kinetic_energy')
+    qd = _vector(qd, 12, 'qd', 'kinetic_energy')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'kinetic_energy')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     T = np.empty(batch + (1,))
     q_3 = q[..., 3]
@@ -2095,8 +2105,8 @@ def kinetic_energy(q, qd, p=None):
 
 def potential_energy(q, p=None):
     """U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'potential_energy')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'potential_energy')
     batch = np.broadcast_shapes(q.shape[:-1], )
     U = np.empty(batch + (1,))
     U[..., 0] = 0
@@ -2105,9 +2115,9 @@ def potential_energy(q, p=None):
 
 def momentum(q, qd, p=None):
     """h: the total linear momentum and angular momentum about the world origin, world axes: each body's A_lk V (2.3) moved to the world by its pose L (1.13)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'momentum')
+    qd = _vector(qd, 12, 'qd', 'momentum')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'momentum')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     h = np.empty(batch + (6,))
     q_0 = q[..., 0]
@@ -2301,10 +2311,10 @@ def momentum(q, qd, p=None):
 
 def joint_wrenches(q, qd, qdd, p=None):
     """W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'joint_wrenches')
+    qd = _vector(qd, 12, 'qd', 'joint_wrenches')
+    qdd = _vector(qdd, 12, 'qdd', 'joint_wrenches')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'joint_wrenches')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
     W = np.empty(batch + (5, 6))
     q_3 = q[..., 3]
@@ -2524,10 +2534,10 @@ def joint_wrenches(q, qd, qdd, p=None):
 
 def forward_dynamics(q, qd, tau, p=None):
     """qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    tau = np.asarray(tau, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'forward_dynamics')
+    qd = _vector(qd, 12, 'qd', 'forward_dynamics')
+    tau = _vector(tau, 12, 'tau', 'forward_dynamics')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'forward_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], tau.shape[:-1], )
     qdd = np.empty(batch + (12,))
     q_3 = q[..., 3]
@@ -2928,8 +2938,8 @@ def forward_dynamics(q, qd, tau, p=None):
 
 def inertia_inverse(q, p=None):
     """A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'inertia_inverse')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'inertia_inverse')
     batch = np.broadcast_shapes(q.shape[:-1], )
     Ainv = np.empty(batch + (12, 12))
     q_3 = q[..., 3]
@@ -3638,8 +3648,8 @@ def inertia_inverse(q, p=None):
 
 def transvective_factors(q, p=None):
     """the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'transvective_factors')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'transvective_factors')
     batch = np.broadcast_shapes(q.shape[:-1], )
     targs = np.empty(batch + (57,))
     diag = np.empty(batch + (12,))
@@ -4070,11 +4080,11 @@ def transvective_factors(q, p=None):
 
 def support_coefficients(q, qd, gamma, gammad, p=None):
     """the coefficients of the support equation A qdd + B qd + I gammadd + J gammad + g = L T (3.1)-(3.3): A = A+_11 M, I_beta = L A+_lk M f_beta, B and J the support-side columns of B(q, qd) (2.17), g the weights at the support, L the world wrench T moved to the support"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    gamma = np.asarray(gamma, dtype=float)
-    gammad = np.asarray(gammad, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 6, 'q', 'support_coefficients')
+    qd = _vector(qd, 6, 'qd', 'support_coefficients')
+    gamma = _vector(gamma, 6, 'gamma', 'support_coefficients')
+    gammad = _vector(gammad, 6, 'gammad', 'support_coefficients')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'support_coefficients')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], gamma.shape[:-1], gammad.shape[:-1], )
     support_A = np.empty(batch + (6, 6))
     support_B = np.empty(batch + (6, 6))
@@ -5078,13 +5088,13 @@ def support_coefficients(q, qd, gamma, gammad, p=None):
 
 def support_direct(q, qd, gamma, gammad, gammadd, T, p=None):
     """the direct problem (3.4) 1: the support's qdd from its state, the mechanism's motion gamma(t) and the external wrench T"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    gamma = np.asarray(gamma, dtype=float)
-    gammad = np.asarray(gammad, dtype=float)
-    gammadd = np.asarray(gammadd, dtype=float)
-    T = np.asarray(T, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 6, 'q', 'support_direct')
+    qd = _vector(qd, 6, 'qd', 'support_direct')
+    gamma = _vector(gamma, 6, 'gamma', 'support_direct')
+    gammad = _vector(gammad, 6, 'gammad', 'support_direct')
+    gammadd = _vector(gammadd, 6, 'gammadd', 'support_direct')
+    T = _vector(T, 6, 'T', 'support_direct')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'support_direct')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], gamma.shape[:-1], gammad.shape[:-1], gammadd.shape[:-1], T.shape[:-1], )
     qdd = np.empty(batch + (6,))
     status = np.empty(batch + (1,))
@@ -6294,13 +6304,13 @@ def support_direct(q, qd, gamma, gammad, gammadd, T, p=None):
 
 def support_inverse(q, qd, qdd, gamma, gammad, T, p=None):
     """the inverse problem (3.4) 2: the mechanism's gammadd that gives the support a wanted qdd: exact (minimum norm when k > 6) when rank I = 6, least squares with the 6-residual when k < 6"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
-    gamma = np.asarray(gamma, dtype=float)
-    gammad = np.asarray(gammad, dtype=float)
-    T = np.asarray(T, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 6, 'q', 'support_inverse')
+    qd = _vector(qd, 6, 'qd', 'support_inverse')
+    qdd = _vector(qdd, 6, 'qdd', 'support_inverse')
+    gamma = _vector(gamma, 6, 'gamma', 'support_inverse')
+    gammad = _vector(gammad, 6, 'gammad', 'support_inverse')
+    T = _vector(T, 6, 'T', 'support_inverse')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'support_inverse')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], gamma.shape[:-1], gammad.shape[:-1], T.shape[:-1], )
     gammadd = np.empty(batch + (6,))
     residual = np.empty(batch + (6,))
@@ -7219,8 +7229,8 @@ def support_inverse(q, qd, qdd, gamma, gammad, T, p=None):
 
 def frame_poses(q, p=None):
     """per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'frame_poses')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'frame_poses')
     batch = np.broadcast_shapes(q.shape[:-1], )
     X = np.empty(batch + (2, 12))
     q_0 = q[..., 0]
@@ -7311,8 +7321,8 @@ def frame_poses(q, p=None):
 
 def frame_jacobians(q, p=None):
     """per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'frame_jacobians')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'frame_jacobians')
     batch = np.broadcast_shapes(q.shape[:-1], )
     J = np.empty(batch + (2, 6, 12))
     q_0 = q[..., 0]
@@ -7553,10 +7563,10 @@ def frame_jacobians(q, p=None):
 
 def frame_accelerations(q, qd, qdd, p=None):
     """per frame the classical acceleration of its origin and its angular acceleration, world axes, from the forward sweep (2.40) without gravity; with qdd = 0 it is J' qd"""
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    qdd = np.asarray(qdd, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'frame_accelerations')
+    qd = _vector(qd, 12, 'qd', 'frame_accelerations')
+    qdd = _vector(qdd, 12, 'qdd', 'frame_accelerations')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'frame_accelerations')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], qdd.shape[:-1], )
     a = np.empty(batch + (2, 6))
     q_3 = q[..., 3]
@@ -7760,8 +7770,8 @@ def frame_accelerations(q, qd, qdd, p=None):
 
 def center_of_mass(q, p=None):
     """the centre of mass in the world: sum (m_k o_k + R_k h_k) / M over the moving bodies, h_k the first moment of Theta_lk (2.3)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'center_of_mass')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'center_of_mass')
     batch = np.broadcast_shapes(q.shape[:-1], )
     c = np.empty(batch + (3,))
     q_0 = q[..., 0]
@@ -7820,8 +7830,8 @@ def center_of_mass(q, p=None):
 
 def com_jacobian(q, p=None):
     """the Jacobian of the centre of mass, 3 x n row-major: column i is the linear momentum of the subtree that coordinate i moves, per unit rate, over the total mass (S (1.42) applied to the subtrees' mass and first moment)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'com_jacobian')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'com_jacobian')
     batch = np.broadcast_shapes(q.shape[:-1], )
     Jc = np.empty(batch + (3, 12))
     q_0 = q[..., 0]
@@ -7977,8 +7987,8 @@ def com_jacobian(q, p=None):
 
 def centroidal_map(q, p=None):
     """the centroidal momentum matrix A_G, 6 x n row-major: h_G = A_G qd, the linear momentum and the angular momentum about the centre of mass, world axes (Pinocchio's computeCentroidalMap)"""
-    q = np.asarray(q, dtype=float)
-    p = PARAMETERS if p is None else np.asarray(p, dtype=float)
+    q = _vector(q, 12, 'q', 'centroidal_map')
+    p = PARAMETERS if p is None else _vector(p, 0, 'p', 'centroidal_map')
     batch = np.broadcast_shapes(q.shape[:-1], )
     Ag = np.empty(batch + (6, 12))
     q_0 = q[..., 0]

@@ -9,6 +9,7 @@ from __future__ import annotations
 from ...errors import AggsymError
 from .base import Job, RoutineLines, Runner, Target
 from .c import CTarget
+from .ext import ExtensionTarget
 from .jax import JaxTarget
 from .latex import LatexTarget
 from .manifest import ManifestTarget
@@ -61,6 +62,7 @@ def select(names=None) -> list:
 for _target in (CTarget(), NumPyTarget(), ManifestTarget(), LatexTarget(), JaxTarget()):  # one line per target
     register(_target)
 register(TorchTarget())  # --targets torch (not in the default set)
+register(ExtensionTarget())  # --targets c,numpy,ext (not in the default set)
 
 __all__ = ["Job", "RoutineLines", "Runner", "Target", "TARGETS", "register", "unregister", "select", "known",
            "default_targets"]

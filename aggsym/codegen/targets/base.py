@@ -52,6 +52,7 @@ class Target:
     default: bool = False  # part of the default set of ``aggsym generate`` (the built-in four)
     stage: str = "templates"  # the progress line its rendering is timed under
     column: str = ""  # its heading in ``aggsym check``'s table (with a :meth:`runner`)
+    checked_by_default: bool = True  # ``aggsym check`` without --targets generates and runs it (where it can)
     folder: str = ""  # its templates' folder in the package data aggsym.templates (aggsym/templates/FOLDER)
     templates: tuple = ()  # the templates it renders from that folder (documentation; layout only)
     lines: frozenset = frozenset()  # the roles whose straight lines it needs at rendering (Job.lines)

@@ -22,7 +22,7 @@ in float32 with ``--scalar float`` (held to the float C's bounds, the manifest's
 """
 from __future__ import annotations
 
-from ...contract import ROUTINES, signature
+from ...contract import ROUTINES, SCALAR_INPUTS, input_length, signature
 from ...core.functions import FUNCTIONS
 from ..printing import Spelling, _number
 from .base import Runner, Target
@@ -148,6 +148,8 @@ class JaxTarget(Target):
                                  "status": next((k for k, o in enumerate(e.routine.outputs) if o.returned), None),
                                  "written": [k for k, o in enumerate(e.routine.outputs) if not o.returned],
                                  "custom": custom[e.routine.role],
+                                 "lengths": {i: input_length(job.model, i, e.routine) for i in e.inputs
+                                             if i not in SCALAR_INPUTS},
                                  **custom_groups(list(e.inputs), custom[e.routine.role])} for e in job.emitted]}
         return {f"{job.model.name}_jax.py": self.template("model_jax.py.j2").render(ctx)}
 

@@ -8,6 +8,7 @@ importing the module and calling it against the numeric twin.
 """
 from __future__ import annotations
 
+from ...contract import SCALAR_INPUTS, input_length
 from ...core.functions import FUNCTIONS
 from ...core.program import Node
 from ..printing import Infix, Spelling, _number
@@ -97,6 +98,9 @@ class NumPyTarget(Target):
 
     def print_routine(self, model, prog, lines, emitted):
         emitted.py_body = numpy_body(model, prog, lines, emitted.routine, emitted.inputs)
+        # the length of each array input's last dimension, checked on entry (a ValueError naming the argument)
+        emitted.bodies[self.name] = {i: input_length(model, i, emitted.routine) for i in emitted.inputs
+                                     if i not in SCALAR_INPUTS}
 
     def render(self, job):
         return {f"{job.model.name}.py": self.template("model.py.j2").render(job.ctx)}

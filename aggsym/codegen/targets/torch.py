@@ -22,6 +22,7 @@ installed: in float64, or in float32 under ``--scalar float`` against the float 
 """
 from __future__ import annotations
 
+from ...contract import SCALAR_INPUTS, input_length
 from ...core.functions import FUNCTIONS
 from ...core.program import Node
 from ..printing import Spelling, _number
@@ -161,6 +162,7 @@ class TorchTarget(Target):
                 "status": e.routine.status.py if e.routine.status else None,
                 "failure": e.routine.status.failure if e.routine.status else "",
                 "analytic": wired,
+                "lengths": [(i, input_length(model, i, e.routine)) for i in e.inputs if i not in SCALAR_INPUTS],
             })
         ctx = {**job.ctx, "torch_routines": routines, "quaternion": model.nq != model.nv,
                "analytic": [r["role"] for r in routines if r["analytic"]],
