@@ -25,7 +25,7 @@ def test_the_simulation_example_matches_the_numpy_module(tmp_path):
 def test_the_fitting_example_converges_to_the_noise(tmp_path):
     import jax_fit_inertia
 
-    out = jax_fit_inertia.main(["--samples", "150", "--robot", "double_pendulum", "--noise", "0.05", "--folder",
+    out = jax_fit_inertia.main(["--samples", "150", "--robot", "double_pendulum", "--noise", "0.02", "--folder",
                                 str(tmp_path)])
     start, one, two = out["rms"]
     assert start > 1.5 * out["noise"]

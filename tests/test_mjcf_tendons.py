@@ -162,7 +162,7 @@ def test_the_manifest_describes_the_rows(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert cli.main(["generate", str(path), "-o", str(tmp_path / "out"), "-q", "--targets", "manifest"]) == 0
-    manifest = json.loads((tmp_path / "out" / "chain.json").read_text())
+    manifest = json.loads((tmp_path / "out" / "m.json").read_text())
     (row,) = manifest["constraints"]["constraints"]
     assert row["kind"] == "joint" and row["lambda"] == [0, 1]
     assert [name for name, _ in row["first"]] == ["j1", "j2", "j4"]
@@ -331,7 +331,7 @@ def test_frictionloss_as_coulomb_friction_on_request(tmp_path):
         warnings.simplefilter("ignore")
         assert cli.main(["generate", str(path), "-o", str(tmp_path / "out"), "-q", "--targets", "manifest",
                          "--frictionloss", "coulomb"]) == 0
-    manifest = json.loads((tmp_path / "out" / "chain.json").read_text())
+    manifest = json.loads((tmp_path / "out" / "m.json").read_text())
     assert manifest["conservative"] is False and manifest["mjcf"]["frictionloss"] == "coulomb"
     assert "friction_j2" in [p["name"] for p in manifest["parameters"]]
 

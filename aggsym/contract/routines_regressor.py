@@ -3,6 +3,7 @@ joint friction and armature (tau = Y_f pi_f, issue 34), with the layouts that na
 parameters: :func:`~.analyses.base_parameters`)."""
 from __future__ import annotations
 
+from ..core.backend import as_expr
 from ..mechanics import regressor
 from .analyses import BASE_RANK_TOLERANCE, BASE_SEED, base_parameters
 from .registry import Output, Routine, flat, register
@@ -58,14 +59,14 @@ def drive_values(model) -> list:
     defaults = dict(zip(model.parameter_symbols, model.parameter_values))
 
     def own(table, j):
-        return sp.sympify(table[j]) if table else sp.Integer(0)
+        return as_expr(table[j]) if table else sp.Integer(0)
 
     def urdf(prefix, j):
         return symbols.get(f"{prefix}_{model.coordinates[j].name}", sp.Integer(0))
 
     exprs = ([urdf("damping", j) + own(model.damping, j) for j in joints] + [urdf("friction", j) for j in joints]
-             + [sp.sympify(model.armature) + own(model.dof_armature, j) for j in rotors])
-    return [(float(sp.sympify(e).subs(defaults)), str(e) if sp.sympify(e).free_symbols else None) for e in exprs]
+             + [as_expr(model.armature) + own(model.dof_armature, j) for j in rotors])
+    return [(float(as_expr(e).subs(defaults)), str(e) if as_expr(e).free_symbols else None) for e in exprs]
 
 
 def friction_regressor_layout(model) -> dict:

@@ -10,6 +10,7 @@ parameter expression) into a scalar of either.
 """
 from __future__ import annotations
 
+import numbers
 from fractions import Fraction
 from typing import Protocol
 
@@ -88,6 +89,21 @@ class Numeric:
 
 # SymPy's functions that a model's expressions may hold -> the table's functions
 _SYMPY_FUNCTIONS = by_sympy()
+
+
+def as_expr(x) -> sp.Expr:
+    """A number or expression of a model as a SymPy expression, without ever parsing text (what ``sympify`` would do
+    with a string): SymPy values as they are, integers as Integers, fractions as Rationals, floats as Floats of their
+    exact binary value."""
+    if isinstance(x, sp.Basic):
+        return x
+    if isinstance(x, bool) or not isinstance(x, numbers.Number):
+        raise TypeError(f"not a number or a SymPy expression: {x!r}")
+    if isinstance(x, numbers.Integral):
+        return sp.Integer(int(x))
+    if isinstance(x, numbers.Rational):
+        return sp.Rational(int(x.numerator), int(x.denominator))
+    return sp.Float(float(x))
 
 
 def to_scalar(expr, values: dict, backend):

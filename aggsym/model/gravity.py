@@ -17,6 +17,7 @@ import dataclasses
 
 import sympy as sp
 
+from ..core.backend import as_expr
 from ..errors import AggsymError
 from .types import Model, Parameter
 
@@ -34,7 +35,7 @@ def with_gravity_parameters(model: Model) -> Model:
                           f"named {clash[0]!r}")
     values = []
     for axis, g in zip("xyz", model.gravity):
-        g = sp.sympify(g)
+        g = as_expr(g)
         if g.free_symbols:
             raise AggsymError(f"{model.source or model.name}: --gravity-parameter: the model's gravity already "
                               f"depends on its parameters ({axis}: {g}); set them in p instead")

@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from ..core.backend import as_expr
+
 COORDINATE_CODES = ("o1", "o2", "o3", "theta4", "theta5", "theta6")
 WORLD = "world"
 TIME = sp.Symbol("t", real=True)  # the time in prescribed motions (rotor spins)
@@ -295,7 +297,7 @@ class JointRow:
     @property
     def linear(self) -> bool:
         """Whether phi is linear in q (a2 = a3 = a4 = 0): then J is constant and gamma is 0."""
-        return all(sp.sympify(a) == 0 for a in self.polynomial[2:]) or not self.second
+        return all(as_expr(a) == 0 for a in self.polynomial[2:]) or not self.second
 
 
 @dataclass(frozen=True)
@@ -322,7 +324,7 @@ class Tendon:
     @property
     def deadband(self) -> bool:
         """Whether the spring has a dead band (lower < upper): then its force is piecewise linear."""
-        return sp.sympify(self.lower) != sp.sympify(self.upper)
+        return as_expr(self.lower) != as_expr(self.upper)
 
 
 CONSTRAINT_KINDS = {  # block: kind -> the forbidden relative motions, in the reference frame (ch. 4)
