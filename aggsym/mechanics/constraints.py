@@ -57,7 +57,7 @@ from .damped import DelassusSolver, model_proximal
 from .group import Motion, rotation
 from .joint_space import BoundJointRow, bind_joint_row, places
 from .kinematics import TreeKinematics, point_motion, point_rows, world_poses
-from .linalg import EYE3, add, cross, dot, mm, mtv, mul, mv, scale, sub, transpose
+from .linalg import EYE3, add, cross, dot, ldl_factor, mm, mtv, mul, mv, scale, sub, transpose
 from .transvective import apply_T_transpose_tree, apply_T_tree, articulated_factors, transvected_forces
 
 EPS = 1e-30  # the log map's guard at theta = 0: (theta + EPS) / (|s| + EPS) is theta/sin(theta) (relative error
@@ -347,19 +347,7 @@ def ldl_solve(G, b, backend):
     """x with G x = b for a small symmetric G by L D L^T (no pivoting), and the status: the number of pivots
     below SINGULAR * trace(G) / m counted by sign() (nonzero when G is singular or not finite)."""
     m = len(b)
-    L = [[0] * m for _ in range(m)]
-    d = [0] * m
-    for j in range(m):
-        acc = G[j][j]
-        for k in range(j):
-            acc = acc - mul(mul(L[j][k], L[j][k]), d[k])
-        d[j] = acc
-        inv = 1 / acc
-        for i in range(j + 1, m):
-            acc = G[i][j]
-            for k in range(j):
-                acc = acc - mul(mul(L[i][k], L[j][k]), d[k])
-            L[i][j] = mul(acc, inv)
+    L, d = ldl_factor(G)
     y = list(b)
     for i in range(m):
         for k in range(i):

@@ -28,7 +28,7 @@ The damped status counts the pivots of ``G + mu E`` not above mu / 2: zero unles
 from __future__ import annotations
 
 from ..core.program import is_zero
-from .linalg import mul
+from .linalg import ldl_factor, mul
 
 SINGULAR = 1e-12  # as aggsym.mechanics.constraints.SINGULAR: an exact pivot below SINGULAR * trace(G) / m is singular
 
@@ -51,7 +51,7 @@ class DelassusSolver:
         self.mu, self.iterations = (None, 0) if proximal is None else proximal
         if self.mu is not None:
             G = [[g + self.mu if i == j else g for j, g in enumerate(row)] for i, row in enumerate(G)]
-        self.L, self.d = self._factor(G)
+        self.L, self.d = ldl_factor(G)
         self.recip = [1 / d for d in self.d]
         if self.mu is None:
             trace = 0
@@ -60,23 +60,6 @@ class DelassusSolver:
             self.status = _sign_count(backend, trace * (SINGULAR / self.m), self.d) if self.m else 0
         else:
             self.status = _sign_count(backend, self.mu * backend.rational(1, 2), self.d) if self.m else 0
-
-    def _factor(self, G):
-        m = self.m
-        L = [[0] * m for _ in range(m)]
-        d = [0] * m
-        for j in range(m):
-            acc = G[j][j]
-            for k in range(j):
-                acc = acc - mul(mul(L[j][k], L[j][k]), d[k])
-            d[j] = acc
-            inv = 1 / acc
-            for i in range(j + 1, m):
-                acc = G[i][j]
-                for k in range(j):
-                    acc = acc - mul(mul(L[i][k], L[j][k]), d[k])
-                L[i][j] = mul(acc, inv)
-        return L, d
 
     def _apply(self, b):
         """(L D L^T)^-1 b."""

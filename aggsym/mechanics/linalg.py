@@ -110,3 +110,23 @@ def congruence3(c, m):
 def is_identity(c) -> bool:
     """c is structurally the 3x3 identity."""
     return all(is_one(c[i][j]) if i == j else is_zero(c[i][j]) for i in range(3) for j in range(3))
+
+
+def ldl_factor(G) -> tuple:
+    """(L, d) with G = L diag(d) L^T for a small symmetric m x m G (lists of rows), L unit lower triangular, no
+    pivoting: the factorization both the exact and the damped constraint solves run on."""
+    m = len(G)
+    L = [[0] * m for _ in range(m)]
+    d = [0] * m
+    for j in range(m):
+        acc = G[j][j]
+        for k in range(j):
+            acc = acc - mul(mul(L[j][k], L[j][k]), d[k])
+        d[j] = acc
+        inv = 1 / acc
+        for i in range(j + 1, m):
+            acc = G[i][j]
+            for k in range(j):
+                acc = acc - mul(mul(L[i][k], L[j][k]), d[k])
+            L[i][j] = mul(acc, inv)
+    return L, d

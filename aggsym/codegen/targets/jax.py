@@ -26,7 +26,7 @@ from ...contract import ROUTINES, SCALAR_INPUTS, input_length, signature
 from ...core.functions import FUNCTIONS
 from ..printing import Spelling, _number
 from .base import Runner, Target
-from .numpy import array_steps
+from .numpy import array_steps, step_statement
 
 # the JAX spelling: jax.numpy's element-wise functions (the same names as NumPy's), double literals as the C's (a
 # Python float is weakly typed in JAX: it takes the dtype of the array it meets, so float32 stays float32)
@@ -56,10 +56,9 @@ def jax_body(model, prog, lines, routine, inputs) -> dict:
     entries = [["0.0"] * size for size in sizes]
     body = []
     for step in array_steps(model, prog, lines, routine, inputs, JAX):
-        if step[0] == "input":
-            body.append(f"{step[1]} = {step[2]}[..., {step[3]}]")
-        elif step[0] == "temp":
-            body.append(f"{step[1]} = {step[2]}")
+        statement = step_statement(step)
+        if statement is not None:
+            body.append(statement)
         elif step[3] is not None:
             _, o, k, rhs = step
             name = f"_o{o}_{k}"

@@ -64,16 +64,25 @@ def array_steps(model, prog, lines, routine, inputs, spelling):
         yield ("temp", names[i], text(prog.nodes[i], i))
 
 
+def step_statement(step) -> str | None:
+    """The Python statement of an input or temporary step of :func:`array_steps` (the same in every array
+    target); None for an output entry, which each target assembles its own way."""
+    if step[0] == "input":
+        return f"{step[1]} = {step[2]}[..., {step[3]}]"
+    if step[0] == "temp":
+        return f"{step[1]} = {step[2]}"
+    return None
+
+
 def numpy_body(model, prog, lines, routine, inputs) -> list:
     """The Python statements of one routine (the function's body, before its returns): outputs filled in
     place."""
     shapes = [out.shape(model) for out in routine.outputs]
     body = []
     for step in array_steps(model, prog, lines, routine, inputs, NUMPY):
-        if step[0] == "input":
-            body.append(f"{step[1]} = {step[2]}[..., {step[3]}]")
-        elif step[0] == "temp":
-            body.append(f"{step[1]} = {step[2]}")
+        statement = step_statement(step)
+        if statement is not None:
+            body.append(statement)
         else:
             _, o, k, rhs = step
             target = f"{routine.outputs[o].py}[..., {', '.join(str(j) for j in _unravel(k, shapes[o]))}]"

@@ -27,7 +27,7 @@ from ...core.functions import FUNCTIONS
 from ...core.program import Node
 from ..printing import Spelling, _number
 from .base import Runner, Target
-from .numpy import _unravel, array_steps
+from .numpy import _unravel, array_steps, step_statement
 
 # torch's name of each function of aggsym/core/functions.py (element-wise, so that inputs carry batch dimensions)
 TORCH_NAMES = {"sin": "sin", "cos": "cos", "sqrt": "sqrt", "tan": "tan", "exp": "exp", "log": "log", "abs": "abs",
@@ -54,10 +54,9 @@ def torch_body(model, prog, lines, routine, inputs) -> dict:
     entries = [[None] * _size(shape) for shape in shapes]
     statements = []
     for step in array_steps(model, prog, lines, routine, inputs, TORCH):
-        if step[0] == "input":
-            statements.append(f"{step[1]} = {step[2]}[..., {step[3]}]")
-        elif step[0] == "temp":
-            statements.append(f"{step[1]} = {step[2]}")
+        statement = step_statement(step)
+        if statement is not None:
+            statements.append(statement)
         else:
             _, o, k, rhs = step
             x = lines.outputs[o][k]
