@@ -1,3 +1,5 @@
+import importlib
+import re
 import sys
 from pathlib import Path
 
@@ -9,6 +11,47 @@ MODELS = sorted((ROOT / "models").glob("*.yaml"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from helpers import ROBOTS  # noqa: E402  (the tests folder is on the path from here on)
+
+
+# Optional references: a test module that imports one of these helpers at its top (directly or through another
+# helper) is not collected where the helper's dependency does not import, and the run says so at its end.  Nothing
+# is skipped: `make test` installs every dependency, and there every module is collected.
+REFERENCES = {"pinocchio_reference": ("pinocchio", "Pinocchio (PyPI pin)"), "jax_support": ("jax", "jax (aggsym[jax])")}
+TOP_IMPORT = re.compile(r"^(?:from|import)\s+(\w+)", re.M)
+
+
+def _import_error(module: str):
+    """None when ``module`` imports, else the error (not installed, or installed but broken)."""
+    try:
+        importlib.import_module(module)
+    except ImportError as error:
+        return error
+    return None
+
+
+def _modules_needing(helper: str) -> list:
+    """The test modules (file names) that import ``helper`` at their top, directly or through other tests/ modules."""
+    folder = Path(__file__).resolve().parent
+    imports = {f.stem: set(TOP_IMPORT.findall(f.read_text())) for f in folder.glob("*.py")}
+    needing, grew = {helper}, True
+    while grew:
+        grew = False
+        for name, names in imports.items():
+            if name not in needing and names & needing:
+                needing.add(name)
+                grew = True
+    return sorted(f"{name}.py" for name in needing if name.startswith("test_"))
+
+
+MISSING = {helper: (label, error) for helper, (module, label) in REFERENCES.items()
+           if (error := _import_error(module)) is not None}
+collect_ignore = sorted({f for helper in MISSING for f in _modules_needing(helper)})
+
+
+def pytest_terminal_summary(terminalreporter):
+    for helper, (label, error) in MISSING.items():
+        terminalreporter.write_line(f"needs {label}, which does not import here ({error}): "
+                                    f"{len(_modules_needing(helper))} test modules not collected")
 
 
 def pytest_collection_modifyitems(items):

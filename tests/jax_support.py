@@ -1,24 +1,19 @@
 """The JAX tests' helpers: generating a model's NumPy and JAX modules side by side, float64 within a test (without
 switching jax's global setting for the rest of the suite), random arguments of a routine, central differences.
 
-Importing this module skips the importing test module where jax does not import (``pytest.skip`` at module level,
-as ``pinocchio_reference.py`` does for Pinocchio)."""
+Where jax does not import, conftest.py does not collect the test modules that import this one (as for
+``pinocchio_reference.py`` and Pinocchio)."""
 from __future__ import annotations
 
 import contextlib
 import inspect
 
+import jax
+import jax.numpy as jnp  # noqa: F401  (re-exported for the tests)
 import numpy as np
-import pytest
 
 from aggsym.codegen.compile import import_module
 from aggsym.codegen.generate import generate, write
-
-try:
-    import jax
-    import jax.numpy as jnp  # noqa: F401  (re-exported for the tests)
-except ImportError as error:  # the optional extra aggsym[jax] is not installed
-    pytest.skip(f"needs jax (pip install aggsym[jax]), which does not import here: {error}", allow_module_level=True)
 
 
 def x64():

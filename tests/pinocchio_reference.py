@@ -1,23 +1,19 @@
 """Pinocchio as the tests' reference: its models of URDF files (fixed base, or the free root of six coordinates)
 and of our models (:func:`pinocchio_tree`), its configuration vectors, and comparisons with it (:func:`compare`).
 
-Importing this module skips the importing test module where Pinocchio does not import (``pytest.skip`` at module
-level), so the suite still collects there; test modules take ``pin`` from here (``from pinocchio_reference import
-pin``) and carry the ``pinocchio`` marker.  The helpers that need no Pinocchio are in ``helpers.py``.
+Where Pinocchio does not import, conftest.py does not collect the test modules that import this one, so the suite
+still collects there; test modules take ``pin`` from here (``from pinocchio_reference import pin``) and carry the
+``pinocchio`` marker.  The helpers that need no Pinocchio are in ``helpers.py``.
 """
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 import aggsym
 from helpers import TOLERANCE, relative_error
 from reference import NumericModel
 
-try:
-    import pinocchio as pin
-except ImportError as error:  # not installed, or installed but broken: either way no reference here
-    pytest.skip(f"needs Pinocchio (PyPI pin), which does not import here: {error}", allow_module_level=True)
+import pinocchio as pin  # (conftest.py leaves the modules importing this one out where it fails)
 
 
 def free_root() -> "pin.JointModelComposite":
