@@ -119,6 +119,21 @@ def mujoco_model(path):
     return m
 
 
+def reference_terms(m, data, qpos, qvel, force) -> tuple:
+    """MuJoCo's forward at (qpos, qvel, qfrc_applied = force, no control), and its terms in aggsym's coordinates:
+    (M, (q, qd, tau, J, c) of :func:`to_aggsym`, A = J^T M J, d = J^T (M c + qfrc_bias - qfrc_passive))."""
+    import mujoco
+
+    data.qpos[:], data.qvel[:], data.qfrc_applied[:] = qpos, qvel, force
+    data.ctrl[:] = 0
+    mujoco.mj_forward(m, data)
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, data, M)
+    converted = to_aggsym(m, qpos, qvel, force)
+    J, c = converted[3], converted[4]
+    return M, converted, J.T @ M @ J, J.T @ (M @ c + data.qfrc_bias - data.qfrc_passive)
+
+
 def compare(path, model=None, samples: int = 3, seed: int = 0) -> dict:
     """The largest relative differences {A, d, qdd, passive} over ``samples`` random states: max |aggsym - MuJoCo|
     over max |MuJoCo| of each quantity."""
@@ -138,14 +153,7 @@ def compare(path, model=None, samples: int = 3, seed: int = 0) -> dict:
         qpos, qvel, force = states(m, rng)
         if coupled is not None:  # a state where the couplings hold, no force on the coupled coordinates
             qpos, qvel, force = coupled.state(qpos, qvel, force)
-        data.qpos[:], data.qvel[:], data.qfrc_applied[:] = qpos, qvel, force
-        data.ctrl[:] = 0
-        mujoco.mj_forward(m, data)
-        M = np.zeros((m.nv, m.nv))
-        mujoco.mj_fullM(m, data, M)
-        q, qd, tau, J, c = to_aggsym(m, qpos, qvel, force)
-        A_ref = J.T @ M @ J
-        d_ref = J.T @ (M @ c + data.qfrc_bias - data.qfrc_passive)
+        M, (q, qd, tau, J, c), A_ref, d_ref = reference_terms(m, data, qpos, qvel, force)
         if coupled is not None:  # q's coordinates; the reference: the hard coupling solved densely (KKT)
             qacc_ref = coupled.kkt(A_ref, tau - d_ref)
             A_ref, d_ref = coupled.Jc.T @ A_ref @ coupled.Jc, coupled.Jc.T @ d_ref
@@ -219,14 +227,7 @@ def compare_constrained(path, model=None, samples: int = 3, seed: int = 0, step:
 
     for _ in range(samples):
         qpos, qvel, force = states(free, rng)
-        d_free.qpos[:], d_free.qvel[:], d_free.qfrc_applied[:] = qpos, qvel, force
-        d_free.ctrl[:] = 0
-        mujoco.mj_forward(free, d_free)
-        M = np.zeros((m.nv, m.nv))
-        mujoco.mj_fullM(free, d_free, M)
-        q, qd, tau, Jm, c = to_aggsym(free, qpos, qvel, force)
-        A_ref = Jm.T @ M @ Jm
-        d_ref = Jm.T @ (M @ c + d_free.qfrc_bias - d_free.qfrc_passive)
+        M, (q, qd, tau, Jm, c), A_ref, d_ref = reference_terms(free, d_free, qpos, qvel, force)
         Jq = equality_jacobian(m, d_eq, qpos)
         ahead, behind = qpos.copy(), qpos.copy()
         mujoco.mj_integratePos(m, ahead, qvel, step)
