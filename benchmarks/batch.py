@@ -23,6 +23,7 @@ Settings (environment variables; defaults in brackets):
     AGGSYM_BENCH_BATCH_TOLERANCE  largest relative difference accepted             [1e-8]
     AGGSYM_BENCH_BATCH_TIMEOUT    seconds allowed to one worker process            [3600]
     AGGSYM_BENCH_BATCH_REUSE      1: keep the generated modules of an earlier run   [0]
+    AGGSYM_BENCH_BATCH_PROJECT_PYTHON  the interpreter of the entry aggsym_jax_project [.venv/bin/python]
 
 Writes benchmarks/batch.json and benchmarks/batch.png; :mod:`benchmarks.batch_report` renders the section of
 REPORT.md and the targets of the issue.
@@ -37,7 +38,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from . import batch_report
-from .batch_peers import ENTRIES, ROUTINES
+from .batch_peers import ENTRIES, PROJECT_ENTRIES, ROUTINES
 from .environment import cpu_line, environment, load_average
 from .measure import child_env, run_measured
 from .robots import robots_directory
@@ -210,6 +211,14 @@ def agreement(outputs: dict, ref, tolerance: float) -> dict:
 
 
 # --------------------------------------------------------------------------------------------------- running
+def interpreter(entry: str) -> str:
+    """The Python of an entry's worker: this one (the peers' venv), or for :data:`PROJECT_ENTRIES` the project's own
+    (``AGGSYM_BENCH_BATCH_PROJECT_PYTHON``, default ``.venv/bin/python``)."""
+    if entry in PROJECT_ENTRIES:
+        return os.environ.get("AGGSYM_BENCH_BATCH_PROJECT_PYTHON", str(ROOT / ".venv" / "bin" / "python"))
+    return sys.executable
+
+
 def run_worker(entry: str, robot: dict, routine: str, cfg, round_: int) -> dict:
     import numpy as np
 
@@ -223,7 +232,7 @@ def run_worker(entry: str, robot: dict, routine: str, cfg, round_: int) -> dict:
     Path(str(stem) + ".job.json").write_text(json.dumps(job, indent=1))
     env = child_env()
     env.setdefault("OMP_NUM_THREADS", "1")
-    run = run_measured([sys.executable, "-m", "benchmarks.batch_worker", str(stem) + ".job.json"], env=env,
+    run = run_measured([interpreter(entry), "-m", "benchmarks.batch_worker", str(stem) + ".job.json"], env=env,
                        cwd=ROOT, timeout=cfg["timeout"])
     if not run.ok or not Path(job["result"]).exists():
         text = (run.stderr or run.stdout)[-3000:]

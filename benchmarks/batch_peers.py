@@ -43,6 +43,8 @@ ENTRIES = {
                          "routine)"),
     "aggsym_jax_routine": ("aggsym JAX derivative routine", "jax", ("jac",),
                            "forward_dynamics_derivatives called directly (jit)"),
+    "aggsym_jax_project": ("aggsym JAX, the project's jax", "jax", ("fd", "A", "id"),
+                           "(not timed: the Jacobian is the entry aggsym JAX's, in the peers' jax)"),
     "aggsym_torch": ("aggsym PyTorch", "torch", ROUTINES,
                      "torch.autograd.grad through forward_dynamics (its analytic autograd.Function), one reverse "
                      "pass per output over the whole batch"),
@@ -54,6 +56,9 @@ ENTRIES = {
     "mjx": ("MuJoCo MJX", "jax", ROUTINES, "jax.jacfwd through mjx.forward (MuJoCo's state converted inside)"),
     "pinocchio": ("Pinocchio loop", "numpy", ROUTINES, "computeABADerivatives, state by state"),
 }
+# entries run by the project's own interpreter (.venv: the jax that `pip install aggsym[jax]` brings, newer than the
+# peers' venv, whose adam-robotics pins jax <= 0.6): the generated module as a user of aggsym meets it
+PROJECT_ENTRIES = ("aggsym_jax_project",)
 GRAVITY = 9.81  # Pinocchio's, given to the peers that have their own default (adam: 9.80665)
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from .batch_peers import PROJECT_ENTRIES
 from .tables import markdown_table, text_table
 
 ROUTINE_TITLES = {"fd": "forward dynamics", "A": "A(q)", "id": "inverse dynamics",
@@ -55,6 +56,13 @@ def _status(r) -> str:
     if not a["ok"]:
         return f"REFUSED: differs from Pinocchio by {a.get('max_relative')} ({a.get('error', a.get('where'))})"
     return f"{a['max_relative']:.1e}"
+
+
+def project_versions(data) -> str:
+    """The sentence naming the framework of the entries run by the project's own venv (none: empty)."""
+    seen = sorted({(r["label"], r["framework_version"]) for r in data.get("rows", [])
+                   if r.get("entry") in PROJECT_ENTRIES and r.get("framework_version")})
+    return "".join(f"  {label}: the project's venv, jax {version}." for label, version in seen)
 
 
 def _label(r) -> str:
@@ -130,24 +138,32 @@ def targets(data) -> list:
     rows = []
     for robot in data.get("robots", {}):
         big = _largest(data, robot)
-        for routine in ("fd", "A"):
-            ours = _at(data, "aggsym_jax", robot, routine)
-            for peer, factor in (("adam_jax", 10), ("jaxsim", 10), ("mjx", 10), ("pinocchio", 1)):
-                theirs = _at(data, peer, robot, routine)
-                what = (f"{robot} {ROUTINE_TITLES[routine]}, B = {big}: aggsym JAX ≥ {factor}× faster than "
-                        f"{data['entries'][peer]['label']}" if factor > 1 else
-                        f"{robot} {ROUTINE_TITLES[routine]}, B = {big}: aggsym JAX faster per state than the "
-                        f"Pinocchio loop")
-                rows.append(_ratio_row(what, ours, theirs, factor))
+        # the generated module in the peers' jax, and (when measured) in the project's own
+        jax_entries = [e for e in ("aggsym_jax", "aggsym_jax_project")
+                       if e == "aggsym_jax" or _timed(data, e, robot, "fd") is not None]
+        for entry in jax_entries:
+            label = data["entries"][entry]["label"] if entry in data.get("entries", {}) else "aggsym JAX"
+            for routine in ("fd", "A"):
+                ours = _at(data, entry, robot, routine)
+                for peer, factor in (("adam_jax", 10), ("jaxsim", 10), ("mjx", 10), ("pinocchio", 1)):
+                    theirs = _at(data, peer, robot, routine)
+                    what = (f"{robot} {ROUTINE_TITLES[routine]}, B = {big}: {label} ≥ {factor}× faster than "
+                            f"{data['entries'][peer]['label']}" if factor > 1 else
+                            f"{robot} {ROUTINE_TITLES[routine]}, B = {big}: {label} faster per state than the "
+                            f"Pinocchio loop")
+                    rows.append(_ratio_row(what, ours, theirs, factor))
         ours = _at(data, "aggsym_jax", robot, "jac")
         rows.append(_ratio_row(f"{robot} Jacobian, B = {big}: aggsym JAX ≥ 10× faster than adam JAX jacrev", ours,
                                _at(data, "adam_jax", robot, "jac"), 10))
         rows.append(_ratio_row(f"{robot} Jacobian, B = {big}: aggsym JAX no slower than Pinocchio's "
                                "computeABADerivatives", ours, _at(data, "pinocchio", robot, "jac"), 1, strict=False))
-        jit = _at(data, "aggsym_jax", robot, "fd", key="first_call_seconds")
         limit = JIT_TARGET_SECONDS.get(robot, JIT_TARGET_SECONDS[HUMANOID])
-        rows.append((f"{robot} JIT of forward dynamics ≤ {limit:g} s (first call at B = {big})",
-                     "—" if jit is None else f"{jit:.2f} s", None if jit is None else jit <= limit))
+        for entry in jax_entries:
+            jit = _at(data, entry, robot, "fd", key="first_call_seconds")
+            label = data["entries"][entry]["label"] if entry in data.get("entries", {}) else "aggsym JAX"
+            which = "" if entry == "aggsym_jax" else f", {label}"
+            rows.append((f"{robot} JIT of forward dynamics ≤ {limit:g} s{which} (first call at B = {big})",
+                         "—" if jit is None else f"{jit:.2f} s", None if jit is None else jit <= limit))
         for routine in data.get("config", {}).get("routines", []):
             r = _timed(data, "aggsym_torch", robot, routine)
             if r is None:
@@ -243,7 +259,8 @@ def markdown(data) -> str:
              f"{', '.join(_sizes(data))}, {cfg.get('repeats')} interleaved samples per B of ≥ "
              f"{cfg.get('sample_seconds')} s, {cfg.get('rounds')} round(s); float64 on the CPU; each "
              "(entry, robot, routine) in its own process (`python -m benchmarks.batch`, in `.venv-batch`).", "",
-             "Versions: " + ", ".join(f"{k} {v}" for k, v in env.get("peer_versions", {}).items()) + ".", "",
+             "Versions: " + ", ".join(f"{k} {v}" for k, v in env.get("peer_versions", {}).items()) + "."
+             + project_versions(data), "",
              "Robots: " + "; ".join(f"{k} (nq = {v['nq']}, nv = {v['nv']}"
                                      + (", Pinocchio's free-flyer" if v.get("floating") else ", fixed base") + ")"
                                      for k, v in data.get("robots", {}).items()) + ".", "",

@@ -25,6 +25,16 @@ import numpy as np
 from . import batch_engines, batch_peers
 
 ARGS = {"fd": ("q", "v", "tau"), "A": ("q",), "id": ("q", "v", "a"), "jac": ("q", "v", "tau")}
+ENTRY_FRAMEWORK = {name: spec[1] for name, spec in batch_peers.ENTRIES.items()}
+
+
+def framework_version(framework: str | None) -> str | None:
+    """The version of the framework an entry ran on in this process (the entries of the project's venv and of the
+    peers' venv may differ)."""
+    if framework not in ("jax", "torch"):
+        return None
+    module = sys.modules.get(framework)
+    return getattr(module, "__version__", None)
 
 
 def build(entry: str, robot: dict):
@@ -34,7 +44,8 @@ def build(entry: str, robot: dict):
         return batch_peers.build_pinocchio(robot)
     if entry.startswith("aggsym_jax"):
         return batch_peers.build_aggsym_jax(robot, {"aggsym_jax": "custom", "aggsym_jax_plain": "plain",
-                                                    "aggsym_jax_routine": "routine"}[entry])
+                                                    "aggsym_jax_routine": "routine",
+                                                    "aggsym_jax_project": "custom"}[entry])
     if entry == "aggsym_torch":
         return batch_peers.build_aggsym_torch(robot)
     if entry == "adam_jax":
@@ -89,6 +100,7 @@ def run(job: dict) -> dict:
             samples[b].append((time.perf_counter() - t) / calls[b])
     np.savez(job["outputs"], **outputs)
     return {"entry": job["entry"], "robot": job["robot"]["label"], "routine": job["routine"],
+            "framework_version": framework_version(ENTRY_FRAMEWORK.get(job["entry"])),
             "compiles": built.compiles, "build_seconds": build_seconds,
             "sizes": {str(b): {"first_call_seconds": first[b], "calls_per_sample": calls[b],
                                "seconds_per_call": samples[b]} for b in sizes},
