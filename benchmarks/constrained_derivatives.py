@@ -104,7 +104,8 @@ def generate(label: str, urdf: Path, outdir: Path, timeout: float | None = 600) 
 
 def timers_source(manifests: dict) -> str:
     """bench_contacts.c: section 3's clocks and (empty) model lists, then each model's header and its
-    BENCH_CONTACT_MODEL record (harness/contact_bench.h)."""
+    BENCH_CONTACT_MODEL record (harness/contact_bench.h); ``manifests``: label -> the generated model's manifest
+    (a quaternion coordinate: Pinocchio's free-flyer)."""
     lines = [bench_models_source([]).rstrip("\n"), '#include "contact_bench.h"']
     for label, m in manifests.items():
         name = m["name"]
@@ -114,7 +115,7 @@ def timers_source(manifests: dict) -> str:
         if m["parameters"]:
             lines.append(f"static const double {name}_p[] = {{{', '.join(repr(float(x['value'])) for x in m['parameters'])}}};")
             p = f"{name}_p"
-        free = 1 if MODELS[label][1] == "free" else 0
+        free = 1 if any(c["kind"] == "quaternion" for c in m["coordinates"]) else 0
         lines.append(f"BENCH_CONTACT_MODEL({name}, {m['nq']}, {m.get('nv', m['nq'])}, {m['constraints']['m']}, "
                      f"{free}, {len(m['parameters'])}, {p}, {RESTITUTION!r}, {name}_joints)")
     lines.append("const bench_contact_model *const bench_contact_models[] = {"
