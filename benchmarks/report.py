@@ -135,6 +135,10 @@ def targets(results) -> list:
             measured = f"{r['name']} {p['ratio']:.2f} ({p['generated_ns']:.0f} ns vs {p['pinocchio_ns']:.0f} ns)"
             rows.append((what, measured, p["ratio"] < CONSTRAINED_RATIO_TARGET))
     rows += peer_targets(results)
+    if results.get("constrained_derivatives"):
+        from .constrained_derivatives import targets as contact_targets
+
+        rows += contact_targets(results["constrained_derivatives"])
     rows += opsn_targets(results)
     inputs = results.get("inputs", {})
     for row in inputs.get("rows", []):
@@ -695,7 +699,7 @@ def _targets(results) -> str:
 def _extras(results) -> str:
     """Scaling of generation, the sincos helper, --split's compile time and the batched benchmark (each when
     measured)."""
-    from . import batch_report, compile_split, python_call, scaling, trig
+    from . import batch_report, compile_split, constrained_derivatives, python_call, scaling, trig
 
     parts = []
     for key, title, module in (("scaling", "Scaling of generation (benchmarks/scaling.py)", scaling),
@@ -703,7 +707,10 @@ def _extras(results) -> str:
                                ("split", "Compiling with --split (benchmarks/compile_split.py)", compile_split),
                                ("batch", "Batched: JAX, PyTorch and their peers (benchmarks/batch.py)", batch_report),
                                ("python_call", "One state from Python: the generated modules beside Pinocchio's Python "
-                                               "call (benchmarks/python_call.py)", python_call)):
+                                               "call (benchmarks/python_call.py)", python_call),
+                               ("constrained_derivatives", "Derivatives of constrained dynamics and of impacts against "
+                                                           "Pinocchio (benchmarks/constrained_derivatives.py)",
+                                constrained_derivatives)):
         data = results.get(key)
         if data:
             parts += [f"## {title}", "", module.markdown(data), ""]

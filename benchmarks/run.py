@@ -20,7 +20,8 @@ Settings (environment variables; defaults in brackets):
                                                                                          talos,chain24,chain48]
     AGGSYM_BENCH_CPU               the CPU the harness is pinned to                      [the last allowed]
     AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane,inputs,     [all]
-                                   opsn,scaling,trig,split,batch,python
+                                   opsn,scaling,trig,split,batch,python,
+                                   constrained_derivatives
                                    (a section left out is read back from its JSON of an earlier run)
     AGGSYM_BENCH_BATCH_PYTHON      the interpreter of the batch section's own venv      [.venv-batch/bin/python]
                                    (the AGGSYM_BENCH_BATCH_* settings: benchmarks/batch.py)
@@ -31,7 +32,10 @@ manifests (opcounts.json); 3. runtime of the generated C against Pinocchio C++ (
 the routines on request: derivatives, regressor; with solo12
 standing on its four feet, constrained forward dynamics against constraintDynamics, :mod:`benchmarks.constrained`);
 4. parsing a 2000-link YAML and URDF chain (inputs.json, :mod:`benchmarks.inputs`); opsn: the
-operations per coordinate of inverse_dynamics and forward_dynamics from the manifests of four arms (opsn.json).
+operations per coordinate of inverse_dynamics and forward_dynamics from the manifests of four arms (opsn.json);
+constrained_derivatives: the derivatives of constrained dynamics and of impacts (solo12 on four point feet, Talos
+on two welded soles, Panda welded at the hand) against Pinocchio C++ (constrained_derivatives.json,
+:mod:`benchmarks.constrained_derivatives`).
 
 Section 3 also times, for the robots of AGGSYM_BENCH_PEER_ROBOTS (solo12 with the 6-coordinate Euler root, the
 24- and 48-link chains of :mod:`benchmarks.chain` written as URDF, generated for this section alone), the
@@ -87,7 +91,8 @@ def config() -> dict:
         "AGGSYM_BENCH_STATES": int(env.get("AGGSYM_BENCH_STATES", "1000")),
         "AGGSYM_BENCH_CALLS": int(env.get("AGGSYM_BENCH_CALLS", "100")),
         "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS",
-                                         "generation,runtime,kane,inputs,opsn,scaling,trig,split,batch,python"),
+                                         "generation,runtime,kane,inputs,opsn,scaling,trig,split,batch,python,"
+                                         "constrained_derivatives"),
         "AGGSYM_BENCH_BATCH_PYTHON": env.get("AGGSYM_BENCH_BATCH_PYTHON", str(ROOT / ".venv-batch" / "bin" / "python")),
         "AGGSYM_BENCH_RUNTIME_ROBOTS": env.get("AGGSYM_BENCH_RUNTIME_ROBOTS", ""),
         "AGGSYM_BENCH_PEER_ROBOTS": env.get("AGGSYM_BENCH_PEER_ROBOTS", PEER_ROBOTS),
@@ -367,7 +372,9 @@ def section_extras(sections) -> dict:
     writes scaling.json and scaling.png itself), trig (the sincos helper against libm, :mod:`benchmarks.trig`) and
     split (Talos' compile time in one file and with --split, :mod:`benchmarks.compile_split`); issue 35's python
     (the generated Python's per-call time for one state beside Pinocchio's Python call,
-    :mod:`benchmarks.python_call`, python_call.json)."""
+    :mod:`benchmarks.python_call`, python_call.json); issue 34's constrained_derivatives (the derivatives of
+    constrained dynamics and of impacts against Pinocchio C++, :mod:`benchmarks.constrained_derivatives`,
+    constrained_derivatives.json)."""
     out = {}
     if "scaling" in sections:
         from . import scaling
@@ -390,11 +397,22 @@ def section_extras(sections) -> dict:
         _save("python_call", out["python_call"])
     else:
         out["python_call"] = _load("python_call")
+    if "constrained_derivatives" in sections:
+        from . import constrained_derivatives
+
+        try:
+            out["constrained_derivatives"] = constrained_derivatives.run(log=log)
+        except Exception as exc:  # reported, not fatal
+            out["constrained_derivatives"] = {"error": f"{exc.__class__.__name__}: {exc}"}
+            log(f"constrained_derivatives section failed: {out['constrained_derivatives']['error']}")
+        _save("constrained_derivatives", out["constrained_derivatives"])
+    else:
+        out["constrained_derivatives"] = _load("constrained_derivatives")
     return out
 
 
 SECTION_FILES = ("generation", "kane", "opcounts", "runtime", "inputs", "opsn", "scaling", "trig", "split", "batch",
-                 "python_call")
+                 "python_call", "constrained_derivatives")
 
 
 def report_only() -> int:

@@ -69,6 +69,7 @@ BENCH_GRAPH = graph(BENCHMARKS)
 BENCH_LAYERS = {"measure": 0, "chain": 0, "environment": 0, "robots": 0, "generation": 0, "mujoco_reference": 0,
                 "casadi_peer": 1, "mjcf_corpus": 1, "compile_split": 1, "constrained": 1, "inputs": 1, "kane": 1, "opcounts": 1,
                 "runtime": 1, "scaling": 1, "slicing_runtime": 1, "trig": 1, "python_call": 1,
+                "constrained_derivatives": 1,
                 "batch_peers": 0, "batch_report": 0, "tables": 0, "report_plots": 0, "batch_engines": 1, "batch_worker": 2,
                 "batch": 2, "report": 2, "run": 3}
 
