@@ -147,7 +147,8 @@ def build_pinocchio_object(build: Path, log=print) -> tuple:
     src = HARNESS / "pinocchio_bench.cpp"
     obj = build / "pinocchio_bench.o"
     cmd = [cxx, *cxx_flags(prefix), "-c", str(src), "-o", str(obj)]
-    key = hashlib.sha256((" ".join(cmd) + src.read_text() + (HARNESS / "bench.h").read_text()).encode()).hexdigest()
+    sources = src.read_text() + "".join((HARNESS / f).read_text() for f in ("bench.h", "pinocchio_common.hpp"))
+    key = hashlib.sha256((" ".join(cmd) + sources).encode()).hexdigest()
     if _stamp(obj, key):
         return obj, 0.0
     seconds, _ = _run(cmd, log)
