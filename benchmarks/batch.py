@@ -314,11 +314,12 @@ def section(cfg=None) -> dict:
                 merged = merge_rounds(mine)
                 check = agreement(merged["_outputs"], robot["reference"][routine], cfg["tolerance"])
                 row.update({"agreement": check, "maxrss_mib": merged["maxrss_mib"],
-                            "build_seconds": merged["build_seconds"], "compiles": merged["compiles"]})
+                            "build_seconds": merged["build_seconds"], "compiles": merged["compiles"],
+                            "framework_version": merged.get("framework_version")})
                 if check["ok"]:
                     row["sizes"] = summarize(merged)
                 rows.append(row)
-                if entry in ("aggsym_jax", "aggsym_torch") and routine != "jac":
+                if entry in ("aggsym_jax", "aggsym_jax_project", "aggsym_torch") and routine != "jac":
                     numpy_row = [r for r in runs if (r["entry"], r["robot"], r["routine"]) == ("numpy", label, routine)
                                  and "error" not in r]
                     if numpy_row:
