@@ -43,8 +43,8 @@ ENTRIES = {
                          "routine)"),
     "aggsym_jax_routine": ("aggsym JAX derivative routine", "jax", ("jac",),
                            "forward_dynamics_derivatives called directly (jit)"),
-    "aggsym_jax_project": ("aggsym JAX, the project's jax", "jax", ("fd", "A", "id"),
-                           "(not timed: the Jacobian is the entry aggsym JAX's, in the peers' jax)"),
+    "aggsym_jax_project": ("aggsym JAX, the project's jax", "jax", ROUTINES,
+                           "as aggsym JAX (the custom JVP), in the project's venv"),
     "aggsym_torch": ("aggsym PyTorch", "torch", ROUTINES,
                      "torch.autograd.grad through forward_dynamics (its analytic autograd.Function), one reverse "
                      "pass per output over the whole batch"),
