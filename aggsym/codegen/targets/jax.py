@@ -26,6 +26,7 @@ from ...contract import ROUTINES, SCALAR_INPUTS, input_length, signature
 from ...core.functions import FUNCTIONS
 from ..printing import Spelling, _number
 from .base import Runner, Target
+from .jax_segments import limits, segmented
 from .numpy import array_steps, step_statement
 
 # the JAX spelling: jax.numpy's element-wise functions (the same names as NumPy's), double literals as the C's (a
@@ -64,7 +65,7 @@ def jax_body(model, prog, lines, routine, inputs) -> dict:
             name = f"_o{o}_{k}"
             body.append(f"{name} = {rhs}")
             entries[o][k] = name
-    return {"body": body, "entries": entries}
+    return {"entries": entries, **segmented(routine.role, body, [e for out in entries for e in out])}
 
 
 def custom_directions(model, role: str, roles) -> dict | None:
@@ -138,8 +139,10 @@ class JaxTarget(Target):
         roles = [e.routine.role for e in job.emitted]
         custom = {role: custom_directions(job.model, role, roles) for role in roles}
         ctx = {**job.ctx, "custom": {role: c for role, c in custom.items() if c},
+               **dict(zip(("segment_size", "segmented_above"), limits())),
                "jax_routines": [{"r": e, "role": e.routine.role, "inputs": list(e.inputs),
                                  "args": ", ".join(e.inputs), "body": e.bodies[self.name]["body"],
+                                 "segments": e.bodies[self.name]["segments"],
                                  "entries": [wrapped(x) for x in e.bodies[self.name]["entries"]],
                                  "status_entry": status_entry(e),
                                  "outs": "".join(f"{o.py}, " for o in e.routine.written).rstrip(),

@@ -1,0 +1,233 @@
+"""Long JAX routines cut into segments (issue 32: XLA's CPU compiler fuses a whole straight line into kernels
+that evaluate shared values again at every use): each segment a function called through ``jax.lax.cond`` with
+itself in both branches, on a predicate XLA cannot fold.
+
+Shown here: the cutting keeps every statement once, in program order, and every name a segment reads is defined
+before it (on a real routine and on random straight lines); with segments forced small on the small models,
+every routine still equals the NumPy module to 1e-12 (batched, unbatched, with a status, with the time t), jit,
+vmap, jacfwd, jacrev, grad along p and hessian go through them (against central differences), the custom JVP
+through a cut derivative routine agrees with plain tracing; the conditionals survive XLA's compiler (else the
+kernels would not end at the borders); generation stays deterministic."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+import aggsym
+from aggsym.codegen.generate import generate
+from aggsym.codegen.targets import jax_segments
+from aggsym.codegen.targets.jax_segments import _parts, segmented
+from aggsym.contract import select_routines
+from conftest import model_path
+from jax_support import arguments, as_tuple, central_differences, float64, jax, jnp, modules, relative, routines
+
+SIZE = 15  # statements per segment when forced small
+
+
+def _check_cut(body, tail, cut, size):
+    """Every statement once, in order; a segment's reads are its parameters or its own earlier statements; the
+    parameters are defined before the call; the names the tail reads are defined at the end."""
+    prelude = [s for s in cut["body"] if "= _cut(_kept, " not in s and not s.startswith("_kept =")]
+    assert [s for s in body if s in prelude] == prelude
+    cut_lines = [line for seg in cut["segments"] for line in seg.lines]
+    assert [s for s in body if s not in prelude] == cut_lines
+    available = {_parts(s)[0] for s in prelude}
+    calls = [s for s in cut["body"] if "= _cut(_kept, " in s]
+    assert len(calls) == len(cut["segments"])
+    for seg, call in zip(cut["segments"], calls):
+        assert 1 <= len(seg.lines) <= size
+        assert set(seg.params) <= available, seg.name
+        assert call.endswith(f" = _cut(_kept, {seg.name}, {', '.join(seg.params)})")
+        inside = set(seg.params)
+        for line in seg.lines:
+            name, used = _parts(line)
+            assert all(u in inside or u == "jnp" for u in used), line
+            inside.add(name)
+        assert set(seg.results) <= inside
+        available |= set(seg.results)
+    assert {n for t in tail for n in re.findall(r"[A-Za-z_]\w*", t)} <= available
+
+
+def _random_line(rng, n):
+    """A random straight line of n statements over inputs q_0..q_3, each reading two earlier names, and the
+    outputs' entries: every name nothing reads (as in the pruned programs), and a few more."""
+    names = [f"q_{i}" for i in range(4)]
+    body = [f"q_{i} = q[..., {i}]" for i in range(4)]
+    read = set()
+    for k in range(n):
+        a, b = rng.choice(len(names), 2)
+        body.append(f"x{k} = jnp.sin({names[a]})*{names[b]} + 0.5")
+        read |= {names[a], names[b]}
+        names.append(f"x{k}")
+    return body, [x for x in names if x not in read] + [f"x{n // 2}", "q_1"]
+
+
+def test_a_run_nothing_reads_is_dropped():
+    body = ["q_0 = q[..., 0]", "x0 = q_0*2.0", "x1 = x0 + 1.0", "x2 = x0*x0", "x3 = x2 + x0"]
+    cut = segmented("f", body, ["x3"], size=1, above=0)
+    assert [seg.lines for seg in cut["segments"]] == [("x0 = q_0*2.0",), ("x2 = x0*x0",), ("x3 = x2 + x0",)]
+
+
+def test_a_short_routine_is_kept_whole():
+    body, tail = _random_line(np.random.default_rng(0), 30)
+    assert segmented("f", body, tail) == {"body": body, "segments": []}
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_cutting_random_lines_keeps_every_statement_and_defines_every_read(seed):
+    rng = np.random.default_rng(seed)
+    body, tail = _random_line(rng, int(rng.integers(20, 120)))
+    size = int(rng.integers(1, 12))
+    cut = segmented("f", body, tail, size=size, above=0)
+    assert cut["segments"]
+    _check_cut(body, tail, cut, size)
+
+
+def test_cutting_a_real_routine(tmp_path):
+    """planar_3link's forward dynamics derivatives, as the JAX target prints them."""
+    model = select_routines(aggsym.load(model_path("planar_3link")), ["forward_dynamics_derivatives"])
+    text = generate(model, latex=False, targets="jax").files["planar_3link_jax.py"]
+    assert "_SEGMENTS" not in text  # short enough to stay whole by default
+    lines = text.split("\n")
+    start = lines.index(next(x for x in lines if x.startswith("def _forward_dynamics_derivatives(")))
+    body = []
+    for line in lines[start + 4:]:
+        if line.startswith("    return"):
+            break
+        body.append(line.strip())
+    tail = re.findall(r"_o\d+_\d+", "\n".join(lines[start:]).split("    return", 1)[1].split("\n\n")[0])
+    cut = segmented("forward_dynamics_derivatives", body, tail, size=SIZE, above=0)
+    _check_cut(body, tail, cut, SIZE)
+
+
+SMALL = {"planar_2link": ["all"], "four_bar": None, "gyroscope_spinning_rotor": None,
+         "planar_3link": ["inertia", "inertia_inverse", "forward_dynamics", "forward_dynamics_derivatives"]}
+
+
+@pytest.fixture(scope="module")
+def cut(tmp_path_factory):
+    """{name: (NumPy module, JAX module)} with every routine of more than 30 statements cut into segments of 15."""
+    out = {}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(jax_segments, "SEGMENT", SIZE)
+        mp.setattr(jax_segments, "SEGMENTED", 30)
+        for name, roles in SMALL.items():
+            model = aggsym.load(model_path(name))
+            if roles:
+                model = select_routines(model, roles)
+            out[name] = modules(model, tmp_path_factory.mktemp(name))
+    return out
+
+
+@pytest.mark.parametrize("name", list(SMALL))
+def test_cut_routines_equal_the_numpy_module(cut, name, rng):
+    npm, jm = cut[name]
+    assert jm._SEGMENTS == SIZE
+    segments = [f for f in vars(jm) if re.fullmatch(r"_\w+__\d+", f)]
+    assert len(segments) >= 3
+    with float64():
+        for role in routines(npm):
+            for batch, traced in (((), False), ((2, 3), True)):  # eager: the segments called directly
+                args = arguments(npm, role, rng, batch)
+                try:
+                    want = getattr(npm, role)(*args)
+                except np.linalg.LinAlgError:
+                    continue
+                got = (jax.jit(getattr(jm, role)) if traced else getattr(jm, role))(*args)
+                assert [np.shape(x) for x in as_tuple(got)] == [np.shape(x) for x in as_tuple(want)], role
+                assert relative(got, want) < 1e-12, role
+
+
+def test_a_cut_routine_with_a_status_gives_nan_where_numpy_raises(cut):
+    npm, jm = cut["four_bar"]
+    p = np.array([0.1, 0.3, 0.25, 0.3])
+    q = np.stack([np.full(3, 0.3), np.zeros(3)])
+    with pytest.raises(np.linalg.LinAlgError):
+        npm.constrained_forward_dynamics(q, np.zeros((2, 3)), np.zeros((2, 3)), p)
+    with float64():
+        qdd, lam = jax.jit(jm.constrained_forward_dynamics)(q, np.zeros((2, 3)), np.zeros((2, 3)), p)
+    assert np.isnan(qdd[1]).all() and np.isnan(lam[1]).all() and np.isfinite(qdd[0]).all()
+
+
+THROUGH = {"planar_2link": ["forward_dynamics", "inverse_dynamics", "inertia", "regressor"],
+           "gyroscope_spinning_rotor": ["forward_dynamics"]}  # (the time t)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(THROUGH))
+def test_transforms_go_through_cut_routines(cut, name, rng):
+    """jit and vmap equal the NumPy module; jacfwd equals jacrev and central differences along the first input;
+    grad along p equals central differences; the hessian of a scalar of the outputs is symmetric."""
+    npm, jm = cut[name]
+    with float64():
+        for role in THROUGH[name]:
+            f = getattr(jm, role)
+            args = arguments(npm, role, rng)
+            assert relative(jax.jit(f)(*args), getattr(npm, role)(*args)) < 1e-12, role
+            batch = arguments(npm, role, rng, (3,))
+            assert relative(jax.jit(jax.vmap(f))(*batch), getattr(npm, role)(*batch)) < 1e-12, role
+            x0 = np.asarray(args[0])
+            fwd = as_tuple(jax.jit(jax.jacfwd(f))(*args))
+            rev = as_tuple(jax.jit(jax.jacrev(f))(*args))
+            flat = central_differences(lambda x: np.concatenate([np.ravel(o) for o in as_tuple(f(x, *args[1:]))]), x0)
+            start = 0
+            for a, b in zip(fwd, rev):
+                size = int(np.prod(a.shape[:-1]))
+                assert relative(a, b) < 1e-10, role
+                assert relative(a, flat[start:start + size].reshape(a.shape), floor=1.0) < 1e-6, role
+                start += size
+            p = np.asarray(npm.PARAMETERS, dtype=float)
+
+            def of_p(p, args=args, f=f):
+                return sum(jnp.sum(o) for o in as_tuple(f(*args, p)))
+            g = jax.jit(jax.grad(of_p))(p)
+            assert relative(g, central_differences(lambda x: np.asarray(of_p(x)), p), floor=1.0) < 1e-6, role
+
+            def scalar(x, args=args, f=f):
+                return sum(jnp.sum(jnp.sin(o)) for o in as_tuple(f(x, *args[1:])))
+            H = np.asarray(jax.jit(jax.hessian(scalar))(x0))
+            assert np.isfinite(H).all() and np.allclose(H, H.T, rtol=1e-10, atol=1e-10), role
+
+
+def test_the_custom_jvp_through_a_cut_derivative_routine(cut, rng):
+    """planar_3link: jacfwd and jacrev of forward dynamics apply the cut derivative routine; they equal plain
+    tracing of the (cut) straight line and central differences."""
+    npm, jm = cut["planar_3link"]
+    assert any(f.startswith("_forward_dynamics_derivatives__") for f in vars(jm))
+    n = jm.NV
+    q, qd, tau = rng.uniform(-1.5, 1.5, n), rng.normal(size=n), rng.normal(size=n)
+    p = np.asarray(jm.PARAMETERS)
+
+    def plain(q, qd):
+        return jm._forward_dynamics(*(jnp.asarray(a, jnp.float64) for a in (q, qd, tau, p)))[0]
+    with float64():
+        for k, x in enumerate((q, qd)):
+            custom = jax.jit(jax.jacfwd(jm.forward_dynamics, k))(q, qd, tau)
+            assert relative(custom, jax.jacrev(jm.forward_dynamics, k)(q, qd, tau)) < 1e-10
+            assert relative(custom, jax.jacfwd(plain, k)(q, qd)) < 1e-10
+            diff = central_differences(lambda y: np.asarray(jm.forward_dynamics(*((y, qd) if k == 0 else (q, y)), tau)), x)
+            assert relative(custom, diff, floor=1.0) < 1e-6
+        want = npm.forward_dynamics_derivatives(q, qd, tau)
+        assert relative(jm.forward_dynamics_derivatives(q, qd, tau), want) < 1e-12
+
+
+def test_the_conditionals_survive_xla(cut, rng):
+    """The compiled program keeps one conditional per segment: were the predicate folded, XLA would inline the
+    branches and fuse the whole straight line again."""
+    npm, jm = cut["planar_3link"]
+    segments = [f for f in vars(jm) if f.startswith("_forward_dynamics_derivatives__")]
+    args = arguments(npm, "forward_dynamics_derivatives", rng, (16,))
+    with float64():
+        text = jax.jit(jm.forward_dynamics_derivatives).lower(*args).compile().as_text()
+    assert len(re.findall(r"\bconditional\(", text)) >= len(segments) >= 3
+
+
+def test_generation_with_segments_is_deterministic(monkeypatch):
+    monkeypatch.setattr(jax_segments, "SEGMENT", SIZE)
+    monkeypatch.setattr(jax_segments, "SEGMENTED", 30)
+    model = aggsym.load(model_path("planar_3link"))
+    first = generate(model, latex=False, targets="jax").files
+    assert "_forward_dynamics__2(" in first["planar_3link_jax.py"]
+    assert first == generate(model, latex=False, targets="jax").files
