@@ -338,11 +338,12 @@ def section(cfg=None) -> dict:
 
 
 def keep_earlier(data: dict, earlier: dict) -> dict:
-    """A run on some robots, or on some entries, keeps the earlier batch.json's rows of every (robot, entry) it
-    did not run, each marked ``earlier_run`` (the report says so); the batch sizes and routines are the union of
-    both runs'."""
-    ran = {(r["robot"], r["entry"]) for r in data["rows"]}
-    rows = [dict(r, earlier_run=True) for r in earlier.get("rows", []) if (r["robot"], r["entry"]) not in ran]
+    """A run on some robots, entries or routines keeps the earlier batch.json's rows of every (robot, entry,
+    routine) it did not run, each marked ``earlier_run`` (the report says so); the batch sizes and routines are the
+    union of both runs'."""
+    ran = {(r["robot"], r["entry"], r["routine"]) for r in data["rows"]}
+    rows = [dict(r, earlier_run=True) for r in earlier.get("rows", [])
+            if (r["robot"], r["entry"], r["routine"]) not in ran]
     if not rows:
         return data
     kept = sorted({r["robot"] for r in rows})

@@ -130,6 +130,18 @@ def test_a_run_of_some_entries_keeps_the_other_entries_rows_of_the_same_robot():
     assert all(r.get("earlier_run") for r in merged["rows"] if r["entry"] != entry)
 
 
+def test_a_run_of_some_routines_keeps_the_other_routines_rows_of_the_same_entries():
+    earlier = fake_results()
+    now = fake_results()
+    routine = now["rows"][0]["routine"]
+    now["rows"] = [r for r in now["rows"] if r["routine"] == routine]
+    merged = batch.keep_earlier(now, earlier)
+    assert len(merged["rows"]) == len(earlier["rows"])
+    assert {r["routine"] for r in merged["rows"]} == {r["routine"] for r in earlier["rows"]}
+    assert all(r.get("earlier_run") is None for r in merged["rows"] if r["routine"] == routine)
+    assert all(r.get("earlier_run") for r in merged["rows"] if r["routine"] != routine)
+
+
 URDF = """<robot name="r">
  <link name="base"><inertial><mass value="2"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>
   <visual><geometry><mesh filename="package://x/base.stl"/></geometry></visual></link>
