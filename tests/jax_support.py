@@ -76,3 +76,15 @@ def central_differences(f, x, h=1e-6):
     x = np.asarray(x, dtype=float)
     return np.stack([(np.asarray(f(x + h * e)) - np.asarray(f(x - h * e))) / (2 * h) for e in np.eye(x.size)],
                     axis=-1)
+
+
+def four_bar_dead_centre(npm):
+    """The four-bar's constrained_forward_dynamics arguments for two states, the second at its dead centre q = 0
+    (tests/test_constraints.py), where the NumPy module ``npm`` raises LinAlgError (checked here)."""
+    q = np.stack([np.full(3, 0.3), np.zeros(3)])
+    args = (q, np.zeros((2, 3)), np.zeros((2, 3)), np.array([0.1, 0.3, 0.25, 0.3]))
+    try:
+        npm.constrained_forward_dynamics(*args)
+    except np.linalg.LinAlgError:
+        return args
+    raise AssertionError("the NumPy module did not raise LinAlgError at the dead centre")
