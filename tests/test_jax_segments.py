@@ -86,7 +86,7 @@ def test_cutting_random_lines_keeps_every_statement_and_defines_every_read(seed)
     _check_cut(body, tail, cut, size)
 
 
-def test_cutting_a_real_routine(tmp_path):
+def test_cutting_a_real_routine():
     """planar_3link's forward dynamics derivatives, as the JAX target prints them."""
     model = select_routines(aggsym.load(model_path("planar_3link")), ["forward_dynamics_derivatives"])
     text = generate(model, latex=False, targets="jax").files["planar_3link_jax.py"]
@@ -122,6 +122,7 @@ def cut(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(SMALL))
 def test_cut_routines_equal_the_numpy_module(cut, name, rng):
     npm, jm = cut[name]
