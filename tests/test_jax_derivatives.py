@@ -88,8 +88,9 @@ def test_without_derivative_routines_the_functions_are_plain(tmp_path):
 
 @pytest.mark.slow
 def test_quaternion_free_flyer_differentiates_along_the_entries_of_q(tmp_path, rng, monkeypatch):
-    """nq = nv + 1: d qdd / d q along the seven base positions as passed (traced), d qdd / d qd by the generated
-    routine; both equal central differences of the NumPy module."""
+    """nq = nv + 1: d qdd / d q along the entries of q as passed: the joints' columns from the generated routine,
+    the seven base positions traced one at a time; d qdd / d qd by the generated routine; jacfwd and jacrev equal
+    central differences of the NumPy module and plain tracing."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ModelWarning)
         model = aggsym.load(robot_path("double_pendulum"), floating_base="quaternion")
@@ -106,9 +107,58 @@ def test_quaternion_free_flyer_differentiates_along_the_entries_of_q(tmp_path, r
             fd = central_differences(lambda v, k=k: npm.forward_dynamics(*[v if j == k else y
                                                                           for j, y in enumerate((q, qd, tau))]), x)
             assert relative(got, fd, floor=1.0) < 1e-5
-            assert relative(got, jax.jacfwd(_plain(jm, "forward_dynamics"), k)(q, qd, tau, jm.PARAMETERS),
-                            floor=1.0) < 1e-12
-    assert counter.calls == 1  # qd alone: q is traced
+            plain = jax.jacfwd(_plain(jm, "forward_dynamics"), k)(q, qd, tau, jm.PARAMETERS)
+            assert relative(got, plain, floor=1.0) < 1e-12
+            assert relative(jax.jacrev(jm.forward_dynamics, k)(q, qd, tau), plain, floor=1.0) < 1e-12
+    assert counter.calls == 4  # along q and qd, by jacfwd and by jacrev
+
+
+BALL_BETWEEN_HINGES = """
+name: ball_between_hinges
+gravity: [0.3, -0.2, -9.81]
+bodies:
+  - name: base
+    parent: world
+    pair: {name: yaw, translation: [0.1, 0, 0.2], rotation: [[2, 0.4]], functional: {theta6: q_yaw}}
+    mass: 2.0
+    com: [0.1, 0.02, 0.3]
+    inertia: {xx: 0.03, yy: 0.025, zz: 0.012, xy: 0.001}
+  - name: upper
+    parent: base
+    pair: {name: hip, type: ball, translation: [0.1, 0.2, 0.5], rotation: [[1, 0.3], [3, -0.7]]}
+    mass: 1.2
+    com: [0.05, -0.1, -0.25]
+    inertia: {xx: 0.04, yy: 0.05, zz: 0.02, yz: 0.002}
+  - name: foot
+    parent: upper
+    pair: {name: ankle, translation: [0, 0, -0.4], rotation: [[2, 0.4]], functional: {theta4: q_ankle}}
+    mass: 0.03
+    com: [0.1, 0.0, -0.02]
+    inertia: {xx: 0.0001, yy: 0.0003, zz: 0.00025, xz: 0.00001}
+"""
+
+
+@pytest.mark.slow
+def test_a_ball_between_hinges_differentiates_along_the_entries_of_q(tmp_path, rng, monkeypatch):
+    """A ball pair's quaternion in the middle of q (hinge, ball, hinge: nq = 6, nv = 5): the hinges' columns from
+    the generated routine, the quaternion's four entries traced; jacfwd and jacrev along q equal plain tracing and
+    central differences of the NumPy module."""
+    (tmp_path / "ball.yaml").write_text(BALL_BETWEEN_HINGES)
+    npm, jm = modules(select_routines(aggsym.load(tmp_path / "ball.yaml"), DERIVATIVES), tmp_path)
+    assert (jm.NQ, jm.NV) == (6, 5)
+    quat = rng.normal(size=4)
+    q = np.concatenate([[0.7312], quat / np.linalg.norm(quat), [-1.2047]])
+    qd, tau = rng.normal(size=5), rng.normal(size=5)
+    counter = Counting(jm, "_forward_dynamics_derivatives", monkeypatch)
+    with float64():
+        plain = jax.jacfwd(_plain(jm, "forward_dynamics"))(q, qd, tau, jm.PARAMETERS)
+        fd = central_differences(lambda v: npm.forward_dynamics(v, qd, tau), q)
+        for jac in (jax.jacfwd, jax.jacrev):
+            got = jax.jit(jac(jm.forward_dynamics))(q, qd, tau)
+            assert got.shape == (5, 6)
+            assert relative(got, plain, floor=1.0) < 1e-12
+            assert relative(got, fd, floor=1.0) < 1e-6
+    assert counter.calls == 2
 
 
 @pytest.mark.pinocchio

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from ...contract import ROUTINES, SCALAR_INPUTS, input_length, signature
 from ...core.functions import FUNCTIONS
+from ...model.tree import Tree
 from ..printing import Spelling, _number
 from .base import Runner, Target
 from .jax_segments import limits, segmented
@@ -80,22 +81,38 @@ def custom_directions(model, role: str, roles) -> dict | None:
     for name, (source, index) in spec[1].items():
         if source not in roles or name not in signature(ROUTINES[role], model):
             continue
-        if name == "q" and model.nq != model.nv:  # tangent space (quaternions): traced instead
-            continue
-        out[name] = (source, index, ", ".join(signature(ROUTINES[source], model)))
+        split = entry_columns(model) if name == "q" and model.nq != model.nv else None
+        out[name] = (source, index, ", ".join(signature(ROUTINES[source], model)), split)
     return out
 
 
+def entry_columns(model) -> tuple:
+    """(Q, V, T) for a model whose q has quaternions (nq > nv): the entries Q of q that are coordinates, Q[i] the
+    coordinate V[i] (their derivative columns apply as they are), and the entries T of a quaternion pair (a
+    free-flyer's origin and quaternion, a ball's quaternion), along which the derivative routines, in Pinocchio's
+    tangent space, do not differentiate: the custom JVP traces those, one entry at a time."""
+    tree = Tree(model)
+    Q, V, T = [], [], []
+    for body, positions, coords in zip(model.bodies, tree.positions, tree.coords):
+        if body.pair.quaternion:
+            T += positions
+        else:
+            Q += positions
+            V += coords
+    return tuple(Q), tuple(V), tuple(T)
+
+
 def custom_groups(inputs, custom) -> dict:
-    """For the template of a custom JVP: ``groups`` [{role, args, uses: [(tangent index, output index)]}] the
-    derivative routines to call (each once), ``traced`` the indices of the inputs differentiated by tracing."""
+    """For the template of a custom JVP: ``groups`` [{role, args, uses: [(tangent index, output index, split)]}]
+    the derivative routines to call (each once; ``split``: :func:`entry_columns` for q with quaternions, else
+    None), ``traced`` the indices of the inputs differentiated by tracing."""
     if not custom:
         return {"groups": [], "traced": []}
     groups = {}
     for k, name in enumerate(inputs):
         if name in custom:
-            role, index, args = custom[name]
-            groups.setdefault(role, {"role": role, "args": args, "uses": []})["uses"].append((k, index))
+            role, index, args, split = custom[name]
+            groups.setdefault(role, {"role": role, "args": args, "uses": []})["uses"].append((k, index, split))
     return {"groups": list(groups.values()), "traced": [k for k, name in enumerate(inputs) if name not in custom]}
 
 
