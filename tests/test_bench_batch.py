@@ -119,27 +119,17 @@ def test_a_run_on_one_robot_keeps_the_other_robots_rows():
     assert "aggsym JAX (an earlier run)" in batch_report.markdown(merged)
 
 
-def test_a_run_of_some_entries_keeps_the_other_entries_rows_of_the_same_robot():
+@pytest.mark.parametrize("key", ["entry", "routine"])
+def test_a_run_of_some_entries_or_routines_keeps_the_others_rows_of_the_same_robot(key):
     earlier = fake_results()
     now = fake_results()
-    entry = now["rows"][0]["entry"]
-    now["rows"] = [r for r in now["rows"] if r["entry"] == entry]
+    ran = now["rows"][0][key]
+    now["rows"] = [r for r in now["rows"] if r[key] == ran]
     merged = batch.keep_earlier(now, earlier)
     assert len(merged["rows"]) == len(earlier["rows"])
-    assert all(r.get("earlier_run") is None for r in merged["rows"] if r["entry"] == entry)
-    assert all(r.get("earlier_run") for r in merged["rows"] if r["entry"] != entry)
-
-
-def test_a_run_of_some_routines_keeps_the_other_routines_rows_of_the_same_entries():
-    earlier = fake_results()
-    now = fake_results()
-    routine = now["rows"][0]["routine"]
-    now["rows"] = [r for r in now["rows"] if r["routine"] == routine]
-    merged = batch.keep_earlier(now, earlier)
-    assert len(merged["rows"]) == len(earlier["rows"])
-    assert {r["routine"] for r in merged["rows"]} == {r["routine"] for r in earlier["rows"]}
-    assert all(r.get("earlier_run") is None for r in merged["rows"] if r["routine"] == routine)
-    assert all(r.get("earlier_run") for r in merged["rows"] if r["routine"] != routine)
+    assert {r[key] for r in merged["rows"]} == {r[key] for r in earlier["rows"]}
+    assert all(r.get("earlier_run") is None for r in merged["rows"] if r[key] == ran)
+    assert all(r.get("earlier_run") for r in merged["rows"] if r[key] != ran)
 
 
 URDF = """<robot name="r">

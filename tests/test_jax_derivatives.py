@@ -115,26 +115,26 @@ def test_quaternion_free_flyer_differentiates_along_the_entries_of_q(tmp_path, r
 
 BALL_BETWEEN_HINGES = """
 name: ball_between_hinges
-gravity: [0.3, -0.2, -9.81]
+gravity: [0.0, 0.0, -9.81]
 bodies:
-  - name: base
+  - name: hub
     parent: world
-    pair: {name: yaw, translation: [0.1, 0, 0.2], rotation: [[2, 0.4]], functional: {theta6: q_yaw}}
-    mass: 2.0
-    com: [0.1, 0.02, 0.3]
-    inertia: {xx: 0.03, yy: 0.025, zz: 0.012, xy: 0.001}
-  - name: upper
-    parent: base
-    pair: {name: hip, type: ball, translation: [0.1, 0.2, 0.5], rotation: [[1, 0.3], [3, -0.7]]}
-    mass: 1.2
-    com: [0.05, -0.1, -0.25]
-    inertia: {xx: 0.04, yy: 0.05, zz: 0.02, yz: 0.002}
-  - name: foot
-    parent: upper
-    pair: {name: ankle, translation: [0, 0, -0.4], rotation: [[2, 0.4]], functional: {theta4: q_ankle}}
-    mass: 0.03
-    com: [0.1, 0.0, -0.02]
-    inertia: {xx: 0.0001, yy: 0.0003, zz: 0.00025, xz: 0.00001}
+    pair: {name: turn, translation: [0.03125, -0.01, 0.45], rotation: [[1, 0.21837]], functional: {theta6: q_turn}}
+    mass: 350.0
+    com: [0.012, 0.004, 0.11]
+    inertia: {xx: 4.1, yy: 3.7, zz: 2.2, xz: 0.03}
+  - name: link
+    parent: hub
+    pair: {name: socket, type: ball, translation: [0.0, 0.17, 0.3], rotation: [[2, -1.05713], [3, 0.33871]]}
+    mass: 0.85
+    com: [-0.02, 0.07, -0.31]
+    inertia: {xx: 0.011, yy: 0.013, zz: 0.0045, xy: 0.0004}
+  - name: tip
+    parent: link
+    pair: {name: wrist, translation: [0.01, 0, -0.62], rotation: [[3, 2.46109]], functional: {theta5: q_wrist}}
+    mass: 0.00035
+    com: [0.004, 0.001, -0.01]
+    inertia: {xx: 0.000000021, yy: 0.000000034, zz: 0.000000018}
 """
 
 
@@ -157,7 +157,7 @@ def test_a_ball_between_hinges_differentiates_along_the_entries_of_q(tmp_path, r
             got = jax.jit(jac(jm.forward_dynamics))(q, qd, tau)
             assert got.shape == (5, 6)
             assert relative(got, plain, floor=1.0) < 1e-12
-            assert relative(got, fd, floor=1.0) < 1e-6
+            assert relative(got, fd, floor=1.0) < 1e-5  # (central differences' own error: masses over six decades)
     assert counter.calls == 2
 
 
