@@ -66,6 +66,19 @@ class Tree:
         return q
 
     @cached_property
+    def position_split(self) -> tuple:
+        """(Q, V, T): the entries Q of q that are coordinates themselves (Q[i] is coordinate V[i]), and the entries T
+        of the quaternion pairs (a free-flyer's origin and quaternion, a ball's quaternion), which are not."""
+        Q, V, T = [], [], []
+        for b, positions, coords in zip(self.model.bodies, self.positions, self.coords):
+            if b.pair.quaternion:
+                T += positions
+            else:
+                Q += positions
+                V += coords
+        return tuple(Q), tuple(V), tuple(T)
+
+    @cached_property
     def subtrees(self) -> list[list[int]]:
         """(lk)+ for every body: k and all its descendants, in body order."""
         sub = [[k] for k in range(len(self))]

@@ -81,31 +81,17 @@ def custom_directions(model, role: str, roles) -> dict | None:
     for name, (source, index) in spec[1].items():
         if source not in roles or name not in signature(ROUTINES[role], model):
             continue
-        split = entry_columns(model) if name == "q" and model.nq != model.nv else None
+        # with quaternions (a free-flyer, ball pairs) the routines are in the tangent space: along q they give the
+        # columns of the entries that are coordinates; the quaternion pairs' entries are traced
+        split = Tree(model).position_split if name == "q" and model.nq != model.nv else None
         out[name] = (source, index, ", ".join(signature(ROUTINES[source], model)), split)
     return out
 
 
-def entry_columns(model) -> tuple:
-    """(Q, V, T) for a model whose q has quaternions (nq > nv): the entries Q of q that are coordinates, Q[i] the
-    coordinate V[i] (their derivative columns apply as they are), and the entries T of a quaternion pair (a
-    free-flyer's origin and quaternion, a ball's quaternion), along which the derivative routines, in Pinocchio's
-    tangent space, do not differentiate: the custom JVP traces those, one entry at a time."""
-    tree = Tree(model)
-    Q, V, T = [], [], []
-    for body, positions, coords in zip(model.bodies, tree.positions, tree.coords):
-        if body.pair.quaternion:
-            T += positions
-        else:
-            Q += positions
-            V += coords
-    return tuple(Q), tuple(V), tuple(T)
-
-
 def custom_groups(inputs, custom) -> dict:
     """For the template of a custom JVP: ``groups`` [{role, args, uses: [(tangent index, output index, split)]}]
-    the derivative routines to call (each once; ``split``: :func:`entry_columns` for q with quaternions, else
-    None), ``traced`` the indices of the inputs differentiated by tracing."""
+    the derivative routines to call (each once; ``split``: the tree's ``position_split`` for q with quaternions,
+    else None), ``traced`` the indices of the inputs differentiated by tracing."""
     if not custom:
         return {"groups": [], "traced": []}
     groups = {}
