@@ -17,10 +17,12 @@ import pytest
 
 import aggsym
 from aggsym.codegen.generate import generate
+from aggsym.codegen.targets import jax as jax_target
 from aggsym.codegen.targets import jax_segments
 from aggsym.codegen.targets.jax_segments import _parts, segmented
 from aggsym.contract import select_routines
 from conftest import model_path
+from helpers import robot_path
 from jax_support import (arguments, as_tuple, central_differences, float64, four_bar_dead_centre, jax, jnp, modules,
                          relative, routines)
 
@@ -28,17 +30,29 @@ SIZE = 6  # statements per segment when forced small
 
 
 def _check_cut(body, tail, cut, size):
-    """Every statement once, in order; a segment's reads are its parameters or its own earlier statements; the
-    parameters are defined before the call; the names the tail reads are defined at the end."""
+    """Every statement once: the unpacked inputs first, then the calls segment (if any: statements that read only
+    inputs and each other), then the others in program order; a segment's reads are its parameters or its own
+    earlier statements; the parameters are defined before the call; the names the tail reads are defined at the
+    end."""
     prelude = [s for s in cut["body"] if "= _cut(_kept, " not in s and not s.startswith("_kept =")]
     assert [s for s in body if s in prelude] == prelude
-    cut_lines = [line for seg in cut["segments"] for line in seg.lines]
-    assert [s for s in body if s not in prelude] == cut_lines
+    segments = cut["segments"]
+    hoisted = list(segments[0].lines) if segments and segments[0].name.endswith("__calls") else []
+    assert [s for s in body if s in hoisted] == hoisted
+    inputs = {_parts(s)[0] for s in prelude if not _parts(s)[1] or _parts(s)[1] == ["q"]}
+    known = set(inputs)
+    for line in hoisted:
+        name, used = _parts(line)
+        assert set(used) - {"jnp", "q", "qd", "tau", "p"} <= known, line
+        known.add(name)
+    cut_lines = [line for seg in segments for line in seg.lines]
+    assert [s for s in body if s not in prelude and s not in hoisted] == cut_lines[len(hoisted):]
+    assert sorted(cut_lines + prelude) == sorted(body)
     available = {_parts(s)[0] for s in prelude}
     calls = [s for s in cut["body"] if "= _cut(_kept, " in s]
-    assert len(calls) == len(cut["segments"])
-    for seg, call in zip(cut["segments"], calls):
-        assert 1 <= len(seg.lines) <= size
+    assert len(calls) == len(segments)
+    for seg, call in zip(segments, calls):
+        assert 1 <= len(seg.lines) <= (len(hoisted) if seg.name.endswith("__calls") else size)
         assert set(seg.params) <= available, seg.name
         assert call.endswith(f" = _cut(_kept, {seg.name}, {', '.join(seg.params)})")
         inside = set(seg.params)
@@ -51,7 +65,7 @@ def _check_cut(body, tail, cut, size):
     assert {n for t in tail for n in re.findall(r"[A-Za-z_]\w*", t)} <= available
 
 
-def _random_line(rng, n):
+def _random_line(rng, n, function="sin"):
     """A random straight line of n statements over inputs q_0..q_3, each reading two earlier names, and the
     outputs' entries: every name nothing reads (as in the pruned programs), and a few more."""
     names = [f"q_{i}" for i in range(4)]
@@ -59,7 +73,7 @@ def _random_line(rng, n):
     read = set()
     for k in range(n):
         a, b = rng.choice(len(names), 2)
-        body.append(f"x{k} = jnp.sin({names[a]})*{names[b]} + 0.5")
+        body.append(f"x{k} = jnp.{function}({names[a]})*{names[b]} + 0.5")
         read |= {names[a], names[b]}
         names.append(f"x{k}")
     return body, [x for x in names if x not in read] + [f"x{n // 2}", "q_1"]
@@ -72,8 +86,32 @@ def test_a_run_nothing_reads_is_dropped():
 
 
 def test_a_short_routine_is_kept_whole():
-    body, tail = _random_line(np.random.default_rng(0), 30)
+    body, tail = _random_line(np.random.default_rng(0), 30, "sign")  # (sign: cheap, no calls segment)
     assert segmented("f", body, tail) == {"body": body, "segments": []}
+
+
+def test_the_functions_of_the_inputs_go_first_into_their_segment():
+    """cos and sin of the inputs (and of a sum of an input and a constant) go into _f__calls, in every routine;
+    a call that depends on more than NEAR statements, or on one that does, stays where it is."""
+    body = ["q_0 = q[..., 0]", "q_1 = q[..., 1]", "x0 = q_0*q_1", "x1 = 0.5 + q_1", "x2 = jnp.cos(x1)",
+            "x3 = jnp.sin(q_0)", "x4 = x2*x3"]
+    body += [f"x{k} = x{k - 1}*x0" for k in range(5, 5 + jax_segments.NEAR + 1)]
+    last = 5 + jax_segments.NEAR
+    body += [f"x{last + 1} = jnp.sqrt(x{last})", f"x{last + 2} = jnp.sign(q_1)*x4", f"x{last + 3} = x{last + 1} + x0"]
+    tail = [f"x{last + 3}", f"x{last + 2}"]
+    for above in (None, 0):  # whole, then cut
+        cut = segmented("f", body, tail, size=3, above=above)
+        calls = cut["segments"][0]
+        assert calls.name == "_f__calls"
+        assert calls.lines == ("x1 = 0.5 + q_1", "x2 = jnp.cos(x1)", "x3 = jnp.sin(q_0)")
+        assert calls.params == ("q_1", "q_0") and calls.results == ("x2", "x3")
+        assert cut["body"][:3] == ["q_0 = q[..., 0]", "q_1 = q[..., 1]",
+                                   "_kept = jax.lax.optimization_barrier(jnp.asarray(False))  # a predicate XLA "
+                                   "cannot fold (see _SEGMENTS)"]
+        assert cut["body"][3] == "x2, x3, = _cut(_kept, _f__calls, q_1, q_0)"
+        _check_cut(body, tail, cut, 3)
+    whole = segmented("f", body, tail)
+    assert len(whole["segments"]) == 1 and whole["body"][4:] == [s for s in body[2:] if s not in calls.lines]
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -86,11 +124,14 @@ def test_cutting_random_lines_keeps_every_statement_and_defines_every_read(seed)
     _check_cut(body, tail, cut, size)
 
 
-def test_cutting_a_real_routine():
-    """planar_3link's forward dynamics derivatives, as the JAX target prints them."""
+def test_cutting_a_real_routine(monkeypatch):
+    """planar_3link's forward dynamics derivatives, as the JAX target prints them (short enough to stay whole
+    by default, but for the calls segment of its sines and cosines)."""
     model = select_routines(aggsym.load(model_path("planar_3link")), ["forward_dynamics_derivatives"])
     text = generate(model, latex=False, targets="jax").files["planar_3link_jax.py"]
-    assert "_SEGMENTS" not in text  # short enough to stay whole by default
+    assert "def _forward_dynamics_derivatives__calls(" in text and "def _forward_dynamics_derivatives__1(" not in text
+    monkeypatch.setattr(jax_target, "segmented", lambda role, body, tail: {"body": body, "segments": []})
+    text = generate(model, latex=False, targets="jax").files["planar_3link_jax.py"]
     lines = text.split("\n")
     start = lines.index(next(x for x in lines if x.startswith("def _forward_dynamics_derivatives(")))
     body = []
@@ -231,3 +272,18 @@ def test_generation_with_segments_is_deterministic(monkeypatch):
     first = generate(model, latex=False, targets="jax").files
     assert "_forward_dynamics__2(" in first["planar_3link_jax.py"]
     assert first == generate(model, latex=False, targets="jax").files
+
+
+def test_xla_evaluates_each_sine_once(tmp_path, rng):
+    """The calls segment's sines and cosines are results of a conditional, so every kernel after it reads them:
+    the compiled forward dynamics holds each of them once per branch.  Without the segment XLA copies them into
+    the kernels that read them (here 140 for Panda's 12, five times slower)."""
+    model = select_routines(aggsym.load(robot_path("panda")), ["forward_dynamics"])
+    npm, jm = modules(model, tmp_path)
+    text = open(jm.__file__).read()
+    written = len(re.findall(r"jnp\.(?:sin|cos)\(", text))
+    assert written >= 12
+    args = arguments(npm, "forward_dynamics", rng, (64,))
+    with float64():
+        hlo = jax.jit(jm.forward_dynamics).lower(*args).compile().as_text()
+    assert len(re.findall(r"\b(?:sine|cosine)\(", hlo)) <= 2 * written

@@ -8,7 +8,8 @@ that ``jit``, ``vmap``, ``grad``, ``jacfwd``, ``jacrev`` and ``hessian`` go thro
 function converts its inputs (the dtype follows them: float32 stays float32, float64 where the user enabled
 x64), fills in ``p`` and calls the private one.  A long routine's statements are cut into segments, each a function
 called through ``jax.lax.cond`` (:mod:`.jax_segments`: XLA's CPU compiler would otherwise fuse the whole straight
-line into kernels that evaluate shared values again at every use).
+line into kernels that evaluate shared values again at every use); in every routine the sines and cosines of the
+inputs go first into a segment of their own, so that each is evaluated once.
 
 Analytic derivatives (:data:`CUSTOM`): when the module also holds a routine's derivative routine, the public
 function goes through a :func:`jax.custom_jvp` whose rule applies the generated derivative matrices to the

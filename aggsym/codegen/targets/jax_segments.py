@@ -21,6 +21,14 @@ A statement that uses no earlier statement (an input's entry unpacked, ``q_3 = q
 private function, before the segments; the others are cut, in program order, into runs of :data:`SEGMENT`.  A
 segment's parameters are the names it uses that earlier statements define (in order of first use), its results
 the names it defines that a later segment or the assembly of the outputs uses (in order of definition).
+
+The functions of the inputs (``jnp.cos(q_3)``, ``jnp.sin(0.785 + q_6)``: a statement that calls one of
+:data:`EXPENSIVE` and depends on at most :data:`NEAR` statements besides the unpacked inputs) go first, with
+those statements, into a segment of their own, ``_ROLE__calls``, in every routine, cut or whole.  XLA's fusion
+otherwise copies each sine and cosine into every kernel that reads it: Panda's forward dynamics (12 sines and
+cosines in its straight line) compiled to 140 of them and took 1.6 µs per state (jax 0.10.2, B = 4096), 0.35
+with the segment (``docs/batched.md``).  Moving them first changes no value: they read nothing but the inputs
+and each other.
 """
 from __future__ import annotations
 
@@ -29,6 +37,9 @@ import dataclasses
 
 SEGMENT = 40  # statements per segment
 SEGMENTED = 500  # a routine is cut when it has more statements than this
+# the functions whose statements go into the calls segment (the NumPy names the JAX target prints, jnp.NAME)
+EXPENSIVE = frozenset(("sin", "cos", "tan", "sqrt", "exp", "log", "arcsin", "arccos", "arctan", "arctan2"))
+NEAR = 4  # a call goes into the calls segment when it depends on at most this many statements (besides inputs)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,40 +69,91 @@ def _parts(statement: str) -> tuple:
     return tree.targets[0].id, used
 
 
+def _calls(statement: str) -> bool:
+    """Whether a generated statement calls one of :data:`EXPENSIVE` (``jnp.NAME(...)``) anywhere."""
+    return any(isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in EXPENSIVE
+               and isinstance(node.func.value, ast.Name) and node.func.value.id == "jnp"
+               for node in ast.walk(ast.parse(statement, mode="exec").body[0].value))
+
+
+def _hoisted(body: list, parsed: list, prelude: set) -> set:
+    """The indices of the statements of the calls segment: each statement calling one of :data:`EXPENSIVE` that
+    depends on at most :data:`NEAR` statements other than the ``prelude``, and those statements."""
+    near, where, chosen = {}, {}, set()
+    for k, (statement, (name, used)) in enumerate(zip(body, parsed)):
+        where[name] = k
+        if name in prelude:
+            continue
+        above = set()
+        for u in used:
+            if u in prelude or u not in where:
+                continue
+            if near.get(u) is None:
+                above = None
+                break
+            above |= {u} | near[u]
+            if len(above) > NEAR:
+                above = None
+                break
+        near[name] = above
+        if above is not None and _calls(statement):
+            chosen |= {k} | {where[u] for u in above}
+    return chosen
+
+
+def _segment(name: str, lines: list, defined: set, later: set):
+    """The segment of ``lines`` ((statement, name, used) triples), with the ``defined`` names its parameters may
+    be and the ``later`` names (read after it) its results are; None when nothing after it reads what it
+    defines (dead code: the programs are pruned, not seen in practice)."""
+    here = {n for _, n, _ in lines}
+    params = tuple(dict.fromkeys(u for _, _, used in lines for u in used if u in defined and u not in here))
+    results = tuple(n for _, n, _ in lines if n in later)
+    if not results:
+        return None
+    return Segment(name, params, results, tuple(s for s, _, _ in lines))
+
+
+def _call(seg: Segment) -> str:
+    return f"{', '.join(seg.results)}, = _cut(_kept, {seg.name}, {', '.join(seg.params)})"
+
+
 def segmented(role: str, body: list, tail: list, size: int | None = None, above: int | None = None) -> dict:
     """``body`` (a routine's statements, in program order) as {"body": the private function's statements,
-    "segments": [Segment]}; ``tail`` the texts read after the body (the outputs' entries, the status).  Routines of
-    at most ``above`` statements (default :data:`SEGMENTED`) are kept whole: their kernels are small, and cutting
+    "segments": [Segment]}; ``tail`` the texts read after the body (the outputs' entries, the status).  The calls
+    of functions of the inputs go first into their segment ``_ROLE__calls`` (module text).  Routines of at most
+    ``above`` statements (default :data:`SEGMENTED`) are otherwise kept whole: their kernels are small, and cutting
     would cost more compile time than it saves; the others are cut into runs of ``size`` (default
     :data:`SEGMENT`)."""
     size = SEGMENT if size is None else size
     parsed = [_parts(s) for s in body]
     defined = {name for name, _ in parsed}
-    if len(body) <= (SEGMENTED if above is None else above):
+    prelude = [k for k, (_, used) in enumerate(parsed) if not any(u in defined for u in used)]
+    hoisted = _hoisted(body, parsed, {parsed[k][0] for k in prelude})
+    whole = len(body) <= (SEGMENTED if above is None else above)
+    if whole and not hoisted:
         return {"body": list(body), "segments": []}
-    prelude, runs = [], []
-    for statement, (name, used) in zip(body, parsed):
-        if not any(u in defined for u in used):
-            prelude.append(statement)
-            continue
-        if not runs or len(runs[-1]) == size:
-            runs.append([])
-        runs[-1].append((statement, name, used))
-    last = {u: k for k, run in enumerate(runs) for _, _, used in run for u in used}
-    last.update({node.id: len(runs) for text in tail for node in ast.walk(ast.parse(text, mode="eval"))
-                 if isinstance(node, ast.Name)})
-    segments, calls = [], []
-    for k, run in enumerate(runs):
-        here = {name for _, name, _ in run}
-        params = tuple(dict.fromkeys(u for _, _, used in run for u in used if u in defined and u not in here))
-        results = tuple(name for _, name, _ in run if last.get(name, -1) > k)
-        if not results:
-            continue  # dead code (the programs are pruned: not seen in practice)
-        seg = Segment(f"_{role}__{len(segments) + 1}", params, results, tuple(s for s, _, _ in run))
-        segments.append(seg)
-        calls.append(f"{', '.join(results)}, = _cut(_kept, {seg.name}, {', '.join(params)})")
+    first = set(prelude)
+    rest = [(body[k], *parsed[k]) for k in range(len(body)) if k not in first and k not in hoisted]
+    tail_names = {node.id for text in tail for node in ast.walk(ast.parse(text, mode="eval"))
+                  if isinstance(node, ast.Name)}
+    calls = _segment(f"_{role}__calls", [(body[k], *parsed[k]) for k in sorted(hoisted)], defined,
+                     tail_names | {u for _, _, used in rest for u in used})
     head = ["_kept = jax.lax.optimization_barrier(jnp.asarray(False))  # a predicate XLA cannot fold (see _SEGMENTS)"]
-    return {"body": prelude + head + calls, "segments": segments}
+    segments = [calls] if calls else []
+    lines = [body[k] for k in prelude] + head + [_call(seg) for seg in segments]
+    if whole:
+        return {"body": lines + [s for s, _, _ in rest], "segments": segments}
+    runs = [rest[k:k + size] for k in range(0, len(rest), size)]
+    last = {u: k for k, run in enumerate(runs) for _, _, used in run for u in used}
+    last.update({u: len(runs) for u in tail_names})
+    count = 0
+    for k, run in enumerate(runs):
+        seg = _segment(f"_{role}__{count + 1}", run, defined, {n for n, j in last.items() if j > k})
+        if seg is not None:
+            count += 1
+            segments.append(seg)
+            lines.append(_call(seg))
+    return {"body": lines, "segments": segments}
 
 
 __all__ = ["SEGMENT", "SEGMENTED", "Segment", "limits", "segmented"]
