@@ -7,7 +7,8 @@ before it (on a real routine and on random straight lines); with segments forced
 every routine still equals the NumPy module to 1e-12 (batched, unbatched, with a status, with the time t), jit,
 vmap, jacfwd, jacrev, grad along p and hessian go through them (against central differences), the custom JVP
 through a cut derivative routine agrees with plain tracing; the conditionals survive XLA's compiler (else the
-kernels would not end at the borders); generation stays deterministic."""
+kernels would not end at the borders); generation stays deterministic.  The functions of the inputs (sines,
+cosines) go first into a calls segment of their own in every routine, and XLA then evaluates each of them once."""
 from __future__ import annotations
 
 import re
