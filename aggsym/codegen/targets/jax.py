@@ -9,7 +9,9 @@ function converts its inputs (the dtype follows them: float32 stays float32, flo
 x64), fills in ``p`` and calls the private one.  A long routine's statements are cut into segments, each a function
 called through ``jax.lax.cond`` (:mod:`.jax_segments`: XLA's CPU compiler would otherwise fuse the whole straight
 line into kernels that evaluate shared values again at every use); in every routine the sines and cosines of the
-inputs go first into a segment of their own, so that each is evaluated once.
+inputs go first into a segment of their own, so that each is evaluated once.  An output is assembled by chains of
+selects (``_stack``), in a cut routine by one ``jnp.stack`` of its entries, which the segments have written to
+memory already (``_stacked``).
 
 Analytic derivatives (:data:`CUSTOM`): when the module also holds a routine's derivative routine, the public
 function goes through a :func:`jax.custom_jvp` whose rule applies the generated derivative matrices to the
@@ -30,7 +32,7 @@ from ...core.functions import FUNCTIONS
 from ...model.tree import Tree
 from ..printing import Spelling, _number
 from .base import Runner, Target
-from .jax_segments import limits, segmented
+from .jax_segments import cut, limits, segmented
 from .numpy import array_steps, step_statement
 
 # the JAX spelling: jax.numpy's element-wise functions (the same names as NumPy's), double literals as the C's (a
@@ -149,6 +151,8 @@ class JaxTarget(Target):
                "jax_routines": [{"r": e, "role": e.routine.role, "inputs": list(e.inputs),
                                  "args": ", ".join(e.inputs), "body": e.bodies[self.name]["body"],
                                  "segments": e.bodies[self.name]["segments"],
+                                 "cut": cut(e.bodies[self.name]["segments"]),
+                                 "assemble": "_stacked" if cut(e.bodies[self.name]["segments"]) else "_stack",
                                  "entries": [wrapped(x) for x in e.bodies[self.name]["entries"]],
                                  "status_entry": status_entry(e),
                                  "outs": "".join(f"{o.py}, " for o in e.routine.written).rstrip(),

@@ -113,6 +113,12 @@ def _segment(name: str, lines: list, defined: set, later: set):
     return Segment(name, params, results, tuple(s for s, _, _ in lines))
 
 
+def cut(segments) -> bool:
+    """Whether a routine's ``segments`` cut its straight line (more than the calls segment): every entry of its
+    outputs is then a result of a segment, written to memory before the outputs are assembled."""
+    return any(not seg.name.endswith("__calls") for seg in segments)
+
+
 def _call(seg: Segment) -> str:
     return f"{', '.join(seg.results)}, = _cut(_kept, {seg.name}, {', '.join(seg.params)})"
 
@@ -156,4 +162,4 @@ def segmented(role: str, body: list, tail: list, size: int | None = None, above:
     return {"body": lines, "segments": segments}
 
 
-__all__ = ["SEGMENT", "SEGMENTED", "Segment", "limits", "segmented"]
+__all__ = ["SEGMENT", "SEGMENTED", "Segment", "cut", "limits", "segmented"]
