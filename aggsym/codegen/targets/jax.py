@@ -152,7 +152,6 @@ class JaxTarget(Target):
                                  "args": ", ".join(e.inputs), "body": e.bodies[self.name]["body"],
                                  "segments": e.bodies[self.name]["segments"],
                                  "cut": cut(e.bodies[self.name]["segments"]),
-                                 "assemble": "_stacked" if cut(e.bodies[self.name]["segments"]) else "_stack",
                                  "entries": [wrapped(x) for x in e.bodies[self.name]["entries"]],
                                  "status_entry": status_entry(e),
                                  "outs": "".join(f"{o.py}, " for o in e.routine.written).rstrip(),
