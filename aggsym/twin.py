@@ -37,6 +37,9 @@ class NumericTwin:
 
         Returns a NumPy array of the output's shape, or a tuple of arrays for a routine with several outputs."""
         routine = ROUTINES[role]
+        if self.model.couplings and routine.coupled is None:
+            raise ValueError(f"{role} is not a routine of {self.model.name}: its coordinates are coupled "
+                             "(--mimic couple), and the routine has no coupled form")
         names = [n for n in signature(routine, self.model) if n != "p"]
         if "t" in names and len(args) == len(names) - 1:
             args = args + (0.0 if t is None else t,)

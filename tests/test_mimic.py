@@ -149,3 +149,18 @@ def test_cli_couples_mimics(tmp_path, capsys):
     yaml_model = tmp_path / "x.yaml"
     yaml_model.write_text("name: x\nbodies:\n  - name: a\n    pair: {functional: {theta6: q}}\n    mass: 1\n")
     assert cli.main(["generate", str(yaml_model), "--mimic", "couple"]) == 2
+
+
+def test_the_twin_refuses_a_routine_the_coupled_model_does_not_have(tmp_path):
+    """joint_friction is not emitted with coupled coordinates (the friction of a mimic joint acts through its
+    master's rate): asked of the twin, it names the routine and why, instead of failing inside."""
+    path = tmp_path / "gripper.urdf"
+    path.write_text(GRIPPER.replace('<axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>',
+                                    '<axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/>'
+                                    '<dynamics damping="0.3" friction="0.05"/></joint>', 1))
+    model = aggsym.load(path, mimic="couple")
+    assert model.has_joint_dynamics
+    with pytest.raises(ValueError, match="joint_friction is not a routine of gripper: its coordinates are coupled"):
+        aggsym.NumericTwin(model).joint_friction(np.ones(model.nq))
+    independent = aggsym.load(path)
+    assert aggsym.NumericTwin(independent).joint_friction(np.ones(independent.nq)).shape == (independent.nq,)
