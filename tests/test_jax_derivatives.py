@@ -28,6 +28,18 @@ def _plain(jm, role):
     return lambda *args: private(*(jnp.asarray(a, jnp.float64) for a in args))[0]
 
 
+def traced_entries(module, monkeypatch) -> list:
+    """The list to which every call of the module's _entries (the entries of q traced by the custom JVP) appends
+    its entries."""
+    traced, entries = [], module._entries
+
+    def recorded(f, primals, k, index, tangent):
+        traced.append(index)
+        return entries(f, primals, k, index, tangent)
+    monkeypatch.setattr(module, "_entries", recorded)
+    return traced
+
+
 class Counting:
     """Counts the calls of a module's private routine (the custom JVP rule calls it while tracing)."""
 
@@ -89,8 +101,9 @@ def test_without_derivative_routines_the_functions_are_plain(tmp_path):
 @pytest.mark.slow
 def test_quaternion_free_flyer_differentiates_along_the_entries_of_q(tmp_path, rng, monkeypatch):
     """nq = nv + 1: d qdd / d q along the entries of q as passed: the joints' columns from the generated routine,
-    the seven base positions traced one at a time; d qdd / d qd by the generated routine; jacfwd and jacrev equal
-    central differences of the NumPy module and plain tracing."""
+    the quaternion's four entries traced one at a time, the origin's three not (the dynamics never read them: their
+    columns are zero); d qdd / d qd by the generated routine; jacfwd and jacrev equal central differences of the
+    NumPy module and plain tracing."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ModelWarning)
         model = aggsym.load(robot_path("double_pendulum"), floating_base="quaternion")
@@ -100,6 +113,7 @@ def test_quaternion_free_flyer_differentiates_along_the_entries_of_q(tmp_path, r
     q = np.concatenate([rng.normal(size=3), quat / np.linalg.norm(quat), rng.uniform(-1, 1, jm.NQ - 7)])
     qd, tau = rng.normal(size=jm.NV), rng.normal(size=jm.NV)
     counter = Counting(jm, "_forward_dynamics_derivatives", monkeypatch)
+    traced = traced_entries(jm, monkeypatch)
     with float64():
         for k, x in enumerate((q, qd, tau)):
             got = jax.jacfwd(jm.forward_dynamics, k)(q, qd, tau)
@@ -111,6 +125,7 @@ def test_quaternion_free_flyer_differentiates_along_the_entries_of_q(tmp_path, r
             assert relative(got, plain, floor=1.0) < 1e-12
             assert relative(jax.jacrev(jm.forward_dynamics, k)(q, qd, tau), plain, floor=1.0) < 1e-12
     assert counter.calls == 4  # along q and qd, by jacfwd and by jacrev
+    assert traced == [(3, 4, 5, 6)] * 2  # along q, by jacfwd and by jacrev
 
 
 BALL_BETWEEN_HINGES = """
@@ -150,6 +165,7 @@ def test_a_ball_between_hinges_differentiates_along_the_entries_of_q(tmp_path, r
     q = np.concatenate([[0.7312], quat / np.linalg.norm(quat), [-1.2047]])
     qd, tau = rng.normal(size=5), rng.normal(size=5)
     counter = Counting(jm, "_forward_dynamics_derivatives", monkeypatch)
+    traced = traced_entries(jm, monkeypatch)
     with float64():
         plain = jax.jacfwd(_plain(jm, "forward_dynamics"))(q, qd, tau, jm.PARAMETERS)
         fd = central_differences(lambda v: npm.forward_dynamics(v, qd, tau), q)
@@ -159,6 +175,7 @@ def test_a_ball_between_hinges_differentiates_along_the_entries_of_q(tmp_path, r
             assert relative(got, plain, floor=1.0) < 1e-12
             assert relative(got, fd, floor=1.0) < 1e-5  # (central differences' own error: masses over six decades)
     assert counter.calls == 2
+    assert traced == [(1, 2, 3, 4)] * 2  # the ball's quaternion, all read
 
 
 @pytest.mark.pinocchio

@@ -17,8 +17,9 @@ Analytic derivatives (:data:`CUSTOM`): when the module also holds a routine's de
 function goes through a :func:`jax.custom_jvp` whose rule applies the generated derivative matrices to the
 tangents (forward dynamics: d qdd/d q, d qdd/d qd and A^-1 for tau; inverse dynamics: d tau/d q, d tau/d qd and A
 for qdd), so that ``jax.jacfwd`` and ``jax.jacrev`` cost what the derivative routine costs.  A direction the
-routines do not cover (p, the time t, and q with a quaternion free-flyer, whose derivative routines are in
-Pinocchio's tangent space rather than along the entries of q) is differentiated by tracing the plain function.
+routines do not cover (p, the time t, and the entries of a quaternion pair in q, where the derivative routines are
+in Pinocchio's tangent space rather than along the entries of q) is differentiated by tracing the plain function;
+of a quaternion pair's entries, only those the routine reads (a free-flyer's origin is never read by the dynamics).
 
 A routine with a returned status (a system that can be singular) cannot raise on a value under ``jit``: its
 outputs are NaN in the states where the NumPy module raises LinAlgError.  Checked (``aggsym check``, column
@@ -53,7 +54,8 @@ CUSTOM = {
 
 def jax_body(model, prog, lines, routine, inputs) -> dict:
     """One routine as the private function's statements: {"body": lines before the outputs are assembled,
-    "entries": per output the texts of its entries in row-major order ("0.0" for a zero)}."""
+    "entries": per output the texts of its entries in row-major order ("0.0" for a zero), "reads": per input
+    the set of its entries the straight line reads}."""
     sizes = []
     for out in routine.outputs:
         size = 1
@@ -61,8 +63,10 @@ def jax_body(model, prog, lines, routine, inputs) -> dict:
             size *= n
         sizes.append(size)
     entries = [["0.0"] * size for size in sizes]
-    body = []
+    body, reads = [], {}
     for step in array_steps(model, prog, lines, routine, inputs, JAX):
+        if step[0] == "input":
+            reads.setdefault(step[2], set()).add(step[3])
         statement = step_statement(step)
         if statement is not None:
             body.append(statement)
@@ -71,7 +75,8 @@ def jax_body(model, prog, lines, routine, inputs) -> dict:
             name = f"_o{o}_{k}"
             body.append(f"{name} = {rhs}")
             entries[o][k] = name
-    return {"entries": entries, **segmented(routine.role, body, [e for out in entries for e in out])}
+    return {"entries": entries, "reads": reads,
+            **segmented(routine.role, body, [e for out in entries for e in out])}
 
 
 def custom_directions(model, role: str, roles) -> dict | None:
@@ -88,6 +93,21 @@ def custom_directions(model, role: str, roles) -> dict | None:
         # columns of the entries that are coordinates; the quaternion pairs' entries are traced
         split = Tree(model).position_split if name == "q" and model.nq != model.nv else None
         out[name] = (source, index, ", ".join(signature(ROUTINES[source], model)), split)
+    return out
+
+
+def read_entries(custom, reads) -> dict | None:
+    """``custom`` (:func:`custom_directions`) with each quaternion pair's traced entries cut to those the routine's
+    straight line reads (``reads``: :func:`jax_body`'s): the routine is constant along an entry it never reads (a
+    free-flyer's origin, in the dynamics), so tracing it would only add zero columns (Talos: 3 of 7 directions of
+    a JVP through all of forward dynamics)."""
+    if not custom:
+        return custom
+    out = {}
+    for name, (source, index, args, split) in custom.items():
+        if split is not None:
+            split = (split[0], split[1], tuple(t for t in split[2] if t in reads.get(name, ())))
+        out[name] = (source, index, args, split)
     return out
 
 
@@ -145,7 +165,8 @@ class JaxTarget(Target):
 
     def render(self, job):
         roles = [e.routine.role for e in job.emitted]
-        custom = {role: custom_directions(job.model, role, roles) for role in roles}
+        custom = {e.routine.role: read_entries(custom_directions(job.model, e.routine.role, roles),
+                                               e.bodies[self.name]["reads"]) for e in job.emitted}
         ctx = {**job.ctx, "custom": {role: c for role, c in custom.items() if c},
                **dict(zip(("segment_size", "segmented_above"), limits())),
                "jax_routines": [{"r": e, "role": e.routine.role, "inputs": list(e.inputs),
