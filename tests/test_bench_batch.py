@@ -198,3 +198,15 @@ def test_retraction_is_pinocchios_integrate_to_first_order(tmp_path):
         errors.append(np.abs(ours - theirs).max())
     assert errors[0] < 1e-5 and errors[1] < errors[0] / 50  # second order: a tenth of eps, a hundredth of the error
     assert np.allclose(batch_peers.retract(np, q, np.zeros(model.nv), True), q, atol=0, rtol=1e-15)
+
+
+def test_one_batch_size_shows_no_trend():
+    """A robot timed at one batch size only: 'time per state falls as B grows' is not measured, not met."""
+    data = fake_results()
+    for r in data["rows"]:
+        if r["robot"] == "talos" and r.get("sizes"):
+            r["sizes"] = {"64": r["sizes"]["64"]}
+    rows = {what: (measured, ok) for what, measured, ok in batch_report.targets(data)}
+    measured, ok = rows["talos forward dynamics: PyTorch time per state falls as B grows"]
+    assert ok is None and measured.endswith("(B = 64 only)")
+    assert rows["panda forward dynamics: PyTorch time per state falls as B grows"][1] is True
