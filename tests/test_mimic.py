@@ -152,8 +152,8 @@ def test_cli_couples_mimics(tmp_path, capsys):
 
 
 def test_the_twin_refuses_a_routine_the_coupled_model_does_not_have(tmp_path):
-    """joint_friction is not emitted with coupled coordinates (the friction of a mimic joint acts through its
-    master's rate): asked of the twin, it names the routine and why, instead of failing inside."""
+    """joint_friction is not emitted with coupled coordinates (it has no coupled form): asked of the twin, it names
+    the routine and why, instead of failing inside the coupled evaluation."""
     path = tmp_path / "gripper.urdf"
     path.write_text(GRIPPER.replace('<axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>',
                                     '<axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/>'
