@@ -79,9 +79,10 @@ def jax_body(model, prog, lines, routine, inputs) -> dict:
             **segmented(routine.role, body, [e for out in entries for e in out])}
 
 
-def custom_directions(model, role: str, roles) -> dict | None:
-    """{input: (role, output index, its arguments' text)} of the directions the custom JVP of ``role`` covers in a
-    module of the routines ``roles``; None when ``role`` has no derivative routine there (plain tracing)."""
+def custom_directions(model, role: str, roles, reads: dict) -> dict | None:
+    """{input: (role, output index, its arguments' text, split)} of the directions the custom JVP of ``role`` covers
+    in a module of the routines ``roles``; None when ``role`` has no derivative routine there (plain tracing).
+    ``reads``: the entries of each input that the routine's straight line reads (:func:`jax_body`'s)."""
     spec = CUSTOM.get(role)
     if spec is None or spec[0] not in roles or role not in roles:
         return None
@@ -90,24 +91,14 @@ def custom_directions(model, role: str, roles) -> dict | None:
         if source not in roles or name not in signature(ROUTINES[role], model):
             continue
         # with quaternions (a free-flyer, ball pairs) the routines are in the tangent space: along q they give the
-        # columns of the entries that are coordinates; the quaternion pairs' entries are traced
-        split = Tree(model).position_split if name == "q" and model.nq != model.nv else None
+        # columns of the entries that are coordinates; of the quaternion pairs' entries, those the routine reads are
+        # traced (it is constant along the others, e.g. a free-flyer's origin in the dynamics: tracing them would
+        # only add zero columns, 3 of Talos's 7 directions of a JVP through all of forward dynamics)
+        split = None
+        if name == "q" and model.nq != model.nv:
+            Q, V, T = Tree(model).position_split
+            split = (Q, V, tuple(t for t in T if t in reads.get(name, ())))
         out[name] = (source, index, ", ".join(signature(ROUTINES[source], model)), split)
-    return out
-
-
-def read_entries(custom, reads) -> dict | None:
-    """``custom`` (:func:`custom_directions`) with each quaternion pair's traced entries cut to those the routine's
-    straight line reads (``reads``: :func:`jax_body`'s): the routine is constant along an entry it never reads (a
-    free-flyer's origin, in the dynamics), so tracing it would only add zero columns (Talos: 3 of 7 directions of
-    a JVP through all of forward dynamics)."""
-    if not custom:
-        return custom
-    out = {}
-    for name, (source, index, args, split) in custom.items():
-        if split is not None:
-            split = (split[0], split[1], tuple(t for t in split[2] if t in reads.get(name, ())))
-        out[name] = (source, index, args, split)
     return out
 
 
@@ -165,8 +156,8 @@ class JaxTarget(Target):
 
     def render(self, job):
         roles = [e.routine.role for e in job.emitted]
-        custom = {e.routine.role: read_entries(custom_directions(job.model, e.routine.role, roles),
-                                               e.bodies[self.name]["reads"]) for e in job.emitted}
+        custom = {e.routine.role: custom_directions(job.model, e.routine.role, roles, e.bodies[self.name]["reads"])
+                  for e in job.emitted}
         ctx = {**job.ctx, "custom": {role: c for role, c in custom.items() if c},
                **dict(zip(("segment_size", "segmented_above"), limits())),
                "jax_routines": [{"r": e, "role": e.routine.role, "inputs": list(e.inputs),
