@@ -16,7 +16,7 @@ recorded into a program.
 from __future__ import annotations
 
 from .functions import COS, FUNCTIONS, SIN, SQRT
-from .program import Node, is_zero
+from .program import Node, arithmetic, is_zero
 
 
 def lift(v, d: dict):
@@ -152,4 +152,28 @@ class DualBackend:
         return lift(value, d)
 
 
-__all__ = ["Dual", "DualBackend", "lift", "tangent"]
+def along_inputs(program, outputs, directions) -> list:
+    """The derivatives of ``outputs`` (a flat list of nodes of ``program`` or constants) along the inputs
+    ``directions`` (a list of (kind, index)), as new nodes of the program: forward mode on the straight line itself
+    (interpreted on duals seeded with a unit tangent on each of those inputs), for a routine whose derivatives
+    along some raw inputs no recursion gives (a quaternion's entries, where the derivative routines are in the
+    tangent space).  [[d out / d input for input in directions] for out in outputs], 0 where out does not
+    depend on the input."""
+    from .backend import Symbolic
+
+    backend = DualBackend(Symbolic(program))
+    seed = {key: k for k, key in enumerate(directions)}
+
+    def leaf(kind, index):
+        x = program.input(kind, index)
+        k = seed.get((kind, index))
+        return x if k is None else Dual(x, {k: 1})
+
+    def apply(code, *x):
+        return arithmetic(code, x, lambda name: lambda *a: backend.call(name, *a))
+
+    values = program.interpret(outputs, leaf, apply)
+    return [[tangent(v, k) for k in range(len(directions))] for v in values]
+
+
+__all__ = ["Dual", "DualBackend", "along_inputs", "lift", "tangent"]

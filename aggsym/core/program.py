@@ -34,7 +34,7 @@ from fractions import Fraction
 
 from .functions import COS, FUNCTIONS, SIN, SQRT
 
-__all__ = ["Program", "Node", "is_zero", "is_one", "is_const", "normalize_const", "fold", "to_sympy",
+__all__ = ["Program", "Node", "arithmetic", "is_zero", "is_one", "is_const", "normalize_const", "fold", "to_sympy",
            "expanded_terms", "straight_line", "StraightLine", "FUNCTIONS", "INLINE_DEPTH"]
 
 # operation codes
@@ -564,10 +564,10 @@ class Program:
             function = lambda f: FUNCTIONS[f].value  # noqa: E731
         else:
             function = lambda f: FUNCTIONS[f].numpy  # noqa: E731
-        return self.interpret(outputs, lambda kind, i: values[(kind, i)], lambda code, *x: _arith(code, x, function))
+        return self.interpret(outputs, lambda kind, i: values[(kind, i)], lambda code, *x: arithmetic(code, x, function))
 
 
-def _arith(code, x, function):
+def arithmetic(code, x, function):
     """One operation on values: arithmetic by Python's operators, functions looked up by ``function(name)``."""
     if code == ADD:
         return x[0] + x[1]
@@ -594,7 +594,7 @@ def to_sympy(program, outputs, symbols: dict):
         return sp.Integer(x) if type(x) is int else sp.Float(x)
 
     return program.interpret(outputs, lambda kind, i: symbols[(kind, i)],
-                             lambda code, *x: _arith(code, x, functions.__getitem__), constant)
+                             lambda code, *x: arithmetic(code, x, functions.__getitem__), constant)
 
 
 def expanded_terms(program, outputs) -> int:
