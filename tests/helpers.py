@@ -135,6 +135,13 @@ def states(model, rng, n):
         yield (rng.uniform(-np.pi, np.pi, model.nq), rng.normal(size=model.nq), rng.normal(size=model.nq))
 
 
+def central_differences(f, x, h=1e-6):
+    """d f / d x (f: a vector to an array) by central differences, the direction last."""
+    x = np.asarray(x, dtype=float)
+    return np.stack([(np.asarray(f(x + h * e)) - np.asarray(f(x - h * e))) / (2 * h) for e in np.eye(x.size)],
+                    axis=-1)
+
+
 def rk4_step(f, q, v, dt):
     """One classical RK4 step of q'' = f(q, q'): the new (q, q')."""
     k1q, k1v = v, f(q, v)
@@ -187,6 +194,32 @@ GRIPPER = """<robot name="gripper">
     <axis xyz="0.6 0 0.8"/><limit lower="-1" upper="1" effort="1" velocity="1"/>
     <mimic joint="wrist" multiplier="-0.7" offset="0.2"/></joint>
 </robot>
+"""
+
+
+# a ball pair's quaternion in the middle of q (hinge, ball, hinge: nq = 6, nv = 5), masses over six decades
+BALL_BETWEEN_HINGES = """
+name: ball_between_hinges
+gravity: [0.0, 0.0, -9.81]
+bodies:
+  - name: hub
+    parent: world
+    pair: {name: turn, translation: [0.03125, -0.01, 0.45], rotation: [[1, 0.21837]], functional: {theta6: q_turn}}
+    mass: 350.0
+    com: [0.012, 0.004, 0.11]
+    inertia: {xx: 4.1, yy: 3.7, zz: 2.2, xz: 0.03}
+  - name: link
+    parent: hub
+    pair: {name: socket, type: ball, translation: [0.0, 0.17, 0.3], rotation: [[2, -1.05713], [3, 0.33871]]}
+    mass: 0.85
+    com: [-0.02, 0.07, -0.31]
+    inertia: {xx: 0.011, yy: 0.013, zz: 0.0045, xy: 0.0004}
+  - name: tip
+    parent: link
+    pair: {name: wrist, translation: [0.01, 0, -0.62], rotation: [[3, 2.46109]], functional: {theta5: q_wrist}}
+    mass: 0.00035
+    com: [0.004, 0.001, -0.01]
+    inertia: {xx: 0.000000021, yy: 0.000000034, zz: 0.000000018}
 """
 
 

@@ -15,7 +15,7 @@ import aggsym
 from aggsym.contract import select_routines
 from aggsym.errors import ModelWarning
 from conftest import model_path
-from helpers import robot_path
+from helpers import BALL_BETWEEN_HINGES, robot_path
 from jax_support import central_differences, float64, jax, jnp, modules, relative
 
 DERIVATIVES = ["inertia", "inertia_inverse", "inverse_dynamics", "forward_dynamics", "inverse_dynamics_derivatives",
@@ -126,31 +126,6 @@ def test_quaternion_free_flyer_differentiates_along_the_entries_of_q(tmp_path, r
             assert relative(jax.jacrev(jm.forward_dynamics, k)(q, qd, tau), plain, floor=1.0) < 1e-12
     assert counter.calls == 4  # along q and qd, by jacfwd and by jacrev
     assert traced == [(3, 4, 5, 6)] * 2  # along q, by jacfwd and by jacrev
-
-
-BALL_BETWEEN_HINGES = """
-name: ball_between_hinges
-gravity: [0.0, 0.0, -9.81]
-bodies:
-  - name: hub
-    parent: world
-    pair: {name: turn, translation: [0.03125, -0.01, 0.45], rotation: [[1, 0.21837]], functional: {theta6: q_turn}}
-    mass: 350.0
-    com: [0.012, 0.004, 0.11]
-    inertia: {xx: 4.1, yy: 3.7, zz: 2.2, xz: 0.03}
-  - name: link
-    parent: hub
-    pair: {name: socket, type: ball, translation: [0.0, 0.17, 0.3], rotation: [[2, -1.05713], [3, 0.33871]]}
-    mass: 0.85
-    com: [-0.02, 0.07, -0.31]
-    inertia: {xx: 0.011, yy: 0.013, zz: 0.0045, xy: 0.0004}
-  - name: tip
-    parent: link
-    pair: {name: wrist, translation: [0.01, 0, -0.62], rotation: [[3, 2.46109]], functional: {theta5: q_wrist}}
-    mass: 0.00035
-    com: [0.004, 0.001, -0.01]
-    inertia: {xx: 0.000000021, yy: 0.000000034, zz: 0.000000018}
-"""
 
 
 @pytest.mark.slow

@@ -11,8 +11,11 @@ Where the module also has the derivative routines (``--routines default,inverse_
 forward_dynamics_derivatives``), ``inverse_dynamics`` and ``forward_dynamics`` carry them as a
 ``torch.autograd.Function`` (:func:`analytic_routines`): their gradients along q, qd and qdd|tau are the generated
 derivative matrices (with A or A^-1), those along p (and t) go through plain autograd of the traced routine.  With
-a quaternion free-flyer (nq = nv + 1) the derivative routines are in Pinocchio's tangent space, not along the
-entries of q: there q's gradient, too, is plain autograd (exact, at the cost of tracing).
+quaternion pairs (a free-flyer, ball joints) the derivative routines are in Pinocchio's tangent space, not along
+the entries of q: there the coordinates' columns are the routine's, and those of the quaternion pairs' entries that
+the routine reads are generated too, by forward mode on its straight line (:func:`quaternion_columns`: four for a
+free-flyer's dynamics, whose origin is never read).  The Function keeps the matrices that its first backward pass
+makes for the later passes through the same graph (a Jacobian row by row).
 
 A routine with a status (a singular system: constrained forward dynamics, the support problems) cannot raise
 under ``vmap`` or ``torch.compile``: its outputs hold NaN at the states of the batch where the status is nonzero
@@ -22,11 +25,15 @@ installed: in float64, or in float32 under ``--scalar float`` against the float 
 """
 from __future__ import annotations
 
-from ...contract import SCALAR_INPUTS, input_length
+import textwrap
+
+from ...contract import SCALAR_INPUTS, input_length, routines_for
+from ...core.dual import along_inputs
 from ...core.functions import FUNCTIONS
-from ...core.program import Node
+from ...core.program import Node, straight_line
+from ...model.tree import Tree
 from ..printing import Spelling, _number
-from .base import Runner, Target
+from .base import RoutineLines, Runner, Target
 from .numpy import _unravel, array_steps, step_statement
 
 # torch's name of each function of aggsym/core/functions.py (element-wise, so that inputs carry batch dimensions)
@@ -47,13 +54,46 @@ ANALYTIC = {
 
 
 def torch_body(model, prog, lines, routine, inputs) -> dict:
-    """One routine as PyTorch: ``statements`` (inputs unpacked, temporaries) and ``outputs``, per output its
-    entries' texts in row-major order (``zero`` for a zero, ``zero + c`` for another constant, so that every
-    entry is a tensor of the batch shape when stacked)."""
-    shapes = [out.shape(model) for out in routine.outputs]
+    """One routine as PyTorch (:func:`_printed`); for a routine whose gradients the derivative routines carry (when
+    they are emitted too), on a model with quaternion pairs, also ``columns``: its derivative along the entries of
+    those pairs that it reads (:func:`quaternion_columns`), or None."""
+    body = _printed(model, prog, lines, inputs, [out.shape(model) for out in routine.outputs],
+                    [f"{routine.role}: output {out.name}" for out in routine.outputs])
+    if routine.role in ANALYTIC and model.nq != model.nv \
+            and set(ANALYTIC[routine.role]) <= {r.role for r in routines_for(model)}:
+        body["columns"] = quaternion_columns(model, prog, lines, routine, inputs, body["reads"])
+    return body
+
+
+def quaternion_columns(model, prog, lines, routine, inputs, reads) -> dict | None:
+    """The derivative of the routine's first output along the entries of q's quaternion pairs that its straight line
+    reads (the derivative routines are in the tangent space and do not give them), as a straight line of its own:
+    forward mode on the routine's straight line (:func:`~aggsym.core.dual.along_inputs`), printed like a routine
+    (:func:`_printed`) with one output of shape (n, len(entries)), and ``entries``.  None when it reads none."""
+    entries = tuple(i for i in Tree(model).position_split[2] if i in reads.get(inputs[0], ()))
+    if not entries:
+        return None
+    columns = along_inputs(prog, lines.outputs[0], [(inputs[0], i) for i in entries])
+    flat = [x for row in columns for x in row]
+    sl = straight_line(prog, [flat])
+    names = {prog.inputs[key].id: f"{key[0]}_{key[1]}" for key in sl.inputs}
+    names.update({i: f"x{k}" for k, i in enumerate(sl.temps)})
+    shape = (len(columns), len(entries))
+    body = _printed(model, prog, RoutineLines(sl, names, [flat], {}, {}, {}, False), inputs, [shape],
+                    [f"{routine.role}: its columns along q's quaternion entries"])
+    return {**body, "entries": entries, "shape": shape}
+
+
+def _printed(model, prog, lines, inputs, shapes, labels) -> dict:
+    """A straight line as PyTorch: ``statements`` (inputs unpacked, temporaries), ``outputs``, per output (of
+    ``shapes``) its entries' texts in row-major order (``zero`` for a zero, ``zero + c`` for another constant, so
+    that every entry is a tensor of the batch shape when stacked), and ``reads``, per input the set of its entries
+    that the straight line reads.  ``labels``: the outputs' names in errors."""
     entries = [[None] * _size(shape) for shape in shapes]
-    statements = []
-    for step in array_steps(model, prog, lines, routine, inputs, TORCH):
+    statements, reads = [], {}
+    for step in array_steps(model, prog, lines, None, inputs, TORCH):
+        if step[0] == "input":
+            reads.setdefault(step[2], set()).add(step[3])
         statement = step_statement(step)
         if statement is not None:
             statements.append(statement)
@@ -69,31 +109,41 @@ def torch_body(model, prog, lines, routine, inputs) -> dict:
     for o, shape in enumerate(shapes):
         for k, e in enumerate(entries[o]):
             if e is None:
-                raise RuntimeError(f"{routine.role}: output {routine.outputs[o].name} entry {_unravel(k, shape)} "
-                                   f"was never written")
-    return {"statements": statements, "outputs": entries}
+                raise RuntimeError(f"{labels[o]} entry {_unravel(k, shape)} was never written")
+    return {"statements": statements, "outputs": entries, "reads": reads,
+            "zero": any(e == "zero" or e.startswith("zero + ") for out in entries for e in out)}
 
 
-def _wiring(e, derivative, matrix, quaternion: bool) -> dict:
-    """How the autograd.Function of routine ``e`` (inputs q, qd, qdd|tau, [t], p) takes its gradients: along
-    ``analytic`` inputs from the derivative routine (q unless the root is a quaternion free-flyer, qd) and the
-    matrix (the third input), along the ``plain`` ones (q with a quaternion, t, p) by a vjp (jvp) of the traced
-    routine; the names and the backward's tuple for the template."""
+def _wiring(model, e, derivative, matrix, columns) -> dict:
+    """How the autograd.Function of routine ``e`` (inputs q, qd, qdd|tau, [t], p) takes its gradients: along q, qd
+    and the third input from the derivative routine and the matrix, along the ``plain`` ones (t, p) by a vjp (jvp)
+    of the traced routine; the names and the backward's tuple for the template.
+
+    ``columns``: False without quaternion pairs; with them (a free-flyer, ball joints: the derivative routines are
+    in the tangent space) :func:`quaternion_columns`'s (None: the routine reads no quaternion entry).  The derivative
+    along q's entries is then assembled by ``_along_entries``: the tangent space's column V[j] at the coordinate's
+    entry Q[j] (the tree's ``position_split``), the generated column at each quaternion entry the routine reads,
+    zero at the others (a free-flyer's origin in the dynamics), along which it is constant."""
     inputs = list(e.inputs)
-    plain = [i for k, i in enumerate(inputs) if (k == 0 and quaternion) or k >= 3]
-    pairs = ([] if quaternion else [(inputs[0], "d_q")]) + [(inputs[1], "d_qd"), (inputs[2], "m")]
-    backward = []
-    for k, i in enumerate(inputs):
-        if i in plain:
-            backward.append(f"grad_{i}")
-        else:
-            backward.append(f"(g @ {dict((x, d) for x, d in pairs)[i]}).squeeze(-2)")
+    plain = inputs[3:]
+    pairs = [(inputs[0], "d_q"), (inputs[1], "d_qd"), (inputs[2], "m")]
+    backward = [f"(g @ {d}).squeeze(-2)" for _, d in pairs]
+    split = None
+    if columns is not False:
+        backward[0] = f"None if d_q is None else {backward[0]}"
+        Q, V, _ = Tree(model).position_split
+        entries = columns["entries"] if columns else ()
+        where = {**dict(zip(Q, V)), **{i: model.nv + t for t, i in enumerate(entries)}}
+        index = [str(where.get(i, model.nv + len(entries))) for i in range(model.nq)]
+        split = {"columns": columns, "constant": f"_{e.routine.role.upper()}_ENTRIES",
+                 "index": "\n    ".join(textwrap.wrap(", ".join(index) + ",", 100))}
+    backward += [f"grad_{i}" for i in plain]
     return {"derivative": derivative.routine.role, "matrix": matrix.routine.role, "class": _class_name(e.routine.role),
             "derivative_inputs": list(derivative.inputs), "matrix_inputs": list(matrix.inputs), "third": inputs[2],
             "analytic": [x for x, _ in pairs[:-1]], "plain": plain, "plain_index": tuple(inputs.index(i) for i in plain),
             "plain_grads": [f"grad_{i}" for i in plain], "plain_dots": [f"{i}_dot" for i in plain],
             "plain_args": [f"{i}_" for i in plain], "plain_call": [f"{i}_" if i in plain else i for i in inputs],
-            "analytic_pairs": pairs, "backward": backward, "q_plain": quaternion}
+            "analytic_pairs": pairs, "backward": backward, "split": split}
 
 
 def _class_name(role: str) -> str:
@@ -149,12 +199,13 @@ class TorchTarget(Target):
             wired = analytic.get(e.routine.role)
             if wired:
                 by_role = {x.routine.role: x for x in job.emitted}
-                wired = _wiring(e, by_role[wired[0]], by_role[wired[1]], quaternion=model.nq != model.nv)
+                columns = body["columns"] if model.nq != model.nv else False
+                wired = _wiring(model, e, by_role[wired[0]], by_role[wired[1]], columns)
             routines.append({
                 "role": e.routine.role, "doc": e.routine.doc, "inputs": list(e.inputs), "arrays": arrays,
                 "scalars": scalars, "has_p": "p" in e.inputs, "py_parameters": e.py_parameters,
                 "statements": body["statements"],
-                "zero": any(e == "zero" or e.startswith("zero + ") for out in body["outputs"] for e in out),
+                "zero": body["zero"],
                 "outputs": [{"py": o.py, "shape": o.shape(model), "entries": body["outputs"][k],
                              "returned": o.returned} for k, o in enumerate(e.routine.outputs)],
                 "written": [{"py": o.py, "scalar": o.shape(model) == (1,)} for o in e.routine.written],
