@@ -51,7 +51,9 @@ ROBOTS = {
     "panda": ("panda_description/urdf/panda.urdf", False, ("panda_finger_joint1", "panda_finger_joint2")),
     "talos": ("talos_data/robots/talos_reduced.urdf", True, ()),
 }
-GENERATED = "inertia,inverse_dynamics,forward_dynamics,forward_dynamics_derivatives"
+# (inertia_inverse: the PyTorch module wires its autograd.Function only with both the derivative routine and the
+# matrix along tau, as the default routines give them)
+GENERATED = "inertia,inertia_inverse,inverse_dynamics,forward_dynamics,forward_dynamics_derivatives"
 PLAIN = "inertia,inverse_dynamics,forward_dynamics"
 
 

@@ -46,8 +46,9 @@ ENTRIES = {
     "aggsym_jax_project": ("aggsym JAX, the project's jax", "jax", ROUTINES,
                            "as aggsym JAX (the custom JVP), in the project's venv"),
     "aggsym_torch": ("aggsym PyTorch", "torch", ROUTINES,
-                     "torch.autograd.grad through forward_dynamics (its analytic autograd.Function), one reverse "
-                     "pass per output over the whole batch"),
+                     "torch.autograd.grad through forward_dynamics (its analytic autograd.Function: the first pass "
+                     "makes the derivative matrices, the others reuse them), one reverse pass per output over the "
+                     "whole batch"),
     "numpy": ("aggsym NumPy", "numpy", ROUTINES, "forward_dynamics_derivatives of the generated NumPy module"),
     "adam_jax": ("adam JAX", "jax", ROUTINES, "jax.jacrev through adam's aba (as the issue measured it)"),
     "adam_torch": ("adam PyTorch", "torch", ROUTINES,

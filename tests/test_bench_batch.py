@@ -210,3 +210,19 @@ def test_one_batch_size_shows_no_trend():
     measured, ok = rows["talos forward dynamics: PyTorch time per state falls as B grows"]
     assert ok is None and measured.endswith("(B = 64 only)")
     assert rows["panda forward dynamics: PyTorch time per state falls as B grows"][1] is True
+
+
+def test_each_framework_judged_at_its_own_largest_batch():
+    """The humanoid's PyTorch entries timed up to B = 4096, its JAX ones and peers to 64 only: the JAX targets are
+    judged at 64 (not 'not measured' at 4096), the PyTorch ones at 4096."""
+    data = fake_results()
+    for r in data["rows"]:
+        if r["robot"] == "talos" and r.get("sizes") and r["entry"] not in ("aggsym_torch", "adam_torch"):
+            r["sizes"] = {b: s for b, s in r["sizes"].items() if int(b) <= 64}
+    rows = {what: (measured, ok) for what, measured, ok in batch_report.targets(data)}
+    assert rows["talos forward dynamics, B = 64: aggsym JAX ≥ 10× faster than adam JAX"][1] is True
+    assert rows["talos Jacobian, B = 64: aggsym JAX ≥ 10× faster than adam JAX jacrev"][1] is True
+    assert rows["talos JIT of forward dynamics ≤ 15 s (first call at B = 64)"][1] is True
+    assert rows["talos forward dynamics, B = 4096: aggsym PyTorch ≥ 10× faster than adam PyTorch"] == \
+        ("25.00× (3.33 vs 83.3 µs)", True)
+    assert not any(what.startswith("talos") and "B = 4096: aggsym JAX" in what for what in rows)
