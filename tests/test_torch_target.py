@@ -207,7 +207,8 @@ def test_quaternion_pairs_gradient_along_q_is_exact(robot, tmp_path_factory, rng
     the coordinates' columns from the derivative routine and generated columns along the quaternion entries that
     the routine reads (a free-flyer's four, not its origin; all four of a ball's): vmap(jacrev), jacfwd and a
     Jacobian row by row equal plain autograd and central differences of the NumPy module, and gradcheck passes
-    along the free-flyer's raw entries.  Row by row, the first backward pass makes the matrices and the later ones reuse them."""
+    along the free-flyer's raw entries.  Row by row, the first backward pass makes the matrices and the later ones
+    reuse them."""
     if robot == "free_flyer":
         model, np_module, module = modules(tmp_path_factory, robot_path("double_pendulum"), DERIVATIVES,
                                            floating_base="quaternion")
@@ -249,8 +250,10 @@ def test_quaternion_pairs_gradient_along_q_is_exact(robot, tmp_path_factory, rng
             got = torch.stack([r[j] for r in rows], -2)
             assert relative_error(got.numpy(), plain[j].numpy()) < 1e-11, role
         monkeypatch.undo()
-        if robot == "free_flyer":  # (the ball's tip of 0.35 g reaches 8e6 in forward dynamics: differences of
-            x = [t.clone().requires_grad_() for t in (q, qd, u)]  # gradcheck's step lose 1e-3 to rounding there)
+        # (not the ball: its tip of 0.35 g reaches 8e6 in forward dynamics, where differences of gradcheck's step
+        # lose 1e-3 to rounding)
+        if robot == "free_flyer":
+            x = [t.clone().requires_grad_() for t in (q, qd, u)]
             assert torch.autograd.gradcheck(f, tuple(x))
 
 

@@ -564,7 +564,8 @@ class Program:
             function = lambda f: FUNCTIONS[f].value  # noqa: E731
         else:
             function = lambda f: FUNCTIONS[f].numpy  # noqa: E731
-        return self.interpret(outputs, lambda kind, i: values[(kind, i)], lambda code, *x: arithmetic(code, x, function))
+        return self.interpret(outputs, lambda kind, i: values[(kind, i)],
+                              lambda code, *x: arithmetic(code, x, function))
 
 
 def arithmetic(code, x, function):
