@@ -298,10 +298,20 @@ def test_singular_system_gives_nan_at_those_states(tmp_path_factory):
 
 
 @pytest.mark.slow
-def test_torch_compile(tmp_path_factory, rng):
-    """torch.compile of the forward dynamics (the analytic Function inside) gives the eager values and gradients."""
-    model, _, module = modules(tmp_path_factory, model_path("double_pendulum"), DERIVATIVES)
-    x = [torch.tensor(rng.normal(size=(4, model.nq)), requires_grad=True) for _ in range(3)]
+@pytest.mark.parametrize("base", ["fixed", "quaternion"])
+def test_torch_compile(base, tmp_path_factory, rng):
+    """torch.compile of the forward dynamics (the analytic Function inside) gives the eager values and gradients;
+    on a quaternion free-flyer too (the Function's generated columns along the quaternion's entries)."""
+    if base == "fixed":
+        model, _, module = modules(tmp_path_factory, model_path("double_pendulum"), DERIVATIVES)
+    else:
+        model, _, module = modules(tmp_path_factory, robot_path("double_pendulum"), DERIVATIVES,
+                                   floating_base="quaternion")
+    q = rng.normal(size=(4, model.nq))
+    if base == "quaternion":
+        q[:, 3:7] /= np.linalg.norm(q[:, 3:7], axis=1, keepdims=True)
+    x = [torch.tensor(q, requires_grad=True)] + [torch.tensor(rng.normal(size=(4, model.nv)), requires_grad=True)
+                                                 for _ in range(2)]
     compiled = torch.compile(module.forward_dynamics)
     got, want = compiled(*x), module.forward_dynamics(*x)
     assert relative_error(got.detach().numpy(), want.detach().numpy()) < 1e-12
