@@ -34,7 +34,7 @@ from ...model.tree import Tree
 from ..printing import Spelling, _number
 from .base import Runner, Target
 from .jax_segments import cut, limits, segmented
-from .numpy import array_steps, step_statement
+from .numpy import array_steps, quaternion_entries_read, step_statement
 
 # the JAX spelling: jax.numpy's element-wise functions (the same names as NumPy's), double literals as the C's (a
 # Python float is weakly typed in JAX: it takes the dtype of the array it meets, so float32 stays float32)
@@ -96,8 +96,8 @@ def custom_directions(model, role: str, roles, reads: dict) -> dict | None:
         # only add zero columns, 3 of Talos's 7 directions of a JVP through all of forward dynamics)
         split = None
         if name == "q" and model.nq != model.nv:
-            Q, V, T = Tree(model).position_split
-            split = (Q, V, tuple(t for t in T if t in reads.get(name, ())))
+            Q, V, _ = Tree(model).position_split
+            split = (Q, V, quaternion_entries_read(model, reads))
         out[name] = (source, index, ", ".join(signature(ROUTINES[source], model)), split)
     return out
 

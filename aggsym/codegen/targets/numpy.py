@@ -11,6 +11,7 @@ from __future__ import annotations
 from ...contract import SCALAR_INPUTS, input_length
 from ...core.functions import FUNCTIONS
 from ...core.program import Node
+from ...model.tree import Tree
 from ..printing import Infix, Spelling, _number
 from .base import Runner, Target, file_pattern
 
@@ -62,6 +63,14 @@ def array_steps(model, prog, lines, routine, inputs, spelling):
             yield ("temp", names[i], printed(prog.nodes[i]))
             continue
         yield ("temp", names[i], text(prog.nodes[i], i))
+
+
+def quaternion_entries_read(model, reads: dict) -> tuple:
+    """The entries of q's quaternion pairs (the tree's ``position_split``: a free-flyer's origin and quaternion, a
+    ball's quaternion) that a routine's straight line reads (``reads``: per input the entries it reads, from the
+    ``("input", ...)`` steps of :func:`array_steps`), in q's order: where the derivative routines, in the tangent
+    space, give no column of their own."""
+    return tuple(i for i in Tree(model).position_split[2] if i in reads.get("q", ()))
 
 
 def step_statement(step) -> str | None:

@@ -34,7 +34,7 @@ from ...core.program import Node, straight_line
 from ...model.tree import Tree
 from ..printing import Spelling, _number
 from .base import RoutineLines, Runner, Target
-from .numpy import _unravel, array_steps, step_statement
+from .numpy import _unravel, array_steps, quaternion_entries_read, step_statement
 
 # torch's name of each function of aggsym/core/functions.py (element-wise, so that inputs carry batch dimensions)
 TORCH_NAMES = {"sin": "sin", "cos": "cos", "sqrt": "sqrt", "tan": "tan", "exp": "exp", "log": "log", "abs": "abs",
@@ -70,7 +70,7 @@ def quaternion_columns(model, prog, lines, routine, inputs, reads) -> dict | Non
     reads (the derivative routines are in the tangent space and do not give them), as a straight line of its own:
     forward mode on the routine's straight line (:func:`~aggsym.core.dual.along_inputs`), printed like a routine
     (:func:`_printed`) with one output of shape (n, len(entries)), and ``entries``.  None when it reads none."""
-    entries = tuple(i for i in Tree(model).position_split[2] if i in reads.get(inputs[0], ()))
+    entries = quaternion_entries_read(model, reads)
     if not entries:
         return None
     columns = along_inputs(prog, lines.outputs[0], [(inputs[0], i) for i in entries])
