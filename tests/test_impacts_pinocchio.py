@@ -33,6 +33,7 @@ Measured (worst over 2-3 states each): impulse_dynamics 3e-15 to 6e-14; derivati
 """
 from __future__ import annotations
 
+import json
 import warnings
 from pathlib import Path
 
@@ -41,6 +42,8 @@ import pytest
 
 import aggsym
 import constraint_reference as cr
+from aggsym.codegen.compile import CLibrary, compile_shared
+from aggsym.codegen.generate import generate, write
 from aggsym.contract import sample_configurations, select_routines
 from aggsym.errors import ModelWarning
 from aggsym.model.yaml_reader import load_constraints
@@ -234,11 +237,30 @@ def ours(twin, q, v_impact, v, tau, r) -> tuple:
     return imp, fwd
 
 
-def check(model, pm, to_pin, specs, rng, states, consistent, dense=None):
+class Compiled:
+    """The generated C library with the twin's calls (the routines it holds; the others from the twin)."""
+
+    def __init__(self, lib, twin):
+        self.lib, self.twin = lib, twin
+
+    def __getattr__(self, role):
+        if role in self.lib.manifest["functions"]:
+            return lambda *args: self.lib.call(role, *args)
+        return getattr(self.twin, role)
+
+
+def check(model, pm, to_pin, specs, rng, states, consistent, dense=None, compiled=None):
     """Compare at ``states`` random states; ``consistent``: the forward dynamics at a velocity with J v = 0;
-    ``dense``: the reference's constraints for the impact law solved densely instead of impulseDynamics."""
+    ``dense``: the reference's constraints for the impact law solved densely instead of impulseDynamics;
+    ``compiled``: a folder, where the model's C is generated (every column map looped), compiled and compared
+    instead of the twin."""
     model = select_routines(model, ROUTINES)
     twin = NumericTwin(model)
+    if compiled is not None:
+        write(generate(model, latex=False, looped_above=0), compiled)
+        manifest = json.loads((compiled / f"{model.name}.json").read_text())
+        twin = Compiled(CLibrary(compile_shared(compiled / f"{model.name}.c", compiled / f"lib{model.name}.so",
+                                                extra=("-O1",)), manifest), twin)
     worst = {}
     done = 0
     while done < states:
@@ -263,14 +285,30 @@ def check(model, pm, to_pin, specs, rng, states, consistent, dense=None):
     return worst
 
 
-def test_a_quadruped_on_four_point_feet(tmp_path, rng):
+def quadruped_on_four_point_feet(tmp_path, rng, compiled=None):
+    """solo12 on a quaternion free-flyer standing on its four point feet, against Pinocchio (``check``)."""
     path = robot_path("solo12")
     model = quiet(load_constraints, side(tmp_path, [f"{{name: c{i}, body: {f}, block: point}}"
                                                     for i, f in enumerate(SOLO_FEET)]),
                   quiet(aggsym.load, path, floating_base="quaternion"))
     pm = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
     check(model, pm, pinocchio_configuration, [(f, [0, 0, 0], None, 3) for f in SOLO_FEET], rng, 2,
-          consistent=False)
+          consistent=False, compiled=compiled)
+    return model
+
+
+def test_a_quadruped_on_four_point_feet(tmp_path, rng):
+    quadruped_on_four_point_feet(tmp_path, rng)
+
+
+@pytest.mark.compiler
+def test_the_generated_c_of_a_quadruped_on_four_point_feet_looped(tmp_path, rng):
+    """The C with the solves of both derivative routines looped (aggsym/codegen/targets/c_columns.py; by default
+    only a routine as large as Talos's is), compiled, against Pinocchio."""
+    model = quadruped_on_four_point_feet(tmp_path, rng, compiled=tmp_path)
+    text = (tmp_path / f"{model.name}.c").read_text()
+    for role in ("constrained_forward_dynamics_derivatives", "impulse_dynamics_derivatives"):
+        assert f"{model.name}_{role}_columns(aggsym_c, aggsym_v" in text
 
 
 def test_a_quadruped_with_two_welded_feet(tmp_path, rng):

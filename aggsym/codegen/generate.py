@@ -42,6 +42,7 @@ from .names import header_macros
 from .printing import SCALARS, _number
 from .slicing import SLICE_SIZE, SLICE_THRESHOLD
 from .targets import TARGETS, Job, select
+from .targets.c_columns import LOOPED_ABOVE
 from .targets.c import (  # noqa: F401  (their home is the C target; imported from here before targets)
     SCALAR_BYTES, ZERO_BYTES, EmittedRoutine, _zero_chunks, emit_routine, split_files, split_layout, split_names,
 )
@@ -159,7 +160,7 @@ def check_constraints(model) -> None:
 
 @collector_paused()
 def generate(model, progress=None, latex: bool = True, scalar: str = "double", split: bool = False,
-             slicing=(SLICE_THRESHOLD, SLICE_SIZE), targets=None) -> Generated:
+             slicing=(SLICE_THRESHOLD, SLICE_SIZE), targets=None, looped_above: int = LOOPED_ABOVE) -> Generated:
     """Generate all files of a model in memory; ``scalar`` is the C type (``float``: single-precision C, its
     bounds against the twin in the manifest's ``float_tolerance``; the NumPy module stays double).  ``split``:
     one .c per routine instead of NAME.c, the helpers in NAME_helpers.h and a Makefile (:func:`split_files`).
@@ -167,7 +168,8 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
     threshold is emitted as static functions of about that size each behind the public one (:mod:`.slicing`: one
     huge function takes GCC minutes); None: every routine as one function.  ``targets``: the targets' names (a
     comma-separated string or a list, :func:`.targets.select`; None: the default set, less ``latex`` when
-    ``latex`` is False): only their files are generated."""
+    ``latex`` is False): only their files are generated.  ``looped_above``: the C of a routine whose solves are
+    one body applied to columns (:mod:`.targets.c_columns`) loops over them when it has more operations than this."""
     chosen = select(targets)
     if not latex:
         chosen = [t for t in chosen if t.name != "latex"]
@@ -192,7 +194,8 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         sl = straight_line(prog, outs)
         if role in wanted:
             lines[role] = sl
-        emitted.append(emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing, sl, chosen))
+        emitted.append(emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing, sl, chosen,
+                                    prog.columns.get(role), looped_above))
         del sl
     stages.done("printing")
     ctx = {

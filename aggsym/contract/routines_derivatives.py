@@ -37,13 +37,25 @@ def _no_coulomb(model) -> bool:
                                                for c in model.constraints)
 
 
+def _recorded(bound, role, columns):
+    """The solves' :class:`~aggsym.core.columns.ColumnMap` kept on the straight-line program (none on floats)."""
+    if columns:
+        bound.backend.program.columns[role] = columns[0]
+
+
 def _constrained_forward_dynamics_derivatives(bound, kin, x):
-    *mats, status = constraint_derivatives.constrained_forward_dynamics_derivatives(bound, kin, x["qd"], x["tau"])
+    columns = []
+    *mats, status = constraint_derivatives.constrained_forward_dynamics_derivatives(bound, kin, x["qd"], x["tau"],
+                                                                                    columns)
+    _recorded(bound, "constrained_forward_dynamics_derivatives", columns)
     return (*(flat(m) for m in mats), [status])
 
 
 def _impulse_dynamics_derivatives(bound, kin, x):
-    *mats, status = constraint_derivatives.impulse_dynamics_derivatives(bound, kin, x["qd_minus"], x["r"][0])
+    columns = []
+    *mats, status = constraint_derivatives.impulse_dynamics_derivatives(bound, kin, x["qd_minus"], x["r"][0],
+                                                                        columns)
+    _recorded(bound, "impulse_dynamics_derivatives", columns)
     return (*(flat(m) for m in mats), [status])
 
 

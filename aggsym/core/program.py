@@ -163,12 +163,14 @@ class Program:
         self._signatures: dict = {}  # MUL node id -> sorted factor ids
         self._coefficients: dict = {}  # MUL node id -> its constant coefficient, where that is not 1
         self.inputs: dict = {}  # (kind, index) -> Node
+        self.columns: dict = {}  # routine role -> ColumnMap: its outputs as one body applied to columns
+        # (aggsym.core.columns), recorded by the routine for the targets that print the body once
 
     def release(self) -> None:
         """Drop every node: a node refers to its program and the program to its nodes, a cycle that only the
         cyclic collector would free, and :func:`~aggsym.collector.collector_paused` keeps it off while
         generating; a scratch program that has served (a count) is released at once instead."""
-        self.ops, self.nodes, self.inputs = [], [], {}
+        self.ops, self.nodes, self.inputs, self.columns = [], [], {}, {}
         self._table, self._products, self._signatures, self._coefficients = {}, {}, {}, {}
 
     def seal(self) -> None:

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from ..core.columns import ColumnMap, Run
 from ..core.dual import Dual, DualBackend, lift, tangent
 from ..core.program import is_zero
 from .constraints import ConstraintKinematics, _transpose_times, constrained_forward_dynamics, rest_kinematics
@@ -46,6 +47,9 @@ from .kkt import ConstrainedSystem, arguments_pay
 from .linalg import dot, mul
 from .passive import left_forces
 from .sweeps import inverse_dynamics
+
+# the input kinds of the solves' body (aggsym.core.columns): a column's f, h and (J')^T lambda
+COLUMN_F, COLUMN_H, COLUMN_T = "column_f", "column_h", "column_t"
 
 
 def _dual_state(bound, kin, qd, directions):
@@ -109,22 +113,40 @@ def _impulse_terms(bound, kin, qd, x, lam, r, directions):
 
 
 def _columns(system, terms, directions, count):
-    """Per direction d of ``directions``: (x', lambda', (J^T lambda)') from the tangents of ``terms`` = (E1 less
-    J^T lambda, J^T lambda, E2)."""
+    """Per direction d of ``directions``: (x', (J^T lambda)', its column's values (f, h, (J')^T lambda)) from the
+    tangents of ``terms`` = (E1 less J^T lambda, J^T lambda, E2)."""
     e1, jt, e2 = terms
     out = {}
     for d in directions:
         tj = [tangent(v, d) for v in jt]
         f = [tv - tangent(v, d) for v, tv in zip(e1, tj)]
         h = [-tangent(v, d) for v in e2]
-        x, lam = system.solve(f, h)
-        out[d] = (x, [a + b for a, b in zip(tj, system.joint_space(lam))])
+        out[d] = (*_solved(system, f, h, tj), (f, h, tj))
     return out
 
 
-def constrained_forward_dynamics_derivatives(bound, kin, qd, tau) -> tuple:
+def _solved(system, f, h, tj) -> tuple:
+    """(x, tj + J^T lambda) of the system at (f, h): one column, and the body of :func:`_column_map`."""
+    x, lam = system.solve(f, h)
+    return x, [a + b for a, b in zip(tj, system.joint_space(lam))]
+
+
+def _column_map(system, n, m, columns, offsets=()):
+    """The solves as one body applied to columns (:mod:`aggsym.core.columns`), for a straight-line program:
+    ``columns``: per block (output of x', output of (J^T lambda)', its n columns' values)."""
+    program = system.bound.backend.program
+    f, h, t = (program.vector(kind, k) for kind, k in ((COLUMN_F, n), (COLUMN_H, m), (COLUMN_T, n)))
+    x, y = _solved(system, f, h, t)
+    cmap = ColumnMap([f, h, t], [x, y], offsets=list(offsets))
+    for ox, oy, values in columns:
+        cmap.runs.append(Run(list(values), [(ox, 0, 1, n), (oy, 0, 1, n)]))
+    return cmap
+
+
+def constrained_forward_dynamics_derivatives(bound, kin, qd, tau, columns=None) -> tuple:
     """(dqdd/dq, dqdd/dqd, dqdd/dtau, d(J^T lambda)/dq, .../dqd, .../dtau) as n x n rows, and the status of the
-    solve (``tau`` as the routine receives it: the passive forces are taken here)."""
+    solve (``tau`` as the routine receives it: the passive forces are taken here).  ``columns``: a list, to which
+    the solves are appended as a :class:`~aggsym.core.columns.ColumnMap` on a straight-line program."""
     n = kin.tree.nv
     qdd, lam, status = constrained_forward_dynamics(
         bound, kin, qd, [t - c for t, c in zip(tau, left_forces(bound, kin.q, qd))])
@@ -132,18 +154,23 @@ def constrained_forward_dynamics_derivatives(bound, kin, qd, tau) -> tuple:
     cols = {}
     for batch in _batches(bound, n, 2 * n):
         cols.update(_columns(system, _forward_terms(bound, kin, qd, qdd, lam, set(batch)), batch, 2 * n))
+    m = len(lam)
     for j in range(n):
-        x, lj = system.solve([1 if i == j else 0 for i in range(n)], [0] * len(lam))
-        cols[2 * n + j] = (x, system.joint_space(lj))
+        values = ([1 if i == j else 0 for i in range(n)], [0] * m, [0] * n)
+        cols[2 * n + j] = (*_solved(system, *values), values)
     mats = []
     for part in (0, 1):
         for block in range(3):
             mats.append(_matrix([cols[block * n + j][part] for j in range(n)], n))
+    if columns is not None and bound.backend.symbolic:
+        columns.append(_column_map(system, n, m, [(b, 3 + b, [cols[b * n + j][2] for j in range(n)])
+                                                  for b in range(3)]))
     return (*mats, status)
 
 
-def impulse_dynamics_derivatives(bound, kin, qd, r) -> tuple:
-    """(dqd+/dq, dqd+/dqd-, d(J^T Lambda)/dq, d(J^T Lambda)/dqd-) as n x n rows, and the status of the solve."""
+def impulse_dynamics_derivatives(bound, kin, qd, r, columns=None) -> tuple:
+    """(dqd+/dq, dqd+/dqd-, d(J^T Lambda)/dq, d(J^T Lambda)/dqd-) as n x n rows, and the status of the solve;
+    ``columns`` as for :func:`constrained_forward_dynamics_derivatives`."""
     n = kin.tree.nv
     system = ConstrainedSystem(bound, kin, arguments=arguments_pay(bound, kin, 2 * n))
     x, lam = system.solve_transvected([0] * n, impact_rhs(system.J, system.ck.time_terms(), qd, r))
@@ -154,6 +181,9 @@ def impulse_dynamics_derivatives(bound, kin, qd, r) -> tuple:
     dqd = _matrix([cols[n + j][0] for j in range(n)], n)
     for i in range(n):
         dqd[i][i] = dqd[i][i] + 1
+    if columns is not None and bound.backend.symbolic:
+        columns.append(_column_map(system, n, len(lam), [(b, 2 + b, [cols[b * n + j][2] for j in range(n)])
+                                                         for b in range(2)], [(1, i * n + i, 1) for i in range(n)]))
     return (dq, dqd, _matrix([cols[j][1] for j in range(n)], n), _matrix([cols[n + j][1] for j in range(n)], n),
             system.status)
 

@@ -23,6 +23,7 @@ from ..names import c_prototype, c_symbol, python_parameters
 from ..printing import Infix, LiteralError, Spelling, _number
 from ..slicing import Sliced, Statement, slice_routine, work
 from .base import RoutineLines, Runner, Target, file_pattern
+from .c_columns import LOOPED_ABOVE, columns_c
 
 
 # the C spelling of the functions: <math.h>'s names (fabs for abs), sign the emitted aggsym_sign: (x > 0) - (x < 0),
@@ -52,6 +53,7 @@ class EmittedRoutine:
     work: int = 0  # the C's size as slicing.work measures it (operations + statements)
     sliced: Sliced | None = None  # the C as several functions (slicing.py), for a routine above the threshold
     bodies: dict = field(default_factory=dict)  # target name -> what its print_routine kept (other targets)
+    functions: list = field(default_factory=list)  # C lines of static functions before it (.c_columns)
 
     @property
     def zeros(self) -> bool:
@@ -64,19 +66,23 @@ def _input_symbols(sl):
 
 
 def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double", slicing=None,
-                 sl=None, targets=None) -> EmittedRoutine:
+                 sl=None, targets=None, columns=None, looped_above: int = LOOPED_ABOVE) -> EmittedRoutine:
     """C statements of one routine, the operation count of the C (its arrays, temporaries and literals of the C
     type ``scalar``, double or float), and the routine printed by each of ``targets`` (their
     :meth:`~.base.Target.print_routine`; None: the NumPy target, as before targets).  ``slicing``: (threshold,
     size), the C of a routine of more work than the threshold also as slices of about that size
     (:mod:`..slicing`); None: never.  ``sl``: the outputs' :func:`~aggsym.core.program.straight_line` when
-    already formed."""
+    already formed.  ``columns``: the routine's :class:`~aggsym.core.columns.ColumnMap`, whose body the C prints
+    once and applies in a loop (:mod:`.c_columns`) when the routine's unrolled C has more than ``looped_above``
+    operations; the other targets print the outputs as they are."""
     if targets is None:
         from .numpy import NumPyTarget
         targets = [NumPyTarget()]
     try:
         sl = sl or straight_line(prog, outputs)
         emitted, lines = _emit_routine(model, prog, routine, outputs, scalar, slicing, sl)
+        if columns is not None and sum(emitted.ops[k] for k in ("mul", "add", "div")) > looped_above:
+            emitted = _emit_mapped(model, prog, routine, outputs, scalar, slicing, columns)
         for target in targets:
             target.print_routine(model, prog, lines, emitted)
         return emitted
@@ -86,8 +92,25 @@ def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double",
                              if scalar == "float" else "")) from None
 
 
-def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, sl):
-    """(EmittedRoutine without the other targets' text, RoutineLines for them)."""
+def _emit_mapped(model, prog, routine: Routine, outputs, scalar: str, slicing, cmap) -> EmittedRoutine:
+    """The C of a routine with a column map: its straight line less the entries the body writes, plus the arrays
+    the body reads (:func:`.c_columns.columns_c`)."""
+    symbol = c_symbol(model, routine)
+    mapped = columns_c(symbol, prog, cmap, [o.name for o in routine.outputs], c_spelling(scalar), scalar)
+    hole = float("nan")  # a written entry: neither computed nor counted as a zero (never printed)
+    kept = [[hole if (o, k) in mapped.skip else x for k, x in enumerate(out)] for o, out in enumerate(outputs)]
+    kept += [values for _, values in mapped.locals]
+    emitted, _ = _emit_routine(model, prog, routine, kept, scalar, slicing, straight_line(prog, kept), mapped)
+    for key, n in mapped.ops.items():
+        emitted.ops[key] += n
+    emitted.functions = mapped.functions
+    return emitted
+
+
+def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, sl, mapped=None):
+    """(EmittedRoutine without the other targets' text, RoutineLines for them).  ``mapped``: the
+    :class:`~.c_columns.ColumnsC` of a routine with a column map (``outputs`` then also holds its local arrays'
+    entries, after the routine's outputs)."""
     inputs = signature(routine, model)
     allowed = set(inputs)
     for kind, _ in sl.inputs:
@@ -118,6 +141,10 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     status = routine.status
     if status is not None:
         emit([f"{scalar} {status.name}[1];"], entry="head")
+    out_names = [o.name for o in routine.outputs]
+    if mapped is not None:
+        emit(mapped.head, entry="head")
+        out_names += [name for name, _ in mapped.locals]
     for kind in inputs:  # every input is read before any output is written: outputs may alias inputs
         used = [i for k, i in sl.inputs if k == kind]
         if not used:
@@ -142,8 +169,10 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
         before = ops_so_far()
         if step[0] == "out":
             _, o, k = step
+            if mapped is not None and (o, k) in mapped.skip:
+                continue
             x = outputs[o][k]
-            name = routine.outputs[o].name
+            name = out_names[o]
             if s in zeros:  # one of a chunk of zero entries: the first writes them all (AGGSYM_ZEROS)
                 if zeros[s]:
                     emit([f"AGGSYM_ZEROS({name} + {k});"], arrays=(name,))
@@ -182,6 +211,10 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
         emit([f"{scalar} {', '.join(c_names)};",
               f"aggsym_sincos{'' if partner is None else '2'}({', '.join(arguments)}, {pointers});"],
              defines=c_names, ops=ops_so_far() - before)
+    if mapped is not None:
+        emit(mapped.tail, arrays=out_names, entry="tail")
+        for key, n in mapped.tail_ops.items():
+            counts[key] += n
     if status is not None:
         emit([f"return {status.name}[0] != {_number(0.0, scalar)};"], entry="tail")
     # what count_ops reads from the C, counted while printing (the other statements hold none); the printer
@@ -190,7 +223,7 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     sliced, size = None, sum(work(st) for st in stmts)
     if slicing is not None and size > slicing[0]:
         arrays = {k: f"const {scalar} *{k}" for k in inputs}
-        arrays.update({o.name: f"{scalar} *{o.name}" for o in routine.outputs})
+        arrays.update({name: f"{scalar} *{name}" for name in out_names})
         pieces = min(slicing[1], routine.slice_size or slicing[1])
         sliced = slice_routine(c_symbol(model, routine), arrays, stmts, scalar, pieces)
     c_body = [line for st in stmts for line in st.lines]

@@ -1,0 +1,145 @@
+"""The solves of the derivatives of constrained dynamics as one body applied to columns (aggsym/core/columns.py)
+and its C: the body printed once and called in a loop (aggsym/codegen/targets/c_columns.py).
+
+The C against Pinocchio is in tests/test_impacts_pinocchio.py (a quadruped on four point feet, compiled); here:
+the body at each column's values is the unrolled solve there, entry by entry, on floats; the C's operation count
+is its straight line's plus the body's times the columns; its text compiles warning-free in every layout and
+scalar, is the same on every generation, and the loop stores every entry."""
+from __future__ import annotations
+
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+
+import aggsym
+from aggsym.codegen.compile import CLibrary, compile_shared
+from aggsym.codegen.generate import generate, symbolic_routines, write
+from aggsym.codegen.printing import count_ops
+from aggsym.contract import input_length, select_routines
+from aggsym.core.columns import CAPTURES, VALUES, body_program
+from aggsym.twin import NumericTwin
+from conftest import model_path
+from helpers import relative_error
+
+ROUTINES = ["constrained_forward_dynamics_derivatives", "impulse_dynamics_derivatives"]
+MODELS = ["four_bar", "walking_machine_on_ground", "delta_robot"]
+LOOPED = {"latex": False, "looped_above": 0}  # every routine with a column map looped (Talos's alone by default)
+
+
+def with_routines(name):
+    return select_routines(aggsym.load(model_path(name)), ROUTINES)
+
+
+def random_inputs(model, rng) -> dict:
+    """(kind, index) -> a float: every input a routine of the model may read (p at its defaults)."""
+    values = {}
+    for kind in ("q", "qd", "tau", "qd_minus", "t"):
+        for i in range(input_length(model, kind)):
+            values[(kind, i)] = float(rng.uniform(-1.5, 1.5))
+    values[("r", 0)] = float(rng.uniform())
+    values.update({("p", i): float(x.value) for i, x in enumerate(model.parameters)})
+    return values
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_the_body_at_each_column_is_the_unrolled_solve(name, rng):
+    """Every entry the loop writes, evaluated through the body program at its column's values (the captures and
+    values evaluated in the routine's program), equals the routine's own unrolled entry: to rounding, as both
+    are the same arithmetic on the same operands (the unrolled one folded on its zeros)."""
+    model = with_routines(name)
+    prog, outputs = symbolic_routines(model)
+    assert set(prog.columns) == set(ROUTINES)
+    for role, cmap in prog.columns.items():
+        body = body_program(prog, cmap)
+        assert body.captures and all(hasattr(c, "id") for c in body.captures)
+        columns = [list(column) for run in cmap.runs for column in run.values]
+        assert len(columns) == cmap.columns == (3 if role.startswith("constrained") else 2) * model.nv
+        for _ in range(2):
+            values = random_inputs(model, rng)
+            unrolled = [prog.evaluate(out, values) for out in outputs[role]]
+            captured = prog.evaluate(body.captures, values)
+            for column in columns:
+                flat = [x for group in column for x in group]
+                assert len(flat) == cmap.width
+            got = {}
+            for col, column in enumerate(columns):
+                v = prog.evaluate([x for group in column for x in group], values)
+                inputs = {(CAPTURES, k): c for k, c in enumerate(captured)}
+                inputs.update({(VALUES, i): x for i, x in enumerate(v)})
+                got[col] = body.program.evaluate(body.outputs, inputs)
+            offsets = {(o, k): c for o, k, c in cmap.offsets}
+            written = set()
+            for o, k, col, j in cmap.placements():
+                want, have = unrolled[o][k], got[col][j] + offsets.get((o, k), 0)
+                assert math.isfinite(have)
+                assert abs(have - want) <= 1e-12 * max(1.0, abs(want)), (role, o, k)
+                written.add((o, k))
+            blocks = len(outputs[role]) - 1  # (the status is no block)
+            assert written == {(o, k) for o in range(blocks) for k in range(model.nv ** 2)}
+
+
+def c_text(model, **options) -> dict:
+    return generate(model, **LOOPED, **options).files
+
+
+def looped_library(model, folder, scalar="double"):
+    """(C library, manifest) of the model's C with every column map looped, compiled -O1 with -Werror."""
+    write(generate(model, scalar=scalar, **LOOPED), folder)
+    manifest = json.loads((folder / f"{model.name}.json").read_text())
+    return CLibrary(compile_shared(folder / f"{model.name}.c", folder / f"lib{model.name}.so", extra=("-O1",),
+                                   scalar=scalar), manifest), manifest
+
+
+def test_the_operation_count_is_the_straight_line_and_the_body_times_the_columns():
+    """The manifest's ops of a routine with a loop: its C's straight line, read back from the text (less the loop's
+    call), plus the body's operations, read back from its function, times the columns."""
+    model = with_routines("walking_machine_on_ground")
+    gen = generate(model, **LOOPED)
+    c = gen.files[f"{model.name}.c"]
+    manifest = json.loads(gen.files[f"{model.name}.json"])
+    for r in gen.routines:
+        if r.routine.role not in ROUTINES:
+            continue
+        body = c.split(f"static void {r.symbol}_column(")[1].split("\n}\n")[0]
+        body = body.split("{", 1)[1]
+        columns = int(re.search(rf"/\* {r.symbol}: the body applied to each of its (\d+) columns", c).group(1))
+        straight = [line for line in r.c_body if not line.startswith(f"{r.symbol}_columns(")]
+        want = count_ops("\n".join(straight))
+        for key, n in count_ops(body).items():
+            want[key] += columns * n
+        assert manifest["ops"][r.routine.role] == want == r.ops, r.routine.role
+
+
+@pytest.mark.compiler
+@pytest.mark.parametrize("scalar", ["double", "float"])
+def test_the_c_equals_the_twin_in_every_scalar(scalar, tmp_path, rng):
+    """The loop's C (compiled with -Werror, warnings of float conversions too) against the twin, every entry
+    written (the library fills its outputs with NaN first)."""
+    model = with_routines("walking_machine_on_ground")
+    lib, manifest = looped_library(model, tmp_path, scalar)
+    twin = NumericTwin(model)
+    tol = 1e-10 if scalar == "double" else manifest["float_tolerance"]["constrained_forward_dynamics_derivatives"]
+    for _ in range(3):
+        values = random_inputs(model, rng)
+        q = np.array([values[("q", i)] for i in range(model.nq)])
+        qd = np.array([values[("qd", i)] for i in range(model.nv)])
+        tau = np.array([values[("tau", i)] for i in range(model.nv)])
+        r = values[("r", 0)]
+        for role, args in (("constrained_forward_dynamics_derivatives", (q, qd, tau)),
+                           ("impulse_dynamics_derivatives", (q, qd, r))):
+            for got, want in zip(lib.call(role, *args), getattr(twin, role)(*args)):
+                assert np.all(np.isfinite(got)), role
+                assert relative_error(got, want, floor=1.0) < (tol if scalar == "double" else 10 * tol), role
+
+
+def test_the_c_is_deterministic_and_split_alike():
+    """Two generations give the same bytes; with --split the routine's file holds the body and the loop."""
+    model = with_routines("four_bar")
+    assert c_text(model) == c_text(model)
+    split = c_text(model, split=True)
+    text = split["four_bar_impulse_dynamics_derivatives.c"]
+    assert "static void four_bar_impulse_dynamics_derivatives_column(" in text
+    assert "four_bar_impulse_dynamics_derivatives_columns(aggsym_c, aggsym_v" in text
