@@ -7,12 +7,14 @@ is its straight line's plus the body's times the columns; its text compiles warn
 scalar, is the same on every generation, and the loop stores every entry."""
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import re
 
 import numpy as np
 import pytest
+import sympy as sp
 
 import aggsym
 from aggsym.codegen.compile import CLibrary, compile_shared
@@ -25,12 +27,17 @@ from conftest import model_path
 from helpers import relative_error
 
 ROUTINES = ["constrained_forward_dynamics_derivatives", "impulse_dynamics_derivatives"]
-MODELS = ["four_bar", "walking_machine_on_ground", "delta_robot"]
+MODELS = ["four_bar", "walking_machine_on_ground", "delta_robot", "four_bar+damped"]
 LOOPED = {"latex": False, "looped_above": 0}  # every routine with a column map looped (Talos's alone by default)
 
 
 def with_routines(name):
-    return select_routines(aggsym.load(model_path(name)), ROUTINES)
+    """The model with both derivative routines; ``NAME+damped``: with the damped (proximal) solve, 3 iterations."""
+    name, _, damped = name.partition("+")
+    model = aggsym.load(model_path(name))
+    if damped:
+        model = dataclasses.replace(model, proximal=(sp.Float(1e-3), 3))
+    return select_routines(model, ROUTINES)
 
 
 def random_inputs(model, rng) -> dict:
@@ -114,11 +121,12 @@ def test_the_operation_count_is_the_straight_line_and_the_body_times_the_columns
 
 
 @pytest.mark.compiler
-@pytest.mark.parametrize("scalar", ["double", "float"])
-def test_the_c_equals_the_twin_in_every_scalar(scalar, tmp_path, rng):
+@pytest.mark.parametrize("name,scalar", [("walking_machine_on_ground", "double"),
+                                         ("walking_machine_on_ground", "float"), ("four_bar+damped", "double")])
+def test_the_c_equals_the_twin_in_every_scalar(name, scalar, tmp_path, rng):
     """The loop's C (compiled with -Werror, warnings of float conversions too) against the twin, every entry
-    written (the library fills its outputs with NaN first)."""
-    model = with_routines("walking_machine_on_ground")
+    written (the library fills its outputs with NaN first); with the damped solve too."""
+    model = with_routines(name)
     lib, manifest = looped_library(model, tmp_path, scalar)
     twin = NumericTwin(model)
     tol = 1e-10 if scalar == "double" else manifest["float_tolerance"]["constrained_forward_dynamics_derivatives"]
