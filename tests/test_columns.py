@@ -1,5 +1,6 @@
-"""The solves of the derivatives of constrained dynamics as one body applied to columns (aggsym/core/columns.py)
-and its C: the body printed once and called in a loop (aggsym/codegen/targets/c_columns.py).
+"""The solves of the derivatives of the dynamics (constrained, impulse and free forward dynamics) as one body
+applied to columns (aggsym/core/columns.py) and its C: the body printed once and called in a loop
+(aggsym/codegen/targets/c_columns.py).
 
 The C against Pinocchio is in tests/test_impacts_pinocchio.py (a quadruped on four point feet, compiled); here:
 the body at each column's values is the unrolled solve there, entry by entry, on floats; the C's operation count
@@ -26,7 +27,9 @@ from aggsym.twin import NumericTwin
 from conftest import model_path
 from helpers import relative_error
 
-ROUTINES = ["constrained_forward_dynamics_derivatives", "impulse_dynamics_derivatives"]
+ROUTINES = ["constrained_forward_dynamics_derivatives", "impulse_dynamics_derivatives", "forward_dynamics_derivatives"]
+BLOCKS = {"constrained_forward_dynamics_derivatives": 3, "impulse_dynamics_derivatives": 2,
+          "forward_dynamics_derivatives": 2}  # the column blocks of n columns each
 MODELS = ["four_bar", "walking_machine_on_ground", "delta_robot", "four_bar+damped"]
 LOOPED = {"latex": False, "looped_above": 0}  # every routine with a column map looped (Talos's alone by default)
 
@@ -63,7 +66,7 @@ def test_the_body_at_each_column_is_the_unrolled_solve(name, rng):
         body = body_program(prog, cmap)
         assert body.captures and all(hasattr(c, "id") for c in body.captures)
         columns = [list(column) for run in cmap.runs for column in run.values]
-        assert len(columns) == cmap.columns == (3 if role.startswith("constrained") else 2) * model.nv
+        assert len(columns) == cmap.columns == BLOCKS[role] * model.nv
         for _ in range(2):
             values = random_inputs(model, rng)
             unrolled = [prog.evaluate(out, values) for out in outputs[role]]
@@ -84,8 +87,8 @@ def test_the_body_at_each_column_is_the_unrolled_solve(name, rng):
                 assert math.isfinite(have)
                 assert abs(have - want) <= 1e-12 * max(1.0, abs(want)), (role, o, k)
                 written.add((o, k))
-            blocks = len(outputs[role]) - 1  # (the status is no block)
-            assert written == {(o, k) for o in range(blocks) for k in range(model.nv ** 2)}
+            matrices = [o for o, out in enumerate(outputs[role]) if len(out) == model.nv ** 2]  # (not the status)
+            assert written == {(o, k) for o in matrices for k in range(model.nv ** 2)}
 
 
 def c_text(model, **options) -> dict:
@@ -137,7 +140,8 @@ def test_the_c_equals_the_twin_in_every_scalar(name, scalar, tmp_path, rng):
         tau = np.array([values[("tau", i)] for i in range(model.nv)])
         r = values[("r", 0)]
         for role, args in (("constrained_forward_dynamics_derivatives", (q, qd, tau)),
-                           ("impulse_dynamics_derivatives", (q, qd, r))):
+                           ("impulse_dynamics_derivatives", (q, qd, r)),
+                           ("forward_dynamics_derivatives", (q, qd, tau))):
             for got, want in zip(lib.call(role, *args), getattr(twin, role)(*args)):
                 assert np.all(np.isfinite(got)), role
                 assert relative_error(got, want, floor=1.0) < (tol if scalar == "double" else 10 * tol), role

@@ -9,14 +9,22 @@ from .routines_constraints import CONSTRAINT_FAILURE
 from .shapes import nq_square, scalar
 
 
+def _recorded(bound, role, columns):
+    """The solves' :class:`~aggsym.core.columns.ColumnMap` kept on the straight-line program (none on floats)."""
+    if columns:
+        bound.backend.program.columns[role] = columns[0]
+
+
 def _inverse_dynamics_derivatives(bound, kin, x):
     dq, dqd = derivatives.inverse_dynamics_derivatives(bound, kin, x["qd"], x["qdd"])
     return flat(dq), flat(dqd)
 
 
 def _forward_dynamics_derivatives(bound, kin, x):
+    columns = []
     dq, dqd = derivatives.forward_dynamics_derivatives(
-        bound, kin, x["qd"], minus(x["tau"], passive.left_forces(bound, kin.q, x["qd"])))
+        bound, kin, x["qd"], minus(x["tau"], passive.left_forces(bound, kin.q, x["qd"])), columns)
+    _recorded(bound, "forward_dynamics_derivatives", columns)
     return flat(dq), flat(dqd)
 
 
@@ -35,12 +43,6 @@ register(Routine("forward_dynamics_derivatives", ("q", "qd", "tau", "p"),
 def _no_coulomb(model) -> bool:
     return bool(model.constraints) and not any(c.friction is not None and c.friction[0] == "coulomb"
                                                for c in model.constraints)
-
-
-def _recorded(bound, role, columns):
-    """The solves' :class:`~aggsym.core.columns.ColumnMap` kept on the straight-line program (none on floats)."""
-    if columns:
-        bound.backend.program.columns[role] = columns[0]
 
 
 def _constrained_forward_dynamics_derivatives(bound, kin, x):

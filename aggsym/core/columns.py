@@ -1,7 +1,8 @@
 """One straight-line body applied to many columns: the solves of a routine's derivative columns written once.
 
 The derivatives of the constrained dynamics (:mod:`aggsym.mechanics.constraint_derivatives`) solve one system, on
-one set of factors, for 2n or 3n right-hand sides.  Unrolled, every solve is its own copy of the same arithmetic:
+one set of factors, for 2n or 3n right-hand sides; those of the forward dynamics
+(:mod:`aggsym.mechanics.derivatives`) apply A^-1 to 2n columns.  Unrolled, every solve is its own copy of the same arithmetic:
 Talos on its two soles has 114 of them, about 230,000 operations of C whose machine code no longer fits the
 processor's caches, so that it runs at a seventh of the speed per operation of the smaller routines.  A
 :class:`ColumnMap` records that the routine's outputs are, column by column, one generic body (the solve on

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from ..core.columns import ColumnMap, Run
 from ..core.dual import Dual, DualBackend, lift, tangent
 from .bound import scratch_operations
 from .passive import left_forces
@@ -93,8 +94,10 @@ def inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction=None) -> tupl
     return dq, dqd
 
 
-def forward_dynamics_derivatives(bound, kin, qd, tau) -> tuple:
-    """(dqdd/dq, dqdd/dqd) as n x n rows, at q'' = forward dynamics (tau already less the elastic force).
+def forward_dynamics_derivatives(bound, kin, qd, tau, columns=None) -> tuple:
+    """(dqdd/dq, dqdd/dqd) as n x n rows, at q'' = forward dynamics (tau already less the elastic force);
+    ``columns``: a list, to which the 2n solves are appended as one body applied to columns (a
+    :class:`~aggsym.core.columns.ColumnMap`) on a straight-line program.
 
     Each column of ``-dtau_ID/dx`` goes through A^-1 = T^T diag(1/(beta,beta)) T (3.19) in one of two ways:
     with the arguments <t,k> formed once (:func:`~.transvective.cauchy_solve`, (3.8)-(3.10): two sparse
@@ -117,7 +120,7 @@ def forward_dynamics_derivatives(bound, kin, qd, tau) -> tuple:
         with_arguments = scratch_operations(bound, kin, form(_with_arguments))
         if scratch_operations(bound, kin, form(_on_the_tree), with_arguments) < with_arguments:
             solve = _on_the_tree
-    return _forward_dynamics_derivatives(bound, kin, qd, tau, solve)
+    return _forward_dynamics_derivatives(bound, kin, qd, tau, solve, columns=columns)
 
 
 def _with_arguments(kin, fac, columns):
@@ -128,16 +131,23 @@ def _on_the_tree(kin, fac, columns):
     return [cauchy_solve_tree(kin, fac, c) for c in columns]
 
 
-def _forward_dynamics_derivatives(bound, kin, qd, tau, solve, by_direction=None) -> tuple:
+def _forward_dynamics_derivatives(bound, kin, qd, tau, solve, by_direction=None, columns=None) -> tuple:
     n = kin.tree.nv
     fac = articulated_factors(bound, kin, arguments=solve is _with_arguments)
     qdd = forward_dynamics(bound, kin, tau, qd, fac)
     dq, dqd = inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction)
-    out = []
-    for rows in (dq, dqd):
-        cols = solve(kin, fac, [[-rows[i][j] for i in range(n)] for j in range(n)])
+    out, runs = [], []
+    for k, rows in enumerate((dq, dqd)):
+        values = [[-rows[i][j] for i in range(n)] for j in range(n)]
+        cols = solve(kin, fac, values)
         out.append([[cols[j][i] for j in range(n)] for i in range(n)])
+        runs.append(Run([[v] for v in values], [(k, 0, 1, n)]))
+    if columns is not None and bound.backend.symbolic:
+        f = bound.backend.program.vector(COLUMN_F, n)
+        columns.append(ColumnMap([f], [solve(kin, fac, [f])[0]], runs))
     return tuple(out)
 
+
+COLUMN_F = "column_f"  # the input kind of the solves' body (aggsym.core.columns): a column of -d tau_ID / d x
 
 __all__ = ["inverse_dynamics_derivatives", "forward_dynamics_derivatives"]
