@@ -1,10 +1,10 @@
 """One straight-line body applied to many columns: the solves of a routine's derivative columns written once.
 
 The derivatives of the constrained dynamics (:mod:`aggsym.mechanics.constraint_derivatives`) solve one system, on
-one set of factors, for 2n or 3n right-hand sides; those of the forward dynamics
-(:mod:`aggsym.mechanics.derivatives`) apply A^-1 to 2n columns.  Unrolled, every solve is its own copy of the same arithmetic:
-Talos on its two soles has 114 of them, about 230,000 operations of C whose machine code no longer fits the
-processor's caches, so that it runs at a seventh of the speed per operation of the smaller routines.  A
+one set of factors, for 2n or 3n right-hand sides; those of the forward dynamics (:mod:`aggsym.mechanics.derivatives`)
+apply A^-1 to 2n columns.  Unrolled, every solve is its own copy of the same arithmetic: Talos on its two soles has
+114 of them, about 230,000 operations of C whose machine code no longer fits the processor's caches, so that it
+runs at a seventh of the speed per operation of the smaller routines.  A
 :class:`ColumnMap` records that the routine's outputs are, column by column, one generic body (the solve on
 fresh inputs) applied to each column's values, so that a target can print the body once and call it in a loop;
 the routine's own outputs stay what they are (the unrolled solves, on which every other target and every
@@ -26,6 +26,9 @@ from dataclasses import dataclass, field
 from .program import INPUT, Node, Program, arithmetic
 
 CAPTURES, VALUES = "c", "v"  # the input kinds of a body program: the captured values, the column's values
+# the input kinds of the fresh inputs a routine builds its body on, in its own program (a column's f, h and a term
+# added to the result); never inputs of a routine
+COLUMN_F, COLUMN_H, COLUMN_T = "column_f", "column_h", "column_t"
 
 
 @dataclass
@@ -118,4 +121,5 @@ def body_program(program: Program, cmap: ColumnMap) -> Body:
     return Body(new, [get(x) for x in flat], captures)
 
 
-__all__ = ["ColumnMap", "Run", "Body", "body_program", "CAPTURES", "VALUES"]
+__all__ = ["ColumnMap", "Run", "Body", "body_program", "CAPTURES", "VALUES", "COLUMN_F", "COLUMN_H",
+           "COLUMN_T"]

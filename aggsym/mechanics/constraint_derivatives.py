@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from ..core.columns import ColumnMap, Run
+from ..core.columns import COLUMN_F, COLUMN_H, COLUMN_T, ColumnMap, Run
 from ..core.dual import Dual, DualBackend, lift, tangent
 from ..core.program import is_zero
 from .constraints import ConstraintKinematics, _transpose_times, constrained_forward_dynamics, rest_kinematics
@@ -47,9 +47,6 @@ from .kkt import ConstrainedSystem, arguments_pay
 from .linalg import dot, mul
 from .passive import left_forces
 from .sweeps import inverse_dynamics
-
-# the input kinds of the solves' body (aggsym.core.columns): a column's f, h and (J')^T lambda
-COLUMN_F, COLUMN_H, COLUMN_T = "column_f", "column_h", "column_t"
 
 
 def _dual_state(bound, kin, qd, directions):

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from ..core.columns import ColumnMap, Run
+from ..core.columns import COLUMN_F, ColumnMap, Run
 from ..core.dual import Dual, DualBackend, lift, tangent
 from .bound import scratch_operations
 from .passive import left_forces
@@ -147,7 +147,5 @@ def _forward_dynamics_derivatives(bound, kin, qd, tau, solve, by_direction=None,
         columns.append(ColumnMap([f], [solve(kin, fac, [f])[0]], runs))
     return tuple(out)
 
-
-COLUMN_F = "column_f"  # the input kind of the solves' body (aggsym.core.columns): a column of -d tau_ID / d x
 
 __all__ = ["inverse_dynamics_derivatives", "forward_dynamics_derivatives"]
