@@ -219,7 +219,7 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         "frames": model.frames if any(e.routine.role.startswith("frame_") for e in emitted) else (),
         "sincos": any("aggsym_sincos" in line for r in emitted for line in r.c_body),
         "sincos2": any("aggsym_sincos2(" in line for r in emitted for line in r.c_body),
-        "sign": any("aggsym_sign(" in line for r in emitted for line in r.c_body),
+        "sign": any("aggsym_sign(" in line for r in emitted for line in r.c_body + r.functions),
         "sliced": any(r.sliced for r in emitted),
         "scalar_stores": any(r.routine.scalar_stores for r in emitted),
         "zeros": any(r.zeros for r in emitted),
