@@ -45,6 +45,11 @@ ENTRIES = {
                            "forward_dynamics_derivatives called directly (jit)"),
     "aggsym_jax_project": ("aggsym JAX, the project's jax", "jax", ROUTINES,
                            "as aggsym JAX (the custom JVP), in the project's venv"),
+    "aggsym_jax_rev": ("aggsym JAX jacrev", "jax", ("jac",),
+                       "jax.jacrev through forward_dynamics: JAX transposes the custom JVP, whose derivative matrices "
+                       "are made once and applied to the nv cotangents (jacfwd pushes 2 nv tangents)"),
+    "aggsym_jax_project_rev": ("aggsym JAX jacrev, the project's jax", "jax", ("jac",),
+                               "as aggsym JAX jacrev, in the project's venv"),
     "aggsym_torch": ("aggsym PyTorch", "torch", ROUTINES,
                      "torch.autograd.grad through forward_dynamics (its analytic autograd.Function: the first pass "
                      "makes the derivative matrices, the others reuse them), one reverse pass per output over the "
@@ -59,7 +64,7 @@ ENTRIES = {
 }
 # entries run by the project's own interpreter (.venv: the jax that `pip install aggsym[jax]` brings, newer than the
 # peers' venv, whose adam-robotics pins jax <= 0.6): the generated module as a user of aggsym meets it
-PROJECT_ENTRIES = ("aggsym_jax_project",)
+PROJECT_ENTRIES = ("aggsym_jax_project", "aggsym_jax_project_rev")
 GRAVITY = 9.81  # Pinocchio's, given to the peers that have their own default (adam: 9.80665)
 
 
@@ -233,7 +238,7 @@ def build_aggsym_jax(robot, which):
 
         return _jax_built({"jac": jax.jit(lambda q, v, tau: jnp.concatenate(
             mod.forward_dynamics_derivatives(q, v, tau), -1))})
-    routines = {"jac": jax_jacobian(mod.forward_dynamics, floating, nv)}
+    routines = {"jac": jax_jacobian(mod.forward_dynamics, floating, nv, "rev" if which == "custom_rev" else "fwd")}
     if which == "custom":
         routines.update({"fd": jax.jit(mod.forward_dynamics), "A": jax.jit(mod.inertia),
                          "id": jax.jit(mod.inverse_dynamics)})

@@ -143,6 +143,18 @@ def _at(data, entry, robot, routine, b=None, key="min_us"):
     return r["sizes"].get(b, {}).get(key)
 
 
+def _jacobian_rows(data, robot, entry, big, required=False) -> list:
+    """The Jacobian's two targets for an aggsym JAX entry (none where it was not measured, unless ``required``)."""
+    ours = _at(data, entry, robot, "jac", big)
+    if ours is None and not required:
+        return []
+    label = data["entries"][entry]["label"] if entry in data.get("entries", {}) else "aggsym JAX"
+    return [_ratio_row(f"{robot} Jacobian, B = {big}: {label} ≥ 10× faster than adam JAX jacrev", ours,
+                       _at(data, "adam_jax", robot, "jac", big), 10),
+            _ratio_row(f"{robot} Jacobian, B = {big}: {label} no slower than Pinocchio's computeABADerivatives", ours,
+                       _at(data, "pinocchio", robot, "jac", big), 1, strict=False)]
+
+
 def targets(data) -> list:
     """(target, measured, met: True/False/None) for the issue's Targets at the largest B measured on each robot by
     the aggsym entry of the row (minimum times)."""
@@ -164,17 +176,13 @@ def targets(data) -> list:
                             f"{robot} {ROUTINE_TITLES[routine]}, B = {big}: {label} faster per state than the "
                             f"Pinocchio loop")
                     rows.append(_ratio_row(what, ours, theirs, factor))
-            ours = _at(data, entry, robot, "jac", big)
-            if entry == "aggsym_jax" or ours is not None:
-                rows.append(_ratio_row(f"{robot} Jacobian, B = {big}: {label} ≥ 10× faster than adam JAX jacrev",
-                                       ours, _at(data, "adam_jax", robot, "jac", big), 10))
-                rows.append(_ratio_row(f"{robot} Jacobian, B = {big}: {label} no slower than Pinocchio's "
-                                       "computeABADerivatives", ours, _at(data, "pinocchio", robot, "jac", big), 1,
-                                       strict=False))
+            rows += _jacobian_rows(data, robot, entry, big, required=entry == "aggsym_jax")
             jit = _at(data, entry, robot, "fd", big, key="first_call_seconds")
             which = "" if entry == "aggsym_jax" else f", {label}"
             rows.append((f"{robot} JIT of forward dynamics ≤ {limit:g} s{which} (first call at B = {big})",
                          "—" if jit is None else f"{jit:.2f} s", None if jit is None else jit <= limit))
+        for entry in ("aggsym_jax_rev", "aggsym_jax_project_rev"):  # (the Jacobian alone, where measured)
+            rows += _jacobian_rows(data, robot, entry, _largest(data, robot, [entry]))
         big = _largest(data, robot, ["aggsym_torch", "adam_torch"])
         for routine in data.get("config", {}).get("routines", []):
             r = _timed(data, "aggsym_torch", robot, routine)

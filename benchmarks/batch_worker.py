@@ -45,7 +45,8 @@ def build(entry: str, robot: dict):
     if entry.startswith("aggsym_jax"):
         return batch_peers.build_aggsym_jax(robot, {"aggsym_jax": "custom", "aggsym_jax_plain": "plain",
                                                     "aggsym_jax_routine": "routine",
-                                                    "aggsym_jax_project": "custom"}[entry])
+                                                    "aggsym_jax_project": "custom", "aggsym_jax_rev": "custom_rev",
+                                                    "aggsym_jax_project_rev": "custom_rev"}[entry])
     if entry == "aggsym_torch":
         return batch_peers.build_aggsym_torch(robot)
     if entry == "adam_jax":

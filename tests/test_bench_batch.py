@@ -226,3 +226,18 @@ def test_each_framework_judged_at_its_own_largest_batch():
     assert rows["talos forward dynamics, B = 4096: aggsym PyTorch ≥ 10× faster than adam PyTorch"] == \
         ("25.00× (3.33 vs 83.3 µs)", True)
     assert not any(what.startswith("talos") and "B = 4096: aggsym JAX" in what for what in rows)
+
+
+def test_the_jacrev_entries_are_judged_on_the_jacobian_alone():
+    """aggsym JAX's jacrev entries (the Jacobian only) get the Jacobian's two targets where they were measured,
+    and no row where they were not."""
+    data = fake_results()
+    rows = {what for what, _, _ in batch_report.targets(data)}
+    assert not any("jacrev, the project's jax" in what or "aggsym JAX jacrev ≥" in what for what in rows)
+    data["rows"].append(_row("aggsym_jax_project_rev", "talos", "jac", 2.0))
+    rows = {what: ok for what, _, ok in batch_report.targets(data)}
+    assert rows["talos Jacobian, B = 4096: aggsym JAX jacrev, the project's jax ≥ 10× faster than adam JAX jacrev"]
+    assert rows["talos Jacobian, B = 4096: aggsym JAX jacrev, the project's jax no slower than Pinocchio's "
+                "computeABADerivatives"] is True
+    assert not any(what.startswith("talos forward dynamics") and "jacrev" in what for what in rows)
+    assert "aggsym_jax_project_rev" in batch_peers.PROJECT_ENTRIES
