@@ -30,9 +30,9 @@ CAPTURED, COLUMN_VALUES = "aggsym_c", "aggsym_v"  # the public function's local 
 # stays unrolled below: the unrolled code does fewer operations (each solve folded on its own zeros) and runs
 # faster while it fits the caches.  Measured (GCC 12 -O2, one Xeon host, benchmarks/constrained_derivatives.py,
 # the ratio to Pinocchio's value + derivatives, unrolled -> looped, in one session): Talos's constrained forward
-# dynamics derivatives, 301,775 operations unrolled, 1.93 -> 0.81; Talos's impulse derivatives (132,125) 0.59 ->
-# 0.66; solo12's constrained derivatives (96,565) 0.70 -> 0.64 and impulse derivatives (53,043) 0.59 -> 0.63;
-# Panda's (29,606 and 14,306) 0.51 -> 0.57 and 0.52 -> 0.50 (runs repeat within about 0.05).  By hand, the forward
+# dynamics derivatives, 286,272 operations unrolled, 1.93 -> 0.81; Talos's impulse derivatives (121,397) 0.59 ->
+# 0.66; solo12's constrained derivatives (88,364) 0.70 -> 0.64 and impulse derivatives (46,695) 0.59 -> 0.63;
+# Panda's (26,256 and 11,977) 0.51 -> 0.57 and 0.52 -> 0.50 (runs repeat within about 0.05).  By hand, the forward
 # dynamics derivatives: a 32-link chain (331,035 operations) 230-407 us -> 125-247 us; the 48-coordinate test_bench
 # (126,780) 32.4 -> 38-41 us.
 LOOPED_ABOVE = 150_000
