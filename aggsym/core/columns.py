@@ -22,6 +22,7 @@ fresh inputs; the other nodes it reads (the factors, computed once per call by t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 
 from .program import INPUT, Node, Program, arithmetic
 
@@ -91,34 +92,31 @@ class Body:
 
 
 def body_program(program: Program, cmap: ColumnMap) -> Body:
-    """The map's body moved into a program of its own (see the module's docstring)."""
-    fresh = {node.id: i for i, node in enumerate(x for g in cmap.inputs for x in g)}
+    """The map's body moved into a program of its own (see the module's docstring): the routine's program
+    interpreted (:meth:`~.program.Program.interpret`) into a new one from the fresh inputs and the captures, the
+    nodes outside the body that it reads, in the order of their first use."""
+    fresh = [x for g in cmap.inputs for x in g]
     flat = [x for g in cmap.outputs for x in g]
-    ops = program.ops
-    body, depends = [], set(fresh)
+    depends, captures, seen = {x.id for x in fresh}, [], set()
+
+    def captured(x):
+        if x.__class__ is Node and x.id not in depends and x.id not in seen:
+            seen.add(x.id)
+            captures.append(x)
     for i in program.reachable(flat):
-        entry = ops[i]
+        entry = program.ops[i]
         if entry[0] != INPUT and any(a.__class__ is Node and a.id in depends for a in entry[1:]):
             depends.add(i)
-            body.append(i)
+            for a in entry[1:]:
+                captured(a)
+    for x in flat:
+        captured(x)
     new = Program()
-    captures, value = [], {}
-    for i, k in fresh.items():
-        value[i] = new.input(VALUES, k)
-
-    def get(x):
-        if x.__class__ is not Node:
-            return x
-        got = value.get(x.id)
-        if got is None:  # a node of the routine the body reads: captured, an input of the body
-            got = value[x.id] = new.input(CAPTURES, len(captures))
-            captures.append(x)
-        return got
-
-    for i in body:
-        entry = ops[i]
-        value[i] = arithmetic(entry[0], [get(a) for a in entry[1:]], lambda name: (lambda *a: new.call(name, *a)))
-    return Body(new, [get(x) for x in flat], captures)
+    given = {x.id: new.input(VALUES, k) for k, x in enumerate(fresh)}
+    given.update({x.id: new.input(CAPTURES, k) for k, x in enumerate(captures)})
+    outputs = program.interpret(flat, None, lambda code, *x: arithmetic(code, x, lambda name: partial(new.call, name)),
+                                given=given)
+    return Body(new, outputs, captures)
 
 
 __all__ = ["ColumnMap", "Run", "Body", "body_program", "CAPTURES", "VALUES", "COLUMN_F", "COLUMN_H",

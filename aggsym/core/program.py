@@ -542,16 +542,17 @@ class Program:
                         stack.append(a.id)
         return new
 
-    def interpret(self, outputs, leaf, apply, constant=lambda x: x):
+    def interpret(self, outputs, leaf, apply, constant=lambda x: x, given=None):
         """The one interpreter of a program: the values of ``outputs`` with ``leaf(kind, index)`` for the inputs,
         ``apply(opcode, *operand values)`` for every other node and ``constant(x)`` for constant operands, in
-        creation (topological) order, iteratively."""
-        val: dict[int, object] = {}
+        creation (topological) order, iteratively.  ``given``: {node id: value} for nodes taken as they are, what
+        they depend on not walked (a body cut out of the program at its captured values, :mod:`.columns`)."""
+        val: dict[int, object] = dict(given or {})
 
         def get(x):
             return val[x.id] if isinstance(x, Node) else constant(x)
 
-        for i in self.reachable(outputs):
+        for i in sorted(self.reach(outputs, set(val))):
             entry = self.ops[i]
             if entry[0] == INPUT:
                 val[i] = leaf(entry[1], entry[2])

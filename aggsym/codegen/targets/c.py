@@ -211,10 +211,8 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
         emit([f"{scalar} {', '.join(c_names)};",
               f"aggsym_sincos{'' if partner is None else '2'}({', '.join(arguments)}, {pointers});"],
              defines=c_names, ops=ops_so_far() - before)
-    if mapped is not None:
+    if mapped is not None:  # (its operations are mapped.ops, counted by the caller)
         emit(mapped.tail, arrays=out_names, entry="tail")
-        for key, n in mapped.tail_ops.items():
-            counts[key] += n
     if status is not None:
         emit([f"return {status.name}[0] != {_number(0.0, scalar)};"], entry="tail")
     # what count_ops reads from the C, counted while printing (the other statements hold none); the printer

@@ -43,13 +43,13 @@ class ColumnsC:
     """What the C of a mapped routine adds to its straight line: the entries it does not write (``skip``: (output
     index, flat index)), the local arrays (name, length) and the lists of their entries (``locals``, written by
     the straight line like outputs), the statements of the public function's head and tail, the two static
-    functions (``functions``: C lines) and their operations (``ops``: the body's times the columns)."""
+    functions (``functions``: C lines) and the operations beyond the straight line's (``ops``: the body's times the
+    columns, and the tail's additions of constants)."""
 
     skip: set
     locals: list
     head: list
     tail: list
-    tail_ops: dict
     functions: list
     ops: dict
 
@@ -99,14 +99,12 @@ def columns_c(symbol: str, prog, cmap: ColumnMap, output_names: list, spelling: 
     values = [x for run in cmap.runs for column in run.values for g in column for x in g]
     head = [f"{scalar} {CAPTURED}[{max(len(captures), 1)}];", f"{scalar} {COLUMN_VALUES}[{max(len(values), 1)}];"]
     call = f"{symbol}_columns({CAPTURED}, {COLUMN_VALUES}, {', '.join(output_names[o] for o in used)});"
-    tail, tail_ops = [call], {"mul": 0, "add": 0, "div": 0, "call": 0}
-    for o, k, constant in cmap.offsets:
-        tail.append(f"{output_names[o]}[{k}] = {output_names[o]}[{k}] + {spelling.number(float(constant))};")
-        tail_ops["add"] += 1
+    tail = [call] + [f"{output_names[o]}[{k}] = {output_names[o]}[{k}] + {spelling.number(float(constant))};"
+                     for o, k, constant in cmap.offsets]
     skip = {(o, k) for o, k, *_ in cmap.placements()}
     ops = {key: body_ops[key] * count for key in body_ops}
-    return ColumnsC(skip, [(CAPTURED, list(captures)), (COLUMN_VALUES, values)], head, tail, tail_ops, functions,
-                    ops)
+    ops["add"] += len(cmap.offsets)
+    return ColumnsC(skip, [(CAPTURED, list(captures)), (COLUMN_VALUES, values)], head, tail, functions, ops)
 
 
 __all__ = ["ColumnsC", "columns_c", "CAPTURED", "COLUMN_VALUES", "LOOPED_ABOVE"]
