@@ -3,7 +3,8 @@
 ``computeConstraintDynamicsDerivatives``, one ``RigidConstraintModel`` per constraint (CONTACT_3D for a point,
 CONTACT_6D for a weld, LOCAL_WORLD_ALIGNED: its rows are ours for a contact with the world).
 
-Robots: solo12 (quadruped) on a quaternion free-flyer standing on four point feet, and with two feet welded (6D);
+Robots: solo12 (quadruped) on a quaternion free-flyer standing on four point feet, with two feet welded (6D), and
+on one welded foot, one point foot and a point off a third foot (its C, looped);
 Talos (humanoid, slow) on its two welded soles; Panda (fixed base) welded at its hand; a closed loop (a three-link
 spatial chain whose tip is pinned to a cart on a rail: the loop's medium translates only, so Pinocchio's
 constraint rows and drift are ours at every state); the damped solve on Panda welded at the hand plus a point
@@ -319,6 +320,20 @@ def test_a_quadruped_with_two_welded_feet(tmp_path, rng):
                   quiet(aggsym.load, path, floating_base="quaternion"))
     pm = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
     check(model, pm, pinocchio_configuration, [(f, [0, 0, 0], None, 6) for f in feet], rng, 2, consistent=True)
+
+
+@pytest.mark.compiler
+def test_a_quadruped_on_a_weld_a_foot_and_an_offset_point_looped(tmp_path, rng):
+    """A mixed contact set: one foot welded (6D), one a point, one a point 1.3 cm off its frame (3D each: 12
+    rows), at consistent velocities; the generated C with both derivative routines looped."""
+    path = robot_path("solo12")
+    offset = [0.0131, -0.0042, 0.00587]
+    lines = ["{name: c0, body: FL_FOOT, block: weld}", "{name: c1, body: HR_FOOT, block: point}",
+             f"{{name: c2, body: FR_FOOT, point: {offset}, block: point}}"]
+    model = quiet(load_constraints, side(tmp_path, lines), quiet(aggsym.load, path, floating_base="quaternion"))
+    pm = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+    specs = [("FL_FOOT", [0, 0, 0], None, 6), ("HR_FOOT", [0, 0, 0], None, 3), ("FR_FOOT", offset, None, 3)]
+    check(model, pm, pinocchio_configuration, specs, rng, 2, consistent=True, compiled=tmp_path)
 
 
 @pytest.mark.slow
