@@ -324,7 +324,7 @@ def test_a_quadruped_with_two_welded_feet(tmp_path, rng):
 
 @pytest.mark.compiler
 def test_a_quadruped_on_a_weld_a_foot_and_an_offset_point_looped(tmp_path, rng):
-    """A mixed contact set: one foot welded (6D), one a point, one a point 1.3 cm off its frame (3D each: 12
+    """A mixed contact set: one foot welded (6D), one a point, one a point 1.5 cm off its frame (3D each: 12
     rows), at consistent velocities; the generated C with both derivative routines looped."""
     path = robot_path("solo12")
     offset = [0.0131, -0.0042, 0.00587]
