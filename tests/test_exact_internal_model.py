@@ -9,7 +9,10 @@ within 1e-9, angles "right" within 1e-12).  So every joint axis and origin rotat
 trees is tilted by random angles of 1e-9 to 1e-3 rad, or written to 5-7 significant digits as files do, and lengths
 and masses are scaled across 1e-4 to 1e2; A, b + g, g, inverse and forward dynamics and A^-1 of both internal models
 (the two that :func:`aggsym.codegen.generate.internal_model` chooses between) must equal Pinocchio's on the same
-file to 1e-12, relative to the largest entry.
+file to 1e-12, relative to the largest entry.  A^-1 (against the 40-digit inverse of Pinocchio's A) to 1e-12 or,
+where A is ill-conditioned, to cond(A) times four unit round-offs: how far the inverses of two matrices that agree
+to round-off can be (the random tree of seed 301, lengths 0.025 and masses 0.0016, has cond(A) = 3.8e5; its A
+agrees to 9e-16, and the inverses by 1.0e-12 for the model as read, 1.5e-12 for an internal model, on this host).
 """
 from __future__ import annotations
 
@@ -32,6 +35,7 @@ from random_trees import random_urdf
 pytestmark = [pytest.mark.pinocchio, pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")]
 
 EXACT = 1e-12
+UNIT = np.finfo(float).eps / 2
 FILES = {**ROBOTS, "so100": "so_arm_description/urdf/so100.urdf", "xarm7": "xarm_description/urdf/xarm7.urdf",
          "z1": "z1_description/urdf/z1.urdf"}
 FILES.pop("talos")  # (32 coordinates: the benchmark covers it; the suite keeps to the smaller trees)
@@ -127,6 +131,7 @@ def assert_exact(path, rng, states=2):
         qd, qdd, tau = rng.normal(size=(3, n))
         ref = pinocchio_outputs(path, q, qd, qdd, tau)
         x = {"q": list(q), "qd": list(qd), "qdd": list(qdd), "tau": list(tau)}
+        tolerance = {"inertia_inverse": max(EXACT, 4 * UNIT * np.linalg.cond(ref["inertia"]))}
         for m in inner:
             for role in ROLES:
                 try:
@@ -136,7 +141,8 @@ def assert_exact(path, rng, states=2):
                     with pytest.raises(ZeroDivisionError):
                         ours(model, role, x)
                     continue
-                assert relative_error(got, ref[role]) <= EXACT, (path.name, role, relative_error(got, ref[role]))
+                assert relative_error(got, ref[role]) <= tolerance.get(role, EXACT), \
+                    (path.name, role, relative_error(got, ref[role]))
 
 
 @pytest.mark.parametrize("robot", sorted(FILES))
