@@ -90,6 +90,33 @@ def test_a_short_routine_is_kept_whole():
     assert segmented("f", body, tail) == {"body": body, "segments": []}
 
 
+def test_a_short_routine_with_many_entries_goes_into_one_segment():
+    """More than GATHERED computed entries: every statement but the prelude in one segment, whose results are what
+    the outputs read; at GATHERED entries (constant entries not counted), kept whole."""
+    body, _ = _random_line(np.random.default_rng(1), 60, "sign")
+    names = [_parts(s)[0] for s in body[4:]]
+    tail = names[-jax_segments.GATHERED - 1:]
+    cut = segmented("f", body, tail)
+    assert [seg.name for seg in cut["segments"]] == ["_f__1"]
+    assert cut["segments"][0].lines == tuple(body[4:])
+    _check_cut(body, tail, cut, len(body))
+    kept = tail[1:] + ["0.0"] * 5
+    assert segmented("f", body, kept) == {"body": body, "segments": []}
+
+
+def test_a_short_routine_with_many_entries_equals_the_numpy_module(tmp_path, rng):
+    """manipulator6's A(q) (36 entries, one segment after its calls) and forward dynamics (6 entries, whole), under
+    jit, against the NumPy module; its outputs assembled by one stack."""
+    model = select_routines(aggsym.load(model_path("manipulator6")), ["inertia", "forward_dynamics"])
+    npm, jm = modules(model, tmp_path)
+    assert hasattr(jm, "_inertia__1") and not hasattr(jm, "_forward_dynamics__1")
+    with float64():
+        for role in ("inertia", "forward_dynamics"):
+            for batch in ((), (5,)):
+                args = arguments(npm, role, rng, batch)
+                assert relative(jax.jit(getattr(jm, role))(*args), getattr(npm, role)(*args)) < 1e-12, role
+
+
 def test_the_functions_of_the_inputs_go_first_into_their_segment():
     """cos and sin of the inputs (and of a sum of an input and a constant) go into _f__calls, in every routine;
     a call that depends on more than NEAR statements, or on one that does, stays where it is."""

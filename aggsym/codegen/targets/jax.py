@@ -11,7 +11,8 @@ called through ``jax.lax.cond`` (:mod:`.jax_segments`: XLA's CPU compiler would 
 line into kernels that evaluate shared values again at every use); in every routine the sines and cosines of the
 inputs go first into a segment of their own, so that each is evaluated once.  An output is assembled by chains of
 selects (``_stack``), in a cut routine by one ``jnp.stack`` of its entries, which the segments have written to
-memory already (``_stacked``).
+memory already (``_stacked``); a short routine whose outputs have many entries (A(q)) goes into one segment and is
+assembled so too.
 
 Analytic derivatives (:data:`CUSTOM`): when the module also holds a routine's derivative routine, the public
 function goes through a :func:`jax.custom_jvp` whose rule applies the generated derivative matrices to the

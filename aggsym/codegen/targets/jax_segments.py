@@ -29,6 +29,15 @@ otherwise copies each sine and cosine into every kernel that reads it: Panda's f
 cosines in its straight line) compiled to 140 of them and took 1.6 µs per state (jax 0.10.2, B = 4096), 0.35
 with the segment (``docs/batched.md``).  Moving them first changes no value: they read nothing but the inputs
 and each other.
+
+A short routine with many output entries (more than :data:`GATHERED`: Panda's A(q), 49) is not cut, but its
+statements go into one segment after the calls, whose results are the entries.  Its outputs are then assembled
+by one ``jnp.stack`` of values already in memory, as a cut routine's are.  Otherwise, with jax 0.6.0, XLA fuses
+the assembly's chains of selects with the statements they read and evaluates shared values again for each block:
+Panda's A(q) took 4.8 to 5.1 µs per state at B = 4096, and 0.50 to 0.60 in one segment (jax 0.10.2: 0.37 to 0.52,
+and 0.32 to 0.47; same session, by hand).  The forward and inverse dynamics of a robot of up to 32 coordinates
+have at most 32 entries and are not affected, so their jit stays as it was (Panda's forward dynamics in one
+segment took 3.5 s to compile with jax 0.6.0 instead of 1.6).
 """
 from __future__ import annotations
 
@@ -37,6 +46,7 @@ import dataclasses
 
 SEGMENT = 40  # statements per segment
 SEGMENTED = 500  # a routine is cut when it has more statements than this
+GATHERED = 32  # a routine kept whole whose outputs have more computed entries than this goes into one segment
 # the functions whose statements go into the calls segment (the NumPy names the JAX target prints, jnp.NAME)
 EXPENSIVE = frozenset(("sin", "cos", "tan", "sqrt", "exp", "log", "arcsin", "arccos", "arctan", "arctan2"))
 NEAR = 4  # a call goes into the calls segment when it depends on at most this many statements (besides inputs)
@@ -129,14 +139,17 @@ def segmented(role: str, body: list, tail: list, size: int | None = None, above:
     of functions of the inputs go first into their segment ``_ROLE__calls`` (module text).  Routines of at most
     ``above`` statements (default :data:`SEGMENTED`) are otherwise kept whole: their kernels are small, and cutting
     would cost more compile time than it saves; the others are cut into runs of ``size`` (default
-    :data:`SEGMENT`)."""
+    :data:`SEGMENT`).  A routine kept whole whose outputs have more than :data:`GATHERED` computed entries (names
+    in ``tail``) goes into one segment, all its statements but the prelude and the calls, so that its entries are
+    written to memory once and assembled by one stack (the module docstring)."""
     size = SEGMENT if size is None else size
     parsed = [_parts(s) for s in body]
     defined = {name for name, _ in parsed}
     prelude = [k for k, (_, used) in enumerate(parsed) if not any(u in defined for u in used)]
     hoisted = _hoisted(body, parsed, {parsed[k][0] for k in prelude})
     whole = len(body) <= (SEGMENTED if above is None else above)
-    if whole and not hoisted:
+    gathered = sum(1 for text in tail if text.isidentifier()) > GATHERED
+    if whole and not hoisted and not gathered:
         return {"body": list(body), "segments": []}
     first = set(prelude)
     rest = [(body[k], *parsed[k]) for k in range(len(body)) if k not in first and k not in hoisted]
@@ -147,9 +160,9 @@ def segmented(role: str, body: list, tail: list, size: int | None = None, above:
     head = ["_kept = jax.lax.optimization_barrier(jnp.asarray(False))  # a predicate XLA cannot fold (see _SEGMENTS)"]
     segments = [calls] if calls else []
     lines = [body[k] for k in prelude] + head + [_call(seg) for seg in segments]
-    if whole:
+    if whole and not gathered:
         return {"body": lines + [s for s, _, _ in rest], "segments": segments}
-    runs = [rest[k:k + size] for k in range(0, len(rest), size)]
+    runs = [rest] if whole else [rest[k:k + size] for k in range(0, len(rest), size)]
     last = {u: k for k, run in enumerate(runs) for _, _, used in run for u in used}
     last.update({u: len(runs) for u in tail_names})
     count = 0
@@ -162,4 +175,4 @@ def segmented(role: str, body: list, tail: list, size: int | None = None, above:
     return {"body": lines, "segments": segments}
 
 
-__all__ = ["SEGMENT", "SEGMENTED", "Segment", "cut", "limits", "segmented"]
+__all__ = ["GATHERED", "SEGMENT", "SEGMENTED", "Segment", "cut", "limits", "segmented"]
