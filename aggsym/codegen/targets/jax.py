@@ -160,7 +160,7 @@ class JaxTarget(Target):
         custom = {e.routine.role: custom_directions(job.model, e.routine.role, roles, e.bodies[self.name]["reads"])
                   for e in job.emitted}
         ctx = {**job.ctx, "custom": {role: c for role, c in custom.items() if c},
-               **dict(zip(("segment_size", "segmented_above"), limits())),
+               **dict(zip(("segment_size", "segmented_above", "gathered"), limits())),
                "jax_routines": [{"r": e, "role": e.routine.role, "inputs": list(e.inputs),
                                  "args": ", ".join(e.inputs), "body": e.bodies[self.name]["body"],
                                  "segments": e.bodies[self.name]["segments"],

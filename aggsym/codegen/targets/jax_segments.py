@@ -63,8 +63,8 @@ class Segment:
 
 
 def limits() -> tuple:
-    """(:data:`SEGMENT`, :data:`SEGMENTED`) as they are now (read when a module is rendered)."""
-    return SEGMENT, SEGMENTED
+    """(:data:`SEGMENT`, :data:`SEGMENTED`, :data:`GATHERED`) as they are now (read when a module is rendered)."""
+    return SEGMENT, SEGMENTED, GATHERED
 
 
 def _parts(statement: str) -> tuple:
