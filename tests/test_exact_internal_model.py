@@ -11,8 +11,8 @@ and masses are scaled across 1e-4 to 1e2; A, b + g, g, inverse and forward dynam
 (the two that :func:`aggsym.codegen.generate.internal_model` chooses between) must equal Pinocchio's on the same
 file to 1e-12, relative to the largest entry.  A^-1 (against the 40-digit inverse of Pinocchio's A) to 1e-12 or,
 where A is ill-conditioned, to cond(A) times four unit round-offs: how far the inverses of two matrices that agree
-to round-off can be (the random tree of seed 301, lengths 0.025 and masses 0.0016, has cond(A) = 3.8e5; its A
-agrees to 9e-16, and the inverses by 1.0e-12 for the model as read, 1.5e-12 for an internal model, on this host).
+to round-off can be (random tree 1, lengths 0.025 and masses 0.0016, has cond(A) = 3.8e5; its A agrees to
+9e-16, and the inverses by 1.0e-12 for the model as read, 1.5e-12 for an internal model, on an AMD EPYC host).
 """
 from __future__ import annotations
 
