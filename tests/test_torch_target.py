@@ -341,3 +341,40 @@ def test_check_compares_the_module_in_float64_and_float32(capsys):
     out = capsys.readouterr().out
     assert out.splitlines()[1].split() == ["routine", "NumPy", "PyTorch", "PyTorch", "bound"]
     assert "its float bound (PyTorch) and 1e-12 (NumPy)" in out
+
+
+def test_each_temporary_is_freed_after_its_last_read():
+    """In every function of the module, each temporary no output reads is deleted right after the statement that
+    last reads it, never read after, and the only ones left when the outputs are stacked are those the outputs read
+    (Panda's A(q) would otherwise hold all of its 300 temporaries at once: time per state grew with B)."""
+    import re
+
+    from aggsym.codegen.targets.torch import freed
+
+    assert freed(["x0 = q_0*2.0", "x1 = x0 + 1.0", "x2 = x1*x0", "x3 = x2 - q_1"], [["x3", "x0"]]) == \
+        ["x0 = q_0*2.0", "x1 = x0 + 1.0", "x2 = x1*x0", "del x1", "x3 = x2 - q_1", "del x2"]
+    temp = re.compile(r"x\d+")
+    checked = 0
+    for name, routines in (("double_pendulum", DERIVATIVES), ("four_bar", "all")):
+        model = select_routines(aggsym.load(model_path(name)), routines.split(","))
+        tree = ast.parse(generate(model, targets="torch").files[f"{model.name}_torch.py"])
+        for f in (node for node in tree.body if isinstance(node, ast.FunctionDef)):
+            assigned, deleted, stacked = set(), set(), set()
+            for statement in f.body:
+                loads = {n.id for n in ast.walk(statement) if isinstance(n, ast.Name) and temp.fullmatch(n.id)
+                         and isinstance(n.ctx, ast.Load)}
+                assert not loads & deleted, (f.name, loads & deleted)
+                if isinstance(statement, ast.Delete):
+                    names = {t.id for t in statement.targets}
+                    assert names <= assigned - deleted, f.name
+                    deleted |= names
+                elif isinstance(statement, ast.Assign) and isinstance(statement.value, ast.Call) \
+                        and getattr(statement.value.func, "id", None) == "_stack":
+                    stacked |= loads
+                else:
+                    assigned |= {t.id for t in statement.targets if isinstance(t, ast.Name) and temp.fullmatch(t.id)} \
+                        if isinstance(statement, ast.Assign) else set()
+            if stacked:
+                assert assigned - deleted == stacked, f.name
+                checked += bool(deleted)
+    assert checked >= 10
