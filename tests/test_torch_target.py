@@ -368,12 +368,12 @@ def test_each_temporary_is_freed_after_its_last_read():
                     names = {t.id for t in statement.targets}
                     assert names <= assigned - deleted, f.name
                     deleted |= names
-                elif isinstance(statement, ast.Assign) and isinstance(statement.value, ast.Call) \
-                        and getattr(statement.value.func, "id", None) == "_stack":
+                elif not isinstance(statement, ast.Assign):
+                    continue
+                elif isinstance(statement.value, ast.Call) and getattr(statement.value.func, "id", None) == "_stack":
                     stacked |= loads
                 else:
-                    assigned |= {t.id for t in statement.targets if isinstance(t, ast.Name) and temp.fullmatch(t.id)} \
-                        if isinstance(statement, ast.Assign) else set()
+                    assigned |= {t.id for t in statement.targets if isinstance(t, ast.Name) and temp.fullmatch(t.id)}
             if stacked:
                 assert assigned - deleted == stacked, f.name
                 checked += bool(deleted)

@@ -3,7 +3,8 @@
 Each routine is printed from its straight line by :func:`~.numpy.array_steps` with the spelling :data:`TORCH`
 (``torch.sin``, ...): inputs unpacked, each named temporary one assignment, and the output entries collected and
 stacked once at the end (no in-place write on a tensor that autograd tracks), so that autograd, ``torch.func``
-(``vmap``, ``jacrev``) and ``torch.compile`` go through every routine.  The functions take any leading batch
+(``vmap``, ``jacrev``) and ``torch.compile`` go through every routine; a temporary no output reads is deleted after
+its last read (:func:`freed`).  The functions take any leading batch
 dimensions (broadcast like the NumPy module's, ``p`` included), compute in the inputs' floating dtype on the
 inputs' device (the default ``p`` is made there), and import only torch.
 
