@@ -30,21 +30,28 @@ CAPTURED, COLUMN_VALUES = "aggsym_c", "aggsym_v"  # the public function's local 
 
 # A routine with a column map is looped when its unrolled C has more operations (mul + add + div) than this, and
 # stays unrolled below: the unrolled code does fewer operations (each solve folded on its own zeros) and runs
-# faster while it fits the caches.  Measured (GCC 12 -O2, one Xeon host, benchmarks/constrained_derivatives.py,
-# the ratio to Pinocchio's value + derivatives, unrolled -> looped, in one session): Talos's constrained forward
-# dynamics derivatives, 286,272 operations unrolled, 1.93 -> 0.81; Talos's impulse derivatives (121,397) 0.59 ->
-# 0.66; solo12's constrained derivatives (88,364) 0.70 -> 0.64 and impulse derivatives (46,695) 0.59 -> 0.63;
-# Panda's (26,256 and 11,977) 0.51 -> 0.57 and 0.52 -> 0.50 (runs repeat within about 0.05).  By hand, the forward
-# dynamics derivatives: a 32-link chain (331,035 operations) 230-407 us -> 125-247 us; the 48-coordinate test_bench
-# (126,780) 32.4 -> 38-41 us.
-LOOPED_ABOVE = 150_000
+# faster while it fits the caches.  Measured (GCC 12 -O2, benchmarks/constrained_derivatives.py, the ratio to
+# Pinocchio's value + derivatives, unrolled -> looped).  On a Xeon (2 MB of L2 per core), one column at a time,
+# one session: Talos's constrained forward dynamics derivatives, 286,272 operations unrolled, 1.93 -> 0.81; Talos's
+# impulse derivatives (121,397) 0.59 -> 0.66; solo12's constrained derivatives (88,364) 0.70 -> 0.64 and impulse
+# derivatives (46,695) 0.59 -> 0.63; Panda's (26,256 and 11,977) 0.51 -> 0.57 and 0.52 -> 0.50 (runs repeat within
+# about 0.05); the threshold was 150,000.  On an AMD EPYC (512 KB of L2), with the lanes below, three runs looped
+# and four unrolled, alternating: solo12's constrained 0.72-1.37 -> 0.61-0.83, its impulse 0.57-0.97 -> 0.60-0.62;
+# Talos's impulse 0.58-1.23 -> 0.70-0.85 (Talos's constrained, looped in both, 0.87-1.21: the host's spread); and
+# the lanes take a seventh to a fifth off a looped routine (below), which on the Xeon's figures puts solo12's and
+# Talos's looped routines level with or ahead of their unrolled ones.  The threshold is 50,000: solo12's constrained
+# derivatives and Talos's two are looped; solo12's impulse derivatives (46,695), Panda's, and Talos's forward
+# dynamics derivatives (49,121: 0.36 of Pinocchio's unrolled, not measured looped) stay unrolled.  By hand, the
+# forward dynamics derivatives: a 32-link chain (331,035 operations) 230-407 us -> 125-247 us; the 48-coordinate
+# test_bench (126,780) 32.4 -> 38-41 us (one column at a time, the Xeon).
+LOOPED_ABOVE = 50_000
 # Columns applied LANES at a time by the body written once more as a loop over lanes (SYMBOL_lanes), the columns'
 # values interleaved, so that GCC -O2 runs the lanes in vector registers (SSE2's two doubles without -march: the
 # loop over lanes vectorized, checked with -fopt-info-vec); the columns left over, one by one.  The same operations
 # on the same operands in each lane: the same bits.  Measured by hand (one AMD EPYC host, GCC 12 -O2, the routines
 # interleaved in one process, 1,500 rounds of 16 states, minimum [median], µs per call): Talos's constrained forward
 # dynamics derivatives 106 [116] looped one column at a time, 92 [104] four lanes at a time (two: 93 [103]); solo12's
-# (looped only below this threshold by choice) 26.4 [29.8] -> 21.1 [24.7], its impulse derivatives 15.5 -> 12.4.
+# 26.4 [29.8] -> 21.1 [24.7] (25.5 [36.2] unrolled), its impulse derivatives 15.5 -> 12.4 (12.2 unrolled).
 LANES = 4
 
 
