@@ -110,7 +110,8 @@ def columns_c(symbol: str, prog, cmap: ColumnMap, output_names: list, spelling: 
             stores[0].append(f"    for (i = 0; i < {len(group)}; ++i) "
                              f"{output_names[o]}[{first} + {step} * k + {stride} * i] = o[{j} + i];")
             stores[1].append(f"    for (l = 0; l < {LANES}; ++l) for (i = 0; i < {len(group)}; ++i) "
-                             f"{output_names[o]}[{first} + {step} * (k + l) + {stride} * i] = ol[{LANES} * ({j} + i) + l];")
+                             f"{output_names[o]}[{first} + {step} * (k + l) + {stride} * i] "
+                             f"= ol[{LANES} * ({j} + i) + l];")
             j += len(group)
         loops += ([f"for (k = 0; k + {LANES} <= {n}; k += {LANES}) {{",
                    f"    for (l = 0; l < {LANES}; ++l) for (i = 0; i < {width}; ++i) "
@@ -124,11 +125,13 @@ def columns_c(symbol: str, prog, cmap: ColumnMap, output_names: list, spelling: 
                   f"static void {symbol}_column(const {scalar} *restrict c, const {scalar} *restrict v, "
                   f"{scalar} *restrict o)", "{"]
                  + [f"    {line}" for line in unused + lines] + ["}", "",
-                 f"/* {symbol}: the body on {LANES} columns at once, each in a lane of the loop (v and o interleaved: "
-                 f"entry i of lane l at {LANES} * i + l), so that the compiler can run the lanes in vector registers */",
+                 f"/* {symbol}: the body on {LANES} columns at once, each in a lane of the loop (v and o "
+                 f"interleaved: entry i of lane l at {LANES} * i + l), so that the compiler can run the lanes in "
+                 f"vector registers */",
                  f"static void {symbol}_lanes(const {scalar} *restrict c, const {scalar} *restrict v, "
                  f"{scalar} *restrict o)", "{", "    int l;"] + [f"    {line}" for line in unused]
-                 + [f"    for (l = 0; l < {LANES}; ++l) {{"] + [f"        {line}" for line in lanes] + ["    }", "}", "",
+                 + [f"    for (l = 0; l < {LANES}; ++l) {{"] + [f"        {line}" for line in lanes]
+                 + ["    }", "}", "",
                  f"static void {symbol}_columns({params})", "{",
                  f"    {scalar} o[{size}], ol[{LANES * size}], vl[{LANES * width}];", "    int k, i, l;"]
                  + [f"    {line}" for line in loops] + ["}"])
