@@ -147,11 +147,12 @@ def test_against_pinocchio_rnea_with_armature_damping_and_friction(rubbing_path,
 
 def test_base_parameters_group_the_armatures_with_the_links_inertia_about_their_axes(rubbing_path):
     """j1 turns about the vertical through a's origin: its armature and a's Izz are one column, grouped with
-    coefficient exactly 1 (OpenSYMORO's ZZ1R = ZZ1 + IA1); likewise j2 turns b (and c, which
-    slides along b's z axis) about b's y axis through b's origin: ia_j2, Iyy_b and Iyy_c are one base parameter,
-    each with coefficient exactly 1.  A group's name is any of its equal columns: which one the pivoting takes
-    first depends on how the processor's matrix-vector products round them (ia_j2 on one host, Iyy_b on another).  Every friction parameter and the prismatic j3's armature are identifiable; the relations
-    hold exactly (the model's rotations are right angles)."""
+    coefficient exactly 1 (OpenSYMORO's ZZ1R = ZZ1 + IA1); likewise j2 turns b (and c, which slides along b's z
+    axis) about b's y axis through b's origin: ia_j2, Iyy_b and Iyy_c are one base parameter, each with coefficient
+    exactly 1.  A group's name is any of its equal columns: which one the pivoting takes first depends on how the
+    processor's matrix-vector products round them (ia_j2 on one host, Iyy_b on another).  Every friction parameter
+    and the prismatic j3's armature are identifiable; the relations hold exactly (the model's rotations are right
+    angles)."""
     layout = base_regressor_layout(rubbing(rubbing_path), "friction_regressor")
     groups = {b["name"]: b["combination"] for b in layout["base_parameters"]}
     holding = {drive: [name for name, c in groups.items() if drive in c] for drive in ("ia_j1", "ia_j2", "ia_j3")}
