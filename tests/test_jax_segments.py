@@ -20,7 +20,8 @@ import aggsym
 from aggsym.codegen.generate import generate
 from aggsym.codegen.targets import jax as jax_target
 from aggsym.codegen.targets import jax_segments
-from aggsym.codegen.targets.jax_segments import _parts, segmented
+from aggsym.codegen.targets.jax_segments import segmented
+from aggsym.codegen.targets.numpy import statement_parts as _parts
 from aggsym.contract import select_routines
 from conftest import model_path
 from helpers import robot_path

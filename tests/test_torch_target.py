@@ -351,8 +351,9 @@ def test_each_temporary_is_freed_after_its_last_read():
 
     from aggsym.codegen.targets.torch import freed
 
-    assert freed(["x0 = q_0*2.0", "x1 = x0 + 1.0", "x2 = x1*x0", "x3 = x2 - q_1"], [["x3", "x0"]]) == \
-        ["x0 = q_0*2.0", "x1 = x0 + 1.0", "x2 = x1*x0", "del x1", "x3 = x2 - q_1", "del x2"]
+    assert freed(["q_0 = q[..., 0]", "x0 = q_0*2.0", "x1 = x0 + 1.0", "x2 = x1*x0", "x3 = x2 - q_0"],
+                 [["x3", "x0"]], {"x0", "x1", "x2", "x3"}) == \
+        ["q_0 = q[..., 0]", "x0 = q_0*2.0", "x1 = x0 + 1.0", "x2 = x1*x0", "del x1", "x3 = x2 - q_0", "del x2"]
     temp = re.compile(r"x\d+")
     checked = 0
     for name, routines in (("double_pendulum", DERIVATIVES), ("four_bar", "all")):

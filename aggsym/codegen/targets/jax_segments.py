@@ -44,6 +44,8 @@ from __future__ import annotations
 import ast
 import dataclasses
 
+from .numpy import statement_parts
+
 SEGMENT = 40  # statements per segment
 SEGMENTED = 500  # a routine is cut when it has more statements than this
 GATHERED = 32  # a routine kept whole whose outputs have more computed entries than this goes into one segment
@@ -65,18 +67,6 @@ class Segment:
 def limits() -> tuple:
     """(:data:`SEGMENT`, :data:`SEGMENTED`, :data:`GATHERED`) as they are now (read when a module is rendered)."""
     return SEGMENT, SEGMENTED, GATHERED
-
-
-def _parts(statement: str) -> tuple:
-    """(the name a generated statement ``name = rhs`` assigns, the names its right-hand side reads)."""
-    tree = ast.parse(statement, mode="exec").body[0]
-    if not (isinstance(tree, ast.Assign) and len(tree.targets) == 1 and isinstance(tree.targets[0], ast.Name)):
-        raise ValueError(f"not a generated assignment: {statement!r}")
-    used = []
-    for node in ast.walk(tree.value):
-        if isinstance(node, ast.Name) and node.id not in used:
-            used.append(node.id)
-    return tree.targets[0].id, used
 
 
 def _calls(statement: str) -> bool:
@@ -143,7 +133,7 @@ def segmented(role: str, body: list, tail: list, size: int | None = None, above:
     in ``tail``) goes into one segment, all its statements but the prelude and the calls, so that its entries are
     written to memory once and assembled by one stack (the module docstring)."""
     size = SEGMENT if size is None else size
-    parsed = [_parts(s) for s in body]
+    parsed = [statement_parts(s) for s in body]
     defined = {name for name, _ in parsed}
     prelude = [k for k, (_, used) in enumerate(parsed) if not any(u in defined for u in used)]
     hoisted = _hoisted(body, parsed, {parsed[k][0] for k in prelude})

@@ -8,6 +8,8 @@ importing the module and calling it against the numeric twin.
 """
 from __future__ import annotations
 
+import ast
+
 from ...contract import SCALAR_INPUTS, input_length
 from ...core.functions import FUNCTIONS
 from ...core.program import Node
@@ -71,6 +73,27 @@ def quaternion_entries_read(model, reads: dict) -> tuple:
     ``("input", ...)`` steps of :func:`array_steps`), in q's order: where the derivative routines, in the tangent
     space, give no column of their own."""
     return tuple(i for i in Tree(model).position_split[2] if i in reads.get("q", ()))
+
+
+def _names(tree) -> list:
+    used = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and node.id not in used:
+            used.append(node.id)
+    return used
+
+
+def names_read(expression: str) -> list:
+    """The names a generated Python expression reads, in the order of their first appearance."""
+    return _names(ast.parse(expression, mode="eval"))
+
+
+def statement_parts(statement: str) -> tuple:
+    """(the name a generated statement ``name = rhs`` assigns, the names its right-hand side reads)."""
+    tree = ast.parse(statement, mode="exec").body[0]
+    if not (isinstance(tree, ast.Assign) and len(tree.targets) == 1 and isinstance(tree.targets[0], ast.Name)):
+        raise ValueError(f"not a generated assignment: {statement!r}")
+    return tree.targets[0].id, _names(tree.value)
 
 
 def step_statement(step) -> str | None:

@@ -26,7 +26,6 @@ installed: in float64, or in float32 under ``--scalar float`` against the float 
 """
 from __future__ import annotations
 
-import re
 import textwrap
 
 from ...contract import SCALAR_INPUTS, input_length, routines_for
@@ -36,7 +35,7 @@ from ...core.program import Node, straight_line
 from ...model.tree import Tree
 from ..printing import Spelling, _number
 from .base import RoutineLines, Runner, Target
-from .numpy import _unravel, array_steps, quaternion_entries_read, step_statement
+from .numpy import _unravel, array_steps, names_read, quaternion_entries_read, statement_parts, step_statement
 
 # torch's name of each function of aggsym/core/functions.py (element-wise, so that inputs carry batch dimensions)
 TORCH_NAMES = {"sin": "sin", "cos": "cos", "sqrt": "sqrt", "tan": "tan", "exp": "exp", "log": "log", "abs": "abs",
@@ -92,10 +91,12 @@ def _printed(model, prog, lines, inputs, shapes, labels) -> dict:
     that every entry is a tensor of the batch shape when stacked), and ``reads``, per input the set of its entries
     that the straight line reads.  ``labels``: the outputs' names in errors."""
     entries = [[None] * _size(shape) for shape in shapes]
-    statements, reads = [], {}
+    statements, reads, temporaries = [], {}, set()
     for step in array_steps(model, prog, lines, None, inputs, TORCH):
         if step[0] == "input":
             reads.setdefault(step[2], set()).add(step[3])
+        elif step[0] == "temp":
+            temporaries.add(step[1])
         statement = step_statement(step)
         if statement is not None:
             statements.append(statement)
@@ -112,36 +113,33 @@ def _printed(model, prog, lines, inputs, shapes, labels) -> dict:
         for k, e in enumerate(entries[o]):
             if e is None:
                 raise RuntimeError(f"{labels[o]} entry {_unravel(k, shape)} was never written")
-    return {"statements": freed(statements, entries), "outputs": entries, "reads": reads,
+    return {"statements": freed(statements, entries, temporaries), "outputs": entries, "reads": reads,
             "zero": any(e == "zero" or e.startswith("zero + ") for out in entries for e in out)}
 
 
-_NAME = re.compile(r"\bx\d+\b")  # a temporary's name (array_steps: x0, x1, ...; inputs are q_0, ...)
-
-
-def freed(statements: list, entries: list) -> list:
-    """The statements with each temporary that no output entry reads deleted (``del``) right after the last
-    statement that reads it: its tensor returns to PyTorch's allocator and is reused, still in the caches, by the
-    next result.  Otherwise every temporary of a routine lives until its outputs are stacked: Panda's A(q) holds
+def freed(statements: list, entries: list, temporaries: set) -> list:
+    """The statements with each of the ``temporaries`` that no output entry reads deleted (``del``) right after the
+    last statement that reads it: its tensor returns to PyTorch's allocator and is reused, still in the caches, by
+    the next result.  Otherwise every temporary of a routine lives until its outputs are stacked: Panda's A(q) holds
     about 300 of them, 10 MB at B = 4096, far beyond the caches, so that its time per state grew from B = 1024 to
-    4096 (by hand, this host: 2.3 then 2.8 µs per state, median; with the temporaries freed 2.1 then 1.2).  Autograd
-    keeps what it saves whatever the name: only the name goes."""
-    kept = {name for out in entries for e in out for name in _NAME.findall(e)}
+    4096 (by hand, an AMD EPYC host: 2.3 then 2.8 µs per state, median; with the temporaries freed 2.1 then 1.2).
+    Autograd keeps what it saves whatever the name: only the name goes."""
+    kept = {name for out in entries for e in out for name in names_read(e)}
     last = {}
-    for k, line in enumerate(statements):
-        target, _, rhs = line.partition(" = ")
-        for name in _NAME.findall(rhs):
+    for k, statement in enumerate(statements):
+        target, used = statement_parts(statement)
+        for name in used:
             last[name] = k
         last.setdefault(target, k)  # (a temporary no statement reads: freed where it is made)
     after = {}
     for name, k in last.items():
-        if name not in kept and _NAME.fullmatch(name):
+        if name in temporaries and name not in kept:
             after.setdefault(k, []).append(name)
     out = []
-    for k, line in enumerate(statements):
-        out.append(line)
+    for k, statement in enumerate(statements):
+        out.append(statement)
         if k in after:
-            out.append("del " + ", ".join(sorted(after[k], key=lambda n: int(n[1:]))))
+            out.append("del " + ", ".join(after[k]))
     return out
 
 
