@@ -42,6 +42,9 @@ EXAMPLES = {
 }
 
 
+OPT_LEVELS = ("-O0", "-O1", "-O2", "-O3")  # check --opt
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="aggsym",
@@ -153,8 +156,8 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     c.add_argument("--tol", type=float, default=1e-12, help="largest relative error accepted (default 1e-12)")
     c.add_argument("--opt", default="-O2", type=lambda v: v if v.startswith("-") else "-" + v,
-                   choices=["-O0", "-O1", "-O2", "-O3"],
-                   help="optimization level of the compile: O0, O1, O2 or O3 (or --opt=-O2; default -O2; large "
+                   choices=OPT_LEVELS, metavar="O0|O1|O2|O3",
+                   help="optimization level of the compile: O0, O1, O2 or O3 (or -O2; default -O2; large "
                         "models compile much faster at O0)")
     c.add_argument("--split", action="store_true",
                    help="check the --split layout: its Makefile builds libNAME.a (make -j2, the same warnings as "
@@ -454,9 +457,23 @@ def _bare_floating_base(argv: list) -> list:
     return out
 
 
+def _joined_opt(argv: list) -> list:
+    """``--opt -O1`` as ``--opt=-O1``: argparse reads a value that starts with a dash as an option and would stop
+    with "expected one argument", although the usage line shows these values."""
+    out, i = [], 0
+    while i < len(argv):
+        if argv[i] == "--opt" and i + 1 < len(argv) and argv[i + 1] in OPT_LEVELS:
+            out.append(f"--opt={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(argv[i])
+        i += 1
+    return out
+
+
 def main(argv=None) -> int:
     warnings.showwarning = _show_warning
-    args = _parser().parse_args(_bare_floating_base(sys.argv[1:] if argv is None else argv))
+    args = _parser().parse_args(_joined_opt(_bare_floating_base(sys.argv[1:] if argv is None else argv)))
     try:
         return COMMANDS[args.command](args)
     except AggsymError as exc:

@@ -145,3 +145,21 @@ def test_a_misspelled_parent_or_constraint_link_gets_did_you_mean(arm, tmp_path,
     side.write_text("constraints:\n  - {name: tip, body: forearm, block: point}\n")
     code, _, err = run(capsys, "generate", arm, "--constraints", side, "--list-routines")
     assert code == 2 and "unknown body 'forearm'; did you mean 'fore_arm'?" in err, err
+
+
+@pytest.mark.parametrize("spelling", [["--opt", "-O1"], ["--opt", "O1"], ["--opt=-O1"], ["--opt=O1"]])
+def test_check_takes_the_optimization_level_as_its_usage_line_shows(spelling, capsys):
+    """``--opt -O1`` is what the help suggests; argparse alone reads ``-O1`` as an option and stops with
+    "expected one argument"."""
+    args = cli._parser().parse_args(cli._joined_opt(["check", "model.yaml", *spelling]))
+    assert args.opt == "-O1"
+    with pytest.raises(SystemExit):
+        cli.main(["check", "--help"])
+    assert "--opt O0|O1|O2|O3" in capsys.readouterr().out
+
+
+def test_a_wrong_optimization_level_is_refused(capsys):
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["check", "model.yaml", "--opt", "-O7"])
+    assert exc.value.code == 2
+    assert "--opt" in capsys.readouterr().err
