@@ -31,7 +31,8 @@ ROUTINES = ["constrained_forward_dynamics_derivatives", "impulse_dynamics_deriva
 BLOCKS = {"constrained_forward_dynamics_derivatives": 3, "impulse_dynamics_derivatives": 2,
           "forward_dynamics_derivatives": 2}  # the column blocks of n columns each
 MODELS = ["four_bar", "walking_machine_on_ground", "delta_robot", "four_bar+damped"]
-LOOPED = {"latex": False, "looped_above": 0}  # every routine with a column map looped (by default those above 50,000 operations)
+# every routine with a column map looped (by default, those above 50,000 operations)
+LOOPED = {"latex": False, "looped_above": 0}
 
 
 def with_routines(name):
