@@ -2,13 +2,16 @@
 environments (the XML their wheels ship) that has a joint.
 
 For each: load it with aggsym (``aggsym.load``, MuJoCo's compiler underneath), and compare A, d = b + g - passive
-and qacc with MuJoCo's ``mj_fullM``, ``qfrc_bias - qfrc_passive`` and ``mj_forward`` at random states and forces
+and qacc of the model as read and of its internal models (the frames the generated routines are built in) with
+MuJoCo's ``mj_fullM``, ``qfrc_bias - qfrc_passive`` and ``mj_forward`` at random states and forces
 (:func:`benchmarks.mujoco_reference.compare`: contacts, limits, equalities, frictionloss and actuators disabled,
 fluid forces zero, the model's own armature, damping, springs, tendon springs and dampers and gravity kept).  A
 model with equalities that are constraints (joint-space rows, connect, weld) is also compared as a hard constrained
 system: constrained_forward_dynamics against the dense KKT solve from MuJoCo's M and equality rows
 (:func:`benchmarks.mujoco_reference.compare_constrained`, within ``KKT_TOLERANCE``; MuJoCo's own equalities are
-soft).  A model that does not load is listed with aggsym's message (what is not supported yet).  Writes
+soft).  Its poses (every body's and site's frame, every body's centre of mass and inertia, the internal frames) are
+compared with MuJoCo's kinematics (:func:`benchmarks.mujoco_poses.compare_poses`, within ``POSE_TOLERANCE``).  A
+model that does not load is listed with aggsym's message (what is not supported yet).  Writes
 ``benchmarks/mjcf_corpus.json`` and prints the Markdown table of ``docs/mjcf.md``.
 
     python -m benchmarks.mjcf_corpus [--samples N]
@@ -21,6 +24,7 @@ import warnings
 from pathlib import Path
 
 TOLERANCE = 1e-9
+POSE_TOLERANCE = 1e-12  # benchmarks.mujoco_poses: positions relative to the model's size, rotations absolute
 KKT_TOLERANCE = 1e-8
 OUT = Path(__file__).with_name("mjcf_corpus.json")
 
@@ -73,6 +77,7 @@ def run(samples: int) -> list:
 
     from aggsym.mechanics.passive import has_passive
 
+    from .mujoco_poses import compare_poses
     from .mujoco_reference import compare, compare_constrained
 
     rows = []
@@ -93,9 +98,11 @@ def run(samples: int) -> list:
                     continue
             worst = compare(path, model=model, samples=samples)
             kkt = compare_constrained(path, model=model, samples=samples) if model.constraints else {}
-            agrees = max(worst.values()) <= TOLERANCE and all(v <= KKT_TOLERANCE for v in kkt.values())
+            poses = max(compare_poses(path, model=model, samples=samples).values())
+            agrees = (max(worst.values()) <= TOLERANCE and all(v <= KKT_TOLERANCE for v in kkt.values())
+                      and poses <= POSE_TOLERANCE)
             row.update(nq=model.nq, nv=model.nv, free=len(model.meta["mjcf"]["free_joints"]),
-                       worst={k: float(v) for k, v in worst.items()},
+                       worst={k: float(v) for k, v in worst.items()}, poses=float(poses),
                        constrained={k: float(v) for k, v in kkt.items()},
                        equalities=[kind_of(e["became"]) for e in model.meta["mjcf"].get("equalities", [])],
                        tendons=len(model.tendons), passive=has_passive(model),
@@ -112,13 +119,14 @@ def table(rows) -> str:
     refused = [r for r in counted if r["status"] == "refused"]
     differ = [r for r in counted if r["status"] == "DIFFERS"]
     lines = [f"{len(counted)} models with a joint: {len(agree)} load and agree with MuJoCo within "
-             f"{TOLERANCE:g} (relative; hard equalities against the dense KKT solve within {KKT_TOLERANCE:g}); "
+             f"{TOLERANCE:g} (relative; hard equalities against the dense KKT solve within {KKT_TOLERANCE:g}; "
+             f"poses within {POSE_TOLERANCE:g}); "
              f"{len(refused)} do not load (reason below); {len(differ)} load and differ.", "",
-             "| corpus | model | nq | nv | A | b + g - passive | passive | qacc | constrained qacc (KKT) | status |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "| corpus | model | nq | nv | A | b + g - passive | passive | qacc | constrained qacc (KKT) | poses | status |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in counted:
         if r["status"] == "refused":
-            lines.append(f"| {r['corpus']} | {r['model']} | | | | | | | | refused: {r['reason']} |")
+            lines.append(f"| {r['corpus']} | {r['model']} | | | | | | | | | refused: {r['reason']} |")
         else:
             w = r["worst"]
             kkt = f"{r['constrained']['qdd']:.1e}" if r.get("constrained") else ""
@@ -132,7 +140,7 @@ def table(rows) -> str:
                 notes.append(f"{r['tendons']} tendon spring(s)/damper(s)")
             note = f" ({'; '.join(notes)})" if notes else ""
             lines.append(f"| {r['corpus']} | {r['model']} | {r['nq']} | {r['nv']} | {w['A']:.1e} | {w['d']:.1e} | "
-                         f"{passive} | {w['qdd']:.1e} | {kkt} | {r['status']}{note} |")
+                         f"{passive} | {w['qdd']:.1e} | {kkt} | {r['poses']:.1e} | {r['status']}{note} |")
     skipped = [r["model"] for r in rows if r["status"].startswith("no joint")]
     if skipped:
         lines += ["", f"Without a joint (not counted): {', '.join(skipped)}."]

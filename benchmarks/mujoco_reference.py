@@ -103,16 +103,54 @@ class couplings:
         return x[self.keep]
 
 
-def mujoco_model(path):
-    """The compiled model with constraints and actuation disabled and no fluid (the comparison's MuJoCo)."""
+def compiled(source):
+    """MuJoCo's model of ``source``: an MJCF file's path (compiled, its warnings silenced: the reader has issued
+    them; no log file in the working folder), or an ``MjModel`` (a copy: :func:`mujoco_model` changes it)."""
+    import copy
+
     import mujoco
 
+    if isinstance(source, mujoco.MjModel):
+        return copy.deepcopy(source)
     previous = mujoco.get_mju_user_warning()
-    mujoco.set_mju_user_warning(lambda text: None)  # (the reader has issued them; no log file in the working folder)
+    mujoco.set_mju_user_warning(lambda text: None)
     try:
-        m = mujoco.MjModel.from_xml_path(str(path))
+        return mujoco.MjModel.from_xml_path(str(source))
     finally:
         mujoco.set_mju_user_warning(previous)
+
+
+def routine_models(model) -> list:
+    """The model as read and the internal models the generated routines of the coordinates alone may be built from
+    (:func:`aggsym.codegen.generate.internal_model` chooses one of the two of :func:`aggsym.model.reframe.reframe`
+    by operation count), each compared with MuJoCo: a frame chosen wrongly there reaches A without reaching the
+    model as read."""
+    from aggsym.model.reframe import reframe
+
+    out = [model]
+    for fewest in (False, True):
+        inner = reframe(model, fewest=fewest)
+        if inner is not model:
+            out.append(inner)
+    return out
+
+
+class Module:
+    """A generated NumPy (or JAX, PyTorch) module as an evaluator of :func:`compare`: ``call(role, *inputs)``."""
+
+    def __init__(self, module):
+        self.module = module
+
+    def call(self, role: str, *args):
+        return np.asarray(getattr(self.module, role)(*args), dtype=float)
+
+
+def mujoco_model(path):
+    """The compiled model with constraints and actuation disabled and no fluid (the comparison's MuJoCo); ``path``
+    an MJCF file or an ``MjModel`` (:func:`compiled`)."""
+    import mujoco
+
+    m = compiled(path)
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
     m.opt.density = 0.0
     m.opt.viscosity = 0.0
@@ -134,9 +172,13 @@ def reference_terms(m, data, qpos, qvel, force) -> tuple:
     return M, converted, J.T @ M @ J, J.T @ (M @ c + data.qfrc_bias - data.qfrc_passive)
 
 
-def compare(path, model=None, samples: int = 3, seed: int = 0) -> dict:
+def compare(path, model=None, samples: int = 3, seed: int = 0, internal: bool = True, evaluators=()) -> dict:
     """The largest relative differences {A, d, qdd, passive} over ``samples`` random states: max |aggsym - MuJoCo|
-    over max |MuJoCo| of each quantity."""
+    over max |MuJoCo| of each quantity; A, d and qdd of the model as read and (``internal``) of each of its
+    internal models (:func:`routine_models`).  ``path``: the MJCF file, or an ``MjModel`` with ``model`` its
+    aggsym model (:func:`aggsym.model.mjcf_reader.read_compiled`).  ``evaluators``: more objects whose
+    ``call(role, *inputs)`` evaluates the routines (the generated code: :class:`aggsym.codegen.compile.CLibrary`,
+    :class:`Module`), compared as the twin is, passive forces included."""
     import mujoco
 
     from aggsym.model import load
@@ -144,6 +186,7 @@ def compare(path, model=None, samples: int = 3, seed: int = 0) -> dict:
 
     model = load(path) if model is None else model
     twin = NumericTwin(model)
+    internal = [NumericTwin(inner) for inner in routine_models(model)[1:]] if internal else []
     m = mujoco_model(path)
     data = mujoco.MjData(m)
     rng = np.random.default_rng(seed)
@@ -158,21 +201,24 @@ def compare(path, model=None, samples: int = 3, seed: int = 0) -> dict:
             qacc_ref = coupled.kkt(A_ref, tau - d_ref)
             A_ref, d_ref = coupled.Jc.T @ A_ref @ coupled.Jc, coupled.Jc.T @ d_ref
             q, qd, tau = q[coupled.keep], qd[coupled.keep], tau[coupled.keep]
-            qacc = twin.call("forward_dynamics", q, qd, tau)
         else:
-            qacc, qacc_ref = J @ twin.call("forward_dynamics", q, qd, tau) + c, data.qacc
-        A = twin.call("inertia", q)
-        d = twin.call("nonlinear_effects", q, qd)
-        for key, mine, ref in (("A", A, A_ref), ("d", d, d_ref), ("qdd", qacc, qacc_ref)):
-            worst[key] = max(worst[key], float(np.max(np.abs(mine - ref)) / max(np.max(np.abs(ref)), 1e-300)))
+            qacc_ref = data.qacc
+        for each in [twin] + internal + list(evaluators):
+            qacc = each.call("forward_dynamics", q, qd, tau)
+            qacc = qacc if coupled is not None else J @ qacc + c
+            A = each.call("inertia", q)
+            d = each.call("nonlinear_effects", q, qd)
+            for key, mine, ref in (("A", A, A_ref), ("d", d, d_ref), ("qdd", qacc, qacc_ref)):
+                worst[key] = max(worst[key], float(np.max(np.abs(mine - ref)) / max(np.max(np.abs(ref)), 1e-300)))
         if has_passive(model):
-            mine = (twin.call("passive_forces", q, qd) if model.has_damping or model.tendons else
-                    -twin.call("elastic", q))
             ref = J.T @ data.qfrc_passive
             if coupled is not None:
                 ref = coupled.Jc.T @ ref
-            worst["passive"] = max(worst["passive"], float(np.max(np.abs(mine - ref)) /
-                                                           max(np.max(np.abs(ref)), 1e-300)))
+            for each in [twin] + list(evaluators):
+                mine = (each.call("passive_forces", q, qd) if model.has_damping or model.tendons else
+                        -each.call("elastic", q))
+                worst["passive"] = max(worst["passive"], float(np.max(np.abs(mine - ref)) /
+                                                               max(np.max(np.abs(ref)), 1e-300)))
     return worst
 
 

@@ -67,6 +67,7 @@ GRAPH = graph(PACKAGE)
 BENCH_GRAPH = graph(BENCHMARKS)
 # the benchmark, bottom to top: shared pieces (0), the sections (1), the report (2), the runner (3)
 BENCH_LAYERS = {"measure": 0, "chain": 0, "environment": 0, "robots": 0, "generation": 0, "mujoco_reference": 0,
+                "mujoco_poses": 0,
                 "casadi_peer": 1, "mjcf_corpus": 1, "compile_split": 1, "constrained": 1, "inputs": 1, "kane": 1, "opcounts": 1,
                 "runtime": 1, "scaling": 1, "slicing_runtime": 1, "trig": 1, "python_call": 1,
                 "constrained_derivatives": 1,

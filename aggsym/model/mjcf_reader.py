@@ -35,6 +35,8 @@ The mapping
   ``Model.damping``), ``stiffness_<coordinate>`` and ``springref_<coordinate>`` (``jnt_stiffness`` and
   ``qpos_spring``: an elastic pair, C (q - q0) of (2.27)), and always ``gravity_x gravity_y gravity_z``
   (``opt.gravity``, 0 when ``<flag gravity="disable">``).  ``<flag spring/damper="disable">`` leave those out.
+  ``meta["mjcf"]["qpos0"]`` (the manifest's ``mjcf.qpos0``): the file's configuration, MuJoCo's qpos0 (each
+  hinge's and slide's ``ref``, the free bodies' poses) as aggsym's q, the pose to start a simulation from.
   Fixed tendons with a ``stiffness`` or ``damping`` (``Model.tendons``, :mod:`aggsym.mechanics.joint_space`):
   ``tendon_stiffness_<tendon>``, ``tendon_springlength_<tendon>`` (``tendon_lengthspring``; a dead band lower <
   upper: ``tendon_springlower_<tendon>``, ``tendon_springupper_<tendon>``), ``tendon_damping_<tendon>``: the force
@@ -376,10 +378,28 @@ class _Reader:
                             "warnings": list(self.warnings),
                             "mjcf": self.summary(free_joints, sites, springs, dampers, flags)})
         model = dataclasses.replace(model, frames=default_frames(model))
+        home = dict(zip((name for name, _, _ in model.positions), self.home_pose()))
         model = with_equalities(self, model)
+        meta = dict(model.meta)
+        meta["mjcf"] = dict(meta["mjcf"], qpos0=[home[name] for name, _, _ in model.positions])
+        model = dataclasses.replace(model, meta=meta)
         if model.nv == 0:
             self.fail("", "the model has no joint; there are no equations of motion")
         return model
+
+    def home_pose(self) -> list:
+        """MuJoCo's ``qpos0`` (the file's configuration: a hinge's or slide's ``ref``, a free body's pose as the
+        file places it) as aggsym's q, before couplings: a free joint's x y z qx qy qz qw, a ball's qx qy qz qw."""
+        m, out = self.m, []
+        for j in range(m.njnt):
+            a = int(m.jnt_qposadr[j])
+            values = [float(v) for v in m.qpos0[a:a + {FREE: 7, BALL: 4}.get(int(m.jnt_type[j]), 1)]]
+            if m.jnt_type[j] == FREE:
+                values = values[:3] + values[4:] + values[3:4]
+            elif m.jnt_type[j] == BALL:
+                values = values[1:] + values[:1]
+            out.extend(values)
+        return out
 
     def ball(self, tree, ids, bodies_ids, parent, link, j, k, xyz, rotation, rate_parameters):
         """Ball joint ``j``, the ``k``-th and last joint of the body ``link``: a ball pair at its anchor, named
@@ -560,10 +580,22 @@ def load_mjcf(path, frictionloss: str = "list") -> Model:
         raise ModelError(path, "", f"MuJoCo's compiler refuses the file: {text[:2000]}") from None
     finally:
         mujoco.set_mju_user_warning(previous)
-    reader = _Reader(path, m, mujoco, frictionloss)
-    for text in said:
-        reader.warn("", f"MuJoCo's compiler warns: {' '.join(str(text).split())[:2000]}")
+    return read_compiled(m, path, frictionloss, [f"MuJoCo's compiler warns: {' '.join(str(t).split())[:2000]}"
+                                                 for t in said])
+
+
+def read_compiled(m, path, frictionloss: str = "list", warnings_said=()) -> Model:
+    """The model of an ``MjModel`` MuJoCo has compiled (from the file ``path``, named in messages and in the
+    model's ``source``): what :func:`load_mjcf` does after the compiler, for a model compiled otherwise (an
+    ``MjSpec`` edited in memory).  ``warnings_said``: texts issued first as :class:`ModelWarning` s."""
+    import mujoco
+
+    if frictionloss not in FRICTIONLOSS_OPTIONS:
+        raise ValueError(f"frictionloss must be one of {', '.join(FRICTIONLOSS_OPTIONS)}, got {frictionloss!r}")
+    reader = _Reader(Path(path), m, mujoco, frictionloss)
+    for text in warnings_said:
+        reader.warn("", text)
     return reader.read()
 
 
-__all__ = ["load_mjcf", "CONVENTION"]
+__all__ = ["load_mjcf", "read_compiled", "CONVENTION"]

@@ -62,7 +62,7 @@ MAX_CANDIDATES = 8  # origins tried per body by _origins (the first ones): paral
 # parent on as a projection, so without a bound a chain of n parallel axes had n candidates per body and the choice
 # took O(n^3) (a 200-link planar chain: 16 s); the arms of the benchmark have at most 4
 
-__all__ = ["reframe", "eligible"]
+__all__ = ["reframe", "eligible", "internal_frames"]
 
 
 def eligible(model: Model) -> bool:
@@ -256,6 +256,11 @@ def _origins(tree, t0, c0, axis, main, R, fewest=True) -> list:
     return [cand[k][choice[k]] for k in range(N)]
 
 
+def _own_offset(pair) -> sp.Expr:
+    """The constant a pair of the model as read adds to its one coordinate (:attr:`~.types.Pair.offset`), 0 if none."""
+    return pair.offset[0] if pair.offset else sp.Integer(0)
+
+
 def _float3(m) -> np.ndarray:
     return np.array([[float(m[i, j]) for j in range(3)] for i in range(3)])
 
@@ -266,8 +271,26 @@ def reframe(model: Model, normals: bool = True, fewest: bool = True) -> Model:
     axis (else the next axis of the URDF's frame after the joint axis); ``fewest``: the origins by
     :func:`_origins` (else each at the foot of the common normal with its parent's axis).  A model that is not :func:`eligible` is
     returned as it is."""
+    return _reframed(model, normals, fewest)[0]
+
+
+def internal_frames(model: Model, normals: bool = True, fewest: bool = True) -> tuple | None:
+    """Where :func:`reframe` ``(model, normals, fewest)`` puts each body's internal frame: per body (R, o), floats,
+    x_B = R x' + o in the body frame B of the model as read (the frames the internal model's kinematics places, so
+    that a test can set them against the poses of the model as read); None for a model that is not
+    :func:`eligible`."""
+    _, axes, places = _reframed(model, normals, fewest)
+    if axes is None:
+        return None
+    return tuple((tuple(tuple(float(a[i, j]) for j in range(3)) for i in range(3)), tuple(float(x) for x in o))
+                 for a, o in zip(axes, places))
+
+
+def _reframed(model: Model, normals: bool, fewest: bool) -> tuple:
+    """(the internal model, its frames' axes, their origins) of :func:`reframe`; (model, None, None) when the model
+    is not :func:`eligible`."""
     if not eligible(model):
-        return model
+        return model, None, None
     tree = Tree(model)
     N = len(tree)
     bodies = model.bodies
@@ -302,7 +325,9 @@ def reframe(model: Model, normals: bool = True, fewest: bool = True) -> Model:
         translation = tuple(_length(float(x), scale) for x in tr)
         turn = 0 if revolute[k] else offset  # a prismatic pair has no angle to take the turn: it stays constant
         rotation = tuple((a, v) for a, v in ((3, gamma_x), (1, alpha_x), (3, turn)) if v != 0)
-        offset = offset if revolute[k] else 0
+        # the pair's own offset (MJCF: -qpos0, a hinge's or a slide's ref) is carried as it is: the pair turns about
+        # (slides along) the same line by q + offset, and the internal frames, fixed on that line, commute with it
+        offset = (offset if revolute[k] else 0) + _own_offset(pairs[k])
         code = "theta6" if revolute[k] else "o3"
         coords = tuple(dataclasses.replace(c, code=code) for c in pairs[k].coordinates)
         pairs[k] = dataclasses.replace(pairs[k], translation=translation, rotation=rotation, coordinates=coords,
@@ -322,7 +347,8 @@ def reframe(model: Model, normals: bool = True, fewest: bool = True) -> Model:
             zero = (sp.Integer(0),) * 3
             inertial = Inertial(m, zero, (zero,) * 3, origin=(m, h, th))
         new.append(dataclasses.replace(b, pair=pairs[k], inertial=inertial, link_rotation=None))
-    return dataclasses.replace(model, bodies=tuple(new), frames=(), meta={**model.meta, "reframed": True})
+    internal = dataclasses.replace(model, bodies=tuple(new), frames=(), meta={**model.meta, "reframed": True})
+    return internal, axes, places
 
 
 def _numeric(form) -> bool:
