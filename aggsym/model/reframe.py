@@ -13,7 +13,8 @@ chosen as follows (x_B = R_k x' + o_k in the original body frame B of body k):
   with the largest subtree): the pair's constant motion is then ``T((a, 0, d)) C(c1(alpha))`` (the parameters
   of the modified Denavit-Hartenberg convention, with the distance d taken on the parent's axis), and the turn of
   the child's x axis about its own axis is an ``offset`` added to the coordinate (q + theta0, a revolute joint
-  only: the functional rotation is c3(q + theta0), one addition);
+  only: the functional rotation is c3(q + theta0), one addition; a pair's own offset, an MJCF joint's -ref, is
+  added to it, and a prismatic pair keeps its own);
 * other children (branches), children of a floating root and bodies after a prismatic joint (whose x axis is
   fixed by its parent, no offset) get ``T((a cos g, a sin g, d)) C(c3(g) c1(alpha))``;
 * the root keeps its frame; a leaf's x axis points to its centre of mass.
