@@ -10,7 +10,7 @@ At random qpos (hinges and slides uniform in [-pi, pi], balls and free joints ra
 * ``com``, ``inertia``: per aggsym body, its mass, centre of mass and inertia about it in world axes (its Mises
   matrix (2.3) moved by its world pose (1.13)) against those of the MuJoCo bodies merged into it (their masses at
   ``xipos``, their inertias ``ximat diag(body_inertia) ximat^T`` moved to the common centre);
-* ``internal``: per internal model (:func:`benchmarks.mujoco_reference.routine_models`), the world pose of each
+* ``internal``: per internal model (both of :func:`benchmarks.mujoco_reference.routine_models`), the world pose of each
   body's internal frame against the pose of the model as read composed with where
   :func:`aggsym.model.reframe.internal_frames` puts it.
 
@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .mujoco_reference import compiled, routine_models, states
+from .mujoco_reference import compiled, states
 
 
 def with_refs(path, rng, scale: float = 1.0):
@@ -89,8 +89,11 @@ def compare_poses(path, model=None, samples: int = 3, seed: int = 0) -> dict:
     bound = bind(model, numeric)
     names = bound.tree.names
     body_of = [names.index(offered[name].body) for name in bodies]  # MuJoCo body i + 1 -> aggsym body
-    internal = [(NumericTwin(inner), bind(inner, numeric), internal_frames(model, fewest=fewest))
-                for inner, fewest in zip(routine_models(model)[1:], (False, True))]
+    internal = []  # (bound internal model, its frames) of both internal models the routines may be built from
+    for fewest in (False, True):
+        inner, placements = internal_frames(model, fewest=fewest)
+        if placements is not None:
+            internal.append((bind(inner, numeric), placements))
     coupled = couplings(m, model) if model.couplings else None
     rng = np.random.default_rng(seed)
     worst = {"frame": 0.0, "rotation": 0.0, "com": 0.0, "inertia": 0.0, "internal": 0.0}
@@ -131,7 +134,7 @@ def compare_poses(path, model=None, samples: int = 3, seed: int = 0) -> dict:
                                    _rel(I, I_ref, scale))
             if com_ref is not None:
                 worst["com"] = max(worst["com"], _rel(com, com_ref, size))
-        for _, inner_bound, placements in internal:
+        for inner_bound, placements in internal:
             inner = world_poses(TreeKinematics(inner_bound, list(full)))
             for k, (R_int, o_int) in enumerate(placements):
                 R, o = np.array(poses[k].c, dtype=float), np.array(poses[k].o, dtype=float)

@@ -275,16 +275,16 @@ def reframe(model: Model, normals: bool = True, fewest: bool = True) -> Model:
     return _reframed(model, normals, fewest)[0]
 
 
-def internal_frames(model: Model, normals: bool = True, fewest: bool = True) -> tuple | None:
-    """Where :func:`reframe` ``(model, normals, fewest)`` puts each body's internal frame: per body (R, o), floats,
-    x_B = R x' + o in the body frame B of the model as read (the frames the internal model's kinematics places, so
-    that a test can set them against the poses of the model as read); None for a model that is not
-    :func:`eligible`."""
-    _, axes, places = _reframed(model, normals, fewest)
+def internal_frames(model: Model, normals: bool = True, fewest: bool = True) -> tuple:
+    """(:func:`reframe` ``(model, normals, fewest)``, where it puts each body's internal frame): per body (R, o),
+    floats, x_B = R x' + o in the body frame B of the model as read (the frames the internal model's kinematics
+    places, so that a test can set them against the poses of the model as read); (model, None) for a model that is
+    not :func:`eligible`."""
+    internal, axes, places = _reframed(model, normals, fewest)
     if axes is None:
-        return None
-    return tuple((tuple(tuple(float(a[i, j]) for j in range(3)) for i in range(3)), tuple(float(x) for x in o))
-                 for a, o in zip(axes, places))
+        return model, None
+    return internal, tuple((tuple(tuple(float(a[i, j]) for j in range(3)) for i in range(3)),
+                            tuple(float(x) for x in o)) for a, o in zip(axes, places))
 
 
 def _reframed(model: Model, normals: bool, fewest: bool) -> tuple:
