@@ -21,7 +21,7 @@ FLOATING_BASE_KINDS = ("euler", "quaternion")  # --floating-base KIND; bare --fl
 
 def _formats() -> str:
     """The readers and their suffixes, for the help (model.readers: one registry)."""
-    from .model.readers import READERS
+    from .model.readers.registry import READERS
 
     return ", ".join(f"{r.name}: {' '.join(r.suffixes + r.sniffed)}" for r in READERS)
 
@@ -29,7 +29,7 @@ def _formats() -> str:
 def _only(option: str, then: str) -> str:
     """The help's opening for an option that only some readers accept ("URDF only" and ``then``), from the
     readers' declarations."""
-    from .model.readers import listing, takers
+    from .model.readers.registry import listing, takers
 
     return f"{listing(takers(option))} only{then}"
 
@@ -171,7 +171,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def _load(args):
     from .model import load
-    from .model.readers import check_cli_options
+    from .model.readers.registry import check_cli_options
 
     path = Path(args.model)
     options = {"floating_base": args.floating_base} if args.floating_base else {}
@@ -208,11 +208,11 @@ def _load(args):
     if name is not None:
         model = dataclasses.replace(model, name=name)
     if args.constraints:
-        from .model.yaml_reader import load_constraints
+        from .model.readers.yaml_reader import load_constraints
 
         model = load_constraints(args.constraints, model)
     if args.support:
-        from .model.validate import support_problem
+        from .model.readers.validate import support_problem
 
         root = model.bodies[0].name
         problem = support_problem(model, root)
@@ -220,7 +220,7 @@ def _load(args):
             raise AggsymError(f"{path}: --support: {problem}")
         model = dataclasses.replace(model, support=root)
     if args.inertial_parameters is not None or args.payload is not None:
-        from .model.inertials import with_inertial_parameters
+        from .model.transforms.inertials import with_inertial_parameters
 
         links = [x.strip() for x in (args.inertial_parameters or "").split(",") if x.strip()]
         payloads = None if args.payload is None else [x.strip() for x in args.payload.split(",") if x.strip()]
@@ -228,15 +228,15 @@ def _load(args):
             raise AggsymError(f"{path}: --payload: no link named (e.g. --payload tool0)")
         model = with_inertial_parameters(model, links, payloads)
     if args.gravity_parameter:  # (after the inertial parameters: p keeps their indices, gravity comes last)
-        from .model.gravity import with_gravity_parameters
+        from .model.transforms.gravity import with_gravity_parameters
 
         model = with_gravity_parameters(model)
     if args.passive == "include":
-        from .model.joint_dynamics import with_passive_included
+        from .model.transforms.joint_dynamics import with_passive_included
 
         model = with_passive_included(model)
     if args.frames is not None:
-        from .model.frames import select_frames
+        from .model.transforms.frames import select_frames
 
         model = select_frames(model, [name.strip() for name in args.frames.split(",") if name.strip()])
     if args.routines is not None:
@@ -264,9 +264,9 @@ def _output_name(args, path: Path, reader) -> str | None:
     args.name_origin = None  # (the model's own name: codegen.generate.name_origin says where it is written)
     if reader.name == "YAML":
         return None
-    from .model.builder import mangle
+    from .model.readers.builder import mangle
 
-    from .model.readers import known_suffixes
+    from .model.readers.registry import known_suffixes
 
     stem = path.name
     while Path(stem).suffix.lower() in known_suffixes() and Path(stem).stem:  # (robot.urdf.xacro: robot)

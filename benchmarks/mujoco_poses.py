@@ -12,7 +12,7 @@ At random qpos (hinges and slides uniform in [-pi, pi], balls and free joints ra
   ``xipos``, their inertias ``ximat diag(body_inertia) ximat^T`` moved to the common centre);
 * ``internal``: per internal model (both of :func:`benchmarks.mujoco_reference.routine_models`), the world pose of each
   body's internal frame against the pose of the model as read composed with where
-  :func:`aggsym.model.reframe.internal_frames` puts it.
+  :func:`aggsym.model.transforms.reframe.internal_frames` puts it.
 
 A pose error anywhere (a reader's placement, an anchor, a joint's ``ref``, an internal frame's offset) fails here
 before it reaches A.  :func:`with_refs` gives a file's model with a ``ref`` on each hinge and slide, compiled by
@@ -33,7 +33,7 @@ def with_refs(path, rng, scale: float = 1.0):
     with 5 digits, compiled by MuJoCo from its ``MjSpec`` (qpos0 = ref; the bodies stay where the file puts them)."""
     import mujoco
 
-    from aggsym.model.mjcf_reader import read_compiled
+    from aggsym.model.readers.mjcf_reader import read_compiled
 
     spec = mujoco.MjSpec.from_file(str(path))
     for joint in spec.joints:
@@ -47,8 +47,8 @@ def with_refs(path, rng, scale: float = 1.0):
 
 
 def _names(m, kind, count, prefix, offset=0):
-    """The reader's names of MuJoCo's elements of one kind (aggsym.model.mjcf_reader._name)."""
-    from aggsym.model.mjcf_reader import _name
+    """The reader's names of MuJoCo's elements of one kind (aggsym.model.readers.mjcf_reader._name)."""
+    from aggsym.model.readers.mjcf_reader import _name
     import mujoco
 
     return [_name(m, mujoco, kind, i, prefix) for i in range(offset, count)]
@@ -67,8 +67,8 @@ def compare_poses(path, model=None, samples: int = 3, seed: int = 0) -> dict:
     from aggsym.mechanics.bound import bind
     from aggsym.mechanics.kinematics import TreeKinematics, world_poses
     from aggsym.model import load
-    from aggsym.model.frames import catalog, select_frames
-    from aggsym.model.reframe import internal_frames
+    from aggsym.model.transforms.frames import catalog, select_frames
+    from aggsym.model.transforms.reframe import internal_frames
     from aggsym.twin import NumericTwin
 
     from .mujoco_reference import couplings, to_aggsym

@@ -5,7 +5,7 @@ and the forward dynamics of aggsym's numeric twin against ``mj_fullM``, ``qfrc_b
 MuJoCo runs with its constraints (contacts, joint limits, equalities, frictionloss) and its actuators disabled and
 fluid forces set to zero (none of them is in the equations of motion); the model's own armature, damping, springs
 and gravity (and their disable flags) are kept.  A free joint's velocity is converted as the reader's convention
-says (``aggsym.model.mjcf_reader.CONVENTION``): with J = I except R (the body's rotation) on each free joint's
+says (``aggsym.model.readers.mjcf_reader.CONVENTION``): with J = I except R (the body's rotation) on each free joint's
 linear velocity, qvel = J v, MuJoCo's qacc = J qdd + c (c = R (w x v) on the free linear rows), so
 A = J^T M J, d = J^T (M c + qfrc_bias - qfrc_passive), tau = J^T qfrc_applied.  A ball joint's quaternion is
 reordered (MuJoCo's w x y z to aggsym's x y z w); its velocity, force and acceleration are MuJoCo's.
@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from aggsym.mechanics.passive import has_passive
-from aggsym.model.mjcf_reader import BALL, FREE
+from aggsym.model.readers.mjcf_reader import BALL, FREE
 
 
 def _quat(rng):
@@ -122,10 +122,10 @@ def compiled(source):
 
 def routine_models(model) -> list:
     """The model as read and the internal models the generated routines of the coordinates alone may be built from
-    (:func:`aggsym.codegen.generate.internal_model` chooses one of the two of :func:`aggsym.model.reframe.reframe`
+    (:func:`aggsym.codegen.generate.internal_model` chooses one of the two of :func:`aggsym.model.transforms.reframe.reframe`
     by operation count), each compared with MuJoCo: a frame chosen wrongly there reaches A without reaching the
     model as read."""
-    from aggsym.model.reframe import reframe
+    from aggsym.model.transforms.reframe import reframe
 
     out = [model]
     for fewest in (False, True):
@@ -176,7 +176,7 @@ def compare(path, model=None, samples: int = 3, seed: int = 0, internal: bool = 
     """The largest relative differences {A, d, qdd, passive} over ``samples`` random states: max |aggsym - MuJoCo|
     over max |MuJoCo| of each quantity; A, d and qdd of the model as read and (``internal``) of each of its
     internal models (:func:`routine_models`).  ``path``: the MJCF file, or an ``MjModel`` with ``model`` its
-    aggsym model (:func:`aggsym.model.mjcf_reader.read_compiled`).  ``evaluators``: more objects whose
+    aggsym model (:func:`aggsym.model.readers.mjcf_reader.read_compiled`).  ``evaluators``: more objects whose
     ``call(role, *inputs)`` evaluates the routines (the generated code: :class:`aggsym.codegen.compile.CLibrary`,
     :class:`Module`), compared as the twin is, passive forces included."""
     import mujoco

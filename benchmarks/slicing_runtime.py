@@ -3,7 +3,7 @@
 ``python -m benchmarks.slicing_runtime [OUT.json]``: Talos (the five benchmark routines, C, b and g) and the
 chains of 24 and 48 links of :mod:`benchmarks.chain` (the five), each generated twice as one NAME.c, with
 ``slicing=None`` and with the default slicing, the sliced one compiled twice, as generated (GCC on x86 compiles the
-slices for size, and A and A^-1 without its basic-block vectorizer: aggsym/templates/c/attributes.c.j2) and with
+slices for size, and A and A^-1 without its basic-block vectorizer: templates/c/attributes.c.j2) and with
 ``-DAGGSYM_AS_COMPILED`` (every function at -O2), all ``cc -O2 -std=c99`` beside a small timer generated here
 (64 random states, fixed seed, the same for both; ``p`` NULL, the defaults), then run in turn ROUNDS times, pinned to
 one CPU when ``taskset`` exists.  Each run reports per routine the best of REPS batches of ITERS calls (ns per call);

@@ -1,7 +1,7 @@
 """The generated C's aggsym_sincos against libm (issue 18, item 4): ns per sin-and-cos of a double.
 
 ``python -m benchmarks.trig`` (not part of ``make bench``'s run.py): renders the double aggsym_sincos of
-aggsym/templates/c/helpers.c.j2 into a header, builds benchmarks/harness/trig_bench.c with it (cc -O2, and -O2
+templates/c/helpers.c.j2 into a header, builds benchmarks/harness/trig_bench.c with it (cc -O2, and -O2
 -ffast-math), and times on the same 4096 arguments, uniform in [-pi, pi] (joint angles) and in [-1000, 1000]:
 libm's sin and cos called separately, GNU sincos (glibc), aggsym's helper of before (a quadrant switch; libm's
 sin and cos under -ffast-math), the generated branch-free aggsym_sincos, aggsym_sincos2 (two angles in the lanes of

@@ -1,11 +1,12 @@
 """The package's layers: imports only run downward, no module imports one that imports it back, and the mechanics
 never load the code generator; the same for the benchmark (``benchmarks/``), which sits above the package.
 
-Layers, bottom to top (docs/architecture.md, "Layers"): ``errors``, ``suggest`` ("did you mean") and ``collector``
-(the garbage collector paused); ``model`` (readers, the immutable model)
-and ``core`` (straight-line programs, backends), which do not know each other; ``mechanics`` (the book's
-recursions); ``contract`` (a package: the registry, the routines by domain, shapes, analyses, manifest); ``twin`` and ``symbolic`` (floats, SymPy);
-``codegen`` (printers, templates, compiling); ``cli``.
+Layers, bottom to top (docs/architecture.md, "The layers"): ``errors``, ``suggest`` ("did you mean") and ``collector``
+(the garbage collector paused); ``core`` (straight-line programs, backends); ``model`` (the immutable model, which
+holds its numbers as the core's expressions), in wings of its own, bottom to top: the types and the tree, the
+transforms of a model, the readers, then the pipeline and the package's face; ``mechanics`` (the book's
+recursions); ``contract`` (a package: the registry, the routines by domain, shapes, analyses, manifest); ``twin`` and
+``symbolic`` (floats, SymPy); ``codegen`` (printers, emission, targets, compiling); ``cli``.
 
 The benchmark's layers: what the sections share (measuring a child process, the chains, the host, the robots);
 the sections; the report, which reads back some sections' JSON; ``run``, which runs them all.
@@ -19,14 +20,10 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "aggsym"
 BENCHMARKS = PACKAGE.parent / "benchmarks"
-LAYERS = {"errors": 0, "collector": 0, "suggest": 0, "model": 1, "core": 1, "mechanics": 2, "contract": 3, "twin": 4, "symbolic": 4,
-          "codegen": 5, "templates": 5, "cli": 6, "__main__": 7}  # (templates: the targets' Jinja files, no import)
-# modules whose import must not bring the code generator (or jinja2) along
-LIGHT = ["aggsym", "aggsym.errors", "aggsym.contract", "aggsym.twin", "aggsym.symbolic"] + sorted(
-    f"aggsym.{p.parent.name}.{p.stem}" for folder in ("core", "mechanics", "model", "contract")
-    for p in (PACKAGE / folder).glob("*.py") if p.stem != "__init__")
-
-
+LAYERS = {"errors": 0, "collector": 0, "suggest": 0, "core": 1, "model": 2, "mechanics": 3, "contract": 4, "twin": 5,
+          "symbolic": 5, "codegen": 6, "cli": 7, "__main__": 8}
+# model/'s wings, bottom to top: the model's types, its transforms, its readers, the pipeline from a file to a model
+MODEL_WINGS = {"types": 0, "tree": 0, "transforms": 1, "readers": 2, "prepare": 3}
 def module_name(path: Path, root: Path = PACKAGE) -> str:
     parts = path.relative_to(root.parent).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
@@ -63,6 +60,10 @@ def graph(root: Path) -> dict:
     return {name: {m for m in targets if m in out and m != name} for name, targets in out.items()}
 
 
+# modules whose import must not bring the code generator (or jinja2) along
+LIGHT = ["aggsym", "aggsym.errors", "aggsym.contract", "aggsym.twin", "aggsym.symbolic"] + sorted(
+    module_name(p) for folder in ("core", "mechanics", "model", "contract")
+    for p in (PACKAGE / folder).rglob("*.py") if p.stem != "__init__")
 GRAPH = graph(PACKAGE)
 BENCH_GRAPH = graph(BENCHMARKS)
 # the benchmark, bottom to top: shared pieces (0), the sections (1), the report (2), the runner (3)
@@ -80,8 +81,34 @@ def layer(name: str) -> int:
     return -1 if len(parts) == 1 else LAYERS[parts[1]]
 
 
+def wing(name: str) -> int:
+    """The wing of a module of aggsym.model (the model package itself: above them all)."""
+    parts = name.split(".")
+    return MODEL_WINGS[parts[2]] if len(parts) > 2 else max(MODEL_WINGS.values()) + 1
+
+
 def test_every_module_has_a_layer():
     assert all(layer(m) >= -1 for m in GRAPH)
+    assert all(wing(m) >= 0 for m in GRAPH if m.startswith("aggsym.model"))
+
+
+def test_the_model_wings_import_downward():
+    """Within aggsym.model, the types and the tree import no wing, a transform never imports a reader, and nothing
+    but the model's own face imports the pipeline."""
+    upward = [(m, t) for m, targets in GRAPH.items() if m.startswith("aggsym.model.") for t in targets
+              if t.startswith("aggsym.model.") and wing(t) > wing(m)]
+    assert not upward, upward
+
+
+def test_the_wing_check_sees_a_transform_reading_a_file(tmp_path):
+    """A transform that imports a reader is an upward import between the wings."""
+    copy = tmp_path / "aggsym" / "model" / "transforms" / "gravity.py"
+    copy.parent.mkdir(parents=True)
+    copy.write_text((PACKAGE / "model" / "transforms" / "gravity.py").read_text()
+                    + "\nfrom ..readers.urdf_reader import load_urdf\n")
+    found = imports(copy, tmp_path / "aggsym")
+    assert "aggsym.model.readers.urdf_reader" in found
+    assert wing("aggsym.model.readers.urdf_reader") > wing("aggsym.model.transforms.gravity")
 
 
 def test_imports_run_downward():

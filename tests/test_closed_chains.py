@@ -20,7 +20,7 @@ import pytest
 
 import aggsym
 import constraint_reference as cr
-from aggsym.model.yaml_reader import load_constraints
+from aggsym.model.readers.yaml_reader import load_constraints
 from aggsym.twin import NumericTwin
 from conftest import model_path
 from constraint_reference import Constraint

@@ -17,7 +17,7 @@ import pytest
 
 import aggsym
 from aggsym import cli
-from aggsym.model.yaml_reader import load_constraints
+from aggsym.model.readers.yaml_reader import load_constraints
 from aggsym.twin import NumericTwin
 from conftest import model_path
 from helpers import generated_code, relative_error, rk4_step, robot_path

@@ -288,7 +288,7 @@ def test_the_function_table_agrees_with_itself():
     from aggsym.core.backend import Numeric
     from aggsym.core.dual import Dual, DualBackend
     from aggsym.core.functions import FUNCTIONS, GRAMMAR
-    from aggsym.model.expressions import parse_value
+    from aggsym.model.readers.expressions import parse_value
 
     assert set(FUNCTIONS) - set(GRAMMAR) == {"sign"}
     dual = DualBackend(Numeric())

@@ -1,7 +1,7 @@
 """The internal model is the model as read, to round-off, on files as calibration and rounding write them (issue 30,
 point 1).
 
-The routines of the coordinates alone run on internal frames (:mod:`aggsym.model.reframe`), chosen from the
+The routines of the coordinates alone run on internal frames (:mod:`aggsym.model.transforms.reframe`), chosen from the
 file's geometry with tolerances.  A tolerance may choose between exact computations; it must never replace a value
 by a nearby one.  Nearly parallel or nearly intersecting axes are where such a choice used to cost digits (the feet
 of the common normal of axes 1e-6 rad from parallel lie a million lengths away) or move the robot (axes "parallel"
@@ -27,7 +27,7 @@ import aggsym
 from aggsym.contract import ROUTINES, run
 from aggsym.core.backend import Numeric
 from aggsym.mechanics.bound import bind
-from aggsym.model.reframe import reframe
+from aggsym.model.transforms.reframe import reframe
 from helpers import ROBOTS, relative_error, robots_directory
 from pinocchio_reference import pin, pinocchio_model, pinocchio_q
 from random_trees import random_urdf

@@ -13,8 +13,8 @@ import pytest
 import sympy as sp
 
 from aggsym import cli
-from aggsym.model import expressions as ex
-from aggsym.model.expressions import ExpressionError, check_supported, evaluate, parse_value
+from aggsym.model.readers import expressions as ex
+from aggsym.model.readers.expressions import ExpressionError, check_supported, evaluate, parse_value
 
 A, B = sp.Symbol("a", real=True), sp.Symbol("b", real=True)
 SYMBOLS = {"a": A, "b": B}

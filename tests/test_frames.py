@@ -17,7 +17,7 @@ import pytest
 
 import aggsym
 from aggsym.errors import AggsymError, ModelWarning
-from aggsym.model.frames import catalog, select_frames
+from aggsym.model.transforms.frames import catalog, select_frames
 from aggsym.twin import NumericTwin
 from conftest import model_path
 from helpers import coupled_gripper, generated_code, reduction, relative_error, robot_path

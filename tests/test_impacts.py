@@ -25,7 +25,7 @@ import pytest
 import aggsym
 from aggsym.contract import sample_configurations, select_routines
 from aggsym.errors import AggsymError, ModelError
-from aggsym.model.yaml_reader import load_constraints
+from aggsym.model.readers.yaml_reader import load_constraints
 from aggsym.twin import NumericTwin
 from conftest import model_path
 from helpers import generated_code, relative_error

@@ -47,7 +47,7 @@ from aggsym.codegen.compile import CLibrary, compile_shared
 from aggsym.codegen.generate import generate, write
 from aggsym.contract import sample_configurations, select_routines
 from aggsym.errors import ModelWarning
-from aggsym.model.yaml_reader import load_constraints
+from aggsym.model.readers.yaml_reader import load_constraints
 from aggsym.twin import NumericTwin
 from helpers import relative_error, robot_path
 from pinocchio_reference import pin, pinocchio_q, pinocchio_tree

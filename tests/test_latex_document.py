@@ -238,7 +238,7 @@ def test_parameter_symbols_are_short_and_unique():
     """Book-style names stay (m, l, w, g); other names are p_k (their index in p); a link's inertial parameters
     are m_l, (m c_x)_l, I_xx,l and a payload's m_P ...; the intermediates take a letter no symbol uses (the
     spacecraft's coordinates include x_11, so its intermediates are w_k)."""
-    from aggsym.model.inertials import with_inertial_parameters
+    from aggsym.model.transforms.inertials import with_inertial_parameters
 
     cart = Notation(aggsym.load(model_path("cart_on_moving_platform")))
     assert [(p.name, p.symbol) for p in cart.parameters] == [

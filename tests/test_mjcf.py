@@ -20,7 +20,7 @@ import pytest
 
 from aggsym import cli
 from aggsym.model import load
-from aggsym.model import mjcf_source
+from aggsym.model.readers import mjcf_source
 from aggsym.twin import NumericTwin
 
 mujoco = pytest.importorskip("mujoco")
@@ -151,7 +151,7 @@ def test_parameters_change_the_equations(scene):
 
 def test_sites_and_bodies_are_frames(scene, tmp_path):
     """Every body and site is a frame (--frames): their poses are MuJoCo's xpos/xmat and site_xpos/site_xmat."""
-    from aggsym.model.frames import select_frames
+    from aggsym.model.transforms.frames import select_frames
 
     names = ["world", "base", "upper", "lower", "ball", "lid", "origin_mark", "elbow_site", "lid_corner"]
     model = select_frames(load(scene), names)
@@ -333,7 +333,7 @@ def test_inertial_parameters_of_a_body_against_mujoco(scene):
     that body_mass (inertia about the centre of mass kept, as MuJoCo keeps body_inertia).  (A hundredfold mass
     makes A's condition number 3e4 and the test's own float arithmetic of the parameters, I about the origin from
     I about the centre of mass, loses 1e-13: beyond 1e-9 in q''.)"""
-    from aggsym.model.inertials import with_inertial_parameters
+    from aggsym.model.transforms.inertials import with_inertial_parameters
 
     model = with_inertial_parameters(load(scene), ["lid"])
     twin = NumericTwin(model)
@@ -367,7 +367,7 @@ def test_inertial_parameters_of_a_body_against_mujoco(scene):
 
 def test_energy_holds_the_rotors_and_a_constraint_on_a_body(scene, tmp_path):
     """T = 1/2 qd^T A qd with the armature (a free joint's too) in A; a --constraints side file names MJCF bodies."""
-    from aggsym.model.yaml_reader import load_constraints
+    from aggsym.model.readers.yaml_reader import load_constraints
 
     model = load(scene)
     twin = NumericTwin(model)

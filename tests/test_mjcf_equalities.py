@@ -343,7 +343,7 @@ def test_a_side_file_adds_to_the_equalities(tmp_path):
     """--constraints on an MJCF model with a connect: the side file's constraints come after the file's own (none
     dropped); a name the file already uses is refused."""
     from aggsym.errors import ModelError
-    from aggsym.model.yaml_reader import load_constraints
+    from aggsym.model.readers.yaml_reader import load_constraints
 
     model = load(write(tmp_path, FOUR_BAR))
     side = write(tmp_path, "constraints:\n  - name: tip\n    body: a\n    point: [0.3, 0, 0]\n    block: normal\n",

@@ -74,7 +74,7 @@ def test_the_pose_check_sees_a_frame_error(tmp_path, monkeypatch):
     """An internal frame whose offset is dropped (the bug of issue 49) and a body placed 1e-9 off fail the check."""
     import sympy as sp
 
-    import aggsym.model.reframe as reframe
+    import aggsym.model.transforms.reframe as reframe
 
     path = tmp_path / "m.xml"
     path.write_text(mjcf_probes.ISSUE)

@@ -3,7 +3,7 @@
 The single-feature probes of tests/mjcf_probes.py, each generated (C and NumPy) and compared with MuJoCo: M, the
 velocity and gravity terms with the passive forces, the passive forces and qacc within 1e-12 relative, the
 hard equalities against the dense KKT solve from MuJoCo's own M and rows.  The generated routines of the
-coordinates alone are built in internal frames (aggsym.model.reframe), which once dropped a pair's own offset: the
+coordinates alone are built in internal frames (aggsym.model.transforms.reframe), which once dropped a pair's own offset: the
 issue's probe had A off by 34 %, q̈ by 69 %, with no word.  Then what else reads qpos0: the manifest's pose of the
 file, the limits (in qpos), ``integrate`` against MuJoCo's ``mj_integratePos``, the spring rest and the equalities
 (in the probes).

@@ -13,7 +13,7 @@ import pytest
 import aggsym
 from aggsym.contract import select_routines
 from aggsym.errors import AggsymError
-from aggsym.model.inertials import NAMES, welded_bodies, with_inertial_parameters
+from aggsym.model.transforms.inertials import NAMES, welded_bodies, with_inertial_parameters
 from aggsym.mechanics.regressor import standard_parameters
 from aggsym.twin import NumericTwin
 from conftest import model_path

@@ -1,6 +1,6 @@
 """The readers' fast number paths give exactly what SymPy's general ones give: ``float_number`` and ``double``
-(aggsym.model.sympy_numbers) against ``sp.Float`` and ``float``, and the URDF reader's tuple arithmetic
-(aggsym.model.link_numbers) against SymPy's ``Matrix`` operations, entry for entry (same value, same type, same
+(aggsym.model.readers.sympy_numbers) against ``sp.Float`` and ``float``, and the URDF reader's tuple arithmetic
+(aggsym.model.readers.link_numbers) against SymPy's ``Matrix`` operations, entry for entry (same value, same type, same
 precision)."""
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import random
 
 import sympy as sp
 
-from aggsym.model import link_numbers as ln
-from aggsym.model.sympy_numbers import double, float_number
+from aggsym.model.readers import link_numbers as ln
+from aggsym.model.readers.sympy_numbers import double, float_number
 
 EDGE_DOUBLES = [5e-324, -5e-324, 2.2250738585072014e-308, 1.7976931348623157e308, -1.7976931348623157e308, 0.1,
                 1.0, -3.0, 2.0 ** 53, 2.0 ** 53 + 2, 1e15, 1e-15, 0.0, -0.0, math.inf, -math.inf]

@@ -1,4 +1,4 @@
-"""The reader registry (aggsym/model/readers.py) and the typed links of a model (Model.links)."""
+"""The reader registry (aggsym/model/readers/registry.py) and the typed links of a model (Model.links)."""
 from __future__ import annotations
 
 import dataclasses
@@ -9,8 +9,8 @@ import pytest
 
 import aggsym
 from aggsym.errors import AggsymError, ModelError
-from aggsym.model import readers
-from aggsym.model.readers import Reader, check_cli_options, reader_for, register
+from aggsym.model.readers import registry as readers
+from aggsym.model.readers.registry import Reader, check_cli_options, reader_for, register
 from aggsym.model.types import LinkFrame, Links
 
 from conftest import model_path

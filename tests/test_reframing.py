@@ -1,4 +1,4 @@
-"""Internal body frames and grouped inertia (issue 18, item 7; :mod:`aggsym.model.reframe`).
+"""Internal body frames and grouped inertia (issue 18, item 7; :mod:`aggsym.model.transforms.reframe`).
 
 The routines of the coordinates alone (``Routine.frame_free``) are generated from an internal model whose body
 frames put each joint axis on e3 (modified-DH-like constant motions, offsets on the coordinates) and whose Mises
@@ -16,8 +16,8 @@ from aggsym.codegen.generate import internal_model
 from aggsym.contract import ROUTINES, run
 from aggsym.core.backend import Numeric
 from aggsym.mechanics.bound import bind
-from aggsym.model.inertials import with_inertial_parameters
-from aggsym.model.reframe import eligible, reframe
+from aggsym.model.transforms.inertials import with_inertial_parameters
+from aggsym.model.transforms.reframe import eligible, reframe
 from helpers import TOLERANCE, generated_code, relative_error, robots_directory
 from pinocchio_reference import pin, pinocchio_model, pinocchio_q
 from random_trees import random_urdf
@@ -161,7 +161,7 @@ def test_a_long_chain_of_parallel_axes_keeps_the_origin_search_small(tmp_path, r
     axes had n candidates per body and the search O(n^3) (a 200-link planar chain took 16 s).  With at most
     MAX_CANDIDATES per body the search's cost evaluations stay within n K^2 + n K, and the internal model of such a
     chain still gives Pinocchio's dynamics."""
-    from aggsym.model import reframe as module
+    from aggsym.model.transforms import reframe as module
 
     n = 60
     links = ['<robot name="planar">', '<link name="l0"/>']
@@ -214,7 +214,7 @@ def test_numeric_grouping_is_the_symbolic_one_without_its_round_off(robot, monke
     for inertias in p: both give the same Mises matrices to 1e-13 of each body's largest entry, and an entry that
     SymPy leaves at round-off size (HyQ's hips: h3 = 6.8e-21 kg m, from lengths that cancel) is exactly 0, so the
     routines carry no product by it."""
-    from aggsym.model import reframe as module
+    from aggsym.model.transforms import reframe as module
 
     calls = []
     numbers = module._grouped_numbers

@@ -28,9 +28,9 @@ from aggsym import cli
 from aggsym.codegen.compile import CLibrary, compile_shared, compiler, import_module
 from aggsym.codegen.generate import generate, write
 from aggsym.errors import AggsymError
-from aggsym.model.gravity import with_gravity_parameters
-from aggsym.model.inertials import with_inertial_parameters
-from aggsym.model.joint_dynamics import with_passive_included
+from aggsym.model.transforms.gravity import with_gravity_parameters
+from aggsym.model.transforms.inertials import with_inertial_parameters
+from aggsym.model.transforms.joint_dynamics import with_passive_included
 from aggsym.twin import NumericTwin
 from helpers import relative_error, robot_path
 from pinocchio_reference import pin, pinocchio_q

@@ -1,4 +1,4 @@
-"""The generated C's aggsym_sincos (aggsym/templates/c/helpers.c.j2; issue 18, item 4): one branch-free sin-and-cos per
+"""The generated C's aggsym_sincos (templates/c/helpers.c.j2; issue 18, item 4): one branch-free sin-and-cos per
 angle, within 2 ulp of libm's sin and cos over [-1e6, 1e6], equal to libm's at the double nearest every k pi/2,
 libm's own values outside |x| < 1e6 and for nan and inf, and all of this also when compiled with -ffast-math;
 and the same of aggsym_sincos2, two angles at once in the lanes of one vector (each test runs on both).

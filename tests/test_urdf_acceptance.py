@@ -14,7 +14,7 @@ import pytest
 import aggsym
 from aggsym.errors import ModelError, ModelWarning
 from aggsym.model.types import JointDynamics, JointLimits
-from aggsym.model.builder import MAX_ROTATIONS
+from aggsym.model.readers.builder import MAX_ROTATIONS
 from helpers import robots_directory
 from pinocchio_reference import pin, compare, joint_names, pinocchio_model
 

@@ -16,8 +16,8 @@ import pytest
 import aggsym
 from aggsym import cli
 from aggsym.errors import ModelError
-from aggsym.model import urdf_reader, xml_source
-from aggsym.model.validate import order_tree
+from aggsym.model.readers import urdf_reader, xml_source
+from aggsym.model.readers.validate import order_tree
 
 INERTIA = '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>'
 INERTIAL = f'<inertial><mass value="1"/>{INERTIA}</inertial>'

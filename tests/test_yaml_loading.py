@@ -81,7 +81,7 @@ def test_the_shortcut_resolver_gives_the_safe_loaders_tags_and_values():
 
     import yaml
 
-    from aggsym.model.yaml_source import _PLAIN_TAGS, _Composer, _Doc
+    from aggsym.model.readers.yaml_source import _PLAIN_TAGS, _Composer, _Doc
 
     for word in RESOLVER_CASES:
         ours = yaml.compose(f"a: {word}", Loader=_Composer).value[0][1].tag

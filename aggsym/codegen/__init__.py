@@ -1,1 +1,1 @@
-"""Straight-line programs, CSE, operation counts, rendering through the targets (templates in aggsym/templates/), compiling."""
+"""Straight-line programs, CSE, operation counts, rendering through the targets (templates in templates/), compiling."""

@@ -5,7 +5,7 @@ The recursions run once on the symbolic backend into one shared straight-line pr
 all routines); each routine's outputs are then cut out of it (:func:`aggsym.core.program.straight_line`),
 printed as C (always: the operation counts are the C's) and by every chosen target
 (:meth:`~.targets.base.Target.print_routine`), and the targets render their files from the Jinja templates
-(layout only; a folder per target in the package data ``aggsym.templates``, ``aggsym/templates/``).  What a routine is called,
+(layout only; a folder per target in the package data ``aggsym.templates``, ``templates/``).  What a routine is called,
 takes and returns comes from :mod:`aggsym.contract`.  Files are written only after everything has been
 generated, through a temporary folder, so a failure leaves the output folder as it was.
 """
@@ -31,8 +31,8 @@ from ..core.backend import Symbolic
 from ..core.program import straight_line
 from ..mechanics.bound import bind, program_operations
 from ..mechanics.kinematics import TreeKinematics
-from ..model.joint_dynamics import passive_entry, routine_notes
-from ..model.reframe import reframe
+from ..model.transforms.joint_dynamics import passive_entry, routine_notes
+from ..model.transforms.reframe import reframe
 from ..model.tree import Tree
 from ..collector import collector_paused
 from ..errors import AggsymError, ModelError, ModelWarning
@@ -101,7 +101,7 @@ COUNTED_UP_TO = 64  # coordinates: above, the first internal model is taken with
 
 def internal_model(model):
     """The model the routines of the coordinates alone (``Routine.frame_free``) are built from: the model as read
-    when it is not :func:`~aggsym.model.reframe.eligible`, else of its two internal models (origins at the feet of
+    when it is not :func:`~aggsym.model.transforms.reframe.eligible`, else of its two internal models (origins at the feet of
     the common normals, or chosen for the fewest translation components) the one whose inverse plus forward
     dynamics take the fewest operations (the first of equals; x axes along the common normals: on the arms of
     the benchmark the URDF's own x axes were never better).  Counting both costs two scratch programs of the

@@ -6,7 +6,7 @@ The user gives what a URDF ``<inertial>`` gives, in the link frame: the mass m, 
 from the link frame's origin) and the inertia tensor about the centre of mass in link axes,
 I = (ixx, ixy, ixz, iyy, iyz, izz) in URDF's attribute order, whose off-diagonal entries are the tensor's (ixy =
 -integral of x y dm, as URDF and Pinocchio read them).  p holds the regressor's form about the link frame's
-origin (:mod:`aggsym.model.inertials`): m, m c, and the parallel-axis theorem I_O = I + m (|c|^2 E - c c^T), in
+origin (:mod:`aggsym.model.transforms.inertials`): m, m c, and the parallel-axis theorem I_O = I + m (|c|^2 E - c c^T), in
 the order Ixx, Ixy, Iyy, Ixz, Iyz, Izz.  The helper does that arithmetic; the expressions are written here once and
 spelled by each target (C arrays ``c[0]``, batched Python ``c[..., 0]``).
 """

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from .. import __version__
 from ..mechanics import elastic
-from ..model.joint_dynamics import passive_entry
+from ..model.transforms.joint_dynamics import passive_entry
 from .registry import ROUTINES, input_length, signature
 
 

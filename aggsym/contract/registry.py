@@ -53,11 +53,11 @@ class Routine:
     input_lengths: Callable | None = None  # model -> {input: length} where it is not q's (the support routines)
     on_request: bool = False  # emitted only when named (--routines): large outputs that few users need
     frame_free: bool = False  # its outputs depend on the coordinates alone, not on the body frames nor on how the
-    # inertia is shared between bodies: generated from the internal model (aggsym.model.reframe).  Not the Coriolis
+    # inertia is shared between bodies: generated from the internal model (aggsym.model.transforms.reframe).  Not the Coriolis
     # matrix: of the many C with C qd = b and A' - 2C skew, the one built from the bodies' B (2.17) depends on them
     slice_size: int | None = None  # the C's slices (aggsym.codegen.slicing) where smaller than the default's run faster
     scalar_stores: bool = False  # a symmetric matrix: its C compiled without GCC's basic-block vectorizer
-    # (AGGSYM_SCALAR_STORES, aggsym/templates/c/attributes.c.j2), which packs the neighbouring stores into shuffled vectors
+    # (AGGSYM_SCALAR_STORES, templates/c/attributes.c.j2), which packs the neighbouring stores into shuffled vectors
 
     @property
     def written(self) -> tuple:

@@ -2,7 +2,7 @@
 
 Each :class:`Function` holds its name (the program's operation code), its number of arguments, its value on
 Python floats (constant folding, :meth:`aggsym.core.program.Program.evaluate`, the model's
-:func:`aggsym.model.expressions.evaluate`), its NumPy and SymPy forms (the numeric backend, ``to_sympy``, the
+:func:`aggsym.model.readers.expressions.evaluate`), its NumPy and SymPy forms (the numeric backend, ``to_sympy``, the
 conversion of a model's SymPy expressions), whether a model file may call it (the expression grammar) and its
 derivative rule (the dual numbers, :mod:`aggsym.core.dual`).  The printed spelling of each function is its
 target's (``aggsym/codegen/targets/``), keyed by these names.  NumPy and SymPy are imported only when a form is

@@ -162,7 +162,7 @@ class TreeKinematics:
         self.free = [b.pair.quaternion for b in bound.model.bodies]  # free-flyer and ball pairs: constant M F
         for k, body in enumerate(bound.bodies):
             qv = [q[i] for i in self.tree.positions[k]]
-            if body.offset is not None:  # internal frames (aggsym.model.reframe): c(q + offset)
+            if body.offset is not None:  # internal frames (aggsym.model.transforms.reframe): c(q + offset)
                 qv = [x + d for x, d in zip(qv, body.offset)]
             if self.free[k]:
                 functional, psi, rots = free_flyer(qv)

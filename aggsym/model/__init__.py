@@ -9,16 +9,16 @@ from ..errors import ModelError
 from .tree import Tree
 from .types import (COORDINATE_CODES, WORLD, Body, Coordinate, Coupling, Inertial, LinkFrame, Links, Model, Pair,
                     Parameter)
-from .readers import READERS, Reader, reader_for, register
-from .urdf_reader import load_urdf
-from .yaml_reader import load_yaml
+from .readers.registry import READERS, Reader, reader_for, register
+from .readers.urdf_reader import load_urdf
+from .readers.yaml_reader import load_yaml
 
 
 def load(path, **options) -> Model:
     """Read a model from a file; the reader is chosen by the suffix (``.yaml``/``.yml``, ``.urdf``; a shared
-    suffix such as ``.xml`` by the content): :mod:`aggsym.model.readers`.  ``options`` go to the reader
+    suffix such as ``.xml`` by the content): :mod:`aggsym.model.readers.registry`.  ``options`` go to the reader
     (``load_urdf``'s ``floating_base``, ``mimic``, ``snap_angles``; for ``.xacro`` also ``xacro_args`` and
-    ``package_paths``, :mod:`aggsym.model.xacro_reader`)."""
+    ``package_paths``, :mod:`aggsym.model.readers.xacro_reader`)."""
     with collector_paused():
         return _load(Path(path), options)
 

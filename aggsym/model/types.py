@@ -89,7 +89,7 @@ class JointDynamics:
     """A URDF joint's ``<dynamics damping= friction=>``: viscous damping d (N m s/rad, or N s/m for a prismatic
     joint) and Coulomb friction f (N m, or N), each None where the file gives none.  They describe the generalized
     force tau_f = -d qd - f sign(qd) along the coordinate: the routine ``joint_friction``, and in forward and inverse
-    dynamics under ``--passive include`` (:mod:`aggsym.model.joint_dynamics`)."""
+    dynamics under ``--passive include`` (:mod:`aggsym.model.transforms.joint_dynamics`)."""
 
     damping: float | None = None
     friction: float | None = None
@@ -176,7 +176,7 @@ class Pair:
     # three coordinates theta4 theta5 theta6 the angular velocity w of the body relative to its parent, in the
     # body's axes.  Empty for every other pair: its entries of q are its coordinates.
     offset: tuple = ()  # per coordinate, a constant added to it in the functional configuration: the pair moves by
-    # c(q + offset) (internal frames of aggsym.model.reframe); empty: none
+    # c(q + offset) (internal frames of aggsym.model.transforms.reframe); empty: none
 
     @property
     def quaternion(self) -> bool:
@@ -474,7 +474,7 @@ class Model:
     constraints: tuple = ()  # Constraint: bilateral constraints with the medium and closed loops (chapter 4)
     stabilization: tuple = (0, 0)  # (kp, kd) expressions: Baumgarte terms J qdd + gamma = -(kd J qd + kp phi)
     support: str | None = None  # the support body (the support paper): its 6 coordinates are q, the others gamma
-    frames: tuple = ()  # Frame: the frames of the frame routines, in output order (see aggsym.model.frames)
+    frames: tuple = ()  # Frame: the frames of the frame routines, in output order (see aggsym.model.transforms.frames)
     routines: tuple | None = None  # the routines to emit (--routines), None: the contract's default set
     regularization: object = 0  # epsilon: constrained forward dynamics solves (J A^-1 J^T + epsilon E) lambda = ...
     proximal: tuple = ()  # (mu expression, iterations): the damped (proximal) solve of the Delassus system

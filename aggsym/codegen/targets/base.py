@@ -53,7 +53,7 @@ class Target:
     stage: str = "templates"  # the progress line its rendering is timed under
     column: str = ""  # its heading in ``aggsym check``'s table (with a :meth:`runner`)
     checked_by_default: bool = True  # ``aggsym check`` without --targets generates and runs it (where it can)
-    folder: str = ""  # its templates' folder in the package data aggsym.templates (aggsym/templates/FOLDER)
+    folder: str = ""  # its templates' folder in the package data aggsym.templates (templates/FOLDER)
     templates: tuple = ()  # the templates it renders from that folder (documentation; layout only)
     lines: frozenset = frozenset()  # the roles whose straight lines it needs at rendering (Job.lines)
 
@@ -130,7 +130,7 @@ def file_pattern(name: str, suffixes) -> re.Pattern:
 
 def environment(root=None) -> jinja2.Environment:
     """A Jinja environment over the folder ``root`` (default: the package data ``aggsym.templates``,
-    ``aggsym/templates/``), with StrictUndefined and the escaping filters of :mod:`aggsym.codegen.escape` (user
+    ``templates/``), with StrictUndefined and the escaping filters of :mod:`aggsym.codegen.escape` (user
     text reaches a template only through them).  A target's templates are in a folder of their own there
     (:meth:`Target.template`)."""
     root = files("aggsym.templates") if root is None else root

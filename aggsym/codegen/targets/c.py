@@ -57,7 +57,7 @@ class EmittedRoutine:
 
     @property
     def zeros(self) -> bool:
-        """Whether its C writes a chunk of zero entries with AGGSYM_ZEROS (aggsym/templates/c/attributes.c.j2)."""
+        """Whether its C writes a chunk of zero entries with AGGSYM_ZEROS (templates/c/attributes.c.j2)."""
         return any(line.startswith("AGGSYM_ZEROS(") for line in self.c_body)
 
 
@@ -230,7 +230,7 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
     return emitted, RoutineLines(sl, names, outputs, zeros, trig, shared, scalar == "double")
 
 
-# The bytes AGGSYM_ZEROS writes at once (aggsym/templates/c/attributes.c.j2): 2 doubles, 4 floats
+# The bytes AGGSYM_ZEROS writes at once (templates/c/attributes.c.j2): 2 doubles, 4 floats
 ZERO_BYTES = 16
 SCALAR_BYTES = {"double": 8, "float": 4}
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from ..errors import ModelError
+from ...errors import ModelError
 
 SNIFF_BYTES = 4096  # what sniff sees of a file whose suffix is shared
 
@@ -142,7 +142,7 @@ def takers(option: str) -> list:
 def check_cli_options(path, given) -> Reader:
     """The file's reader; an error naming the reader and the option when it does not accept one of ``given``
     (the command-line options the user gave that not every model takes)."""
-    from ..errors import AggsymError
+    from ...errors import AggsymError
 
     reader = reader_for(path)
     refused = [o for o in given if o not in reader.cli_options]

@@ -32,9 +32,9 @@ import warnings
 import numpy as np
 import sympy as sp
 
-from ..errors import AggsymError, ModelWarning
-from ..suggest import did_you_mean
-from .types import WORLD, Inertial, InertialBlock, Model, Parameter
+from ...errors import AggsymError, ModelWarning
+from ...suggest import did_you_mean
+from ..types import WORLD, Inertial, InertialBlock, Model, Parameter
 
 NAMES = ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
 _ENTRIES = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))

@@ -2,7 +2,7 @@
 
 Every mistake is reported as :class:`ModelError` with the file, the element (``<joint name="elbow">``, or
 ``<joint name="elbow"> <axis>`` for a part of it), the line, and what is wrong.  The file is parsed with the
-standard library's expat, which gives the line of every element (:mod:`aggsym.model.xml_source`, which also
+standard library's expat, which gives the line of every element (:mod:`aggsym.model.readers.xml_source`, which also
 accepts with a warning what urdfdom reads and whose meaning is clear: an XML declaration after white space, an
 element the reader takes once given again identically; a repeat that differs is an error).
 
@@ -73,7 +73,7 @@ The mapping
 * ``model.links`` (:class:`~aggsym.model.types.Links`, kind ``"link"``): each URDF link, merged links included,
   as a :class:`~aggsym.model.types.LinkFrame`: its body and placement there (x_body = R x_link + t, for
   constraints on links and for the frame routines) and its own mass, centre of mass and inertia about it in its
-  body's axes (for :mod:`aggsym.model.inertials`); its ``leaves`` are the links without a child link (the frames
+  body's axes (for :mod:`aggsym.model.transforms.inertials`); its ``leaves`` are the links without a child link (the frames
   emitted by default).
 * ``model.meta``: ``mimic`` (above), ``links`` (each URDF link's body, merged links included), ``floating_base``, and ``warnings``: what was accepted but looks wrong, also issued as :class:`ModelWarning`;
   ``snapped_angles`` (only when ``snap_angles`` moved an angle of the file: the tolerance and each angle moved,
@@ -82,7 +82,7 @@ The mapping
 Physical validity (where the dynamics sees it)
 ----------------------------------------------
 Each moving body is judged after its welded links are merged, on the motions its joints allow
-(:func:`~aggsym.model.validate.kinetic_energy_problem`): a body whose kinetic energy can be negative for a
+(:func:`~aggsym.model.readers.validate.kinetic_energy_problem`): a body whose kinetic energy can be negative for a
 velocity its joints give it (its inertia about the centre of mass not positive semi-definite, by more than 1e-6
 of its largest principal moment, in a direction it can turn about) is an error naming the body and its links.
 A link whose own inertia is not physical (not positive semi-definite, or principal moments violating the
@@ -112,13 +112,13 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from ..errors import ModelError, ModelWarning
+from ...errors import ModelError, ModelWarning
 from .builder import Names, TreeBuilder, ball_names, floating_root
 from .builder import identifier as _identifier
 from .builder import quaternion_rotations as _quaternion_rotations, right_angle as _right_angle
 from .builder import rpy as _rpy
-from .frames import default_frames
-from .types import Coordinate, Coupling, JointDynamics, JointLimits, Model, Parameter
+from ..transforms.frames import default_frames
+from ..types import Coordinate, Coupling, JointDynamics, JointLimits, Model, Parameter
 from .sympy_numbers import double
 from .validate import kinetic_energy_problem, motion_space, principal_problem
 from .xml_source import NUMBER as _NUMBER, _Element, _parse, _where, read_capped

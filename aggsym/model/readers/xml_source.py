@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
 
-from ..errors import ModelError, ModelWarning
+from ...errors import ModelError, ModelWarning
 
 MAX_LINKS = 10_000
 MAX_JOINTS = 10_000

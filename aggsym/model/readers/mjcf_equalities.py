@@ -1,5 +1,5 @@
 """MuJoCo's active equalities on the book's constraints (chapter 4) and couplings: what
-:mod:`aggsym.model.mjcf_reader` makes of ``eq_*`` and the fixed tendons (``tendon_*``, ``wrap_*``) of the compiled
+:mod:`aggsym.model.readers.mjcf_reader` makes of ``eq_*`` and the fixed tendons (``tendon_*``, ``wrap_*``) of the compiled
 model.
 
 MuJoCo's conventions (checked against its ``efc_pos``: the residual rows it stabilizes):
@@ -42,7 +42,7 @@ import numpy as np
 import sympy as sp
 
 from .link_numbers import exact
-from .types import JOINT_ROW, WORLD, CONSTRAINT_KINDS, Constraint, Coupling, JointRow
+from ..types import JOINT_ROW, WORLD, CONSTRAINT_KINDS, Constraint, Coupling, JointRow
 
 CONNECT, WELD, JOINT, TENDON, FLEX = 0, 1, 2, 3, 4  # mjtEq
 WRAP_JOINT = 1  # mjtWrap

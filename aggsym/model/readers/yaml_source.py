@@ -13,7 +13,7 @@ from pathlib import Path
 
 import yaml
 
-from ..errors import ModelError
+from ...errors import ModelError
 
 
 def _path(parts) -> str:

@@ -1,9 +1,9 @@
 """The MJCF reader: MuJoCo's own compiler reads the XML, this reader maps the compiled ``MjModel`` onto the book's
-bodies and pairs (1.24)-(1.27) through :class:`~aggsym.model.builder.TreeBuilder`.
+bodies and pairs (1.24)-(1.27) through :class:`~aggsym.model.readers.builder.TreeBuilder`.
 
 Nothing of MJCF's meaning is re-implemented: defaults and classes, ``<include>``, ``compiler angle/eulerseq``,
 ``fromto``, inertias from geoms, ``settotalmass`` and ``boundmass`` are what MuJoCo compiled.  The file is first
-screened (:mod:`aggsym.model.mjcf_source`: size, entities, includes outside the model's folder); a file MuJoCo's
+screened (:mod:`aggsym.model.readers.mjcf_source`: size, entities, includes outside the model's folder); a file MuJoCo's
 compiler refuses is a :class:`~aggsym.errors.ModelError` carrying the compiler's message.
 
 The mapping
@@ -51,7 +51,7 @@ The mapping
 * Not in the equations, listed in ``model.meta["mjcf"]`` (and the manifest): ``frictionloss`` (unless asked for as
   above), joint and tendon limits (also on the coordinates' limits), contacts, actuators (with their joint and
   gear), tendons that change nothing but constraints or actuation, inactive equalities, fluid forces
-  (``density``, ``viscosity``: a warning).  Active equalities (:mod:`aggsym.model.mjcf_equalities`): ``connect``
+  (``density``, ``viscosity``: a warning).  Active equalities (:mod:`aggsym.model.readers.mjcf_equalities`): ``connect``
   and ``weld`` become constraints (``model.constraints``), ``joint`` and fixed-tendon equalities couplings
   (``model.couplings``) or joint-space constraint rows, each listed in ``meta["mjcf"]["equalities"]``; the others
   are refused there by name.  Refused with an error naming them, since they would change the equations: spatial
@@ -72,13 +72,13 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from ..errors import ModelError, ModelWarning
+from ...errors import ModelError, ModelWarning
 from .builder import TreeBuilder, ball_names, floating_root, identifier, link_table, quaternion_rotations
-from .frames import default_frames
+from ..transforms.frames import default_frames
 from .link_numbers import exact
 from .mjcf_equalities import WRAP_JOINT, with_equalities
 from .mjcf_source import screen
-from .types import Coordinate, JointLimits, Links, Model, Parameter, Tendon
+from ..types import Coordinate, JointLimits, Links, Model, Parameter, Tendon
 
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3  # mjtJoint
 KINDS = {HINGE: "theta", SLIDE: "o"}
@@ -187,7 +187,7 @@ class _Reader:
             name = _name(m, mj, mj.mjtObj.mjOBJ_EQUALITY, e, "equality")
             kind = EQUALITY_TYPES.get(int(m.eq_type[e]), str(int(m.eq_type[e])))
             if m.eq_active0[e]:
-                continue  # (aggsym.model.mjcf_equalities: a constraint, a coupling or an error naming it)
+                continue  # (aggsym.model.readers.mjcf_equalities: a constraint, a coupling or an error naming it)
             self.warn(f'<equality> <{kind} name="{name}">', f"an inactive {kind} equality is not in the equations "
                                                             f"of motion (listed in the manifest)")
         springs = not m.opt.disableflags & DISABLE_SPRING

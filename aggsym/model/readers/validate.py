@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from ..suggest import did_you_mean
+from ...suggest import did_you_mean
 
 TOL = 1e-9
 PHYSICAL_TOL = 1e-6  # relative to the largest principal moment: how far a body's inertia may be from physical

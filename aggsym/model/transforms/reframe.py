@@ -47,8 +47,8 @@ import numpy as np
 import sympy as sp
 
 from .inertials import mises_in_frame, moved_mises
-from .tree import Tree
-from .types import Inertial, Model, code_index
+from ..tree import Tree
+from ..types import Inertial, Model, code_index
 
 ROUND_OFF = 1e-14  # a value computed here within this (relative to its scale) of 0, of +-1 or of a multiple of pi/2
 # is the round-off of this computation (a few dozen units in the last place of double precision) and is taken
@@ -267,7 +267,7 @@ def _float3(m) -> np.ndarray:
 
 
 def reframe(model: Model, normals: bool = True, fewest: bool = True) -> Model:
-    """The internal model of :mod:`this module <aggsym.model.reframe>`: same tree, same coordinates, internal body
+    """The internal model of :mod:`this module <aggsym.model.transforms.reframe>`: same tree, same coordinates, internal body
     frames, grouped Mises matrices.  ``normals``: each body's x axis along the common normal to its main child's
     axis (else the next axis of the URDF's frame after the joint axis); ``fewest``: the origins by
     :func:`_origins` (else each at the foot of the common normal with its parent's axis).  A model that is not :func:`eligible` is

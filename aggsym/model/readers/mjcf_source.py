@@ -22,7 +22,7 @@ import os
 from pathlib import Path
 from xml.parsers import expat
 
-from ..errors import ModelError
+from ...errors import ModelError
 from .xml_source import guard, read_capped
 
 MAX_BYTES = 64 * 2 ** 20  # one file (the largest MJCF of dm_control and gymnasium is under 1 MiB)

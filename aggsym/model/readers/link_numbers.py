@@ -19,8 +19,8 @@ import functools
 import sympy as sp
 
 from .sympy_numbers import double, float_number
-from .types import Inertial, elementary_entries
-from .types import _snap as snap
+from ..types import Inertial, elementary_entries
+from ..types import _snap as snap
 
 ZERO, ONE = sp.S.Zero, sp.S.One
 IDENTITY = ((ONE, ZERO, ZERO), (ZERO, ONE, ZERO), (ZERO, ZERO, ONE))

@@ -1,7 +1,7 @@
 """URDF joint damping and friction in the equations of motion: ``aggsym generate robot.urdf --passive include``.
 
 A URDF joint's ``<dynamics damping= friction=>`` is always in p (``damping_<joint>``, ``friction_<joint>``, defaults
-from the file, :func:`aggsym.model.urdf_reader.friction_parameters`) and in the routine ``joint_friction``
+from the file, :func:`aggsym.model.readers.urdf_reader.friction_parameters`) and in the routine ``joint_friction``
 (tau_f = -d qd - f sign(qd)).  By default (``--passive exclude``, what Pinocchio's rnea and aba compute) forward and
 inverse dynamics leave them out, and the header and the manifest say so next to those routines.  With ``--passive
 include`` they enter the left side of the equations of motion beside the elastic forces
@@ -20,7 +20,7 @@ import dataclasses
 
 import sympy as sp
 
-from .types import Model
+from ..types import Model
 
 PASSIVE_MODES = ("exclude", "include")
 INCLUDED_IN = ("inverse_dynamics", "forward_dynamics", "nonlinear_effects")  # the routines --passive concerns

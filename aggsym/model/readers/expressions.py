@@ -33,7 +33,7 @@ from fractions import Fraction
 
 import sympy as sp
 
-from ..core.functions import GRAMMAR, by_sympy
+from ...core.functions import GRAMMAR, by_sympy
 from .sympy_numbers import double, float_number
 
 MAX_LENGTH = 100_000  # characters of one expression

@@ -47,7 +47,7 @@ import warnings
 from pathlib import Path
 from xml.parsers import expat
 
-from ..errors import ModelError, ModelWarning
+from ...errors import ModelError, ModelWarning
 
 MAX_BYTES = 16 * 2 ** 20  # the largest xacro file (or included file) read
 REMOVED = frozenset({"type", "vars"})  # taken out of the package's ``python`` namespace

@@ -17,9 +17,9 @@ import dataclasses
 
 import sympy as sp
 
-from ..core.backend import as_expr
-from ..errors import AggsymError
-from .types import Model, Parameter
+from ...core.backend import as_expr
+from ...errors import AggsymError
+from ..types import Model, Parameter
 
 NAMES = ("gravity_x", "gravity_y", "gravity_z")
 

@@ -13,9 +13,9 @@ import dataclasses
 
 import sympy as sp
 
-from ..errors import AggsymError
-from ..suggest import did_you_mean
-from .types import Frame, Model
+from ...errors import AggsymError
+from ...suggest import did_you_mean
+from ..types import Frame, Model
 
 MAX_FRAMES = 10_000  # frames of a YAML model's frames: list, and names given to --frames (as MAX_LINKS)
 

@@ -52,12 +52,12 @@ from pathlib import Path
 import numpy as np
 import sympy as sp
 
-from ..errors import ModelError
-from ..suggest import did_you_mean
+from ...errors import ModelError
+from ...suggest import did_you_mean
 from .builder import TreeBuilder, ball_names
 from .expressions import ExpressionError, check_identifier, check_supported, evaluate, parse_value
-from .frames import MAX_FRAMES, default_frames
-from .types import (CONSTRAINT_KINDS, COORDINATE_CODES, TIME, WORLD, Body, Constraint, Coordinate, Frame, Inertial,
+from ..transforms.frames import MAX_FRAMES, default_frames
+from ..types import (CONSTRAINT_KINDS, COORDINATE_CODES, TIME, WORLD, Body, Constraint, Coordinate, Frame, Inertial,
                     Model, Parameter, Pair)
 from .validate import inertia_problem, mass_problem, order_tree, support_problem
 from .yaml_source import _Doc, _path

@@ -30,7 +30,7 @@ import sympy as sp
 from .expressions import check_identifier
 from .link_numbers import IDENTITY, ORIGIN, add, combine, exact, matvec, product, round_off, rotation_matrix, snapped
 from .link_numbers import transpose, turn
-from .types import WORLD, Body, Coordinate, LinkFrame, Links, Pair
+from ..types import WORLD, Body, Coordinate, LinkFrame, Links, Pair
 
 FLOATING = (("base_x", "o1"), ("base_y", "o2"), ("base_z", "o3"), ("base_rx", "theta4"), ("base_ry", "theta5"),
             ("base_rz", "theta6"))
