@@ -64,12 +64,12 @@ $(VENV)/.bench: pyproject.toml $(VENV)/.test
 	$(BIN)/python -m pip install --quiet -e '.[test,bench]'
 	touch $@
 
-# the batched benchmark's own venv (benchmarks/batch.py, section batch of benchmarks.run): its peers pin an older
+# the batched benchmark's own venv (benchmarks/batch/, section batch of benchmarks.run): its peers pin an older
 # jax (adam-robotics 0.5 requires jax <= 0.6.0) than the project's, and torch is the CPU wheel 2.13.0
 BATCH_VENV := .venv-batch
-$(BATCH_VENV)/.ready: benchmarks/batch-requirements.txt pyproject.toml
+$(BATCH_VENV)/.ready: benchmarks/batch/requirements.txt pyproject.toml
 	$(PYTHON) -m venv $(BATCH_VENV)
-	$(BATCH_VENV)/bin/python -m pip install --quiet -r benchmarks/batch-requirements.txt -e .
+	$(BATCH_VENV)/bin/python -m pip install --quiet -r benchmarks/batch/requirements.txt -e .
 	touch $@
 
 .PHONY: bench

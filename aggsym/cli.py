@@ -6,8 +6,6 @@ the file, the place in it and the problem; never a traceback).
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import math
 import os
 import sys
 import time
@@ -15,23 +13,36 @@ import warnings
 from pathlib import Path
 
 from .errors import AggsymError
-
-FLOATING_BASE_KINDS = ("euler", "quaternion")  # --floating-base KIND; bare --floating-base is euler
+from .pipeline import FLOATING_BASE_KINDS, OPTIONS
 
 
 def _formats() -> str:
-    """The readers and their suffixes, for the help (model.readers: one registry)."""
+    """The readers and their suffixes, for the help (model.readers.registry: one registry)."""
     from .model.readers.registry import READERS
 
     return ", ".join(f"{r.name}: {' '.join(r.suffixes + r.sniffed)}" for r in READERS)
 
 
-def _only(option: str, then: str) -> str:
-    """The help's opening for an option that only some readers accept ("URDF only" and ``then``), from the
-    readers' declarations."""
-    from .model.readers.registry import listing, takers
+def _help(option) -> str:
+    """An option's help, opening with the readers that take it where not every model does ("URDF and xacro only:
+    ..."), from the pipeline's table."""
+    from .model.readers.registry import listing
+    from .pipeline import takers
 
-    return f"{listing(takers(option))} only{then}"
+    who = takers(option)
+    return option.help if who is None else f"{listing(who)} only: {option.help}"
+
+
+def _argparse_type(check):
+    """A pipeline check (ValueError with the reason) as argparse's type (an ArgumentTypeError: exit 2, usage)."""
+    def convert(text):
+        try:
+            return check(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    convert.__name__ = check.__name__
+    return convert
+
 
 EXAMPLES = {
     "generate": "example:\n  aggsym generate models/double_pendulum.yaml             # writes generated/double_pendulum/\n"
@@ -63,73 +74,12 @@ def _parser() -> argparse.ArgumentParser:
                            formatter_class=argparse.RawDescriptionHelpFormatter)
         p.add_argument("model", metavar="MODEL", help=f"a model file ({_formats()}; the reader is chosen by the "
                                                       f"suffix, and by the content where formats share one)")
-        p.add_argument("--floating-base", choices=FLOATING_BASE_KINDS, default=None,
-                       help=_only("--floating-base", ": ")
-                            + "a free root. euler (the default when no kind is given): the 6-coordinate "
-                            "pair o1 o2 o3 theta4 theta5 theta6; quaternion: Pinocchio's free-flyer, q = (x, y, z, "
-                            "qx, qy, qz, qw, joints) (nq = n + 7), velocities (v, w of the base in its own axes, "
-                            "joint rates) (nv = n + 6)"),
-        p.add_argument("--mimic", choices=["independent", "couple"], default="independent",
-                       help=_only("--mimic", ": ")
-                            + "<mimic> joints keep their own coordinate (default) or follow their master")
-        p.add_argument("--snap-angles", metavar="TOL", type=_snap_tolerance, default=0.0,
-                       help=_only("--snap-angles", ", ")
-                            + "an approximation on request (off by default): take the rpy angles of the "
-                            "file's origins within TOL rad of a multiple of pi/2 as that multiple (1.5708 -> pi/2); "
-                            "every angle it moves is listed in the manifest's 'snapped_angles'")
-        p.add_argument("--xacro-arg", metavar="NAME:=VALUE", action="append", type=_xacro_arg, default=[],
-                       help=_only("--xacro-arg", ": ") + "the value of the file's <xacro:arg name=NAME> (repeat for "
-                            "several)")
-        p.add_argument("--package-path", metavar="PKG=DIR", action="append", type=_package_path, default=[],
-                       help=_only("--package-path", ": ") + "$(find PKG) is DIR, and files there may be included "
-                            "(repeat for several; else the folders of ROS_PACKAGE_PATH)")
-        p.add_argument("--frictionloss", choices=["list", "coulomb"], default=None,
-                       help=_only("--frictionloss", ": ")
-                            + "MuJoCo's frictionloss (a constraint in MuJoCo) is listed in the manifest and left out "
-                            "of the equations (list, the default), or taken as Coulomb friction f sign(qd) on the "
-                            "left side of forward and inverse dynamics and in passive_forces (coulomb: runtime "
-                            "parameters friction_<coordinate>, tendon_friction_<tendon>; not conservative)")
-        p.add_argument("--armature", metavar="VALUE", type=_armature, default=0.0,
-                       help="add a rotor inertia VALUE (kg m^2, or kg for a prismatic joint) on every coordinate, as "
-                            "Pinocchio's armature: A(q) + VALUE E (makes A regular where a joint moves no mass)")
-        p.add_argument("--constraints", metavar="FILE",
-                       help=_only("--constraints", ": ")
-                            + "a YAML side file with the robot's 'constraints:' (contacts with the world, "
-                            "closed loops; bodies named by URDF link) and 'stabilization:'")
-        p.add_argument("--support", action="store_true",
-                       help=_only("--support", ", ")
-                            + "with --floating-base: the free root is the support of the support equation "
-                            "(3.1); its 6 coordinates are q, the joints gamma (support_* routines)")
-        p.add_argument("--inertial-parameters", metavar="all|LINK,...",
-                       help=_only("--inertial-parameters", ": ")
-                            + "the named links' inertial data (or every link's: all) become entries of p, "
-                            "ten per link (m, m c, inertia about the link origin in link axes; defaults from the file)")
-        p.add_argument("--payload", metavar="LINK[,LINK...]",
-                       help=_only("--payload", ": ")
-                            + "a payload fixed to LINK, its ten inertial parameters in p (zero by default; several "
-                              "links: a payload on each), and a helper NAME_set_payload_<LINK> that writes them from "
-                              "mass, centre of mass and inertia about it")
-        p.add_argument("--gravity-parameter", action="store_true",
-                       help=_only("--gravity-parameter", ": ")
-                            + "the gravity vector becomes the last three entries of p (gravity_x, gravity_y, "
-                            "gravity_z, m/s^2 in the root frame; default the file's (0, 0, -9.81)), for a wall- or "
-                            "ceiling-mounted robot without generating again")
-        p.add_argument("--passive", choices=["exclude", "include"], default=None,
-                       help=_only("--passive", ": ")
-                            + "the joints' <dynamics damping friction> in forward and inverse dynamics: exclude "
-                            "(default; as Pinocchio: they are in p and in joint_friction, the header says so) or "
-                            "include (A qdd + b + g + D qd + F sign(qd) = tau; the manifest's conservative is false)")
-        p.add_argument("--frames", metavar="A,B,...",
-                       help="the frames of the frame routines, in this order: URDF link names, or a YAML model's "
-                            "bodies and 'frames:' (default: the links or bodies without a child, then 'frames:')")
-        p.add_argument("--routines", metavar="A,B,...",
-                       help="emit only these routines (names as --list-routines shows them, without the model's "
-                            "prefix, or with it as it prints them; 'default': those emitted when none are named; "
-                            "'all': every routine, with those "
-                            "on request: derivatives, regressor, friction_regressor)")
-        p.add_argument("--name", metavar="NAME",
-                       help="the name of the generated code (C prefix, module and file names); default: the model "
-                            "file's name without its suffix (a YAML model's 'name:' where it gives one)")
+        for option in OPTIONS:  # the model options, from the pipeline's table (aggsym.pipeline.OPTIONS)
+            keywords = dict(option.cli)
+            if "type" in keywords:
+                keywords["type"] = _argparse_type(keywords["type"])
+            keywords.setdefault("default", option.default)
+            p.add_argument(option.flag, dest=option.name, help=_help(option), **keywords)
         p.add_argument("--scalar", choices=["double", "float"], default="double",
                        help="the C type of the generated C (default double; float: single precision for "
                             "microcontrollers, each routine's error bound in the manifest's float_tolerance; the "
@@ -170,149 +120,11 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _load(args):
-    from .model import load
-    from .model.readers.registry import check_cli_options
+    """The model the command generates from (:func:`aggsym.pipeline.prepare`, the options from the command line)."""
+    from .pipeline import prepare
 
-    path = Path(args.model)
-    options = {"floating_base": args.floating_base} if args.floating_base else {}
-    if args.mimic != "independent":
-        options["mimic"] = args.mimic
-    if args.snap_angles:
-        options["snap_angles"] = args.snap_angles
-    if args.xacro_arg:
-        options["xacro_args"] = dict(args.xacro_arg)
-    if args.package_path:
-        options["package_paths"] = dict(args.package_path)
-    if args.frictionloss:
-        options["frictionloss"] = args.frictionloss
-    given = [flag for flag, value in (("--floating-base", args.floating_base), ("--mimic", "mimic" in options),
-                                      ("--xacro-arg", args.xacro_arg), ("--package-path", args.package_path),
-                                      ("--snap-angles", args.snap_angles), ("--constraints", args.constraints),
-                                      ("--support", args.support),
-                                      ("--inertial-parameters", args.inertial_parameters is not None),
-                                      ("--payload", args.payload is not None),
-                                      ("--frictionloss", args.frictionloss),
-                                      ("--gravity-parameter", args.gravity_parameter),
-                                      ("--passive", args.passive is not None)) if value]
-    reader = check_cli_options(path, given)  # the reader's name and the option it does not accept
-    if args.support and not args.floating_base:
-        raise AggsymError(f"{path}: --support needs --floating-base (the support is the free root)")
-    if args.support and args.floating_base == "quaternion":
-        raise AggsymError(f"{path}: --support takes the Euler base (--floating-base euler): the support equation "
-                          f"(3.1) is written in the support's six coordinates, which a quaternion base does not have")
-    if args.mimic == "couple" and args.floating_base == "quaternion":
-        raise AggsymError(f"{path}: --mimic couple with --floating-base quaternion is not supported; use "
-                          f"--floating-base euler, or independent mimic joints")
-    model = load(path, **options)
-    name = _output_name(args, path, reader)
-    if name is not None:
-        model = dataclasses.replace(model, name=name)
-    if args.constraints:
-        from .model.readers.yaml_reader import load_constraints
-
-        model = load_constraints(args.constraints, model)
-    if args.support:
-        from .model.readers.validate import support_problem
-
-        root = model.bodies[0].name
-        problem = support_problem(model, root)
-        if problem:
-            raise AggsymError(f"{path}: --support: {problem}")
-        model = dataclasses.replace(model, support=root)
-    if args.inertial_parameters is not None or args.payload is not None:
-        from .model.transforms.inertials import with_inertial_parameters
-
-        links = [x.strip() for x in (args.inertial_parameters or "").split(",") if x.strip()]
-        payloads = None if args.payload is None else [x.strip() for x in args.payload.split(",") if x.strip()]
-        if payloads == []:
-            raise AggsymError(f"{path}: --payload: no link named (e.g. --payload tool0)")
-        model = with_inertial_parameters(model, links, payloads)
-    if args.gravity_parameter:  # (after the inertial parameters: p keeps their indices, gravity comes last)
-        from .model.transforms.gravity import with_gravity_parameters
-
-        model = with_gravity_parameters(model)
-    if args.passive == "include":
-        from .model.transforms.joint_dynamics import with_passive_included
-
-        model = with_passive_included(model)
-    if args.frames is not None:
-        from .model.transforms.frames import select_frames
-
-        model = select_frames(model, [name.strip() for name in args.frames.split(",") if name.strip()])
-    if args.routines is not None:
-        from .contract import select_routines
-
-        model = select_routines(model, [name.strip() for name in args.routines.split(",") if name.strip()])
-    if args.armature:
-        model = dataclasses.replace(model, armature=args.armature)
-    return model
-
-
-def _output_name(args, path: Path, reader) -> str | None:
-    """The name of the generated code (C prefix, module and file names): ``--name``, else the model file's own
-    name without its suffix (``laikago_toes.urdf`` writes ``laikago_toes.h``, whatever its ``<robot name>``),
-    made an identifier; None for a YAML model, whose ``name:`` is the file's name unless it says otherwise.
-    ``args.name_origin`` records where it came from, for the messages about a name too long."""
-    from .codegen.escape import check_c_identifier, check_module_name
-
-    if args.name is not None:
-        problem = check_c_identifier(args.name) or check_module_name(args.name)
-        if problem:
-            raise AggsymError(f"--name: {problem}")
-        args.name_origin = "the option --name"
-        return args.name
-    args.name_origin = None  # (the model's own name: codegen.generate.name_origin says where it is written)
-    if reader.name == "YAML":
-        return None
-    from .model.readers.builder import mangle
-
-    from .model.readers.registry import known_suffixes
-
-    stem = path.name
-    while Path(stem).suffix.lower() in known_suffixes() and Path(stem).stem:  # (robot.urdf.xacro: robot)
-        stem = Path(stem).stem
-    name = mangle(stem, "model")
-    problem = check_c_identifier(name) or check_module_name(name)
-    if problem:
-        raise AggsymError(f"{path}: the generated code is named after the file, and {problem}; give it a name "
-                          f"with --name NAME")
-    args.name_origin = f"{path} (the file's name; --name NAME gives another)"
-    return name
-
-
-def _armature(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (0.0 <= value < float("inf")):
-        raise argparse.ArgumentTypeError(f"{text!r}: the armature is a finite number >= 0")
-    return value
-
-
-def _xacro_arg(text: str) -> tuple:
-    name, sep, value = text.partition(":=")
-    if not sep or not name.strip():
-        raise argparse.ArgumentTypeError(f"{text!r}: expected NAME:=VALUE")
-    return name.strip(), value
-
-
-def _package_path(text: str) -> tuple:
-    name, sep, folder = text.partition("=")
-    if not sep or not name.strip() or not folder:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected PKG=DIR")
-    return name.strip(), folder
-
-
-def _snap_tolerance(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (0.0 < value < math.pi / 4):
-        raise argparse.ArgumentTypeError(f"{text!r}: the tolerance is an angle in radians, above 0 and below pi/4 "
-                                         f"(e.g. 1e-4)")
-    return value
+    options = {o.name: o.from_cli(getattr(args, o.name)) for o in OPTIONS if o.given(getattr(args, o.name))}
+    return prepare(args.model, **options)
 
 
 def _progress(quiet: bool, name: str):
@@ -321,19 +133,19 @@ def _progress(quiet: bool, name: str):
     return lambda msg: print(f"aggsym: {name}: {msg}", file=sys.stderr, flush=True)
 
 
-def _targets(args):
-    """The targets named by --targets (None: the default set), before any work: an unknown one is exit 2."""
-    if args.targets is None:
-        return None
+def _targets(args, default=None):
+    """The targets named by --targets (else ``default``; None: the default set), chosen once, before any work: an
+    unknown one is exit 2."""
     from .codegen.targets import select
 
-    return [t.name for t in select(args.targets)]
+    return select(default if args.targets is None else args.targets)
 
 
 def cmd_generate(args) -> int:
     t0 = time.perf_counter()
     targets = _targets(args)
-    model = _load(args)
+    prepared = _load(args)
+    model = prepared.model
     if args.list_routines:
         from .codegen.names import c_symbol
         from .contract import ROUTINES, omitted_routines, routines_for
@@ -353,7 +165,7 @@ def cmd_generate(args) -> int:
     from .codegen.generate import check_file_names, generate, write
 
     outdir = Path(args.output) if args.output else Path("generated") / model.name
-    origin = args.name_origin  # (None: the model's own name, codegen.generate.name_origin)
+    origin = prepared.name_origin  # (None: the model's own name, codegen.generate.name_origin)
     check_file_names(outdir, [f"{model.name}.json"], model, origin)  # (before the work: write checks every file)
     gen = generate(model, progress=_progress(args.quiet, model.name), scalar=args.scalar, split=args.split,
                    targets=targets)
@@ -369,24 +181,24 @@ def cmd_generate(args) -> int:
 def cmd_latex(args) -> int:
     from .codegen.generate import generate
 
-    model = _load(args)
+    model = _load(args).model
     gen = generate(model, scalar=args.scalar)
     sys.stdout.write(gen.files[f"{model.name}.tex"])
     return 0
 
 
 def cmd_check(args) -> int:
-    from .codegen.compile import check_generated, checked_targets
+    from .codegen.check import check_generated, checked_targets
     from .codegen.generate import generate
     from .codegen.targets import TARGETS
 
-    targets = _targets(args)
-    model = _load(args)
-    generated = [n for n in (targets or [n for n, t in TARGETS.items() if t.checked_by_default]) if n != "latex"]
-    # (the manifest: always, check reads it)
-    gen = generate(model, latex=False, scalar=args.scalar, split=args.split,
-                   targets=sorted(set(generated) | {"manifest"}))
-    checked, skipped = checked_targets(model, gen.files, targets)
+    named = None if args.targets is None else _targets(args)
+    targets = named or [t for t in TARGETS.values() if t.checked_by_default]
+    # (the manifest: always, check reads it; the LaTeX has nothing to run)
+    model = _load(args).model
+    gen = generate(model, scalar=args.scalar, split=args.split,
+                   targets=[t for t in targets if t.name != "latex"] + [TARGETS["manifest"]])
+    checked, skipped = checked_targets(model, gen.files, None if named is None else [t.name for t in named])
     for name, why in skipped.items():
         print(f"aggsym: {model.name}: target {name} not checked: {why}", file=sys.stderr)
     if not checked:
@@ -434,8 +246,8 @@ def cmd_ops(args) -> int:
     from .codegen.generate import generate
     from .codegen.ops import ops_table
 
-    model = _load(args)
-    gen = generate(model, latex=False, scalar=args.scalar)
+    model = _load(args).model
+    gen = generate(model, scalar=args.scalar, targets="manifest")  # (the counts: the C's, printed for any target)
     print(ops_table(model.name, model.nv, {r.routine.role: r.ops for r in gen.routines}))
     return 0
 

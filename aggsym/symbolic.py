@@ -44,7 +44,7 @@ class Equations:
             raise AggsymError(f"{model.name}: the SymPy equations of a model with coupled coordinates are not "
                               f"built; use the numeric twin or the generated code")
         self.model = model
-        self.tree = Tree(model)
+        self.tree = Tree.of(model)
         self.simplify = simplify
         q, qd, qdd = coordinate_symbols(model)
         self.q = sp.Matrix(q)

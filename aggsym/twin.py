@@ -19,7 +19,7 @@ class NumericTwin:
 
     def __init__(self, model):
         self.model = model
-        self.tree = Tree(model)
+        self.tree = Tree.of(model)
         self.backend = Numeric()
         self._bound = {}
 

@@ -9,7 +9,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from . import report_plots, tables
+from . import report_plots
+from .harness import tables
 
 ROBOTS = ("ur5", "panda", "hyq", "talos")
 RUNTIME_TARGET_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics",
@@ -33,7 +34,7 @@ GEN_TARGETS = (("panda", 5.0, None), ("chain12", 10.0, None), ("talos", 60.0, 2 
 RUNTIME_RATIO_TARGET = 0.5
 CONSTRAINED_RATIO_TARGET = 1.0  # solo12 on four point feet, constrained_forward_dynamics vs constraintDynamics
 OPS_TARGET_MODEL = "manipulator6"
-# the second peer (benchmarks/casadi_peer.py) and the generated code at -O3 (harness/bench.h, bench_peer)
+# the second peer (benchmarks/runtime/casadi_peer.py) and the generated code at -O3 (harness/bench.h, bench_peer)
 PEER_ROBOTS = ("ur5", "panda", "solo12_euler", "talos", "chain24", "chain48")
 PEER_TARGET_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics")
 PEER_ROLES = ("inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics", "inertia_inverse")
@@ -136,7 +137,7 @@ def targets(results) -> list:
             rows.append((what, measured, p["ratio"] < CONSTRAINED_RATIO_TARGET))
     rows += peer_targets(results)
     if results.get("constrained_derivatives"):
-        from .constrained_derivatives import targets as contact_targets
+        from .runtime.constrained_derivatives import targets as contact_targets
 
         rows += contact_targets(results["constrained_derivatives"])
     rows += opsn_targets(results)
@@ -144,7 +145,7 @@ def targets(results) -> list:
     for row in inputs.get("rows", []):
         target = row.get("target_seconds", inputs.get("target_seconds"))
         if target is not None:
-            if "links" in row:  # the 3-D chain of benchmarks/chain.py (issue 30: the parse alone)
+            if "links" in row:  # the 3-D chain of benchmarks/harness/chain.py (issue 30: the parse alone)
                 what = (f"parse a {row['links']}-link {row['file']} (3-D, full inertias; aggsym.load in process) "
                         f"≤ {target:g} s")
             else:
@@ -339,8 +340,8 @@ def _generation(results) -> str:
               "*peak* its maximum resident set (`os.wait4`, so per run).  Each model is generated "
               f"{results.get('config', {}).get('AGGSYM_BENCH_GEN_REPEATS', 1)} times and the run of median wall "
               "time is shown (*all wall s*: every run).  The stage columns are what `aggsym "
-              "generate` reports itself.  Chains: `benchmarks/chain.py` (3-D serial arm, joint axes z, y, x, …, "
-              "offsets with three non-zero components, full inertia tensors).", ""]
+              "generate` reports itself.  Chains: `benchmarks/harness/chain.py` (3-D serial arm, joint axes z, y, x, "
+              "…, offsets with three non-zero components, full inertia tensors).", ""]
     rows = []
     for r in runs:
         s = r.get("stages", {})
@@ -365,7 +366,7 @@ def _generation(results) -> str:
         lines += ["Not run.", ""]
     else:
         by_label = _gen_runs(results)
-        lines += ["`python -m benchmarks.kane chainN.yaml` in a fresh process: sympy.physics.mechanics "
+        lines += ["`python -m benchmarks.generation.kane chainN.yaml` in a fresh process: sympy.physics.mechanics "
                   "`KanesMethod.kanes_equations` (textbook construction: `orient_axis`, `locatenew`, `v2pt_theory`, "
                   "numbers as SymPy Floats) for the mass matrix M and the forcing f, then `sympy.cse([M, f])`.  "
                   f"Timeout {kane.get('timeout', '—')} s per n on the timed part; n goes up until one exceeds it.  "
@@ -561,7 +562,8 @@ def _peers(results) -> list:
     if not robots:
         return []
     lines = ["### Generated code, the CasADi peer and Pinocchio in the same batches", "",
-             "The second peer (`benchmarks/casadi_peer.py`): Featherstone's CRBA, RNEA (b+g is RNEA with q̈ = 0), "
+             "The second peer (`benchmarks/runtime/casadi_peer.py`): Featherstone's CRBA, RNEA (b+g is RNEA with "
+             "q̈ = 0), "
              "ABA and A⁻¹ (ABA columns sharing the articulated inertias) written with CasADi SX in body coordinates "
              "from Pinocchio's model of the same URDF (`pin.buildModelFromUrdf`: parents, placements, axes, "
              "inertias), one-column motion subspaces (Sᵀf is one component, S q̇ one entry), constants folded, "
@@ -574,8 +576,8 @@ def _peers(results) -> list:
              "largest relative error against Pinocchio of the four builds).  "
              "solo12_euler: `--floating-base euler` (Pinocchio's composite root PX PY PZ RX RY RZ; the peer "
              "expands it into six one-axis joints joined by massless links).  chain24 and chain48: the chains of "
-             "`benchmarks/chain.py` written as URDF (`chain_urdf`; the same numbers as the YAML), which all three "
-             "read.  *gen/Pin*: generated -O2 over Pinocchio; *gen/CasADi*: generated over CasADi at the same "
+             "`benchmarks/harness/chain.py` written as URDF (`chain_urdf`; the same numbers as the YAML), which all "
+             "three read.  *gen/Pin*: generated -O2 over Pinocchio; *gen/CasADi*: generated over CasADi at the same "
              "level.", ""]
     rows = []
     for robot in robots:
@@ -643,7 +645,7 @@ def _opsn(results) -> str:
 
 
 def _constrained(rt) -> list:
-    """The constrained forward dynamics of solo12 on its four feet (benchmarks/constrained.py), as lines."""
+    """The constrained forward dynamics of solo12 on its four feet (benchmarks/runtime/constrained.py), as lines."""
     if "constrained" not in rt and "constrained_error" not in rt:
         return []
     lines = ["### solo12 standing on its four feet: constrained forward dynamics", ""]
@@ -699,17 +701,20 @@ def _targets(results) -> str:
 def _extras(results) -> str:
     """Scaling of generation, the sincos helper, --split's compile time and the batched benchmark (each when
     measured)."""
-    from . import batch_report, compile_split, constrained_derivatives, python_call, scaling, trig
+    from .batch import report as batch_report
+    from .generation import compile_split, scaling
+    from .runtime import constrained_derivatives, python_call, trig
 
     parts = []
-    for key, title, module in (("scaling", "Scaling of generation (benchmarks/scaling.py)", scaling),
-                               ("trig", "sin and cos (benchmarks/trig.py)", trig),
-                               ("split", "Compiling with --split (benchmarks/compile_split.py)", compile_split),
-                               ("batch", "Batched: JAX, PyTorch and their peers (benchmarks/batch.py)", batch_report),
+    for key, title, module in (("scaling", "Scaling of generation (benchmarks/generation/scaling.py)", scaling),
+                               ("trig", "sin and cos (benchmarks/runtime/trig.py)", trig),
+                               ("split", "Compiling with --split (benchmarks/generation/compile_split.py)",
+                                compile_split),
+                               ("batch", "Batched: JAX, PyTorch and their peers (benchmarks/batch/)", batch_report),
                                ("python_call", "One state from Python: the generated modules beside Pinocchio's Python "
-                                               "call (benchmarks/python_call.py)", python_call),
+                                               "call (benchmarks/runtime/python_call.py)", python_call),
                                ("constrained_derivatives", "Derivatives of constrained dynamics and of impacts against "
-                                                           "Pinocchio (benchmarks/constrained_derivatives.py)",
+                                                           "Pinocchio (benchmarks/runtime/constrained_derivatives.py)",
                                 constrained_derivatives)):
         data = results.get(key)
         if data:

@@ -6,13 +6,11 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from .harness.plots import dress, pyplot, save
+
 
 def plot_generation(results, path: Path) -> bool:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     chains = sorted((r for r in results.get("generation", {}).get("runs", []) if r.get("kind") == "chain"
                      and r.get("ok")), key=lambda r: r["n"])
     kane = results.get("kane", {}).get("runs", [])
@@ -39,29 +37,16 @@ def plot_generation(results, path: Path) -> bool:
         ax.annotate(f"> {k['timeout']:g} s (killed)", (k["n"], k["timeout"]), textcoords="offset points",
                     xytext=(6, -12), color="C3", fontsize=8)
     ax.set_yscale("log")
-    ax.set_xlabel("links n (3-D chain)")
-    ax.set_ylabel("wall time, s (log)")
-    ax.set_title("Generation time")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    ax2.set_xlabel("links n (3-D chain)")
-    ax2.set_ylabel("peak resident memory, MiB")
-    ax2.set_title("Peak memory of the process")
-    ax2.grid(True, alpha=0.3)
-    ax2.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    dress(ax, "links n (3-D chain)", "wall time, s (log)", "Generation time", legend=8)
+    dress(ax2, "links n (3-D chain)", "peak resident memory, MiB", "Peak memory of the process", legend=8,
+          which="major")
+    save(fig, path)
     return True
 
 
 def plot_runtime(results, path: Path, labels: dict, target: float) -> bool:
     """Bars of time generated / time Pinocchio per robot and routine (``labels``: role -> legend), the target's line."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     robots = results.get("runtime", {}).get("robots", [])
     if not robots:
         return False
@@ -85,20 +70,14 @@ def plot_runtime(results, path: Path, labels: dict, target: float) -> bool:
     ax.set_title("Runtime ratio, ns per call (median of batch means); below 1 the generated C is faster")
     ax.legend(fontsize=7, ncol=3)
     ax.grid(True, axis="y", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
     return True
 
 
 def plot_opcounts(results, path: Path) -> bool:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from aggsym.codegen.ops import BOOK_TABLE_32, FEATHERSTONE_ABA, FEATHERSTONE_CRBA, FEATHERSTONE_RNEA
 
+    plt = pyplot()
     runs = sorted((r for r in results.get("generation", {}).get("runs", []) if r.get("kind") == "chain" and r.get("ok")),
                   key=lambda r: r["n"])
     if not runs:
@@ -111,13 +90,7 @@ def plot_opcounts(results, path: Path) -> bool:
         ax.plot(ns, ours, "o-", color=f"C{k}", label=f"aggsym {role}")
         ax.plot(ns, [sum(ref.at(n)) for n in ns], "--", color=f"C{k}", label=ref.label)
     ax.plot(ns, [sum(BOOK_TABLE_32.at(n)) for n in ns], ":", color="C2", label=BOOK_TABLE_32.label)
-    ax.set_xlabel("links n (3-D chain)")
-    ax.set_ylabel("mul + add + div")
     ax.set_yscale("log")
-    ax.set_title("Operation counts of the emitted C vs the references")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    dress(ax, "links n (3-D chain)", "mul + add + div", "Operation counts of the emitted C vs the references")
+    save(fig, path)
     return True

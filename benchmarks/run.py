@@ -24,59 +24,51 @@ Settings (environment variables; defaults in brackets):
                                    constrained_derivatives
                                    (a section left out is read back from its JSON of an earlier run)
     AGGSYM_BENCH_BATCH_PYTHON      the interpreter of the batch section's own venv      [.venv-batch/bin/python]
-                                   (the AGGSYM_BENCH_BATCH_* settings: benchmarks/batch.py)
+                                   (the AGGSYM_BENCH_BATCH_* settings: benchmarks/batch/orchestrator.py)
 
 Sections: 1. generation time and peak memory of every models/*.yaml, the four example-robot-data robots and
 the chains, with KanesMethod on the chains (generation.json, kane.json); 2. operation counts from the
 manifests (opcounts.json); 3. runtime of the generated C against Pinocchio C++ (runtime.json; the four robots generated again, untimed, with
 the routines on request: derivatives, regressor; with solo12
-standing on its four feet, constrained forward dynamics against constraintDynamics, :mod:`benchmarks.constrained`);
-4. parsing a 2000-link YAML and URDF chain (inputs.json, :mod:`benchmarks.inputs`); opsn: the
+standing on its four feet, constrained forward dynamics against constraintDynamics,
+:mod:`benchmarks.runtime.constrained`);
+4. parsing a 2000-link YAML and URDF chain (inputs.json, :mod:`benchmarks.generation.inputs`); opsn: the
 operations per coordinate of inverse_dynamics and forward_dynamics from the manifests of four arms (opsn.json);
 constrained_derivatives: the derivatives of constrained dynamics and of impacts (solo12 on four point feet, Talos
 on two welded soles, Panda welded at the hand) against Pinocchio C++ (constrained_derivatives.json,
-:mod:`benchmarks.constrained_derivatives`).
+:mod:`benchmarks.runtime.constrained_derivatives`).
 
 Section 3 also times, for the robots of AGGSYM_BENCH_PEER_ROBOTS (solo12 with the 6-coordinate Euler root, the
-24- and 48-link chains of :mod:`benchmarks.chain` written as URDF, generated for this section alone), the
-generated C compiled -O3 and a CasADi peer (:mod:`benchmarks.casadi_peer`) compiled -O2 and -O3, in the same
+24- and 48-link chains of :mod:`benchmarks.harness.chain` written as URDF, generated for this section alone), the
+generated C compiled -O3 and a CasADi peer (:mod:`benchmarks.runtime.casadi_peer`) compiled -O2 and -O3, in the same
 batches as the generated code and Pinocchio; the harness runs pinned to one CPU, and the host's CPU model and
 load average are recorded beside Pinocchio's absolute times.
 """
 from __future__ import annotations
 
-import json
 import os
 import sys
 import time
 from pathlib import Path
 
 from . import report
-from .chain import write_chain
-from .environment import cpu_line, environment, load_average
-from .robots import FIVE, ROBOT_FILES, robot_paths, robots_directory  # noqa: F401  (the sections' names)
-
-HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
-BUILD = HERE / "build"
+from .harness.chain import write_chain
+from .harness.cli import logger, names
+from .harness.environment import cpu_line, environment, load_average
+from .harness.paths import BENCHMARKS, BUILD, ROOT, read_json, result_path, write_json
+from .harness.robots import FILES, FIVE, ROBOT_FILES, robot_paths, robots_directory
 
 FREE_FLYER_SUFFIX = report.FREE_FLYER_SUFFIX  # the label of a robot generated with --floating-base quaternion
 # Section 3's robots beyond ROBOT_FILES, generated with the routines FIVE alone: label -> (example-robot-data
 # file or chain length, aggsym options, Pinocchio root for the CasADi peer)
-SOLO12 = "solo_description/robots/solo12.urdf"
 EXTRA_RUNTIME_ROBOTS = {
-    "solo12_euler": (SOLO12, ("--floating-base", "euler", "--name", "solo12_euler"), "euler"),
+    "solo12_euler": (FILES["solo12"], ("--floating-base", "euler", "--name", "solo12_euler"), "euler"),
     "chain24": (24, (), None),
     "chain48": (48, (), None),
 }
 PEER_ROBOTS = "ur5,panda,solo12_euler,talos,chain24,chain48"
 # item 7 of issue 18: operations per coordinate of these arms' inverse and forward dynamics (section opsn)
-OPSN_ROBOTS = {
-    "ur5": "ur_description/urdf/ur5_robot.urdf",
-    "panda": "panda_description/urdf/panda.urdf",
-    "so100": "so_arm_description/urdf/so100.urdf",
-    "xarm7": "xarm_description/urdf/xarm7.urdf",
-}
+OPSN_ROBOTS = {label: FILES[label] for label in ("ur5", "panda", "so100", "xarm7")}
 
 
 def config() -> dict:
@@ -103,17 +95,15 @@ def chain_lengths(cfg) -> list:
     return sorted({int(x) for x in str(cfg["AGGSYM_BENCH_CHAINS"]).split(",") if x.strip()})
 
 
-def log(msg: str):
-    print(f"[bench {time.strftime('%H:%M:%S')}] {msg}", flush=True)
+log = logger("bench")
 
 
 def _save(name: str, data):
-    (HERE / f"{name}.json").write_text(json.dumps(data, indent=1, default=str) + "\n")
+    write_json(result_path(name), data)
 
 
 def _load(name: str):
-    path = HERE / f"{name}.json"
-    return json.loads(path.read_text()) if path.exists() else {}
+    return read_json(result_path(name))
 
 
 def models(cfg) -> list:
@@ -125,7 +115,7 @@ def models(cfg) -> list:
 
 
 def section_generation(cfg) -> dict:
-    from .generation import generate_measured
+    from .generation.measured import generate_measured
 
     runs = []
     for label, kind, path, n in models(cfg):
@@ -150,7 +140,7 @@ def section_generation(cfg) -> dict:
 
 
 def section_kane(cfg) -> dict:
-    from .generation import kane_measured
+    from .generation.measured import kane_measured
 
     timeout = cfg["AGGSYM_BENCH_KANE_TIMEOUT"]
     runs, timed_out_at, failed_at = [], None, None
@@ -180,21 +170,18 @@ def section_kane(cfg) -> dict:
     return {"timeout": timeout, "runs": runs, "timed_out_at": timed_out_at}
 
 
-def _names(text: str) -> list:
-    return [x.strip() for x in str(text).split(",") if x.strip()]
-
-
 def section_runtime(cfg) -> dict:
-    from . import casadi_peer, constrained
-    from .chain import write_chain_urdf
-    from .generation import generate_measured
-    from .runtime import ROUTINES, bench_cpu, build_harness, run_harness
+    from .generation.measured import generate_measured
+    from .harness.build import bench_cpu
+    from .harness.chain import write_chain_urdf
+    from .runtime import casadi_peer, constrained
+    from .runtime.pinocchio_cpp import ROUTINES, build_harness, run_harness
 
     # The robots' code for this section: its own folders, with the routines on request (section 1 times the
     # default set alone, in build/gen); this generation is not timed.
     root = robots_directory()
     paths = robot_paths()
-    wanted = _names(cfg["AGGSYM_BENCH_RUNTIME_ROBOTS"])
+    wanted = names(cfg["AGGSYM_BENCH_RUNTIME_ROBOTS"])
     take = (lambda label: not wanted or label in wanted)
     runs = {}
     for name in ROBOT_FILES:
@@ -234,7 +221,7 @@ def section_runtime(cfg) -> dict:
     generated = {runs[label]["name"]: Path(runs[label]["outdir"]) for label in labels}
     # the CasADi peer of each robot of AGGSYM_BENCH_PEER_ROBOTS, from Pinocchio's model of the same URDF
     peers, peer_info = {}, {}
-    for label in _names(cfg["AGGSYM_BENCH_PEER_ROBOTS"]):
+    for label in names(cfg["AGGSYM_BENCH_PEER_ROBOTS"]):
         if label not in runs:
             continue
         name = runs[label]["name"]
@@ -313,7 +300,7 @@ def section_opsn(cfg) -> dict:
     manifest's counts, divided by n) of OPSN_ROBOTS, each generated with the default routines (not timed)."""
     from aggsym.codegen.ops import arithmetic
 
-    from .generation import generate_measured
+    from .generation.measured import generate_measured
 
     root = robots_directory()
     rows = []
@@ -355,7 +342,7 @@ def section_batch(cfg) -> dict:
     here.  A missing venv or a failed run is reported in the section, not fatal."""
     import subprocess
 
-    from .measure import child_env
+    from .harness.measure import child_env
 
     python = Path(cfg["AGGSYM_BENCH_BATCH_PYTHON"])
     if not python.exists():
@@ -368,21 +355,21 @@ def section_batch(cfg) -> dict:
 
 
 def section_extras(sections) -> dict:
-    """Issue 18's sections: scaling (chains of 6..192 bodies and a 200-body tree, :mod:`benchmarks.scaling`, which
-    writes scaling.json and scaling.png itself), trig (the sincos helper against libm, :mod:`benchmarks.trig`) and
-    split (Talos' compile time in one file and with --split, :mod:`benchmarks.compile_split`); issue 35's python
-    (the generated Python's per-call time for one state beside Pinocchio's Python call,
-    :mod:`benchmarks.python_call`, python_call.json); issue 34's constrained_derivatives (the derivatives of
-    constrained dynamics and of impacts against Pinocchio C++, :mod:`benchmarks.constrained_derivatives`,
-    constrained_derivatives.json)."""
+    """Issue 18's sections: scaling (chains of 6..192 bodies and a 200-body tree, :mod:`benchmarks.generation.scaling`,
+    which writes scaling.json and scaling.png itself), trig (the sincos helper against libm,
+    :mod:`benchmarks.runtime.trig`) and split (Talos' compile time in one file and with --split,
+    :mod:`benchmarks.generation.compile_split`); issue 35's python (the generated Python's per-call time for one state
+    beside Pinocchio's Python call, :mod:`benchmarks.runtime.python_call`, python_call.json); issue 34's
+    constrained_derivatives (the derivatives of constrained dynamics and of impacts against Pinocchio C++,
+    :mod:`benchmarks.runtime.constrained_derivatives`, constrained_derivatives.json)."""
     out = {}
     if "scaling" in sections:
-        from . import scaling
+        from .generation import scaling
 
         out["scaling"] = scaling.run(BUILD / "scaling", progress=log)
     else:
         out["scaling"] = _load("scaling")
-    for name, module in (("trig", "trig"), ("split", "compile_split")):
+    for name, module in (("trig", "runtime.trig"), ("split", "generation.compile_split")):
         if name in sections:
             import importlib
 
@@ -391,14 +378,14 @@ def section_extras(sections) -> dict:
         else:
             out[name] = _load(name)
     if "python" in sections:
-        from . import python_call
+        from .runtime import python_call
 
         out["python_call"] = python_call.run(log=log)
         _save("python_call", out["python_call"])
     else:
         out["python_call"] = _load("python_call")
     if "constrained_derivatives" in sections:
-        from . import constrained_derivatives
+        from .runtime import constrained_derivatives
 
         try:
             out["constrained_derivatives"] = constrained_derivatives.run(log=log)
@@ -417,12 +404,12 @@ SECTION_FILES = ("generation", "kane", "opcounts", "runtime", "inputs", "opsn", 
 
 def report_only() -> int:
     """``python -m benchmarks.run --report-only``: REPORT.md and the plots written again from the JSONs of the last
-    runs, measuring nothing (so a section run on its own, e.g. ``python -m benchmarks.python_call``, joins the
+    runs, measuring nothing (so a section run on its own, e.g. ``python -m benchmarks.runtime.python_call``, joins the
     report beside the others' figures and their host)."""
     saved = _load("environment")
     results = {"environment": saved.get("environment", {}), "config": saved.get("config", {}),
                **{name: _load(name) for name in SECTION_FILES}}
-    path = report.write_report(results, HERE)
+    path = report.write_report(results, BENCHMARKS)
     log(f"wrote {path.relative_to(ROOT)} from the JSONs of the last runs")
     return 0
 
@@ -440,7 +427,7 @@ def main() -> int:
     generation = section_generation(cfg) if "generation" in sections else _load("generation")
     if "generation" in sections:
         _save("generation", generation)
-    from .opcounts import section as opcount_section
+    from .generation.opcounts import section as opcount_section
 
     opcounts = opcount_section(generation.get("runs", []))
     _save("opcounts", opcounts)
@@ -459,7 +446,7 @@ def main() -> int:
     if "kane" in sections:
         _save("kane", kane)
     if "inputs" in sections:
-        from .inputs import section as inputs_section
+        from .generation.inputs import section as inputs_section
 
         inputs = inputs_section(BUILD / "inputs")
         _save("inputs", inputs)
@@ -482,7 +469,7 @@ def main() -> int:
     results = {"environment": env, "config": cfg, "generation": generation, "kane": kane, "opcounts": opcounts,
                "runtime": runtime, "inputs": inputs, "opsn": opsn, **extras}
     _save("environment", {"environment": env, "config": cfg})
-    path = report.write_report(results, HERE)
+    path = report.write_report(results, BENCHMARKS)
     log(f"wrote {path.relative_to(ROOT)} and the plots in {env['bench_wall_seconds']:.0f} s")
     print()
     print(report.summary_text(results))

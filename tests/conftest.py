@@ -1,3 +1,4 @@
+import functools
 import importlib
 import re
 import sys
@@ -10,48 +11,81 @@ ROOT = Path(__file__).resolve().parent.parent
 MODELS = sorted((ROOT / "models").glob("*.yaml"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from helpers import ROBOTS  # noqa: E402  (the tests folder is on the path from here on)
+from helpers import ROBOTS, written  # noqa: E402  (the tests folder is on the path from here on)
 
 
-# Optional references: a test module that imports one of these helpers at its top (directly or through another
-# helper) is not collected where the helper's dependency does not import, and the run says so at its end.  Nothing
-# is skipped: `make test` installs every dependency, and there every module is collected.
-REFERENCES = {"pinocchio_reference": ("pinocchio", "Pinocchio (PyPI pin)"), "jax_support": ("jax", "jax (aggsym[jax])")}
-TOP_IMPORT = re.compile(r"^(?:from|import)\s+(\w+)", re.M)
+# Optional dependencies: a test module that imports one of these at its top (directly, through helpers of tests/ such
+# as pinocchio_reference.py and jax_support.py, or by a top-level pytest.importorskip) is not collected where the
+# module does not import, and the run says so at its end.  Nothing is skipped: `make test` installs every
+# dependency, and there every module is collected.  Each is imported only when a test module that needs it is about
+# to be collected (which would import it anyway), so a run of other modules does not wait for it.
+OPTIONAL = {"pinocchio": "Pinocchio (PyPI pin)", "jax": "jax (aggsym[jax])", "torch": "PyTorch (aggsym[torch])",
+            "mujoco": "MuJoCo (aggsym[mjcf])", "xacro": "xacro (aggsym[xacro])", "casadi": "CasADi (PyPI casadi)",
+            "hypothesis": "Hypothesis (PyPI hypothesis)"}
+TOP_IMPORT = re.compile(r"""^(?:(?:from|import)\s+(\w+)|(?:\w+\s*=\s*)?pytest\.importorskip\(\s*["'](\w+))""", re.M)
+TESTS = Path(__file__).resolve().parent
+_IMPORT_ERRORS = {}  # module -> None (it imports) or the error, once checked
+LEFT_OUT = {}  # module -> (its error's text, the test modules not collected for it)
 
 
 def _import_error(module: str):
     """None when ``module`` imports, else the error (not installed, or installed but broken)."""
-    try:
-        importlib.import_module(module)
-    except ImportError as error:
-        return error
-    return None
+    if module not in _IMPORT_ERRORS:
+        try:
+            importlib.import_module(module)
+            _IMPORT_ERRORS[module] = None
+        except (ImportError, OSError) as error:  # (OSError: a binary wheel whose shared libraries are missing)
+            _IMPORT_ERRORS[module] = error
+    return _IMPORT_ERRORS[module]
 
 
-def _modules_needing(helper: str) -> list:
-    """The test modules (file names) that import ``helper`` at their top, directly or through other tests/ modules."""
-    folder = Path(__file__).resolve().parent
-    imports = {f.stem: set(TOP_IMPORT.findall(f.read_text())) for f in folder.glob("*.py")}
-    needing, grew = {helper}, True
-    while grew:
-        grew = False
-        for name, names in imports.items():
-            if name not in needing and names & needing:
-                needing.add(name)
-                grew = True
-    return sorted(f"{name}.py" for name in needing if name.startswith("test_"))
+@functools.lru_cache(maxsize=None)
+def _needs() -> dict:
+    """{test module (file name): the modules of :data:`OPTIONAL` it needs}: those it imports at its top, directly or
+    through other tests/ modules."""
+    imports = {f.stem: {a or b for a, b in TOP_IMPORT.findall(f.read_text())} for f in TESTS.glob("*.py")}
+    out = {}
+    for module in OPTIONAL:
+        needing, grew = {module}, True
+        while grew:
+            grew = False
+            for name, names in imports.items():
+                if name not in needing and names & needing:
+                    needing.add(name)
+                    grew = True
+        for name in needing:
+            if name.startswith("test_"):
+                out.setdefault(f"{name}.py", set()).add(module)
+    return out
 
 
-MISSING = {helper: (label, error) for helper, (module, label) in REFERENCES.items()
-           if (error := _import_error(module)) is not None}
-collect_ignore = sorted({f for helper in MISSING for f in _modules_needing(helper)})
+def pytest_ignore_collect(collection_path, config):
+    """Leave out a test module of tests/ that needs a module of :data:`OPTIONAL` which does not import here."""
+    if collection_path.parent != TESTS:
+        return None
+    missing = sorted(m for m in _needs().get(collection_path.name, ()) if _import_error(m) is not None)
+    for module in missing:
+        LEFT_OUT.setdefault(module, (str(_import_error(module)), set()))[1].add(collection_path.name)
+    return True if missing else None
+
+
+def pytest_sessionfinish(session):
+    """Under pytest-xdist a worker collects: it hands what it left out to the controller, which reports it."""
+    output = getattr(session.config, "workeroutput", None)
+    if output is not None:
+        output["left_out"] = {m: (error, sorted(files)) for m, (error, files) in LEFT_OUT.items()}
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node, error):
+    for module, (text, files) in getattr(node, "workeroutput", {}).get("left_out", {}).items():
+        LEFT_OUT.setdefault(module, (text, set()))[1].update(files)
 
 
 def pytest_terminal_summary(terminalreporter):
-    for helper, (label, error) in MISSING.items():
-        terminalreporter.write_line(f"needs {label}, which does not import here ({error}): "
-                                    f"{len(_modules_needing(helper))} test modules not collected")
+    for module, (error, files) in sorted(LEFT_OUT.items()):
+        terminalreporter.write_line(f"needs {OPTIONAL[module]}, which does not import here ({error}): "
+                                    f"{len(files)} test modules not collected")
 
 
 def pytest_collection_modifyitems(items):
@@ -65,6 +99,12 @@ def pytest_collection_modifyitems(items):
 @pytest.fixture
 def rng():
     return np.random.default_rng(20261121)
+
+
+@pytest.fixture
+def write(tmp_path):
+    """``write(text, name="robot.urdf")``: the path of a file of tmp_path that holds ``text``."""
+    return lambda text, name="robot.urdf": written(tmp_path / name, text)
 
 
 def model_path(name: str) -> Path:

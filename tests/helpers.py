@@ -1,5 +1,8 @@
 """The tests' helpers that need no Pinocchio: the example-robot-data files, comparisons, building and compiling
-generated code, routines as programs or SymPy, random states, integration, and checks of error messages.
+generated code, routines as programs or SymPy, random states, integration, consistent states of constrained models,
+the command line run in this process, checks of error messages, and the files of tests/data (the gripper with
+<mimic> joints and the ball between hinges among them).  Small URDF robots written from their numbers are in
+``robot_builder.py``.
 
 Pinocchio as the reference (its models of URDF files and of our models, configurations, comparisons) is in
 ``pinocchio_reference.py``, so that this module, and every test that needs no Pinocchio, imports where Pinocchio is
@@ -12,7 +15,9 @@ under whatever prefix the wheel uses.
 """
 from __future__ import annotations
 
+import io
 import json
+from contextlib import redirect_stderr, redirect_stdout
 from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
@@ -82,7 +87,7 @@ def generated_code(model, folder: Path, opt: str = "-O2", c: bool = True, scalar
     """Generate a model's files into ``folder``, compile its C (``opt``; -Werror flags, and -Wdouble-promotion
     -Wfloat-conversion for ``scalar="float"``) and import its NumPy module: (C library or None, NumPy module,
     manifest)."""
-    write(generate(model, latex=False, scalar=scalar), folder)
+    write(generate(model, targets="c,numpy,manifest", scalar=scalar), folder)
     manifest = json.loads((folder / f"{model.name}.json").read_text())
     lib = None
     if c:
@@ -126,7 +131,7 @@ def inverse_dynamics_by_equations(bound, kin, qd, qdd):
 
 
 # --------------------------------------------------------------------------------------------------------------
-# states, integration, messages
+# states, integration, the command line, messages
 
 
 def states(model, rng, n):
@@ -151,6 +156,38 @@ def rk4_step(f, q, v, dt):
     return q + dt / 6 * (k1q + 2 * k2q + 2 * k3q + k4q), v + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
 
 
+def rk4_step_in_time(f, t, q, v, dt):
+    """One classical RK4 step of q'' = f(t, q, q') from time t: the new (q, q') at t + dt."""
+    k1q, k1v = v, f(t, q, v)
+    k2q, k2v = v + dt / 2 * k1v, f(t + dt / 2, q + dt / 2 * k1q, v + dt / 2 * k1v)
+    k3q, k3v = v + dt / 2 * k2v, f(t + dt / 2, q + dt / 2 * k2q, v + dt / 2 * k2v)
+    k4q, k4v = v + dt * k3v, f(t + dt, q + dt * k3q, v + dt * k3v)
+    return q + dt / 6 * (k1q + 2 * k2q + 2 * k3q + k4q), v + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+
+
+def consistent_state(system, q, qd, steps: int = 50, tolerance: float = 1e-15):
+    """(q, qd) on the constraints of ``system`` (anything with constraint_residual and constraint_jacobian of q: a
+    twin, a generated module): Newton on phi(q) = 0 from q (least-squares steps, at most ``steps``, until
+    max|phi| < ``tolerance``), then qd projected on the null space of J."""
+    for _ in range(steps):
+        phi = system.constraint_residual(q)
+        if np.abs(phi).max() < tolerance:
+            break
+        q = q - np.linalg.lstsq(system.constraint_jacobian(q), phi, rcond=None)[0]
+    J = system.constraint_jacobian(q)
+    return q, qd - np.linalg.lstsq(J, J @ qd, rcond=None)[0]
+
+
+def run_cli(args):
+    """(exit code, stderr) of ``aggsym ARGS`` run in this process, its stdout swallowed."""
+    from aggsym import cli
+
+    err = io.StringIO()
+    with redirect_stderr(err), redirect_stdout(io.StringIO()):
+        code = cli.main(args)
+    return code, err.getvalue()
+
+
 def assert_model_error(path, where: str, words) -> ModelError:
     """Loading ``path`` fails with a ModelError at ``where`` whose message names the file and line and holds every
     one of ``words``."""
@@ -165,68 +202,39 @@ def assert_model_error(path, where: str, words) -> ModelError:
 
 
 # --------------------------------------------------------------------------------------------------------------
-# a robot with <mimic> joints
+# files: the robots of tests/data, a file written
+
+
+DATA = Path(__file__).resolve().parent / "data"
+
+
+def data_text(name: str) -> str:
+    """The text of ``tests/data/NAME`` (a robot or model file that tests read, edit or copy)."""
+    return (DATA / name).read_text()
+
+
+def written(path: Path, content) -> Path:
+    """``path`` once ``content`` (text, or bytes) is written into it."""
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content)
+    return path
+
+
+# --------------------------------------------------------------------------------------------------------------
+# robots that several modules use: a gripper with <mimic> joints, a ball pair between hinges
 
 
 # an arm with a two-finger hand: finger_right mimics finger_left, the fingertip mimics the wrist
-GRIPPER = """<robot name="gripper">
-  <link name="base"/>
-  <link name="arm"><inertial><origin xyz="0.2 0 0.01" rpy="0.1 0 0"/><mass value="2"/>
-    <inertia ixx="0.01" iyy="0.05" izz="0.05" ixy="0.001" ixz="0" iyz="0"/></inertial></link>
-  <link name="palm"><inertial><origin xyz="0.05 0 0"/><mass value="0.6"/>
-    <inertia ixx="0.002" iyy="0.003" izz="0.003" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="left"><inertial><origin xyz="0.02 0.01 0"/><mass value="0.1"/>
-    <inertia ixx="0.0001" iyy="0.0002" izz="0.0002" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="right"><inertial><origin xyz="0.02 -0.01 0"/><mass value="0.1"/>
-    <inertia ixx="0.0001" iyy="0.0002" izz="0.0002" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="tip"><inertial><origin xyz="0.01 0 0"/><mass value="0.05"/>
-    <inertia ixx="0.00001" iyy="0.00002" izz="0.00002" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="shoulder" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
-    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-  <joint name="wrist" type="revolute"><parent link="arm"/><child link="palm"/><origin xyz="0.4 0 0" rpy="0 0.3 0"/>
-    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-  <joint name="finger_left" type="prismatic"><parent link="palm"/><child link="left"/><origin xyz="0.1 0.02 0"/>
-    <axis xyz="0 1 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/></joint>
-  <joint name="finger_right" type="prismatic"><parent link="palm"/><child link="right"/><origin xyz="0.1 -0.02 0"/>
-    <axis xyz="0 -1 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/>
-    <mimic joint="finger_left" multiplier="1" offset="0"/></joint>
-  <joint name="tip_joint" type="revolute"><parent link="left"/><child link="tip"/><origin xyz="0.03 0 0"/>
-    <axis xyz="0.6 0 0.8"/><limit lower="-1" upper="1" effort="1" velocity="1"/>
-    <mimic joint="wrist" multiplier="-0.7" offset="0.2"/></joint>
-</robot>
-"""
-
-
+GRIPPER = data_text("gripper.urdf")
 # a ball pair's quaternion in the middle of q (hinge, ball, hinge: nq = 6, nv = 5), masses over six decades
-BALL_BETWEEN_HINGES = """
-name: ball_between_hinges
-gravity: [0.0, 0.0, -9.81]
-bodies:
-  - name: hub
-    parent: world
-    pair: {name: turn, translation: [0.03125, -0.01, 0.45], rotation: [[1, 0.21837]], functional: {theta6: q_turn}}
-    mass: 350.0
-    com: [0.012, 0.004, 0.11]
-    inertia: {xx: 4.1, yy: 3.7, zz: 2.2, xz: 0.03}
-  - name: link
-    parent: hub
-    pair: {name: socket, type: ball, translation: [0.0, 0.17, 0.3], rotation: [[2, -1.05713], [3, 0.33871]]}
-    mass: 0.85
-    com: [-0.02, 0.07, -0.31]
-    inertia: {xx: 0.011, yy: 0.013, zz: 0.0045, xy: 0.0004}
-  - name: tip
-    parent: link
-    pair: {name: wrist, translation: [0.01, 0, -0.62], rotation: [[3, 2.46109]], functional: {theta5: q_wrist}}
-    mass: 0.00035
-    com: [0.004, 0.001, -0.01]
-    inertia: {xx: 0.000000021, yy: 0.000000034, zz: 0.000000018}
-"""
+BALL_BETWEEN_HINGES = data_text("ball_between_hinges.yaml")
 
 
 def coupled_gripper(folder: Path):
     """(model loaded with mimic="couple", URDF path) of :data:`GRIPPER` written into ``folder``."""
-    path = folder / "gripper.urdf"
-    path.write_text(GRIPPER)
+    path = written(folder / "gripper.urdf", GRIPPER)
     model = aggsym.load(path, mimic="couple")
     assert model.couplings
     return model, path

@@ -33,7 +33,7 @@ def float64():
 
 def modules(model, folder):
     """(NumPy module, JAX module) of ``model`` generated into ``folder``."""
-    write(generate(model, latex=False, targets="numpy,jax,manifest"), folder)
+    write(generate(model, targets="numpy,jax,manifest"), folder)
     return (import_module(folder / f"{model.name}.py"), import_module(folder / f"{model.name}_jax.py"))
 
 

@@ -4,12 +4,15 @@ never load the code generator; the same for the benchmark (``benchmarks/``), whi
 Layers, bottom to top (docs/architecture.md, "The layers"): ``errors``, ``suggest`` ("did you mean") and ``collector``
 (the garbage collector paused); ``core`` (straight-line programs, backends); ``model`` (the immutable model, which
 holds its numbers as the core's expressions), in wings of its own, bottom to top: the types and the tree, the
-transforms of a model, the readers, then the pipeline and the package's face; ``mechanics`` (the book's
-recursions); ``contract`` (a package: the registry, the routines by domain, shapes, analyses, manifest); ``twin`` and
-``symbolic`` (floats, SymPy); ``codegen`` (printers, emission, targets, compiling); ``cli``.
+transforms of a model, the readers, then the package's face; ``mechanics`` (the book's recursions); ``contract`` (a
+package: the registry, the routines by domain, shapes, analyses, manifest); ``twin`` and ``symbolic`` (floats,
+SymPy); ``codegen`` (printers, emission, targets, compiling); ``pipeline`` (a file to the model generated from, every
+option applied); ``cli``.
 
-The benchmark's layers: what the sections share (measuring a child process, the chains, the host, the robots);
-the sections; the report, which reads back some sections' JSON; ``run``, which runs them all.
+The benchmark's layers: what the sections share (``harness/``: measuring a child process, the chains, the host, the
+robots, building the C harnesses); the sections, in subpackages by what they measure (``generation/``, ``runtime/``,
+``batch/``, ``mjcf/``), each importing its own modules and the harness alone; the report, which reads back some
+sections' JSON; ``run``, which runs them all.
 """
 import ast
 import subprocess
@@ -21,9 +24,9 @@ import pytest
 PACKAGE = Path(__file__).resolve().parent.parent / "aggsym"
 BENCHMARKS = PACKAGE.parent / "benchmarks"
 LAYERS = {"errors": 0, "collector": 0, "suggest": 0, "core": 1, "model": 2, "mechanics": 3, "contract": 4, "twin": 5,
-          "symbolic": 5, "codegen": 6, "cli": 7, "__main__": 8}
-# model/'s wings, bottom to top: the model's types, its transforms, its readers, the pipeline from a file to a model
-MODEL_WINGS = {"types": 0, "tree": 0, "transforms": 1, "readers": 2, "prepare": 3}
+          "symbolic": 5, "codegen": 6, "pipeline": 7, "cli": 8, "__main__": 9}
+# model/'s wings, bottom to top: the model's types, its transforms, its readers
+MODEL_WINGS = {"types": 0, "tree": 0, "transforms": 1, "readers": 2}
 def module_name(path: Path, root: Path = PACKAGE) -> str:
     parts = path.relative_to(root.parent).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
@@ -66,14 +69,21 @@ LIGHT = ["aggsym", "aggsym.errors", "aggsym.contract", "aggsym.twin", "aggsym.sy
     for p in (PACKAGE / folder).rglob("*.py") if p.stem != "__init__")
 GRAPH = graph(PACKAGE)
 BENCH_GRAPH = graph(BENCHMARKS)
-# the benchmark, bottom to top: shared pieces (0), the sections (1), the report (2), the runner (3)
-BENCH_LAYERS = {"measure": 0, "chain": 0, "environment": 0, "robots": 0, "generation": 0, "mujoco_reference": 0,
-                "mujoco_poses": 0,
-                "casadi_peer": 1, "mjcf_corpus": 1, "compile_split": 1, "constrained": 1, "inputs": 1, "kane": 1, "opcounts": 1,
-                "runtime": 1, "scaling": 1, "slicing_runtime": 1, "trig": 1, "python_call": 1,
-                "constrained_derivatives": 1,
-                "batch_peers": 0, "batch_report": 0, "tables": 0, "report_plots": 0, "batch_engines": 1, "batch_worker": 2,
-                "batch": 2, "report": 2, "run": 3}
+# the benchmark, bottom to top: the harness (0), the sections (1), the tops of the batched section and the report (2),
+# the runner (3); a module of a subpackage is named by its path below benchmarks/ ("runtime.casadi_peer"), a
+# subpackage by its folder (its __init__ holds its docstring alone: 0)
+BENCH_LAYERS = {
+    "harness": 0, "generation": 0, "runtime": 0, "batch": 0, "mjcf": 0,
+    **{f"harness.{m}": 0 for m in ("paths", "measure", "generate", "environment", "robots", "chain", "tables", "plots",
+                                    "cli", "build")},
+    **{f"generation.{m}": 1 for m in ("measured", "kane", "opcounts", "inputs", "scaling", "compile_split")},
+    **{f"runtime.{m}": 1 for m in ("pinocchio_cpp", "constrained", "casadi_peer", "constrained_derivatives",
+                                    "python_call", "slicing", "trig")},
+    **{f"mjcf.{m}": 1 for m in ("mujoco_reference", "mujoco_poses", "corpus")},
+    "batch.peers": 1, "batch.engines": 1, "batch.report": 1, "batch.worker": 2, "batch.orchestrator": 2,
+    "batch.__main__": 2,
+    "report_plots": 1, "report": 2, "run": 3,
+}
 
 
 def layer(name: str) -> int:
@@ -93,8 +103,7 @@ def test_every_module_has_a_layer():
 
 
 def test_the_model_wings_import_downward():
-    """Within aggsym.model, the types and the tree import no wing, a transform never imports a reader, and nothing
-    but the model's own face imports the pipeline."""
+    """Within aggsym.model, the types and the tree import no wing, and a transform never imports a reader."""
     upward = [(m, t) for m, targets in GRAPH.items() if m.startswith("aggsym.model.") for t in targets
               if t.startswith("aggsym.model.") and wing(t) > wing(m)]
     assert not upward, upward
@@ -158,6 +167,21 @@ def test_benchmark_imports_run_downward():
     upward = [(m, t) for m, targets in BENCH_GRAPH.items() if m != "benchmarks" for t in targets
               if t != "benchmarks" and level(t) > level(m)]
     assert not upward, upward
+
+
+def bench_folder(name: str) -> str | None:
+    """The subpackage of benchmarks/ a module is in, or is ("benchmarks.runtime.trig", "benchmarks.runtime":
+    runtime); None for the modules at the top (report, run) and the benchmark itself."""
+    parts = name.split(".")
+    return parts[1] if len(parts) > 1 and (BENCHMARKS / parts[1]).is_dir() else None
+
+
+def test_benchmark_sections_import_only_their_own_modules_and_the_harness():
+    """A subpackage's modules import their own subpackage's and the harness' alone (the harness its own alone): no
+    section reads another's code; the report and the runner, at the top, read them all."""
+    sideways = [(m, t) for m, targets in BENCH_GRAPH.items() if bench_folder(m) for t in targets
+                if t != "benchmarks" and bench_folder(t) not in {bench_folder(m), "harness"}]
+    assert not sideways, sideways
 
 
 def test_the_package_does_not_import_the_benchmark():

@@ -14,37 +14,23 @@ import aggsym
 from aggsym import cli
 from aggsym.contract import omitted_routines
 from aggsym.errors import ModelWarning
-from helpers import TOLERANCE, generated_code, relative_error, robot_path, robots_directory
+from helpers import TOLERANCE, generated_code, relative_error, robot_path, robots_directory, written
 from pinocchio_reference import pin, crba, pinocchio_model, pinocchio_q
+from robot_builder import chain, segment
 
 pytestmark = pytest.mark.pinocchio
 
-HAND = """<?xml version="1.0"?>
-<robot name="hand">
-  <link name="base"/>
-  <link name="palm">
-    <inertial><origin xyz="0.05 0.01 0"/><mass value="1.0"/>
-      <inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0.001" ixz="0" iyz="0"/></inertial>
-  </link>
-  <link name="finger"/>
-  <link name="tip"/>
-  <joint name="wrist" type="revolute"><parent link="base"/><child link="palm"/><axis xyz="0 0 1"/>
-    <limit lower="-3" upper="3" effort="10" velocity="5"/></joint>
-  <joint name="finger_joint" type="revolute"><origin xyz="0.1 0 0"/><parent link="palm"/><child link="finger"/>
-    <axis xyz="0 1 0"/>
-    <limit lower="-3" upper="3" effort="10" velocity="5"/></joint>
-  <joint name="tip_joint" type="prismatic"><origin xyz="0.03 0 0"/><parent link="finger"/><child link="tip"/>
-    <axis xyz="1 0 0"/>
-    <limit lower="-3" upper="3" effort="10" velocity="5"/></joint>
-</robot>
-"""
+# a palm on a wrist carrying two massless links (a finger and its tip)
+HAND = chain("hand",
+             segment("wrist", "palm", axis="0 0 1", limit=(-3, 3, 10, 5), mass=1.0, com="0.05 0.01 0",
+                     inertia=(0.01, 0.02, 0.03, 0.001, 0, 0)),
+             segment("finger_joint", "finger", xyz="0.1 0 0", axis="0 1 0", limit=(-3, 3, 10, 5)),
+             segment("tip_joint", "tip", "prismatic", xyz="0.03 0 0", axis="1 0 0", limit=(-3, 3, 10, 5)))
 
 
 @pytest.fixture
 def hand(tmp_path):
-    path = tmp_path / "hand.urdf"
-    path.write_text(HAND)
-    return path
+    return written(tmp_path / "hand.urdf", HAND)
 
 
 @pytest.mark.compiler

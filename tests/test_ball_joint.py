@@ -12,7 +12,7 @@ References, each independent of the reader under test:
 * central differences on the manifold (through our own integrate) for the derivatives, and for the Jacobian and
   bias of a loop closed through ball pairs (its constrained forward dynamics against a dense KKT solve);
 * MuJoCo itself for an MJCF model with ball joints (mj_fullM, qfrc_bias - qfrc_passive, qacc with contacts and
-  limits disabled; ``benchmarks/mujoco_reference.py``), <= 1e-9 relative;
+  limits disabled; ``benchmarks/mjcf/mujoco_reference.py``), <= 1e-9 relative;
 * the generated C and NumPy module against the numeric twin (``aggsym check``) and against Pinocchio.
 """
 from __future__ import annotations
@@ -27,9 +27,10 @@ import aggsym
 from aggsym import cli
 from aggsym.contract import select_routines
 from aggsym.errors import ModelError
-from helpers import generated_code, relative_error
+from helpers import data_text, generated_code, relative_error, written
 from pinocchio_reference import pin
 from reference import NumericModel
+from robot_builder import chain, root, segment
 
 pytestmark = pytest.mark.pinocchio
 
@@ -37,71 +38,19 @@ TOLERANCE = 1e-9
 ROLES = ("inertia", "bias", "gravity", "inverse_dynamics", "forward_dynamics", "inertia_inverse",
          "inverse_dynamics_derivatives", "forward_dynamics_derivatives")
 
-# a hinge, a ball below it, a ball below that (chained), a hinge below the balls, a ball on a branch; masses over
-# five decades, full inertia tensors, centres off the origins, constructive rotations by arbitrary angles
-CHAIN = """
-name: ball_chain
-gravity: [0.3, -0.2, -9.81]
-bodies:
-  - name: base
-    parent: world
-    pair: {name: yaw, translation: [0.1, 0, 0.2], rotation: [[2, 0.4]], functional: {theta6: q_yaw}}
-    mass: 2.0
-    com: [0.1, 0.02, 0.3]
-    inertia: {xx: 0.03, yy: 0.025, zz: 0.012, xy: 0.001}
-  - name: upper
-    parent: base
-    pair: {name: hip, type: ball, translation: [0.1, 0.2, 0.5], rotation: [[1, 0.3], [3, -0.7]]}
-    mass: 1.2
-    com: [0.05, -0.1, -0.25]
-    inertia: {xx: 0.04, yy: 0.05, zz: 0.02, yz: 0.002}
-  - name: lower
-    parent: upper
-    pair: {name: knee, type: ball, translation: [0, 0.05, -0.5]}
-    mass: 0.004
-    com: [0.02, 0.0, -0.2]
-    inertia: {xx: 0.00002, yy: 0.00003, zz: 0.000015}
-  - name: foot
-    parent: lower
-    pair: {name: ankle, translation: [0, 0, -0.4], rotation: [[2, 0.4]], functional: {theta4: q_ankle}}
-    mass: 30.0
-    com: [0.1, 0.0, -0.02]
-    inertia: {xx: 0.1, yy: 0.3, zz: 0.25, xz: 0.01}
-  - name: arm
-    parent: base
-    pair: {name: shoulder, type: ball, translation: [-0.2, 0.1, 0.4], rotation: [[3, 1.1]]}
-    mass: 150.0
-    com: [0.0, 0.3, 0.0]
-    inertia: {xx: 2.0, yy: 1.0, zz: 2.5, xy: -0.1}
-"""
+# tests/data/ball_chain.yaml: a hinge, two chained balls below it, a hinge below the balls, a ball on a branch;
+# masses over five decades, full inertia tensors, centres off the origins, constructive rotations by arbitrary angles
+CHAIN = data_text("ball_chain.yaml")
 
-# a ball pair on the world (a spherical pendulum) carrying a hinge
-PENDULUM = """
-name: ball_pendulum
-gravity: [0, 0, -9.81]
-bodies:
-  - name: rod
-    parent: world
-    pair: {name: pivot, type: ball}
-    mass: 0.7
-    com: [0.01, 0.02, -0.4]
-    inertia: {xx: 0.02, yy: 0.021, zz: 0.002}
-  - name: disc
-    parent: rod
-    pair: {name: spin, translation: [0, 0, -0.8], functional: {theta6: q_spin}}
-    mass: 0.05
-    com: [0.001, 0, 0]
-    inertia: {xx: 0.0001, yy: 0.0001, zz: 0.0002}
-"""
+# tests/data/ball_pendulum.yaml: a ball pair on the world (a spherical pendulum) carrying a hinge
+PENDULUM = data_text("ball_pendulum.yaml")
 
 KINDS = {0: pin.JointModelPX, 1: pin.JointModelPY, 2: pin.JointModelPZ, 3: pin.JointModelRX, 4: pin.JointModelRY,
          5: pin.JointModelRZ}
 
 
 def yaml_model(tmp_path, text, name="model.yaml"):
-    path = tmp_path / name
-    path.write_text(text)
-    return aggsym.load(path)
+    return aggsym.load(written(tmp_path / name, text))
 
 
 def pinocchio_of_yaml(model):
@@ -222,23 +171,14 @@ def urdf_numbers(rng) -> dict:
     return {"links": links, "joints": joints}
 
 
-def _numbers(values) -> str:
-    return " ".join(repr(float(x)) for x in values)
-
-
 def urdf_text(numbers) -> str:
-    out = ['<robot name="balls">']
-    for name, (m, c, rpy, J) in numbers["links"].items():
-        out.append(f'<link name="{name}"><inertial><origin xyz="{_numbers(c)}" rpy="{_numbers(rpy)}"/>'
-                   f'<mass value="{float(m)!r}"/><inertia ixx="{float(J[0, 0])!r}" ixy="{float(J[0, 1])!r}" '
-                   f'ixz="{float(J[0, 2])!r}" iyy="{float(J[1, 1])!r}" iyz="{float(J[1, 2])!r}" '
-                   f'izz="{float(J[2, 2])!r}"/></inertial></link>')
-    for name, jtype, parent, child, xyz, rpy, axis in numbers["joints"]:
-        ax = "" if axis is None else f'<axis xyz="{_numbers(axis)}"/>'
-        limit = '<limit lower="-1" upper="1" effort="1" velocity="1"/>' if jtype == "revolute" else ""
-        out.append(f'<joint name="{name}" type="{jtype}"><parent link="{parent}"/><child link="{child}"/>'
-                   f'<origin xyz="{_numbers(xyz)}" rpy="{_numbers(rpy)}"/>{ax}{limit}</joint>')
-    return "\n".join(out + ["</robot>"]) + "\n"
+    def body(name):
+        m, c, rpy, J = numbers["links"][name]
+        return dict(mass=m, com=c, com_rpy=rpy, inertia=(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2]))
+    return chain("balls", root("base", **body("base")),
+                 *(segment(name, child, jtype, parent=parent, xyz=xyz, rpy=rpy, axis=axis,
+                           limit=(-1, 1, 1, 1) if jtype == "revolute" else None, **body(child))
+                   for name, jtype, parent, child, xyz, rpy, axis in numbers["joints"]), head="")
 
 
 def pinocchio_of_urdf(numbers):
@@ -356,46 +296,15 @@ def test_a_loop_closed_through_ball_pairs(tmp_path, rng):
     assert relative_error(qdd, kkt[:n]) < 1e-12
 
 
-# an MJCF model: a free torso with a ball hip (armature, damping, anchored off the body origin), a hinge knee about
-# a tilted axis, a hinge then a ball in one body (the ball last), and a ball pendulum chained to a heavy ball bob
-MJCF = """<mujoco model="ballman">
-  <option gravity="0.2 -0.1 -9.81"/>
-  <worldbody>
-    <geom type="plane" size="2 2 .1"/>
-    <body name="torso" pos="0 0 1.2" quat="0.9 0.1 -0.2 0.3">
-      <freejoint name="root"/>
-      <geom type="capsule" fromto="0 -0.1 0 0 0.1 0" size="0.07"/>
-      <body name="thigh" pos="0 -0.1 -0.05" euler="10 -20 5">
-        <joint name="hip" type="ball" pos="0.01 0.02 0" damping="0.7" armature="0.03" range="0 60"/>
-        <geom type="capsule" fromto="0 0 0 0 0.01 -0.34" size="0.06"/>
-        <body name="shin" pos="0 0.01 -0.4">
-          <joint name="knee" type="hinge" axis="0 -1 0.2" pos="0 0 0.02"/>
-          <geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.049"/>
-          <body name="foot" pos="0 0 -0.35">
-            <joint name="ankle_y" type="hinge" axis="0 1 0"/>
-            <joint name="ankle" type="ball" pos="0.03 0 0.01"/>
-            <geom type="box" size="0.1 0.03 0.01" pos="0.05 0 0" mass="0.02"/>
-          </body>
-        </body>
-      </body>
-    </body>
-    <body name="pendulum" pos="1 0 2">
-      <joint name="pivot" type="ball" pos="0 0 0.3" damping="0.1"/>
-      <geom type="capsule" fromto="0 0 0.3 0.1 0 -0.3" size="0.05" mass="5"/>
-      <body name="bob" pos="0.1 0 -0.3">
-        <joint name="bob_ball" type="ball"/>
-        <geom type="ellipsoid" size="0.1 0.05 0.2" mass="300"/>
-      </body>
-    </body>
-  </worldbody>
-</mujoco>
-"""
+# tests/data/ballman.xml, an MJCF model: a free torso with a ball hip (armature, damping, anchored off the body
+# origin), a hinge knee about a tilted axis, a hinge then a ball in one body, a ball pendulum with a heavy ball bob
+MJCF = data_text("ballman.xml")
 
 
 @pytest.mark.mujoco
 def test_mjcf_ball_joints_equal_mujoco(tmp_path):
     pytest.importorskip("mujoco")
-    from benchmarks.mujoco_reference import compare
+    from benchmarks.mjcf.mujoco_reference import compare
 
     path = tmp_path / "ballman.xml"
     path.write_text(MJCF)

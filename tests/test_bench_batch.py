@@ -1,4 +1,4 @@
-"""The batched benchmark's pure parts (benchmarks/batch.py, batch_report.py, batch_peers.py, batch_engines.py),
+"""The batched benchmark's pure parts (benchmarks/batch/: orchestrator.py, report.py, peers.py, engines.py),
 without its venv and without timing: the agreement check that withholds a disagreeing entry's times, the
 tables, plot and targets rendered from fake results, the merge with an earlier run, the URDF the peers read,
 the SDF with fixed joints merged, and the tangent-space retraction against Pinocchio's integrate."""
@@ -13,7 +13,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from benchmarks import batch, batch_engines, batch_peers, batch_report  # noqa: E402
+from benchmarks.batch import engines as batch_engines, orchestrator as batch, peers as batch_peers  # noqa: E402
+from benchmarks.batch import report as batch_report  # noqa: E402
 
 SIZES = [1, 64, 4096]
 

@@ -14,14 +14,18 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from benchmarks import chain, kane, report, runtime  # noqa: E402
-from benchmarks.generation import generate_measured  # noqa: E402
-from benchmarks.measure import run_measured  # noqa: E402
+from benchmarks import report  # noqa: E402
+from benchmarks.generation import kane  # noqa: E402
+from benchmarks.generation.measured import generate_measured  # noqa: E402
+from benchmarks.harness import chain  # noqa: E402
+from benchmarks.harness.measure import run_measured  # noqa: E402
+from benchmarks.runtime import pinocchio_cpp as runtime  # noqa: E402
 
 import aggsym  # noqa: E402
-from aggsym.codegen.compile import check_generated  # noqa: E402
+from aggsym.codegen.check import check_generated  # noqa: E402
 from aggsym.codegen.generate import generate, write  # noqa: E402
 from aggsym.contract import select_routines  # noqa: E402
+from robot_builder import chain as robot_chain, root, segment  # noqa: E402
 
 
 def test_chain_models_are_valid_and_prefixes_of_each_other(tmp_path):
@@ -41,12 +45,12 @@ def test_chain_models_are_valid_and_prefixes_of_each_other(tmp_path):
 
 
 def test_input_chains_are_the_benchmark_arm_listed_from_the_tip(tmp_path):
-    """The inputs section's chains (benchmarks/inputs.py): the 3-D arm of benchmarks/chain.py, its bodies (YAML) and
-    joints (URDF) listed from the tip, load as the same model as the arm listed from the root; the section's rows
-    carry the targets (no timing asserted)."""
+    """The inputs section's chains (benchmarks/generation/inputs.py): the 3-D arm of benchmarks/harness/chain.py, its
+    bodies (YAML) and joints (URDF) listed from the tip, load as the same model as the arm listed from the root; the
+    section's rows carry the targets (no timing asserted)."""
     import dataclasses
 
-    from benchmarks import inputs
+    from benchmarks.generation import inputs
 
     def bodies(model):  # (where: the body's place in its file, which differs)
         return [dataclasses.replace(b, where="") for b in model.bodies]
@@ -67,7 +71,7 @@ def test_input_chains_are_the_benchmark_arm_listed_from_the_tip(tmp_path):
 @pytest.mark.compiler
 def test_chain_generated_c_matches_the_numeric_twin(tmp_path):
     model = chain.chain_model(3, tmp_path)
-    gen = generate(model, latex=False)
+    gen = generate(model, targets="c,numpy,manifest")
     results = check_generated(model, gen.files, trials=3, seed=1, workdir=tmp_path)
     assert {r.role for r in results} >= {"inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics"}
     for r in results:
@@ -80,15 +84,13 @@ def test_timing_harness_runs_on_a_tiny_model(tmp_path):
     timed), chain2 with the default routines alone (the five pairs and the frame Jacobians; the derivatives' and
     the regressor's entries are NULL)."""
     model = select_routines(chain.chain_model(3, tmp_path), runtime.ROUTINES.split(","))
-    write(generate(model, latex=False), tmp_path / "chain3")
-    write(generate(chain.chain_model(2, tmp_path), latex=False), tmp_path / "chain2")
+    write(generate(model, targets="c,numpy,manifest"), tmp_path / "chain3")
+    write(generate(chain.chain_model(2, tmp_path), targets="c,numpy,manifest"), tmp_path / "chain2")
     free = tmp_path / "free.urdf"  # one revolute joint on Pinocchio's free-flyer: q has 8 entries, qd 7
-    free.write_text('<robot name="free"><link name="a"><inertial><mass value="2"/><inertia ixx="1" iyy="2" izz="3" '
-                    'ixy="0" ixz="0" iyz="0"/></inertial></link><link name="b"><inertial><mass value="1"/>'
-                    '<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>'
-                    '<joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>'
-                    '<origin xyz="0.1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>')
-    write(generate(aggsym.load(free, floating_base="quaternion"), latex=False), tmp_path / "free")
+    free.write_text(robot_chain("free", root("a", mass=2, inertia=(1, 2, 3)),
+                                segment("j", "b", xyz="0.1 0 0", axis="0 0 1", limit=(-1, 1, 1, 1), mass=1,
+                                        inertia=(1, 1, 1))))
+    write(generate(aggsym.load(free, floating_base="quaternion"), targets="c,numpy,manifest"), tmp_path / "free")
     manifest = json.loads((tmp_path / "chain3" / "chain3.json").read_text())
     assert set(runtime.EXTRA_ROLES) <= set(manifest["functions"])
     source = runtime.bench_models_source([manifest])
@@ -111,7 +113,7 @@ def test_timing_harness_runs_on_a_tiny_model(tmp_path):
 
 MEASURE_FROM_A_SMALL_PARENT = """
 import json, sys
-from benchmarks.measure import run_measured
+from benchmarks.harness.measure import run_measured
 big = run_measured([sys.executable, "-c", "b = bytearray(300 * 2**20); b[::4096] = b'x' * len(b[::4096])"])
 small = run_measured([sys.executable, "-c", "pass"])
 print(json.dumps([big.ok, small.ok, big.maxrss_kib, small.maxrss_kib]))
@@ -174,7 +176,7 @@ def _fake_results():
                 "stages": {"recursions": 0.2, "printing": 0.3, "templates": 0.1, "latex": 0.1}, "ops": ops6,
                 "outdir": "x", "timed_out": False}
 
-    from benchmarks.opcounts import section
+    from benchmarks.generation.opcounts import section
 
     gen = {"runs": [run("manipulator6", "seed", 6, 2.0), run("ur5", "robot", 6, 2.0), run("panda", "robot", 7, 6.0),
                     run("hyq", "robot", 12, 3.0), run("talos", "robot", 32, 30.0, rss=3 * 2 ** 20),

@@ -38,7 +38,7 @@ import pytest
 
 import aggsym
 from conftest import model_path
-from helpers import generated_code, rk4_step
+from helpers import consistent_state, generated_code, rk4_step
 
 # name: (n coordinates, m rows, rank J at the default q = 0, RK4 run length in steps of 1e-3 s)
 BOOK = {
@@ -63,17 +63,6 @@ def book(request, tmp_path_factory):
     return name, model, stabilized, plain
 
 
-def consistent_state(module, q, qd):
-    """Newton on phi(q) = 0 (least-squares steps: J has more columns than rows), then qd projected on null(J)."""
-    for _ in range(60):
-        phi = module.constraint_residual(q)
-        if np.abs(phi).max() < 1e-14:
-            break
-        q = q - np.linalg.lstsq(module.constraint_jacobian(q), phi, rcond=None)[0]
-    J = module.constraint_jacobian(q)
-    return q, qd - np.linalg.lstsq(J, J @ qd, rcond=None)[0]
-
-
 def nominal(name, n):
     """A posture to start Newton from: the walking machine's knees bent (hip pitch 0.5, knee -1.0, the trunk
     lowered), the test bench at q = 0 (every support stretched, itself consistent)."""
@@ -89,7 +78,8 @@ def random_states(name, module, n, count=3, seed=11):
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(count):
-        q, qd = consistent_state(module, nominal(name, n) + rng.uniform(-0.3, 0.3, n), rng.normal(size=n))
+        q, qd = consistent_state(module, nominal(name, n) + rng.uniform(-0.3, 0.3, n), rng.normal(size=n),
+                                 steps=60, tolerance=1e-14)  # (least-squares steps: J has more columns than rows)
         assert np.abs(module.constraint_residual(q)).max() < 1e-13
         out.append((q, qd))
     return out

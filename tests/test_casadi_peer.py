@@ -1,4 +1,4 @@
-"""The benchmark's CasADi peer (benchmarks/casadi_peer.py) against Pinocchio: its SX functions and its C.
+"""The benchmark's CasADi peer (benchmarks/runtime/casadi_peer.py) against Pinocchio: its SX functions and its C.
 
 The peer is a timing reference, so it must compute what Pinocchio computes: A (crba), b+g (nonLinearEffects),
 inverse dynamics (rnea), forward dynamics (aba) and A^-1 (computeMinverse), on a fixed-base arm, on solo12 with
@@ -15,8 +15,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from benchmarks import casadi_peer, chain  # noqa: E402
-from benchmarks.robots import robots_directory  # noqa: E402
+from benchmarks.harness import chain  # noqa: E402
+from benchmarks.harness.robots import robots_directory  # noqa: E402
+from benchmarks.runtime import casadi_peer  # noqa: E402
 from pinocchio_reference import pin  # noqa: E402
 
 pytestmark = pytest.mark.pinocchio

@@ -13,26 +13,13 @@ import pytest
 from aggsym import cli
 from aggsym.suggest import close_names, did_you_mean
 from conftest import model_path
+from helpers import written
+from robot_builder import chain, segment
 
-URDF = """<?xml version="1.0"?>
-<robot name="plane">
-  <link name="base_link"/>
-  <link name="upper_arm">
-    <inertial><origin xyz="0.1 0 0"/><mass value="1.0"/>
-      <inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial>
-  </link>
-  <link name="fore_arm">
-    <inertial><origin xyz="0.2 0 0"/><mass value="0.5"/>
-      <inertia ixx="0.01" iyy="0.02" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial>
-  </link>
-  <joint name="shoulder" type="revolute">
-    <parent link="base_link"/><child link="upper_arm"/><axis xyz="0 1 0"/>
-  </joint>
-  <joint name="elbow" type="revolute">
-    <origin xyz="0.3 0 0"/><parent link="upper_arm"/><child link="fore_arm"/><axis xyz="0 1 0"/>
-  </joint>
-</robot>
-"""
+URDF = chain("plane",  # two links turning about y
+             segment("shoulder", "upper_arm", axis="0 1 0", mass=1.0, com="0.1 0 0", inertia=(0.01, 0.02, 0.03)),
+             segment("elbow", "fore_arm", xyz="0.3 0 0", axis="0 1 0", mass=0.5, com="0.2 0 0",
+                     inertia=(0.01, 0.02, 0.02)), base="base_link")
 
 
 def run(capsys, *argv):
@@ -43,9 +30,7 @@ def run(capsys, *argv):
 
 @pytest.fixture
 def arm(tmp_path):
-    path = tmp_path / "two_link_arm.urdf"
-    path.write_text(URDF)
-    return path
+    return written(tmp_path / "two_link_arm.urdf", URDF)
 
 
 def test_files_are_named_after_the_model_file_not_the_robot_name(arm, tmp_path, capsys):

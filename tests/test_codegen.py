@@ -12,7 +12,8 @@ import pytest
 
 import aggsym
 from aggsym import cli
-from aggsym.codegen.compile import check_generated, compile_shared, import_module
+from aggsym.codegen.check import check_generated
+from aggsym.codegen.compile import compile_shared, import_module
 from aggsym.codegen.generate import generate, write
 from aggsym.codegen.printing import count_ops
 from conftest import MODELS, ROOT, model_path
@@ -36,7 +37,7 @@ def test_model_compiles_warning_free_and_matches_twin(path, cflags, tmp_path, mo
     at -O0 (its -O3 compile alone takes about two minutes: checked by hand, see the closing notes)."""
     monkeypatch.setenv("CFLAGS", cflags)
     model = aggsym.load(path)
-    gen = generate(model, latex=False)
+    gen = generate(model, targets="c,numpy,manifest")
     opt = "-O0" if model.nq > 40 else "-O3"
     results = check_generated(model, gen.files, trials=5, seed=1, workdir=tmp_path, opt=opt)
     roles = {r.role for r in results}
@@ -118,7 +119,7 @@ def test_count_ops_counts_the_c_text():
 
 def test_manifest_follows_the_contract():
     model = aggsym.load(model_path("double_pendulum"))
-    m = json.loads(generate(model, latex=False).files["double_pendulum.json"])
+    m = json.loads(generate(model, targets="c,numpy,manifest").files["double_pendulum.json"])
     assert m["name"] == "double_pendulum" and m["nq"] == 3
     assert [c["name"] for c in m["coordinates"]] == ["o12", "theta25", "theta36"]
     assert [c["kind"] for c in m["coordinates"]] == ["translation", "rotation", "rotation"]
@@ -132,7 +133,7 @@ def test_manifest_follows_the_contract():
 
 def test_header_declares_the_contract_signatures():
     model = aggsym.load(model_path("double_pendulum"))
-    h = generate(model, latex=False).files["double_pendulum.h"]
+    h = generate(model, targets="c,numpy,manifest").files["double_pendulum.h"]
     for sig in ["void double_pendulum_inertia(const double *q, const double *p, double *A);",
                 "void double_pendulum_bias(const double *q, const double *qd, const double *p, double *b);",
                 "void double_pendulum_gravity(const double *q, const double *p, double *g);",
@@ -145,7 +146,7 @@ def test_header_declares_the_contract_signatures():
 
 def test_numpy_module_accepts_a_batch_and_parameters(tmp_path, rng):
     model = aggsym.load(model_path("planar_3link"))
-    write(generate(model, latex=False), tmp_path)
+    write(generate(model, targets="c,numpy,manifest"), tmp_path)
     mod = import_module(tmp_path / "planar_3link.py")
     twin = aggsym.NumericTwin(model)
     q, qd = rng.normal(size=(2, 4, 3))
@@ -210,34 +211,6 @@ def test_failed_generation_leaves_the_output_folder_as_it_was(tmp_path, monkeypa
     assert [p.name for p in out.iterdir()] == ["keep.txt"]
 
 
-def test_templates_ship_inside_the_wheel(tmp_path):
-    """A non-editable install, run from another directory, finds its templates."""
-    wheel_dir = tmp_path / "wheel"
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w",
-                    str(wheel_dir), str(ROOT)], check=True, capture_output=True)
-    wheel = next(wheel_dir.glob("aggsym-*.whl"))
-    import zipfile
-
-    names = zipfile.ZipFile(wheel).namelist()
-    assert {"aggsym/templates/c/model.c.j2", "aggsym/templates/c/model.h.j2", "aggsym/templates/numpy/model.py.j2",
-            "aggsym/templates/latex/model.tex.j2"} <= set(names)
-    target = tmp_path / "site"
-    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target), str(wheel)],
-                   check=True, capture_output=True)
-    elsewhere = tmp_path / "elsewhere"
-    elsewhere.mkdir()
-    shutil.copy(model_path("planar_2link"), elsewhere)
-    env = dict(os.environ, PYTHONPATH=str(target))
-    proc = subprocess.run([sys.executable, "-c", "import aggsym, sys; print(aggsym.__file__); "
-                           "from importlib.resources import files; print(files('aggsym.templates')); "
-                           "from aggsym.cli import main; sys.exit(main(['generate', 'planar_2link.yaml', '-q']))"],
-                          cwd=elsewhere, env=env, capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr
-    package, templates = proc.stdout.split()
-    assert package.startswith(str(target)) and templates.startswith(str(target))
-    assert (elsewhere / "generated" / "planar_2link" / "planar_2link.c").exists()
-
-
 @pytest.mark.compiler
 def test_emitted_sincos_is_accurate(tmp_path):
     """aggsym_sincos in the generated C (Cody-Waite reduction, minimax series) against libm through NumPy: within
@@ -245,7 +218,7 @@ def test_emitted_sincos_is_accurate(tmp_path):
     import ctypes
     import re
 
-    source = generate(aggsym.load(model_path("double_pendulum")), latex=False).files["double_pendulum.c"]
+    source = generate(aggsym.load(model_path("double_pendulum")), targets="c,numpy,manifest").files["double_pendulum.c"]
     helper = re.search(r"/\* sin\(x\) and cos\(x\) together,.*?static inline void aggsym_sincos\(double.*?\n}\n",
                        source, re.S).group(0)
     (tmp_path / "s.c").write_text("#include <math.h>\n" + helper + "#undef AGGSYM_KEEP\n" + """
@@ -273,7 +246,7 @@ def test_outputs_may_alias_inputs(tmp_path, rng):
     import ctypes
 
     model = aggsym.load(model_path("manipulator6"))
-    write(generate(model, latex=False), tmp_path)
+    write(generate(model, targets="c,numpy,manifest"), tmp_path)
     lib = ctypes.CDLL(str(compile_shared(tmp_path / "manipulator6.c", tmp_path / "m.so")))
     p = ctypes.POINTER(ctypes.c_double)
     q, qd, tau = rng.normal(size=(3, 6))
@@ -292,7 +265,7 @@ def test_closed_forms_only_where_their_expansion_is_small(tmp_path):
     from aggsym.codegen.latex import CLOSED_FORM_MAX_TERMS
     from aggsym.core.program import expanded_terms
     from aggsym.codegen.generate import symbolic_routines
-    from benchmarks.chain import chain_model
+    from benchmarks.harness.chain import chain_model
 
     def terms(model):
         prog, outs = symbolic_routines(model, roles=("inertia", "bias", "gravity"))
@@ -354,7 +327,7 @@ def test_header_size_and_index_macros(tmp_path):
     import re
 
     model = aggsym.load(model_path("double_pendulum_elastic_stand"))
-    gen = generate(model, latex=False)
+    gen = generate(model, targets="c,numpy,manifest")
     header = gen.files[f"{model.name}.h"]
     manifest = json.loads(gen.files[f"{model.name}.json"])
     macros = dict(re.findall(r"#define (\w+) (\d+)", header))

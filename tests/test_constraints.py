@@ -7,20 +7,17 @@ finite differences of phi and J for the identities J qd = d phi/dt and gamma = d
 dense J A^-1 J^T; energy over time for the four-bar.
 """
 import dataclasses
-import io
 import json
-from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import aggsym
-from aggsym import cli
-from aggsym.model.readers.yaml_reader import load_constraints
+from aggsym.model.readers.side_files import load_constraints
 from aggsym.twin import NumericTwin
 from conftest import model_path
-from helpers import generated_code, relative_error, rk4_step, robot_path
+from helpers import consistent_state, generated_code, relative_error, rk4_step, robot_path, run_cli
 from pinocchio_reference import pin, crba, pinocchio_model, pinocchio_q
 
 pytestmark = pytest.mark.pinocchio
@@ -177,25 +174,13 @@ def test_singular_constraints_return_nonzero_in_c_and_raise_in_numpy(tmp_path):
         module.constrained_forward_dynamics(nan, np.zeros(3), np.zeros(3), p)
 
 
-def consistent_state(twin, q, qd, model):
-    """Newton on phi(q) = 0 from q, then qd projected on the null space of J."""
-    for _ in range(50):
-        phi = twin.constraint_residual(q)
-        if np.abs(phi).max() < 1e-15:
-            break
-        q = q - np.linalg.lstsq(twin.constraint_jacobian(q), phi, rcond=None)[0]
-    J = twin.constraint_jacobian(q)
-    qd = qd - np.linalg.lstsq(J, J @ qd, rcond=None)[0]
-    return q, qd
-
-
 def test_the_four_bar_conserves_energy_and_stays_closed(tmp_path):
     model = aggsym.load(model_path("four_bar"))
     plain = dataclasses.replace(model, stabilization=(0, 0))
     _, module, _ = generated_code(plain, tmp_path / "plain", c=False)
     _, stabilized, _ = generated_code(model, tmp_path / "stab", c=False)
     twin = NumericTwin(model)
-    q, qd = consistent_state(twin, np.array([1.2, -0.9, 2.0]), np.array([2.0, 0.0, 0.0]), model)
+    q, qd = consistent_state(twin, np.array([1.2, -0.9, 2.0]), np.array([2.0, 0.0, 0.0]))
     zero = np.zeros(3)
 
     def energy(q, qd):
@@ -276,13 +261,6 @@ def test_bad_constraints_are_reported_with_the_place(case, tmp_path):
     assert err.line is not None, str(err)
     for w in words:
         assert w in str(err), str(err)
-
-
-def run_cli(args):
-    err = io.StringIO()
-    with redirect_stderr(err), redirect_stdout(io.StringIO()):
-        code = cli.main(args)
-    return code, err.getvalue()
 
 
 def test_redundant_rows_are_an_error_with_a_hint(tmp_path):

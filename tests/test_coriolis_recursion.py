@@ -24,7 +24,7 @@ from pinocchio_reference import pin, crba, inertia_rate, pinocchio_model, pinocc
 from random_trees import random_urdf
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from benchmarks.chain import chain_model  # noqa: E402
+from benchmarks.harness.chain import chain_model  # noqa: E402
 
 pytestmark = pytest.mark.pinocchio
 

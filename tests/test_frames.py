@@ -23,6 +23,7 @@ from conftest import model_path
 from helpers import coupled_gripper, generated_code, reduction, relative_error, robot_path
 from pinocchio_reference import pin, pinocchio_model, pinocchio_q, pinocchio_tree
 from random_trees import random_urdf
+from robot_builder import chain, root, segment
 
 pytestmark = pytest.mark.pinocchio
 
@@ -293,7 +294,7 @@ def test_readme_controller_example_compiles_runs_and_tracks(tmp_path):
     text = (ROOT / "docs/generated-code.md").read_text()
     source = re.search(r"```c\n(/\* ctc\.c.*?)```", text, re.S).group(1)
     (tmp_path / "ctc.c").write_text(source)
-    model = aggsym.load(robot_path("ur5"))
+    model = aggsym.load(robot_path("ur5"), name="ur5")  # (as the text says: --name ur5)
     folder = tmp_path / "ur5"
     generated_code(model, folder, c=False)
     exe = tmp_path / "ctc"
@@ -315,10 +316,8 @@ def test_a_robot_whose_moving_links_are_massless_generates_without_the_mass_rout
     """Every body that moves is massless: the centre of mass and its Jacobian are left out (they would divide by
     zero) and generation ends in exit 0, not an internal error; the frames are emitted."""
     path = tmp_path / "massless.urdf"
-    path.write_text('<robot name="massless"><link name="base"><inertial><mass value="1"/>'
-                    '<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link><link name="arm"/>'
-                    '<joint name="j" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>'
-                    '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>')
+    path.write_text(chain("massless", root("base", mass=1, inertia=(1, 1, 1)),
+                          segment("j", "arm", axis="0 0 1", limit=(-1, 1, 1, 1))))
     run = subprocess.run([sys.executable, "-m", "aggsym", "generate", str(path), "-o", str(tmp_path / "out"), "-q",
                           "--routines", "default,regressor,base_regressor"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr

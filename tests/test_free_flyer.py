@@ -282,7 +282,7 @@ def test_contacts_on_a_free_flyer_equal_pinocchio(robot, frames, kind, tmp_path,
     """Feet on the ground (constraints of chapter 4 from a side file): J, gamma, q'' and lambda against the dense KKT
     system of Pinocchio's free-flyer model (crba, nonLinearEffects, LOCAL_WORLD_ALIGNED frame Jacobians and classical
     accelerations)."""
-    from aggsym.model.readers.yaml_reader import load_constraints
+    from aggsym.model.readers.side_files import load_constraints
     from test_constraints import pinocchio_kkt, side_file
 
     model = load_constraints(side_file(tmp_path, frames, kind), load(robot_path(robot)))

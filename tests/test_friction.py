@@ -18,7 +18,7 @@ from sympy.physics import mechanics as me
 import aggsym
 from aggsym.twin import NumericTwin
 from conftest import model_path
-from helpers import generated_code, rk4_step
+from helpers import consistent_state, generated_code, rk4_step
 
 SLIDING = "double_pendulum_sliding_friction"
 
@@ -244,22 +244,11 @@ def test_friction_dissipates_exactly_its_power(sliding, law, rng):
     mu = float(model.parameters[[p.name for p in model.parameters].index("mu")].value)
     for _ in range(5):
         q, qd = consistent_state(twin, rng.uniform(-0.6, 0.6, 3), rng.normal(size=3))
-        qdd, lam = module.constrained_forward_dynamics(q, qd, np.zeros(3))  # one row: lambda is a number
+        qdd, (lam,) = module.constrained_forward_dynamics(q, qd, np.zeros(3))  # one row: lambda has one entry
         w = module.slip_velocities(q, qd)
         expected = -mu * abs(lam) * np.linalg.norm(w) if law == "coulomb" else -mu * w @ w
         assert expected < 0
         assert abs(power(module, q, qd, qdd) - expected) <= 1e-6 * abs(expected)
-
-
-def consistent_state(twin, q, qd):
-    """Newton on phi(q) = 0 from q, then qd projected on the null space of J."""
-    for _ in range(50):
-        phi = twin.constraint_residual(q)
-        if np.abs(phi).max() < 1e-15:
-            break
-        q = q - np.linalg.lstsq(twin.constraint_jacobian(q), phi, rcond=None)[0]
-    J = twin.constraint_jacobian(q)
-    return q, qd - np.linalg.lstsq(J, J @ qd, rcond=None)[0]
 
 
 def test_energy_decreases_along_sliding_motion(tmp_path, rng):

@@ -6,38 +6,14 @@ brackets) and runs ``aggsym generate`` on each.  Whatever the file, the run ends
 or 2 (a message naming the file, nothing written), never a traceback or an internal error, and nothing appears
 outside the output folder.  Derandomized, so a CI run is reproducible; about a minute in all.
 """
-import io
 import shutil
-from contextlib import redirect_stderr, redirect_stdout
-from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from aggsym import cli
 from conftest import model_path
-
-URDF = """<?xml version="1.0"?>
-<robot name="fuzzed">
-  <link name="base"/>
-  <link name="upper">
-    <inertial><origin xyz="0.1 0 0" rpy="0 0 0"/><mass value="1.0"/>
-      <inertia ixx="0.01" iyy="0.02" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial>
-  </link>
-  <link name="lower">
-    <inertial><origin xyz="0 0 -0.2"/><mass value="0.5"/>
-      <inertia ixx="0.005" iyy="0.005" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial>
-  </link>
-  <joint name="shoulder" type="revolute">
-    <origin xyz="0 0 0.5" rpy="0 0 1.5707963267948966"/><parent link="base"/><child link="upper"/>
-    <axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="10" velocity="3"/><dynamics damping="0.1"/>
-  </joint>
-  <joint name="elbow" type="continuous">
-    <origin xyz="0.3 0 0"/><parent link="upper"/><child link="lower"/><axis xyz="1 0 1"/>
-  </joint>
-</robot>
-"""
+from helpers import data_text, run_cli
 
 HOSTILE = ["1e400", "-1", "nan", ".inf", "0", "1e-320", "9^9^9^9", "1/0", "__import__('os').system('true')",
            "sin('x')", "x.__class__", "''", "", "*a", "&a [1, 2]", "!!python/object/apply:os.system ['true']",
@@ -72,16 +48,9 @@ def mutate(text: str, data) -> str:
     return "\n".join(lines)
 
 
-def run_generate(path: Path, out: Path):
-    err, stdout = io.StringIO(), io.StringIO()
-    with redirect_stderr(err), redirect_stdout(stdout):
-        code = cli.main(["generate", str(path), "-o", str(out), "-q"])
-    return code, err.getvalue()
-
-
 SOURCES = {"double_pendulum.yaml": model_path("double_pendulum").read_text(),
            "gyroscope.yaml": model_path("gyroscope").read_text(),
-           "fuzzed.urdf": URDF}
+           "fuzzed.urdf": data_text("fuzzed.urdf")}  # a two-joint arm
 
 
 @pytest.mark.parametrize("source", sorted(SOURCES))
@@ -94,7 +63,7 @@ def test_mutated_models_end_in_exit_0_or_2(source, data, tmp_path_factory):
     text = mutate(SOURCES[source], data)
     path.write_text(text)
     out = folder / "out"
-    code, err = run_generate(path, out)
+    code, err = run_cli(["generate", str(path), "-o", str(out), "-q"])
     assert code in (0, 2), (code, err, text)
     assert "Traceback" not in err and "internal error" not in err, (err, text)
     if code == 2:

@@ -22,10 +22,10 @@ from conftest import model_path
 def test_ops_counted_while_printing_equal_the_c_texts(name, scalar):
     """The manifest's ops come from the printer's counts; the tokenizing counter over each routine's C statements
     (a separate reading of the text) must give the same numbers, routine by routine."""
-    gen = generate(aggsym.load(model_path(name)), latex=False, scalar=scalar)
+    gen = generate(aggsym.load(model_path(name)), targets="c,numpy,manifest", scalar=scalar)
     assert gen.routines
     for r in gen.routines:
-        assert r.ops == count_ops("\n".join(r.c_body)), r.routine.role
+        assert r.ops == count_ops("\n".join(r.bodies["c"].lines)), r.routine.role
 
 
 @pytest.mark.parametrize("code,expected", [
@@ -49,16 +49,16 @@ def test_generate_leaves_the_collector_as_it_was():
     restored after, whether it was on or off, and after a failure too."""
     model = aggsym.load(model_path("double_pendulum"))
     assert gc.isenabled()
-    generate(model, latex=False)
+    generate(model, targets="c,numpy,manifest")
     assert gc.isenabled()
     gc.disable()
     try:
-        generate(model, latex=False)
+        generate(model, targets="c,numpy,manifest")
         assert not gc.isenabled()
     finally:
         gc.enable()
     with pytest.raises(AggsymError):
-        generate(model, latex=False, scalar="half")
+        generate(model, targets="c,numpy,manifest", scalar="half")
     assert gc.isenabled()
 
 

@@ -3,7 +3,7 @@
 The NumPy module checks every array argument's last dimension on entry (a ValueError naming the routine, the
 argument and the length expected, where a wrong length used to end in a bare IndexError deep inside); the target
 ``ext`` (``--targets c,numpy,ext``) computes one state per call in the compiled C and hands everything else to the
-NumPy module, with the same results.  (Per-call times are the benchmark's, ``benchmarks/python_call.py``, never
+NumPy module, with the same results.  (Per-call times are the benchmark's, ``benchmarks/runtime/python_call.py``, never
 a unit test's.)
 """
 from __future__ import annotations
@@ -24,7 +24,7 @@ def pendulum(tmp_path_factory):
     """The double pendulum's C, NumPy module and ext module in one folder: (model, NumPy module, folder)."""
     model = aggsym.load(model_path("double_pendulum"))
     folder = tmp_path_factory.mktemp("pendulum")
-    write(generate(model, latex=False, targets=["c", "numpy", "manifest", "ext"]), folder)
+    write(generate(model, targets=["c", "numpy", "manifest", "ext"]), folder)
     return model, import_module(folder / f"{model.name}.py"), folder
 
 
@@ -96,9 +96,9 @@ def test_the_ext_module_hands_batches_lists_other_dtypes_and_wrong_lengths_to_th
 def test_the_ext_target_needs_the_c_and_the_numpy_module_beside_it():
     model = aggsym.load(model_path("planar_2link"))
     with pytest.raises(AggsymError, match=r"add c and numpy to --targets"):
-        generate(model, latex=False, targets=["manifest", "ext"])
+        generate(model, targets=["manifest", "ext"])
     with pytest.raises(AggsymError, match=r"--split"):
-        generate(model, latex=False, targets=["c", "numpy", "ext"], split=True)
+        generate(model, targets=["c", "numpy", "ext"], split=True)
 
 
 @pytest.mark.compiler
@@ -113,7 +113,7 @@ def test_the_jax_and_torch_modules_name_a_wrong_length_too(tmp_path):
     import torch
 
     model = aggsym.load(model_path("double_pendulum"))
-    write(generate(model, latex=False, targets=["numpy", "manifest", "jax", "torch"]), tmp_path)
+    write(generate(model, targets=["numpy", "manifest", "jax", "torch"]), tmp_path)
     jm = import_module(tmp_path / f"{model.name}_jax.py")
     tm = import_module(tmp_path / f"{model.name}_torch.py")
     q = np.zeros(3)
@@ -137,7 +137,7 @@ def test_a_singular_system_raises_in_the_ext_module_as_in_the_numpy_module(tmp_p
     from aggsym.contract import select_routines
 
     model = select_routines(aggsym.load(model_path("four_bar")), ["constrained_forward_dynamics"])
-    write(generate(model, latex=False, targets=["c", "numpy", "manifest", "ext"]), tmp_path)
+    write(generate(model, targets=["c", "numpy", "manifest", "ext"]), tmp_path)
     m = import_module(tmp_path / f"{model.name}.py")
     ext = import_module(tmp_path / f"{model.name}_ext.py")
     q, zero = np.array([0.3, 0.2, -0.4]), np.zeros(3)

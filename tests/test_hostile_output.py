@@ -16,6 +16,7 @@ from aggsym.codegen.escape import c_comment, check_module_name, latex, py_doc
 from aggsym.codegen.printing import _number
 from conftest import model_path
 from helpers import generated_code
+from robot_builder import chain, segment
 
 EVIL = [
     "*/ #define double float /*",
@@ -40,18 +41,8 @@ def test_escapers_keep_text_in_its_place(text):
     assert all(32 <= ord(ch) < 127 for ch in tex)
 
 
-URDF = """<?xml version="1.0"?>
-<robot name="evil">
-  <link name="base"/>
-  <link name="{joint}">
-    <inertial><origin xyz="0.1 0 0"/><mass value="1.0"/>
-      <inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial>
-  </link>
-  <joint name="{joint}" type="revolute">
-    <parent link="base"/><child link="{joint}"/><axis xyz="0 0 1"/>
-  </joint>
-</robot>
-"""
+# one link and its joint, both named {joint}
+URDF = chain("evil", segment("{joint}", "{joint}", axis="0 0 1", mass=1.0, com="0.1 0 0", inertia=(0.01, 0.02, 0.03)))
 
 
 def xml_attribute(text: str) -> str:

@@ -25,7 +25,7 @@ import pytest
 import aggsym
 from aggsym.contract import sample_configurations, select_routines
 from aggsym.errors import AggsymError, ModelError
-from aggsym.model.readers.yaml_reader import load_constraints
+from aggsym.model.readers.side_files import load_constraints
 from aggsym.twin import NumericTwin
 from conftest import model_path
 from helpers import generated_code, relative_error
@@ -266,12 +266,12 @@ def test_the_damped_solve_is_finite_for_redundant_rows(tmp_path, rng):
     path = tmp_path / "four_bar_o3.yaml"
     path.write_text(text)
     with pytest.raises(ModelError, match="proximal"):
-        aggsym.generate(aggsym.load(path), latex=False)
+        aggsym.generate(aggsym.load(path), targets="c,numpy,manifest")
     mu, N = 1e-3, 4
     (tmp_path / "with.yaml").write_text(text + f"proximal: {{mu: {mu}, iterations: {N}}}\n")
     model = with_routines(aggsym.load(tmp_path / "with.yaml"), ["constraint_bias", "nonlinear_effects"])
     assert model.proximal[1] == N
-    aggsym.generate(model, latex=False)  # accepted
+    aggsym.generate(model, targets="c,numpy,manifest")  # accepted
     twin = NumericTwin(model)
     plain = NumericTwin(with_routines(dataclasses.replace(aggsym.load(model_path("four_bar")), stabilization=(0, 0))))
     for _ in range(3):
@@ -327,6 +327,6 @@ def test_the_manifest_states_the_damped_solve(tmp_path):
     path = tmp_path / "m.yaml"
     path.write_text(model_path("four_bar").read_text() + "proximal: {mu: 1e-8, iterations: 3}\n")
     import json
-    manifest = json.loads(aggsym.generate(aggsym.load(path), latex=False).files["four_bar.json"])
+    manifest = json.loads(aggsym.generate(aggsym.load(path), targets="c,numpy,manifest").files["four_bar.json"])
     entry = manifest["constraints"]["proximal"]
     assert entry["iterations"] == 3 and float(entry["mu"]) == 1e-8 and "sigma_min" in entry["solve"]

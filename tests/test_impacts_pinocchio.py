@@ -47,9 +47,9 @@ from aggsym.codegen.compile import CLibrary, compile_shared
 from aggsym.codegen.generate import generate, write
 from aggsym.contract import sample_configurations, select_routines
 from aggsym.errors import ModelWarning
-from aggsym.model.readers.yaml_reader import load_constraints
+from aggsym.model.readers.side_files import load_constraints
 from aggsym.twin import NumericTwin
-from helpers import relative_error, robot_path
+from helpers import DATA, relative_error, robot_path
 from pinocchio_reference import pin, pinocchio_q, pinocchio_tree
 from test_free_flyer import pinocchio_configuration
 
@@ -64,44 +64,6 @@ MAX_CONDITION = 1e6  # states where cond(G) is larger are drawn again: two doubl
 # cond(G) * 1e-16 there (solo12 with two welded feet at a random configuration: cond(G) up to 1e9, and ours and
 # Pinocchio's dqd+/dq then differ by 1.4e-7 while both differ from central differences of impulseDynamics by 1e-7)
 SOLO_FEET = ["FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT"]
-
-LOOP = """name: rail_loop
-description: a three-link spatial chain whose tip is pinned to a cart on a rail (a closed loop, one degree of freedom)
-gravity: [0, 0, -9.81]
-bodies:
-  - name: base
-    parent: world
-  - name: upper
-    parent: base
-    pair: {translation: [0, 0, 0.5], functional: {theta6: q1}}
-    mass: 1.0
-    com: [0.15, 0.01, 0]
-    inertia: {xx: 0.002, yy: 0.01, zz: 0.01, xy: 0.0005}
-  - name: middle
-    parent: upper
-    pair: {translation: [0.3, 0, 0], functional: {theta5: q2}}
-    mass: 0.7
-    com: [0.12, 0, 0.01]
-    inertia: {xx: 0.001, yy: 0.008, zz: 0.008}
-  - name: lower
-    parent: middle
-    pair: {translation: [0.25, 0, 0], rotation: [[z, 0.4]], functional: {theta4: q3}}
-    mass: 0.5
-    com: [0.1, 0.02, 0]
-    inertia: {xx: 0.001, yy: 0.005, zz: 0.005}
-  - name: cart
-    parent: base
-    pair: {translation: [0.6, 0, 0], functional: {o1: x}}
-    mass: 2.0
-    com: [0, 0.01, 0.02]
-    inertia: {xx: 0.02, yy: 0.03, zz: 0.04}
-constraints:
-  - name: pin
-    body: lower
-    point: [0.2, 0.05, -0.1]
-    medium: cart
-    block: point
-"""
 
 
 def stencil(n, f):
@@ -258,7 +220,7 @@ def check(model, pm, to_pin, specs, rng, states, consistent, dense=None, compile
     model = select_routines(model, ROUTINES)
     twin = NumericTwin(model)
     if compiled is not None:
-        write(generate(model, latex=False, looped_above=0), compiled)
+        write(generate(model, targets="c,numpy,manifest", looped_above=0), compiled)
         manifest = json.loads((compiled / f"{model.name}.json").read_text())
         twin = Compiled(CLibrary(compile_shared(compiled / f"{model.name}.c", compiled / f"lib{model.name}.so",
                                                 extra=("-O1",)), manifest), twin)
@@ -356,9 +318,7 @@ def test_an_arm_welded_at_its_hand(tmp_path, rng):
 
 
 def test_a_closed_loop(tmp_path, rng):
-    path = tmp_path / "rail_loop.yaml"
-    path.write_text(LOOP)
-    model = aggsym.load(path)
+    model = aggsym.load(DATA / "rail_loop.yaml")  # a spatial chain whose tip is pinned to a cart on a rail
     pm, _ = pinocchio_tree(model)
     assert (model.nq, model.constraint_rows) == (4, 3)
     reference = [cr.Constraint("lower", [0.2, 0.05, -0.1], [0, 1, 2], medium="cart")]

@@ -156,10 +156,10 @@ def test_cutting_a_real_routine(monkeypatch):
     """planar_3link's forward dynamics derivatives, as the JAX target prints them (short enough to stay whole
     by default, but for the calls segment of its sines and cosines)."""
     model = select_routines(aggsym.load(model_path("planar_3link")), ["forward_dynamics_derivatives"])
-    text = generate(model, latex=False, targets="jax").files["planar_3link_jax.py"]
+    text = generate(model, targets="jax").files["planar_3link_jax.py"]
     assert "def _forward_dynamics_derivatives__calls(" in text and "def _forward_dynamics_derivatives__1(" not in text
     monkeypatch.setattr(jax_target, "segmented", lambda role, body, tail: {"body": body, "segments": []})
-    text = generate(model, latex=False, targets="jax").files["planar_3link_jax.py"]
+    text = generate(model, targets="jax").files["planar_3link_jax.py"]
     lines = text.split("\n")
     start = lines.index(next(x for x in lines if x.startswith("def _forward_dynamics_derivatives(")))
     body = []
@@ -297,9 +297,9 @@ def test_generation_with_segments_is_deterministic(monkeypatch):
     monkeypatch.setattr(jax_segments, "SEGMENT", SIZE)
     monkeypatch.setattr(jax_segments, "SEGMENTED", 8)
     model = aggsym.load(model_path("planar_3link"))
-    first = generate(model, latex=False, targets="jax").files
+    first = generate(model, targets="jax").files
     assert "_forward_dynamics__2(" in first["planar_3link_jax.py"]
-    assert first == generate(model, latex=False, targets="jax").files
+    assert first == generate(model, targets="jax").files
 
 
 def test_xla_evaluates_each_sine_once(tmp_path, rng):

@@ -51,8 +51,8 @@ def test_the_module_imports_only_jax_and_the_standard_library(small):
 
 def test_generation_is_deterministic():
     model = aggsym.load(model_path("double_pendulum"))
-    first = generate(model, latex=False, targets="jax").files
-    assert first == generate(model, latex=False, targets="jax").files
+    first = generate(model, targets="jax").files
+    assert first == generate(model, targets="jax").files
     assert list(first) == ["double_pendulum_jax.py"]
 
 

@@ -6,35 +6,17 @@ import numpy as np
 import pytest
 
 import aggsym
-from helpers import generated_code, robot_path
+from helpers import generated_code, robot_path, written
 from pinocchio_reference import pinocchio_model
+from robot_builder import rubbing as rubbing_urdf
 
 pytestmark = pytest.mark.pinocchio
 
-URDF = """<?xml version="1.0"?>
-<robot name="rubbing">
-  <link name="base"/>
-  <link name="a"><inertial><origin xyz="0.1 0 0"/><mass value="1"/>
-    <inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="b"><inertial><origin xyz="0.1 0 0"/><mass value="0.5"/>
-    <inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="c"><inertial><origin xyz="0 0 0.1"/><mass value="0.3"/>
-    <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/>
-    <dynamics damping="0.7" friction="0.2"/><limit lower="-2" upper="2.5" effort="30" velocity="4"/></joint>
-  <joint name="j2" type="continuous"><origin xyz="0.2 0 0"/><parent link="a"/><child link="b"/><axis xyz="0 1 0"/>
-  </joint>
-  <joint name="j3" type="prismatic"><origin xyz="0.2 0 0"/><parent link="b"/><child link="c"/><axis xyz="0 0 -1"/>
-    <dynamics friction="1.5"/><limit lower="0" upper="0.3" effort="100" velocity="0.5"/></joint>
-</robot>
-"""
 
 
 @pytest.fixture
 def rubbing(tmp_path):
-    path = tmp_path / "rubbing.urdf"
-    path.write_text(URDF)
-    return path
+    return written(tmp_path / "rubbing.urdf", rubbing_urdf())
 
 
 @pytest.mark.compiler

@@ -22,7 +22,8 @@ from aggsym.codegen.printing import LinComb, Num, Prod, Ref
 from aggsym.mechanics.transvective import transvection_pairs
 from aggsym.model.tree import Tree
 from conftest import model_path
-from helpers import robot_path, robots_directory
+from helpers import robot_path, robots_directory, written
+from robot_builder import chain, segment
 
 OVERFULL = re.compile(r"Overfull \\hbox \(([0-9.]+)pt too wide\)")
 
@@ -217,14 +218,9 @@ def test_hostile_names_stay_text_and_the_document_compiles(tmp_path):
     and pdflatex compiles it."""
     evil = r"j_1^{\input{/etc/passwd}}%$&#~\write18"
     assert "\\input{" not in latex_breakable(evil) and "\\write18" not in latex_breakable(evil)
-    urdf = tmp_path / "evil.urdf"
-    urdf.write_text(f"""<robot name="evil">
-  <link name="base"/>
-  <link name="arm"><inertial><mass value="1"/><origin xyz="0.1 0 0"/>
-    <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="{evil.replace('&', '&amp;')}" type="revolute"><parent link="base"/><child link="arm"/>
-    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/><dynamics damping="0.5"/></joint>
-</robot>""")
+    urdf = written(tmp_path / "evil.urdf", chain("evil", segment(evil.replace("&", "&amp;"), "arm", axis="0 0 1",
+                                                                  limit=(-1, 1, 1, 1), damping=0.5, mass=1,
+                                                                  com="0.1 0 0", inertia=(0.01, 0.01, 0.01))))
     model = aggsym.load(urdf)
     tex = tmp_path / "evil.tex"
     tex.write_text(generate(model, targets="latex").files["evil.tex"])

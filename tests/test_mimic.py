@@ -13,7 +13,7 @@ from aggsym import cli
 from aggsym.codegen.compile import CLibrary, compile_shared, import_module
 from aggsym.codegen.generate import generate, write
 from aggsym.errors import ModelError
-from helpers import GRIPPER, reduction, relative_error
+from helpers import GRIPPER, reduction, relative_error, written
 from pinocchio_reference import pin, inertia_rate, pinocchio_q
 from random_trees import random_urdf
 
@@ -81,8 +81,7 @@ def test_gripper_equals_pinocchios_mimic_model(tmp_path):
     """The same against Pinocchio's own mimic joints (mimic=True), a fresh Data for every call: Pinocchio 4.1's
     crba on a model with mimic joints returns wrong entries when a Data is reused, and differs from J^T M J when a
     mimic joint carries a subtree (neither is the case here)."""
-    path = tmp_path / "gripper.urdf"
-    path.write_text(GRIPPER)
+    path = written(tmp_path / "gripper.urdf", GRIPPER)
     model = aggsym.load(path, mimic="couple")
     pm = pin.buildModelFromUrdf(str(path), mimic=True)
     twin = aggsym.NumericTwin(model)
@@ -98,14 +97,13 @@ def test_gripper_equals_pinocchios_mimic_model(tmp_path):
 
 @pytest.mark.compiler
 def test_gripper_twin_c_and_numpy_equal_the_reduced_pinocchio_model(tmp_path):
-    path = tmp_path / "gripper.urdf"
-    path.write_text(GRIPPER)
+    path = written(tmp_path / "gripper.urdf", GRIPPER)
     model = aggsym.load(path, mimic="couple")
     assert [c.name for c in model.coordinates] == ["shoulder", "wrist", "finger_left"]
     assert len(model.pair_coordinates) == 5
     twin = aggsym.NumericTwin(model)
     compare(model, path, lambda role, *a: twin.call(role, *a))
-    gen = generate(model, latex=True)
+    gen = generate(model)
     write(gen, tmp_path / "out")
     manifest = json.loads((tmp_path / "out" / "gripper.json").read_text())
     assert manifest["nq"] == 3 and len(manifest["couplings"]) == 2
@@ -127,8 +125,7 @@ def test_random_trees_with_mimics_equal_the_reduced_pinocchio_model(seed, tmp_pa
 
 
 def test_independent_mimics_keep_their_coordinates(tmp_path):
-    path = tmp_path / "gripper.urdf"
-    path.write_text(GRIPPER)
+    path = written(tmp_path / "gripper.urdf", GRIPPER)
     model = aggsym.load(path)
     assert model.nq == 5 and not model.couplings and len(model.meta["mimic"]) == 2
 
@@ -142,8 +139,7 @@ def test_chained_mimic_is_refused(tmp_path):
 
 @pytest.mark.compiler
 def test_cli_couples_mimics(tmp_path, capsys):
-    path = tmp_path / "gripper.urdf"
-    path.write_text(GRIPPER)
+    path = written(tmp_path / "gripper.urdf", GRIPPER)
     assert cli.main(["check", str(path), "--mimic", "couple", "--trials", "3", "--opt=-O0"]) == 0
     assert "ok: every routine" in capsys.readouterr().out
     yaml_model = tmp_path / "x.yaml"

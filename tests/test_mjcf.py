@@ -1,11 +1,11 @@
 """The MJCF reader (issue 33, items 1, 2 hinge/slide/free, 3, 5): MuJoCo's compiled model onto the tree, checked
 against MuJoCo itself, and hostile or unsupported files refused with exit 2.
 
-The representative sample of the corpora (``benchmarks/mjcf_corpus.py`` walks all of them, with the comparison of ``benchmarks/mujoco_reference.py``): a fixed-base arm with
+The representative sample of the corpora (``benchmarks/mjcf/corpus.py`` walks all of them, with the comparison of ``benchmarks/mjcf/mujoco_reference.py``): a fixed-base arm with
 damping (acrobot), a cart with a slide (cartpole), a planar runner whose root is three joints in one body and whose
 joints have armature, damping and springs (cheetah), a hinge with qpos0 = pi/2 (finger), joints anchored off the
 body origin with a slide root at qpos0 = 1.25 (gymnasium's walker2d), free-root walkers (gymnasium's ant, dm_control's
-humanoid), and a scene written here: two free bodies, one with armature and damping on its free joint and a hinge
+humanoid), and a scene of tests/data/scene.xml: two free bodies, one with armature and damping on its free joint and a hinge
 child, a fixed-base arm whose body has two joints anchored off its origin (one with a spring and ref), a slide, a
 site, and a tilted gravity.
 """
@@ -22,11 +22,12 @@ from aggsym import cli
 from aggsym.model import load
 from aggsym.model.readers import mjcf_source
 from aggsym.twin import NumericTwin
+from helpers import data_text, written
 
 mujoco = pytest.importorskip("mujoco")
 pytestmark = pytest.mark.mujoco
 
-from benchmarks.mujoco_reference import compare, mujoco_model, states, to_aggsym  # noqa: E402
+from benchmarks.mjcf.mujoco_reference import compare, mujoco_model, states, to_aggsym  # noqa: E402
 
 SITE = Path(mujoco.__file__).resolve().parent.parent
 SUITE = SITE / "dm_control" / "suite"
@@ -34,48 +35,12 @@ GYM = SITE / "gymnasium" / "envs" / "mujoco" / "assets"
 SAMPLE = [SUITE / "acrobot.xml", SUITE / "cartpole.xml", SUITE / "cheetah.xml", SUITE / "finger.xml",
           SUITE / "humanoid.xml", GYM / "walker2d.xml", GYM / "ant.xml"]
 TOLERANCE = 1e-9
-
-SCENE = """<mujoco model="scene">
-  <option gravity="0.3 -0.2 -9.5"/>
-  <worldbody>
-    <geom type="plane" size="2 2 .1"/>
-    <site name="origin_mark" pos="0 0 0.1"/>
-    <body name="base" pos="0 0 0.5" euler="0 0 30">
-      <body name="upper" pos="0.1 0 0.2" euler="10 20 0">
-        <joint name="shoulder_y" type="hinge" axis="0 1 0" pos="0 0 0.05" damping="0.3" armature="0.02"/>
-        <joint name="shoulder_x" type="hinge" axis="1 1 0" pos="0.02 0 0" stiffness="2" springref="0.3" ref="0.2"/>
-        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
-        <site name="elbow_site" pos="0.3 0 0" euler="0 90 0"/>
-        <body name="lower" pos="0.3 0 0">
-          <joint name="slide" type="slide" axis="0 0 1" pos="0.1 0.2 0" damping="1"/>
-          <geom type="box" size="0.1 0.02 0.03" pos="0.1 0 0"/>
-        </body>
-      </body>
-    </body>
-    <body name="ball" pos="1 0 1">
-      <freejoint name="ball_root"/>
-      <geom type="sphere" size="0.1" mass="2"/>
-    </body>
-    <body name="box" pos="-1 0 1" quat="0.9 0.1 0.2 0.3">
-      <joint name="box_root" type="free" damping="0.1" armature="0.05"/>
-      <geom type="box" size="0.1 0.2 0.3" mass="3"/>
-      <body name="lid" pos="0 0 0.3">
-        <joint name="lid_hinge" axis="0 1 0" pos="0 0.1 0"/>
-        <geom type="box" size="0.1 0.2 0.02" mass="0.5"/>
-        <site name="lid_corner" pos="0.1 0.2 0.02" quat="0.5 0.5 0.5 0.5"/>
-      </body>
-    </body>
-  </worldbody>
-  <actuator><motor name="drive" joint="shoulder_y" gear="50"/></actuator>
-</mujoco>
-"""
+SCENE = data_text("scene.xml")  # (test_mjcf_poses.py reads it too)
 
 
 @pytest.fixture
 def scene(tmp_path):
-    path = tmp_path / "scene.xml"
-    path.write_text(SCENE)
-    return path
+    return written(tmp_path / "scene.xml", SCENE)
 
 
 @pytest.mark.parametrize("path", SAMPLE, ids=lambda p: f"{p.parent.name}/{p.stem}")
@@ -367,7 +332,7 @@ def test_inertial_parameters_of_a_body_against_mujoco(scene):
 
 def test_energy_holds_the_rotors_and_a_constraint_on_a_body(scene, tmp_path):
     """T = 1/2 qd^T A qd with the armature (a free joint's too) in A; a --constraints side file names MJCF bodies."""
-    from aggsym.model.readers.yaml_reader import load_constraints
+    from aggsym.model.readers.side_files import load_constraints
 
     model = load(scene)
     twin = NumericTwin(model)
@@ -444,4 +409,4 @@ def test_unusual_names_are_escaped(tmp_path):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     assert module.JOINTS == ('j\'\'\'"""\\input{x} */',)
-    assert float(module.passive_forces([0.0], [2.0])) == -2.0  # (n = 1: a scalar)
+    assert module.passive_forces([0.0], [2.0]).tolist() == [-2.0]  # (n = 1: a vector of one entry, as A is 1 x 1)

@@ -20,7 +20,7 @@ from aggsym.twin import NumericTwin
 
 mujoco = pytest.importorskip("mujoco")
 
-from benchmarks.mujoco_reference import to_aggsym  # noqa: E402
+from benchmarks.mjcf.mujoco_reference import to_aggsym  # noqa: E402
 
 # a spatial four-bar: crank a (hinge y), coupler b (hinges y, x), rocker c (hinge y); b's end tied to c's by connect
 FOUR_BAR = """<mujoco model="fourbar"><option gravity="0.3 -1 -9.81"><flag contact="disable"/></option><worldbody>
@@ -327,7 +327,7 @@ def _suite(name):
 def test_manipulator_loads_with_its_tendon_coupling():
     """dm_control's manipulator: the tendon equality 'coupling' (-0.5 thumb + 0.5 finger held at 0) is the coupling
     finger = thumb; A, the forces and q'' (the hard coupling, dense KKT from MuJoCo's M and bias) agree <= 1e-9."""
-    from benchmarks.mujoco_reference import compare
+    from benchmarks.mjcf.mujoco_reference import compare
 
     path = _suite("manipulator.xml")
     with warnings.catch_warnings():
@@ -343,7 +343,7 @@ def test_a_side_file_adds_to_the_equalities(tmp_path):
     """--constraints on an MJCF model with a connect: the side file's constraints come after the file's own (none
     dropped); a name the file already uses is refused."""
     from aggsym.errors import ModelError
-    from aggsym.model.readers.yaml_reader import load_constraints
+    from aggsym.model.readers.side_files import load_constraints
 
     model = load(write(tmp_path, FOUR_BAR))
     side = write(tmp_path, "constraints:\n  - name: tip\n    body: a\n    point: [0.3, 0, 0]\n    block: normal\n",

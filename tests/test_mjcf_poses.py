@@ -1,9 +1,9 @@
 """Every MJCF model proves its poses (issue 49, item 2): the frames of every body and site, every body's centre of mass
 and inertia, and the internal frames the generated routines are built from, against MuJoCo's kinematics at random
-qpos (:func:`benchmarks.mujoco_poses.compare_poses`), for every model of the corpora (benchmarks/mjcf_corpus.py)
+qpos (:func:`benchmarks.mjcf.mujoco_poses.compare_poses`), for every model of the corpora (benchmarks/mjcf/corpus.py)
 and every MJCF model of the tests, as written and with a random ``ref`` on each hinge and slide
-(:func:`benchmarks.mujoco_poses.with_refs`; the corpora have almost none).  With the refs, the dynamics of the model
-as read and of its internal models are compared with MuJoCo too (the corpus's 1e-9).
+(:func:`benchmarks.mjcf.mujoco_poses.with_refs`; the corpora have almost none).  With the refs, the dynamics of the
+model as read and of its internal models are compared with MuJoCo too (the corpus's 1e-9).
 """
 from __future__ import annotations
 
@@ -19,9 +19,9 @@ mujoco = pytest.importorskip("mujoco")
 pytestmark = [pytest.mark.mujoco, pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning"),
               pytest.mark.filterwarnings("ignore:compiler attribute:UserWarning")]  # (MuJoCo on a corpus file)
 
-from benchmarks.mjcf_corpus import corpora, has_joint  # noqa: E402
-from benchmarks.mujoco_poses import compare_poses, with_refs  # noqa: E402
-from benchmarks.mujoco_reference import compare  # noqa: E402
+from benchmarks.mjcf.corpus import corpora, has_joint  # noqa: E402
+from benchmarks.mjcf.mujoco_poses import compare_poses, with_refs  # noqa: E402
+from benchmarks.mjcf.mujoco_reference import compare  # noqa: E402
 import mjcf_probes  # noqa: E402
 import test_ball_joint  # noqa: E402
 import test_mjcf  # noqa: E402
@@ -44,7 +44,7 @@ WRITTEN = {  # the MJCF models the tests write
 def loaded(path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # (fluid forces and the like: the reader's own tests check the warnings)
-        return load(path)  # (every model of the corpora is read: benchmarks/mjcf_corpus.py)
+        return load(path)  # (every model of the corpora is read: benchmarks/mjcf/corpus.py)
 
 
 def check(path, model, name):

@@ -24,7 +24,7 @@ from mjcf_probes import FREE_AND_BALL, ISSUE, ISSUE_RADIAN, PROBES
 mujoco = pytest.importorskip("mujoco")
 pytestmark = [pytest.mark.mujoco, pytest.mark.compiler]
 
-from benchmarks.mujoco_reference import (  # noqa: E402
+from benchmarks.mjcf.mujoco_reference import (  # noqa: E402
     Module, compare, compare_constrained, mujoco_model, states, to_aggsym)
 
 TOLERANCE = 1e-12

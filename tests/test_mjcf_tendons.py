@@ -2,9 +2,9 @@
 and dampers of fixed tendons, and frictionloss as Coulomb friction on request.
 
 References: MuJoCo itself.  The rows against a dense KKT solve built from MuJoCo's own data (``mj_fullM``, the
-equality rows of its ``efc_J``, gamma by central differences of that J; :func:`benchmarks.mujoco_reference.
+equality rows of its ``efc_J``, gamma by central differences of that J; :func:`benchmarks.mjcf.mujoco_reference.
 compare_constrained`) <= 1e-8, and phi against MuJoCo's ``efc_pos``; the tendon forces against MuJoCo's
-``qfrc_passive`` and ``qacc`` (:func:`benchmarks.mujoco_reference.compare`) <= 1e-9.
+``qfrc_passive`` and ``qacc`` (:func:`benchmarks.mjcf.mujoco_reference.compare`) <= 1e-9.
 """
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from aggsym.twin import NumericTwin
 
 mujoco = pytest.importorskip("mujoco")
 
-from benchmarks.mujoco_reference import (  # noqa: E402
+from benchmarks.mjcf.mujoco_reference import (  # noqa: E402
     compare, compare_constrained, equality_model, mujoco_model, states,
 )
 

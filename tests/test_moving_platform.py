@@ -11,7 +11,7 @@ import pytest
 
 import aggsym
 from conftest import model_path
-from helpers import assert_model_error, generated_code
+from helpers import assert_model_error, generated_code, rk4_step_in_time
 
 H = 1e-4
 
@@ -97,11 +97,7 @@ def test_the_cart_stays_on_the_moving_platform(platform):
         return module.constrained_forward_dynamics(q, qd, np.zeros(4), t)[0]
 
     for _ in range(1000):
-        k1q, k1v = qd, f(t, q, qd)
-        k2q, k2v = qd + dt / 2 * k1v, f(t + dt / 2, q + dt / 2 * k1q, qd + dt / 2 * k1v)
-        k3q, k3v = qd + dt / 2 * k2v, f(t + dt / 2, q + dt / 2 * k2q, qd + dt / 2 * k2v)
-        k4q, k4v = qd + dt * k3v, f(t + dt, q + dt * k3q, qd + dt * k3v)
-        q, qd = q + dt / 6 * (k1q + 2 * k2q + 2 * k3q + k4q), qd + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        q, qd = rk4_step_in_time(f, t, q, qd, dt)
         t += dt
     assert np.abs(module.constraint_residual(q, t)).max() <= 1e-8
     J = module.constraint_jacobian(q, t)

@@ -10,7 +10,7 @@ import pytest
 import aggsym
 from aggsym.errors import AggsymError, ModelError
 from aggsym.model.readers import registry as readers
-from aggsym.model.readers.registry import Reader, check_cli_options, reader_for, register
+from aggsym.model.readers.registry import Reader, reader_for, register
 from aggsym.model.types import LinkFrame, Links
 
 from conftest import model_path
@@ -31,7 +31,7 @@ def test_a_shared_suffix_is_decided_by_the_content(tmp_path):
     urdf = tmp_path / "ur5.xml"
     urdf.write_bytes(robot_path("ur5").read_bytes())
     assert reader_for(urdf).name == "URDF"
-    assert aggsym.load(urdf) == dataclasses.replace(aggsym.load(robot_path("ur5")), source=str(urdf))
+    assert aggsym.load(urdf) == dataclasses.replace(aggsym.load(robot_path("ur5")), source=str(urdf), name="ur5")
     scene = tmp_path / "scene.xml"
     scene.write_text("<mujoco/>\n")
     assert reader_for(scene).name == "MJCF"
@@ -50,22 +50,29 @@ def test_a_new_format_is_one_reader(tmp_path, monkeypatch):
         seen.append(options)
         return base
 
-    register(Reader("Toy", (".toy",), load, options=("scale",), cli_options=("--floating-base",),
-                    sniffed=(".xml",), sniff=lambda head: b"<toy" in head))
+    register(Reader("Toy", (".toy",), load, options=("scale", "floating_base"), sniffed=(".xml",),
+                    sniff=lambda head: b"<toy" in head))
     (tmp_path / "m.toy").write_text("")
     (tmp_path / "m.xml").write_text("<toy/>")
-    assert aggsym.load(tmp_path / "m.toy", scale=2) is base and seen == [{"scale": 2}]
+    assert aggsym.model.load(tmp_path / "m.toy", scale=2) is base and seen == [{"scale": 2}]
     assert reader_for(tmp_path / "m.xml").name == "Toy"
-    assert check_cli_options(tmp_path / "m.toy", ["--floating-base"]).name == "Toy"
+    # the pipeline passes a reader its own options (those of the table it names, and any of its own), and refuses
+    # the table's others
+    model = aggsym.load(tmp_path / "m.toy", scale=3, floating_base="euler", armature=0.5)
+    assert seen[-1] == {"scale": 3, "floating_base": "euler"} and model.armature == 0.5 and model.name == "m"
     with pytest.raises(AggsymError, match="the Toy reader does not accept --payload"):
-        check_cli_options(tmp_path / "m.toy", ["--floating-base", "--payload"])
+        aggsym.load(tmp_path / "m.toy", floating_base="euler", payload="x")
     with pytest.raises(ValueError, match="taken"):
         register(Reader("Other", (".yaml",), load))
 
 
 def test_options_a_reader_does_not_accept_name_the_reader_and_the_option(tmp_path):
     with pytest.raises(TypeError, match="YAML models take no options"):
+        aggsym.model.load(model_path("double_pendulum"), floating_base=True)
+    with pytest.raises(AggsymError, match="the YAML reader does not accept --floating-base"):
         aggsym.load(model_path("double_pendulum"), floating_base=True)
+    with pytest.raises(TypeError, match="unknown model option flaoting_base"):
+        aggsym.load(model_path("double_pendulum"), flaoting_base=True)
     run = subprocess.run([sys.executable, "-m", "aggsym", "ops", str(model_path("double_pendulum")), "--mimic",
                           "couple", "--payload", "x"], capture_output=True, text=True)
     assert run.returncode == 2 and "the YAML reader does not accept --mimic and --payload" in run.stderr

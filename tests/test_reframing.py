@@ -21,6 +21,7 @@ from aggsym.model.transforms.reframe import eligible, reframe
 from helpers import TOLERANCE, generated_code, relative_error, robots_directory
 from pinocchio_reference import pin, pinocchio_model, pinocchio_q
 from random_trees import random_urdf
+from robot_builder import chain, segment
 
 pytestmark = [pytest.mark.pinocchio, pytest.mark.filterwarnings("ignore::aggsym.errors.ModelWarning")]
 
@@ -164,15 +165,11 @@ def test_a_long_chain_of_parallel_axes_keeps_the_origin_search_small(tmp_path, r
     from aggsym.model.transforms import reframe as module
 
     n = 60
-    links = ['<robot name="planar">', '<link name="l0"/>']
-    for k in range(1, n + 1):
-        links.append(f'<link name="l{k}"><inertial><origin xyz="0.1 0 0.01"/><mass value="1"/>'
-                     f'<inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial></link>')
-        links.append(f'<joint name="j{k}" type="revolute"><parent link="l{k - 1}"/><child link="l{k}"/>'
-                     f'<origin xyz="0.2 0.0{k % 7} {0.01 * (k % 5):.2f}"/><axis xyz="0 0 1"/>'
-                     '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>')
+    segments = [segment(f"j{k}", f"l{k}", xyz=f"0.2 0.0{k % 7} {0.01 * (k % 5):.2f}", axis="0 0 1",
+                        limit=(-3, 3, 1, 1), mass=1, com="0.1 0 0.01", inertia=(0.01, 0.02, 0.03))
+                for k in range(1, n + 1)]
     path = tmp_path / "planar.urdf"
-    path.write_text("\n".join(links + ["</robot>"]))
+    path.write_text(chain("planar", *segments, base="l0"))
     model = aggsym.load(path)
     calls = []
     counted = module._nonzeros

@@ -21,35 +21,27 @@ from aggsym.contract import ROUTINES, base_parameters, base_regressor_layout, se
 from aggsym.contract.routines_regressor import friction_regressor_layout
 from aggsym.twin import NumericTwin
 from conftest import model_path
-from helpers import generated_code, relative_error
+from helpers import generated_code, relative_error, written
 from pinocchio_reference import pin, pinocchio_model, pinocchio_q
+from robot_builder import rubbing as rubbing_urdf
 
 ARMATURE = 0.05
-URDF = """<?xml version="1.0"?>
-<robot name="rubbing">
-  <link name="base"/>
-  <link name="a"><inertial><origin xyz="0.1 0.02 0"/><mass value="1"/>
-    <inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0.001" ixz="0" iyz="0"/></inertial></link>
-  <link name="b"><inertial><origin xyz="0.1 0 0.01"/><mass value="0.5"/>
-    <inertia ixx="0.015" iyy="0.02" izz="0.03" ixy="0" ixz="0.0005" iyz="0"/></inertial></link>
-  <link name="c"><inertial><origin xyz="0 0 0.1"/><mass value="0.3"/>
-    <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/>
-    <dynamics damping="0.7" friction="0.2"/><limit lower="-2" upper="2.5" effort="30" velocity="4"/></joint>
-  <joint name="j2" type="continuous"><origin xyz="0.2 0 0"/><parent link="a"/><child link="b"/><axis xyz="0 1 0"/>
-  </joint>
-  <joint name="j3" type="prismatic"><origin xyz="0.2 0 0"/><parent link="b"/><child link="c"/><axis xyz="0 0 -1"/>
-    <dynamics damping="0.1" friction="1.5"/><limit lower="0" upper="0.3" effort="100" velocity="0.5"/></joint>
-</robot>
-"""
+
+
+def arm_urdf(**j2_origin) -> str:
+    """The arm of tests/test_joint_friction.py with products of inertia, centres off the axes and damping on j3
+    too (j2's origin ``j2_xyz``, ``j2_rpy`` as given)."""
+    return rubbing_urdf(a_com="0.1 0.02 0", a_inertia=(0.01, 0.02, 0.03, 0.001, 0, 0), b_com="0.1 0 0.01",
+                        b_inertia=(0.015, 0.02, 0.03, 0, 0.0005, 0), j3_damping=0.1, **j2_origin)
+
+
+URDF = arm_urdf()
 ROLES = ["inverse_dynamics", "joint_friction", "regressor", "friction_regressor", "friction_base_regressor"]
 
 
 @pytest.fixture(scope="module")
 def rubbing_path(tmp_path_factory):
-    path = tmp_path_factory.mktemp("urdf") / "rubbing.urdf"
-    path.write_text(URDF)
-    return path
+    return written(tmp_path_factory.mktemp("urdf") / "rubbing.urdf", URDF)
 
 
 def rubbing(path, floating_base=None, armature=ARMATURE):
@@ -171,8 +163,7 @@ def test_base_parameters_are_exact_not_rounded(tmp_path, rng):
     gave another); Y[:, dependent] = Y[:, independent] beta to rounding on random states."""
     length = 0.3141592653589793
     path = tmp_path / "arm.urdf"
-    path.write_text(URDF.replace('<origin xyz="0.2 0 0"/><parent link="a"/>',
-                                 f'<origin xyz="{length!r} 0 0"/><parent link="a"/>'))
+    path.write_text(arm_urdf(j2_xyz=f"{length!r} 0 0"))
     model = rubbing(path)
     layout = base_regressor_layout(model, "friction_regressor")
     assert layout["inexact"] == [] and layout["inexact_residual"] == 0.0
@@ -201,8 +192,7 @@ def test_inexact_relations_are_named_and_hold_to_rounding(rubbing_path, tmp_path
     first moment cannot hold exactly in the model's numbers; it is named, with its residual on the samples, and
     the base regressor still reproduces the torques."""
     path = tmp_path / "tilted.urdf"
-    path.write_text(URDF.replace('<origin xyz="0.2 0 0"/><parent link="a"/>',
-                                 '<origin xyz="0.2 0 0" rpy="0.3 0 0"/><parent link="a"/>'))
+    path.write_text(arm_urdf(j2_rpy="0.3 0 0"))
     model = rubbing(path)
     layout = base_regressor_layout(model, "friction_regressor")
     assert layout["inexact"] == ["mcy_b"] and 0 < layout["inexact_residual"] < 1e-15
@@ -255,7 +245,7 @@ def test_sign_is_branch_free_and_zero_at_rest_in_jax_and_pytorch(rubbing_path, t
     from aggsym.codegen.generate import generate, write
 
     model = select_routines(rubbing(rubbing_path), ["friction_regressor"])
-    write(generate(model, latex=False, targets=["numpy", "jax", "torch", "manifest", "c"]), tmp_path)
+    write(generate(model, targets=["numpy", "jax", "torch", "manifest", "c"]), tmp_path)
     npm = import_module(tmp_path / "rubbing.py")
     jm = import_module(tmp_path / "rubbing_jax.py")
     tm = import_module(tmp_path / "rubbing_torch.py")

@@ -27,7 +27,7 @@ from aggsym.mechanics.kinematics import TreeKinematics
 from aggsym.model.types import TIME, Coordinate
 from aggsym.mechanics.sweeps import forward_sweep
 from conftest import model_path
-from helpers import assert_model_error
+from helpers import assert_model_error, rk4_step_in_time
 from reference import rot
 from test_peer_kane import kane
 
@@ -214,13 +214,9 @@ def test_the_spin_does_not_depend_on_the_carrier(rng):
 
 
 def rk4(f, q, v, t, dt, steps):
+    """``steps`` RK4 steps of q'' = f(q, q', t) from time t: (q, q', t) at the end."""
     for _ in range(steps):
-        k1q, k1v = v, f(q, v, t)
-        k2q, k2v = v + dt / 2 * k1v, f(q + dt / 2 * k1q, v + dt / 2 * k1v, t + dt / 2)
-        k3q, k3v = v + dt / 2 * k2v, f(q + dt / 2 * k2q, v + dt / 2 * k2v, t + dt / 2)
-        k4q, k4v = v + dt * k3v, f(q + dt * k3q, v + dt * k3v, t + dt)
-        q = q + dt / 6 * (k1q + 2 * k2q + 2 * k3q + k4q)
-        v = v + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        q, v = rk4_step_in_time(lambda t, q, v: f(q, v, t), t, q, v, dt)
         t = t + dt
     return q, v, t
 
@@ -231,7 +227,7 @@ def test_energy_balance_of_the_motor(name, tmp_path, rng):
     int tau_s theta' dt, tau_s the spin row of the spins-as-coordinates model's inverse dynamics; and the
     manifest says conservative: false with t in every signature."""
     model = aggsym.load(model_path(name))
-    write(generate(model, latex=False), tmp_path)
+    write(generate(model, targets="c,numpy,manifest"), tmp_path)
     mod = import_module(tmp_path / f"{name}.py")
     manifest = json.loads((tmp_path / f"{name}.json").read_text())
     assert manifest["conservative"] is False

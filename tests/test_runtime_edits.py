@@ -32,8 +32,9 @@ from aggsym.model.transforms.gravity import with_gravity_parameters
 from aggsym.model.transforms.inertials import with_inertial_parameters
 from aggsym.model.transforms.joint_dynamics import with_passive_included
 from aggsym.twin import NumericTwin
-from helpers import relative_error, robot_path
+from helpers import relative_error, robot_path, written
 from pinocchio_reference import pin, pinocchio_q
+from robot_builder import chain, segment
 
 TOLERANCE = 1e-9
 WALL = np.array([9.81, 0.0, 0.0])  # an arm mounted on a wall: gravity along the base's x axis
@@ -71,7 +72,7 @@ def pinocchio_reference(pm, q, v, a, tau) -> dict:
 def wrapped_library(model, folder, helper: str):
     """The generated C compiled with a wrapper that calls the header's static inline ``helper`` (not in the
     library by itself): (CLibrary, the wrapper as a ctypes function, manifest)."""
-    write(generate(model, latex=False, targets="c,numpy,manifest"), folder)
+    write(generate(model, targets="c,numpy,manifest"), folder)
     wrapper = folder / "wrapper.c"
     wrapper.write_text(f'#include "{model.name}.c"\n'
                        f"void wrapped_{helper}(double *p, double m, const double *c, const double *I)\n"
@@ -162,9 +163,9 @@ def test_the_batched_modules_helpers_write_what_numpys_writes(target, tmp_path, 
     from aggsym.contract import select_routines
 
     model = select_routines(model, ["forward_dynamics"])
-    write(generate(model, latex=False, targets=f"numpy,{target},manifest"), tmp_path)
-    numpy_module = import_module(tmp_path / "ur5.py")
-    module = import_module(tmp_path / f"ur5_{target}.py")
+    write(generate(model, targets=f"numpy,{target},manifest"), tmp_path)
+    numpy_module = import_module(tmp_path / f"{model.name}.py")
+    module = import_module(tmp_path / f"{model.name}_{target}.py")
     masses = np.array([0.05, 3.0, 40.0])
     com = rng.normal(size=(3, 3)) * 0.05
     J = np.array([[0.02, 0.003, -0.001], [0.003, 0.03, 0.002], [-0.001, 0.002, 0.025]])
@@ -199,8 +200,8 @@ def test_a_payload_on_each_of_several_links(tmp_path, rng):
     assert [p.name for p in model.parameters][-1] == "payload_Izz_forearm_link"
     from aggsym.contract import select_routines
 
-    write(generate(select_routines(model, ["gravity"]), latex=False, targets="numpy"), tmp_path)
-    module = import_module(tmp_path / "ur5.py")
+    write(generate(select_routines(model, ["gravity"]), targets="numpy"), tmp_path)
+    module = import_module(tmp_path / f"{model.name}.py")
     J = np.array([[0.02, -0.003, 0.001], [-0.003, 0.03, 0.002], [0.001, 0.002, 0.025]])
     loads = {"tool0": (4.0, np.array([0.01, 0.02, 0.1]), J), "forearm_link": (0.3, np.array([0.2, -0.05, 0.0]), J / 7)}
     p = np.array(model.parameter_values)
@@ -227,8 +228,8 @@ def test_a_links_own_inertial_data_through_its_helper(tmp_path, rng):
 
     path = robot_path("ur5")
     model = with_inertial_parameters(aggsym.load(path), ["wrist_3_link"])
-    write(generate(select_routines(model, ["gravity"]), latex=False, targets="numpy"), tmp_path)
-    module = import_module(tmp_path / "ur5.py")
+    write(generate(select_routines(model, ["gravity"]), targets="numpy"), tmp_path)
+    module = import_module(tmp_path / f"{model.name}.py")
     twin = NumericTwin(model)
     text = path.read_text()
     start = text.index('<link name="wrist_3_link"')
@@ -297,21 +298,17 @@ def test_the_options_are_refused_where_they_mean_nothing(tmp_path, capsys):
 # ---------------------------------------------------------------------------------------------------------------
 # --passive include / exclude
 
-PENDULUM = """<robot name="damped">
-  <link name="base"/>
-  <link name="arm"><inertial><origin xyz="0 0 -{l}" rpy="0 0 0"/><mass value="{m}"/>
-    <inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
-  <joint name="hinge" type="continuous"><parent link="base"/><child link="arm"/><axis xyz="0 1 0"/>
-    <dynamics damping="{d}" friction="{f}"/></joint>
-</robot>"""
+def pendulum(m, l, d, f) -> str:
+    """A point mass m at distance l below a y hinge with damping d and Coulomb friction f."""
+    return chain("damped", segment("hinge", "arm", "continuous", axis="0 1 0", damping=d, friction=f, mass=m,
+                                   com=(0, 0, -l)))
 
 
 def test_passive_include_is_the_hand_written_damped_pendulum(tmp_path, rng):
     """A point mass m at distance l on a y hinge with damping d and Coulomb friction f:
     m l^2 qdd + m g l sin(q) + d qd + f sign(qd) = tau (inverse and forward dynamics, C and NumPy)."""
     m, l, d, f = 1.7, 0.4, 0.35, 0.8
-    path = tmp_path / "damped.urdf"
-    path.write_text(PENDULUM.format(m=m, l=l, d=d, f=f))
+    path = written(tmp_path / "damped.urdf", pendulum(m, l, d, f))
     code = cli.main(["generate", str(path), "-o", str(tmp_path / "inc"), "--passive", "include", "-q"])
     assert code == 0
     manifest = json.loads((tmp_path / "inc" / "damped.json").read_text())
@@ -373,16 +370,10 @@ def test_passive_include_against_pinocchio_with_the_same_damping_and_friction(rn
 # what the header says
 
 
-MASSLESS = """<robot name="arm2">
-  <link name="base"/>
-  <link name="a"><inertial><origin xyz="0 0 0.2"/><mass value="1"/>
-    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
-  <link name="b"/>
-  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/>
-    <limit lower="-1" upper="1" effort="1" velocity="1"/><dynamics damping="0.1"/></joint>
-  <joint name="j2" type="revolute"><parent link="a"/><child link="b"/><origin xyz="0 0 0.4"/><axis xyz="0 1 0"/>
-    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
-</robot>"""
+# the singular arm: a mass on j1 and a massless link on j2
+MASSLESS = chain("arm2", segment("j1", "a", axis="0 0 1", limit=(-1, 1, 1, 1), damping=0.1, mass=1, com="0 0 0.2",
+                                 inertia=(0.01, 0.01, 0.01)),
+                 segment("j2", "b", xyz="0 0 0.4", axis="0 1 0", limit=(-1, 1, 1, 1)))
 
 
 @pytest.mark.compiler
@@ -390,8 +381,7 @@ def test_the_header_says_what_each_routine_holds_and_compiles_warning_free(tmp_p
     """The singular arm: forward dynamics left out, the header says why and which flag brings it back; the
     passive notes sit next to the routines; a controller using NULL, the helper and the macros compiles with
     -std=c99 -Wall -Wextra -Wpedantic -Werror (C) and as C++."""
-    path = tmp_path / "arm2.urdf"
-    path.write_text(MASSLESS)
+    path = written(tmp_path / "arm2.urdf", MASSLESS)
     code = cli.main(["generate", str(path), "-o", str(tmp_path / "g"), "-q", "--payload", "b"])
     assert code == 0
     assert "forward_dynamics, inertia_inverse, transvective_factors left out" in capsys.readouterr().err
@@ -431,8 +421,7 @@ def test_the_header_says_what_each_routine_holds_and_compiles_warning_free(tmp_p
 def test_passive_include_header_and_manifest(tmp_path, capsys):
     """With --passive include the routines' notes say what is included, and the manifest records it; the regressor
     (tau = Y pi, which damping breaks) is refused with the reason."""
-    path = tmp_path / "arm2.urdf"
-    path.write_text(MASSLESS)
+    path = written(tmp_path / "arm2.urdf", MASSLESS)
     code = cli.main(["generate", str(path), "-o", str(tmp_path / "g"), "-q", "--passive", "include",
                      "--armature", "0.01", "--gravity-parameter"])
     assert code == 0

@@ -13,7 +13,7 @@ import pytest
 
 import aggsym
 from aggsym import cli
-from aggsym.codegen.compile import check_generated
+from aggsym.codegen.check import check_generated
 from aggsym.codegen.generate import generate
 from aggsym.codegen.printing import _number
 from aggsym.contract import select_routines
@@ -30,7 +30,7 @@ def test_float_c_of_the_robots_is_within_its_bounds(name, tmp_path):
     model = aggsym.load(robot_path(name))
     if name == "talos":  # 32 joints: the float C of the routines the issue names only
         model = select_routines(model, list(ISSUE_ROLES))
-    gen = generate(model, latex=False, scalar="float")
+    gen = generate(model, targets="c,numpy,manifest", scalar="float")
     bounds = json.loads(gen.files[f"{model.name}.json"])["float_tolerance"]
     results = check_generated(model, gen.files, trials=4, seed=1, workdir=tmp_path, opt="-O1")
     assert {r.role for r in results} == set(bounds) >= set(ISSUE_ROLES)
@@ -43,13 +43,13 @@ def test_float_c_of_the_robots_is_within_its_bounds(name, tmp_path):
 
 def test_float_text_has_float_signatures_literals_and_functions_and_no_double(tmp_path):
     model = aggsym.load(model_path("manipulator6"))
-    gen = generate(model, latex=False, scalar="float")
+    gen = generate(model, targets="c,numpy,manifest", scalar="float")
     c, h = gen.files["manipulator6.c"], gen.files["manipulator6.h"]
     for text in (c, h):
         assert not re.search(r"\bdouble\b", text)
     assert "void manipulator6_inertia(const float *q, const float *p, float *A);" in h
     assert "#define MANIPULATOR6_SCALAR_FLOAT 1" in h
-    arm = generate(aggsym.load(model_path("planar_2link")), latex=False, scalar="float").files
+    arm = generate(aggsym.load(model_path("planar_2link")), targets="c,numpy,manifest", scalar="float").files
     defaults = re.search(r"#define PLANAR_2LINK_P_DEFAULTS \{ (.*) \}", arm["planar_2link.h"]).group(1).split(", ")
     assert defaults == ["1.0f", "0.7f", "0.6f", "0.4f", "9.81f"] and "static const float p_defaults" in arm["planar_2link.c"]
     assert "sinf(" in c and "cosf(" in c
@@ -58,9 +58,9 @@ def test_float_text_has_float_signatures_literals_and_functions_and_no_double(tm
     assert literals and all(suffix == "f" for _, suffix in literals)
     manifest = json.loads(gen.files["manipulator6.json"])
     assert manifest["scalar"] == "float" and set(manifest["float_tolerance"]) == set(manifest["functions"])
-    assert json.loads(generate(model, latex=False).files["manipulator6.json"])["scalar"] == "double"
+    assert json.loads(generate(model, targets="c,numpy,manifest").files["manipulator6.json"])["scalar"] == "double"
     # the double build is the same text as ever, only the manifest says "scalar": "double"
-    doubled = generate(model, latex=False)
+    doubled = generate(model, targets="c,numpy,manifest")
     assert not re.search(r"\bfloat\b", doubled.files["manipulator6.c"])
     assert "aggsym_sincos(double x" in doubled.files["manipulator6.c"]
 
@@ -86,7 +86,8 @@ def test_check_scalar_float_passes_and_prints_each_routine(capsys):
 
 def test_float_output_is_deterministic():
     model = aggsym.load(model_path("walking_machine"))
-    assert generate(model, latex=False, scalar="float").files == generate(model, latex=False, scalar="float").files
+    targets = "c,numpy,manifest"
+    assert generate(model, targets=targets, scalar="float").files == generate(model, targets=targets, scalar="float").files
 
 
 @pytest.mark.parametrize("value", ["1.0e+39", "1.0e-50"])

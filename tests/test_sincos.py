@@ -51,7 +51,7 @@ void sincos2_many(const double *x, double *s, double *c, long n)
 def compiled_driver(folder, flags):
     """The generated double_pendulum.c (which calls both aggsym_sincos and aggsym_sincos2) with DRIVER, compiled
     with the flags and -Werror (warning-free), loaded."""
-    gen = generate(aggsym.load(model_path("double_pendulum")), latex=False)
+    gen = generate(aggsym.load(model_path("double_pendulum")), targets="c,numpy,manifest")
     for name, text in gen.files.items():
         (folder / name).write_text(text)
     assert "aggsym_sincos(" in gen.files["double_pendulum.c"] and "aggsym_sincos2(" in gen.files["double_pendulum.c"]
@@ -163,14 +163,14 @@ def test_outside_the_fast_range_it_is_libm(sincos, x):
 def test_the_helper_is_static_inline_and_has_no_quadrant_branch():
     """C99 static inline, and the quadrant chosen by masks on k: no switch, no if or ?: between the range check
     and the end of the function (the range check is the only branch, predictable)."""
-    c = generate(aggsym.load(model_path("double_pendulum")), latex=False).files["double_pendulum.c"]
+    c = generate(aggsym.load(model_path("double_pendulum")), targets="c,numpy,manifest").files["double_pendulum.c"]
     body = c[c.index("static inline void aggsym_sincos(double x"):]
     body = body[:body.index("\n}\n")]
     assert body.count("if (") == 1 and "switch" not in body
     fast = body[body.index("return;"):]
     assert "if" not in re.sub(r"#if|#endif", "", fast) and "?" not in fast
     assert "static inline void aggsym_sincos(float x" in generate(
-        aggsym.load(model_path("double_pendulum")), latex=False, scalar="float").files["double_pendulum.c"]
+        aggsym.load(model_path("double_pendulum")), targets="c,numpy,manifest", scalar="float").files["double_pendulum.c"]
 
 
 @pytest.mark.compiler
@@ -188,7 +188,7 @@ def test_angles_of_one_routine_are_paired_when_both_are_ready():
     """The emitter joins two sincos calls into one aggsym_sincos2 when the second angle's argument is already
     computable (here the coordinates), and an odd one out stays a single call; the operation count still counts
     one call per angle."""
-    gen = generate(aggsym.load(model_path("manipulator6")), latex=False)
+    gen = generate(aggsym.load(model_path("manipulator6")), targets="c,numpy,manifest")
     c = gen.files["manipulator6.c"]
     body = c[c.index("void manipulator6_inertia("):]
     body = body[:body.index("\n}\n")]
@@ -206,7 +206,7 @@ def test_an_offset_angle_is_emitted_early_to_share_a_call():
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the finger's <mimic>
-        gen = generate(aggsym.load(robot_path("panda")), latex=False)
+        gen = generate(aggsym.load(robot_path("panda")), targets="c,numpy,manifest")
     c = gen.files["panda.c"]
     body = c[c.index("void panda_inverse_dynamics("):]
     body = body[:body.index("\n}\n")]
@@ -221,6 +221,6 @@ def test_an_offset_angle_is_emitted_early_to_share_a_call():
     assert early
     assert body.count("aggsym_sincos(") <= 1
     for r in gen.routines:
-        assert r.ops == count_ops("\n".join(r.c_body)), r.routine.role
+        assert r.ops == count_ops("\n".join(r.bodies["c"].lines)), r.routine.role
     module = gen.files["panda.py"]
     assert all(module.index(f"    {t} = ") > module.index("    q_6 = ") for t in early)

@@ -28,7 +28,8 @@ import numpy as np
 import pytest
 
 import aggsym
-from aggsym.codegen.compile import CLibrary, build_split, compile_shared, compiler, random_inputs, shared_from_archive
+from aggsym.codegen.check import random_inputs
+from aggsym.codegen.compile import CLibrary, build_split, compile_shared, compiler, shared_from_archive
 from aggsym.codegen.generate import generate, symbolic_routines, write
 from aggsym.codegen.slicing import SLICE_THRESHOLD
 from aggsym.contract import ROUTINES, select_routines, signature
@@ -46,7 +47,7 @@ SLICE_CALL = re.compile(r"\b(\w+)_slice(\d+)\(")
 
 
 def _write(model, folder, slicing=SMALL, **options):
-    gen = generate(model, latex=False, slicing=slicing, **options)
+    gen = generate(model, targets="c,numpy,manifest", slicing=slicing, **options)
     write(gen, folder)
     return gen
 
@@ -74,10 +75,10 @@ def test_ur5_sliced_equals_its_program_and_pinocchio(ur5, rng):
     """Each sliced routine against its straight-line program evaluated on floats (1e-12 of the largest output), and
     A, b + g, g, inverse and forward dynamics, A^-1 and C (C qd = b, C + C^T = dM/dt) against Pinocchio (1e-9)."""
     model, gen, lib = ur5
-    sliced = {r.routine.role for r in gen.routines if r.sliced}
+    sliced = {r.routine.role for r in gen.routines if r.bodies["c"].sliced}
     assert {"inertia", "nonlinear_effects", "inverse_dynamics", "forward_dynamics", "inertia_inverse",
             "coriolis"} <= sliced
-    assert all(len(r.sliced.slices) >= 3 for r in gen.routines if r.sliced)
+    assert all(len(r.bodies["c"].sliced.slices) >= 3 for r in gen.routines if r.bodies["c"].sliced)
     prog, outputs = symbolic_routines(model)
     pm = pinocchio_model(robot_path("ur5"))
     data = pm.createData()
@@ -191,7 +192,7 @@ def test_the_workspace_holds_what_each_slice_loads(ur5):
     store = re.compile(r"^w\[(\d+)\] = (\w+);$")
     load = re.compile(r"^const double (\w+) = w\[(\d+)\];$")
     for r in gen.routines:
-        if not r.sliced:
+        if not r.bodies["c"].sliced:
             continue
         held, crossing = {}, set()
         for body in _slices_in_call_order(text, r.symbol):
@@ -203,10 +204,11 @@ def test_the_workspace_holds_what_each_slice_loads(ur5):
                 m = load.match(line)
                 if m:
                     assert held.get(int(m.group(2))) == m.group(1), (r.routine.role, line)
-        assert max(held, default=-1) + 1 == r.sliced.workspace, r.routine.role
+        assert max(held, default=-1) + 1 == r.bodies["c"].sliced.workspace, r.routine.role
         if r.routine.role == "coriolis":
-            assert r.sliced.workspace < len(crossing)
-        assert f"double w[{r.sliced.workspace}];" in r.sliced.entry or not r.sliced.workspace
+            assert r.bodies["c"].sliced.workspace < len(crossing)
+        sliced = r.bodies["c"].sliced
+        assert f"double w[{sliced.workspace}];" in sliced.entry or not sliced.workspace
 
 
 @pytest.mark.parametrize("name, scalar", [("four_bar", "double"), ("gyroscope_spinning_rotor", "double"),
@@ -218,8 +220,8 @@ def test_sliced_equals_unsliced_and_the_twin(name, scalar, tmp_path, rng):
     function (equal to rounding: the same statements in the same order) and against the numeric twin."""
     model = aggsym.load(model_path(name))
     gen = _write(model, tmp_path / "sliced", slicing=TINY, scalar=scalar)
-    assert sum(1 for r in gen.routines if r.sliced) >= 3
-    assert not any(r.sliced for r in _write(model, tmp_path / "plain", slicing=None, scalar=scalar).routines)
+    assert sum(1 for r in gen.routines if r.bodies["c"].sliced) >= 3
+    assert not any(r.bodies["c"].sliced for r in _write(model, tmp_path / "plain", slicing=None, scalar=scalar).routines)
     sliced = _compile(model, tmp_path / "sliced", scalar=scalar)
     plain = _compile(model, tmp_path / "plain", scalar=scalar)
     twin = NumericTwin(model)
@@ -252,21 +254,21 @@ def test_slices_only_above_the_threshold():
     """With the threshold at the median work of manipulator6's routines, exactly those above it are sliced, and the
     others are printed exactly as without slicing; the default threshold slices none of a small model."""
     model = aggsym.load(model_path("manipulator6"))
-    plain = generate(model, latex=False, slicing=None)
+    plain = generate(model, targets="c,numpy,manifest", slicing=None)
     works = {r.routine.role: r.work for r in plain.routines}
     threshold = sorted(works.values())[len(works) // 2]
-    gen = generate(model, latex=False, slicing=(threshold, 100))
+    gen = generate(model, targets="c,numpy,manifest", slicing=(threshold, 100))
     text, plain_text = gen.files["manipulator6.c"], plain.files["manipulator6.c"]
     above = {role for role, w in works.items() if w > threshold}
     assert above and len(above) < len(works)
     for r in gen.routines:
         role = r.routine.role
-        assert (r.sliced is not None) == (role in above), role
+        assert (r.bodies["c"].sliced is not None) == (role in above), role
         assert (f"{r.symbol}_slice0(" in text) == (role in above), role
         if role not in above:
-            function = "\n".join([r.prototype, "{"] + [f"    {line}" for line in r.c_body] + ["}"])
+            function = "\n".join([r.prototype, "{"] + [f"    {line}" for line in r.bodies["c"].lines] + ["}"])
             assert function in text and function in plain_text, role
-    assert generate(model, latex=False).files == plain.files
+    assert generate(model, targets="c,numpy,manifest").files == plain.files
     assert "slice" not in plain_text and "AGGSYM_SLICE" in text
 
 
@@ -277,15 +279,15 @@ def test_the_default_threshold_on_talos():
         warnings.simplefilter("ignore", ModelWarning)  # talos' <mimic> on fixed joints
         model = aggsym.load(robot_path("talos"))
     roles = ["inertia", "nonlinear_effects", "gravity", "inverse_dynamics", "coriolis"]
-    gen = generate(select_routines(model, roles), latex=False)
-    sliced = {r.routine.role for r in gen.routines if r.sliced}
+    gen = generate(select_routines(model, roles), targets="c,numpy,manifest")
+    sliced = {r.routine.role for r in gen.routines if r.bodies["c"].sliced}
     assert sliced == {"coriolis"}
     assert all(r.work <= SLICE_THRESHOLD for r in gen.routines if r.routine.role != "coriolis")
 
 
 def _generate_in_subprocess(folder, seed, split):
     code = ("import sys, aggsym; from aggsym.codegen.generate import generate, write; "
-            f"write(generate(aggsym.load(sys.argv[1]), latex=False, slicing={SMALL!r}, split={split}), sys.argv[2])")
+            f"write(generate(aggsym.load(sys.argv[1]), targets='c,numpy,manifest', slicing={SMALL!r}, split={split}), sys.argv[2])")
     env = dict(os.environ, PYTHONHASHSEED=str(seed))
     subprocess.run([sys.executable, "-c", code, str(model_path("manipulator6")), str(folder)], check=True, env=env,
                    capture_output=True)
@@ -309,7 +311,7 @@ def test_split_make_builds_the_library_with_sliced_routines(tmp_path, rng):
     model = aggsym.load(model_path("manipulator6"))
     folder = tmp_path / "split"
     gen = _write(model, folder, split=True)
-    assert sum(1 for r in gen.routines if r.sliced) >= 3
+    assert sum(1 for r in gen.routines if r.bodies["c"].sliced) >= 3
     archive = build_split(folder, cflags="-O2 -std=c99 -fPIC -Wall -Wextra -Wpedantic -Werror")
     manifest = json.loads((folder / "manipulator6.json").read_text())
     members = subprocess.run(["ar", "t", str(archive)], capture_output=True, text=True, check=True).stdout.split()

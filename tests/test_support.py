@@ -9,26 +9,16 @@ manipulator follows a prescribed gamma(t) through support_direct, support_invers
 A support with fewer than six mechanism coordinates: least squares, the residual orthogonal to I's columns.
 """
 import dataclasses
-import io
-from contextlib import redirect_stderr, redirect_stdout
 
 import numpy as np
 import pytest
 
 import aggsym
-from aggsym import cli
 from conftest import model_path
-from helpers import generated_code, rk4_step, robot_path
+from helpers import generated_code, rk4_step, rk4_step_in_time, robot_path, run_cli
 from pinocchio_reference import pin, pinocchio_model, pinocchio_q
 
 pytestmark = pytest.mark.pinocchio
-
-
-def run_cli(args):
-    err = io.StringIO()
-    with redirect_stderr(err), redirect_stdout(io.StringIO()):
-        code = cli.main(args)
-    return code, err.getvalue()
 
 
 @pytest.fixture(scope="module")
@@ -131,11 +121,7 @@ def test_spacecraft_free_flight_with_a_prescribed_manipulator(tmp_path):
     assert np.abs(h0[3:]).max() > 1.0
     worst = 0.0
     for step in range(1000):  # RK4 with the time in the right-hand side
-        k1q, k1v = qd, accel(t, q, qd)
-        k2q, k2v = qd + dt / 2 * k1v, accel(t + dt / 2, q + dt / 2 * k1q, qd + dt / 2 * k1v)
-        k3q, k3v = qd + dt / 2 * k2v, accel(t + dt / 2, q + dt / 2 * k2q, qd + dt / 2 * k2v)
-        k4q, k4v = qd + dt * k3v, accel(t + dt, q + dt * k3q, qd + dt * k3v)
-        q, qd = q + dt / 6 * (k1q + 2 * k2q + 2 * k3q + k4q), qd + dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        q, qd = rk4_step_in_time(accel, t, q, qd, dt)
         t += dt
         worst = max(worst, np.abs(momentum(t, q, qd) - h0).max())
         if step % 250 == 0:

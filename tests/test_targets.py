@@ -25,7 +25,7 @@ class TextTarget(Target):
         return file == f"{name}.txt"
 
     def print_routine(self, model, prog, lines, emitted):
-        emitted.bodies[self.name] = len(lines.sl.temps)
+        return len(lines.sl.temps)
 
     def render(self, job):
         template = environment().from_string(

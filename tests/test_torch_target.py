@@ -14,7 +14,8 @@ import torch
 
 import aggsym
 from aggsym.cli import main
-from aggsym.codegen.compile import CONDITIONING, _inertia_condition, import_module, random_inputs
+from aggsym.codegen.check import CONDITIONING, _inertia_condition, random_inputs
+from aggsym.codegen.compile import import_module
 from aggsym.codegen.generate import generate, write
 from aggsym.codegen.targets import default_targets
 from aggsym.contract import FLOAT_PER_CONDITION, FLOAT_TIME, FLOAT_TOLERANCE, FLOAT_TOLERANCE_DEFAULT, select_routines

@@ -29,6 +29,7 @@ from aggsym.symbolic import factored_form
 from conftest import MODELS, model_path
 from helpers import routine_program, routine_sympy
 from pinocchio_reference import pin, pinocchio_tree
+from robot_builder import chain, root, segment
 from test_variants import chain_of_elementary_frames
 
 pytestmark = pytest.mark.pinocchio
@@ -351,16 +352,9 @@ def program_operations(model, role) -> int:
 def chain_urdf(n: int) -> str:
     """A chain of n revolute joints about e1, e2, e3 in turn, every origin, centre of mass and inertia general."""
     axes = ("1 0 0", "0 1 0", "0 0 1")
-    parts = ['<?xml version="1.0"?>', '<robot name="chain">']
-    for k in range(n + 1):
-        parts.append(f'<link name="l{k}"><inertial><origin xyz="0.05 0.02 0.1"/><mass value="1.5"/>'
-                     f'<inertia ixx="0.02" ixy="0.001" ixz="0.002" iyy="0.03" iyz="0.003" izz="0.025"/>'
-                     f'</inertial></link>')
-    for k in range(n):
-        parts.append(f'<joint name="j{k}" type="revolute"><parent link="l{k}"/><child link="l{k + 1}"/>'
-                     f'<origin xyz="0.1 0.02 0.3"/><axis xyz="{axes[k % 3]}"/>'
-                     f'<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>')
-    return "\n".join(parts + ["</robot>"])
+    body = dict(mass=1.5, com="0.05 0.02 0.1", inertia=(0.02, 0.03, 0.025, 0.001, 0.002, 0.003))
+    return chain("chain", root("l0", **body), *(segment(f"j{k}", f"l{k + 1}", xyz="0.1 0.02 0.3", axis=axes[k % 3],
+                                                         limit=(-3, 3, 1, 1), **body) for k in range(n)))
 
 
 def test_forward_dynamics_is_linear_in_n(tmp_path, monkeypatch):

@@ -156,15 +156,6 @@ def made_up(plate="0.01 0.01 0.01 0", plate_mass="0.5", arm="0.1 0.1 0.1 0", axi
 """
 
 
-@pytest.fixture
-def write(tmp_path):
-    def _write(text, name="robot.urdf"):
-        path = tmp_path / name
-        path.write_text(text)
-        return path
-    return _write
-
-
 def test_merged_body_that_is_not_physical_is_an_error_naming_it_and_its_links(write):
     """The plate's izz = -1 outweighs everything about the shoulder's axis: body 'arm' (arm + plate) would have a
     negative kinetic energy turning about z."""

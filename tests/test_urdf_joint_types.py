@@ -15,6 +15,7 @@ import pytest
 import aggsym
 from helpers import relative_error
 from pinocchio_reference import pin
+from robot_builder import chain, segment
 
 pytestmark = pytest.mark.pinocchio
 
@@ -174,7 +175,7 @@ def test_generated_numpy_against_pinocchio(robot, tmp_path):
     from aggsym.codegen.generate import generate, write
 
     model, pm = robot
-    write(generate(model, latex=False, targets=["numpy"]), tmp_path)
+    write(generate(model, targets=["numpy"]), tmp_path)
     module = import_module(tmp_path / f"{model.name}.py")
     data, rng = pm.createData(), np.random.default_rng(7)
     for _ in range(3):
@@ -186,19 +187,13 @@ def test_generated_numpy_against_pinocchio(robot, tmp_path):
         assert relative_error(np.asarray(module.forward_dynamics(q, qd, tau)), pin.aba(pm, data, q, qd, tau)) <= TOL
 
 
-PLANAR_ARM = """<robot name="planar_arm">
-<link name="ground"/>
-<link name="cart"><inertial><origin xyz="0.05 -0.02 0.01"/><mass value="1.5"/>
-<inertia ixx="0.02" ixy="0.001" ixz="-0.002" iyy="0.03" iyz="0.0015" izz="0.025"/></inertial></link>
-<link name="pole"><inertial><origin xyz="0 0.01 0.3"/><mass value="0.6"/>
-<inertia ixx="0.01" ixy="0.0002" ixz="0.0001" iyy="0.011" iyz="-0.0003" izz="0.002"/></inertial></link>
-<joint name="table" type="planar"><parent link="ground"/><child link="cart"/>
-<origin xyz="0.1 0.2 0.3" rpy="0.3 -0.2 0.1"/><axis xyz="0 0 1"/></joint>
-<joint name="hinge" type="revolute"><parent link="cart"/><child link="pole"/>
-<origin xyz="0.1 0 0.05" rpy="0 0 0.4"/><axis xyz="1 0 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/>
-</joint>
-</robot>
-"""
+# a cart on a planar joint about z (its frame turned) carrying a pole on a hinge about x; full inertia tensors
+PLANAR_ARM = chain("planar_arm",
+                   segment("table", "cart", "planar", xyz="0.1 0.2 0.3", rpy="0.3 -0.2 0.1", axis="0 0 1", mass=1.5,
+                           com="0.05 -0.02 0.01", inertia=(0.02, 0.03, 0.025, 0.001, -0.002, 0.0015)),
+                   segment("hinge", "pole", xyz="0.1 0 0.05", rpy="0 0 0.4", axis="1 0 0", limit=(-3, 3, 1, 1),
+                           mass=0.6, com="0 0.01 0.3", inertia=(0.01, 0.011, 0.002, 0.0002, 0.0001, -0.0003)),
+                   base="ground")
 
 
 def test_planar_against_pinocchios_own_planar_joint(tmp_path):

@@ -10,6 +10,7 @@ identifier.  The ordering of a 2000-link chain is measured and printed (never as
 import os
 import re
 import time
+from functools import partial
 
 import pytest
 
@@ -18,30 +19,15 @@ from aggsym import cli
 from aggsym.errors import ModelError
 from aggsym.model.readers import urdf_reader, xml_source
 from aggsym.model.readers.validate import order_tree
+import robot_builder
+from robot_builder import AXIS, INERTIA, INERTIAL, link, robot
 
-INERTIA = '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>'
-INERTIAL = f'<inertial><mass value="1"/>{INERTIA}</inertial>'
 LIMIT = '<limit lower="-3" upper="3" velocity="1" effort="1"/>'
 IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
-
-
-def link(name, inertial=INERTIAL):
-    return f'  <link name="{name}">{inertial}</link>\n'
-
-
-def joint(name, parent, child, jtype="revolute", inner=f'<axis xyz="0 0 1"/>{LIMIT}'):
-    return (f'  <joint name="{name}" type="{jtype}">\n'
-            f'    <parent link="{parent}"/>\n    <child link="{child}"/>\n    {inner}\n  </joint>\n')
-
-
-def robot(*parts, name="r", head='<?xml version="1.0"?>\n'):
-    return f'{head}<robot name="{name}">\n' + "".join(parts) + "</robot>\n"
-
-
-def arm(*extra, head='<?xml version="1.0"?>\n', name="r"):
-    """base -> upper (shoulder) -> lower (elbow), plus extra elements."""
-    return robot(link("base"), link("upper"), link("lower"), joint("shoulder", "base", "upper"),
-                 joint("elbow", "upper", "lower"), *extra, head=head, name=name)
+# the error-location tests' pieces (robot_builder.py), every movable joint here with a <limit>; arm(*extra): base ->
+# upper (shoulder) -> lower (elbow), plus extra elements
+joint = partial(robot_builder.joint, inner=AXIS + LIMIT)
+arm = partial(robot_builder.arm, inner=AXIS + LIMIT)
 
 
 def with_shoulder(inner):

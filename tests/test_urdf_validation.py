@@ -9,43 +9,14 @@ import sympy as sp
 import aggsym
 from aggsym.errors import ModelError, ModelWarning
 from aggsym.model import load_urdf
-
-INERTIAL = ('<inertial><mass value="1"/>'
-            '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>')
-
-
-def link(name, inertial=INERTIAL):
-    return f'  <link name="{name}">{inertial}</link>\n'
-
-
-def joint(name, parent, child, jtype="revolute", inner='<axis xyz="0 0 1"/>'):
-    return (f'  <joint name="{name}" type="{jtype}">\n'
-            f'    <parent link="{parent}"/>\n    <child link="{child}"/>\n    {inner}\n  </joint>\n')
-
-
-def robot(*parts, name="r", head='<?xml version="1.0"?>\n'):
-    return f'{head}<robot name="{name}">\n' + "".join(parts) + "</robot>\n"
-
-
-def arm(*extra):
-    """base -> upper (shoulder) -> lower (elbow), plus extra elements."""
-    return robot(link("base"), link("upper"), link("lower"), joint("shoulder", "base", "upper"),
-                 joint("elbow", "upper", "lower"), *extra)
+from helpers import written
+from robot_builder import INERTIAL, arm, chain, joint, link, robot, segment  # arm(): base -> upper -> lower
 
 
 def line_of(text, fragment, occurrence=1):
     """1-based line of the n-th line containing fragment."""
     hits = [i + 1 for i, line in enumerate(text.splitlines()) if fragment in line]
     return hits[occurrence - 1]
-
-
-@pytest.fixture
-def write(tmp_path):
-    def _write(text, name="robot.urdf"):
-        path = tmp_path / name
-        path.write_text(text)
-        return path
-    return _write
 
 
 def error(path, **options) -> ModelError:
@@ -479,16 +450,9 @@ def test_right_angles_are_exact_only_to_round_off(tmp_path):
     import aggsym
 
     def rotation(rpy, **options):
-        text = f"""<robot name="r">
-  <link name="a"/>
-  <link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="j" type="revolute"><parent link="a"/><child link="b"/>
-    <origin xyz="0 0 0.1" rpy="{rpy}"/><axis xyz="0 0 1"/>
-    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
-</robot>"""
-        path = tmp_path / "r.urdf"
-        path.write_text(text)
-        model = aggsym.load(path, **options)
+        text = chain("r", segment("j", "b", xyz="0 0 0.1", rpy=rpy, axis="0 0 1", limit=(-1, 1, 1, 1), mass=1,
+                                  inertia=(1, 1, 1)), base="a")
+        model = aggsym.load(written(tmp_path / "r.urdf", text), **options)
         return model.bodies[-1].pair.constructive_rotation(), model
 
     c, _ = rotation("1.5707963267948966 0 -3.141592653589793")

@@ -33,7 +33,7 @@ import aggsym
 import constraint_reference as cr
 from aggsym.codegen.generate import internal_model
 from aggsym.contract import select_routines
-from aggsym.model.readers.yaml_reader import load_constraints
+from aggsym.model.readers.side_files import load_constraints
 from aggsym.twin import NumericTwin
 from constraint_reference import Constraint
 from helpers import generated_code, relative_error, robots_directory

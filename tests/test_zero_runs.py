@@ -1,4 +1,4 @@
-"""Zero entries of an output in chunks (aggsym/codegen/generate.py, _zero_chunks): every run of consecutive zero
+"""Zero entries of an output in chunks (aggsym/codegen/targets/c.py, _zero_chunks): every run of consecutive zero
 entries of one output is cut into chunks of 16 bytes (2 doubles, 4 floats), each written by AGGSYM_ZEROS (one
 vector store under GCC and Clang, entry by entry elsewhere), the rest entry by entry.  Every entry is written:
 HyQ's A (four legs on a fixed trunk: blocks of zeros) and A^-1 against Pinocchio from NaN-filled outputs, one
@@ -15,7 +15,8 @@ import pytest
 
 import aggsym
 from aggsym.codegen.compile import CLibrary, compile_shared
-from aggsym.codegen.generate import _zero_chunks, generate, write
+from aggsym.codegen.generate import generate, write
+from aggsym.codegen.targets.c import _zero_chunks
 from aggsym.codegen.printing import count_ops
 from aggsym.contract import select_routines
 from aggsym.core.program import Node
@@ -48,7 +49,7 @@ def _hyq(folder, slicing, scalar):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ModelWarning)
         model = select_routines(aggsym.load(robot_path("hyq")), ["inertia", "inertia_inverse"])
-    gen = generate(model, latex=False, slicing=slicing, scalar=scalar)
+    gen = generate(model, targets="c,numpy,manifest", slicing=slicing, scalar=scalar)
     write(gen, folder)
     manifest = json.loads((folder / f"{model.name}.json").read_text())
     lib = compile_shared(folder / f"{model.name}.c", folder / "lib.so", extra=("-O2",), scalar=scalar)
@@ -63,10 +64,10 @@ def test_zero_blocks_are_written_and_right(scalar, width, tolerance, tmp_path, r
     pm = pinocchio_model(robot_path("hyq"))
     model, one, one_lib = _hyq(tmp_path / "one", None, scalar)
     _, sliced, sliced_lib = _hyq(tmp_path / "sliced", (150, 60), scalar)
-    assert all(r.sliced for r in sliced.routines) and not any(r.sliced for r in one.routines)
+    assert all(r.bodies["c"].sliced for r in sliced.routines) and not any(r.bodies["c"].sliced for r in one.routines)
     n = model.nq
     for r in one.routines:
-        starts = [int(m.group(2)) for m in map(ZEROS.match, r.c_body) if m]
+        starts = [int(m.group(2)) for m in map(ZEROS.match, r.bodies["c"].lines) if m]
         assert len(starts) >= 8, r.routine.role
         assert all(b - a >= width for a, b in zip(starts, starts[1:])), r.routine.role
     text = one.files[f"{model.name}.c"]

@@ -41,11 +41,10 @@ from .inertial_helpers import inertial_helpers
 from .names import header_macros
 from .printing import SCALARS, _number
 from .slicing import SLICE_SIZE, SLICE_THRESHOLD
-from .targets import TARGETS, Job, select
+from .emit import emit_routine
+from .targets import Job, select
+from .targets.c import SCALAR_BYTES, ZERO_BYTES
 from .targets.c_columns import LOOPED_ABOVE
-from .targets.c import (  # noqa: F401  (their home is the C target; imported from here before targets)
-    SCALAR_BYTES, ZERO_BYTES, EmittedRoutine, _zero_chunks, emit_routine, split_files, split_layout, split_names,
-)
 
 
 @dataclass
@@ -53,7 +52,7 @@ class Generated:
     model: object
     routines: list
     files: dict = field(default_factory=dict)  # file name -> text
-    targets: tuple = ("c", "numpy", "manifest", "latex")  # the names of the targets generated
+    targets: tuple = ()  # the targets generated (:class:`~.targets.base.Target`), in the registry's order
     timings: list = field(default_factory=list)  # (stage, seconds)
 
 
@@ -122,7 +121,7 @@ def symbolic_routines(model, tree=None, roles=None, omitted=()):
     {role: list of flat output lists})."""
     backend = Symbolic()
     prog = backend.program
-    tree = tree or Tree(model)
+    tree = tree or Tree.of(model)
     bound = bind(model, backend, tree=tree)
     vectors = {k: prog.vector(k, input_length(model, k)) for k in INPUT_KINDS}
     kin = None if model.couplings else TreeKinematics(bound, vectors["q"])  # coupled: run() expands q first
@@ -159,23 +158,22 @@ def check_constraints(model) -> None:
 
 
 @collector_paused()
-def generate(model, progress=None, latex: bool = True, scalar: str = "double", split: bool = False,
+def generate(model, progress=None, scalar: str = "double", split: bool = False,
              slicing=(SLICE_THRESHOLD, SLICE_SIZE), targets=None, looped_above: int = LOOPED_ABOVE) -> Generated:
     """Generate all files of a model in memory; ``scalar`` is the C type (``float``: single-precision C, its
     bounds against the twin in the manifest's ``float_tolerance``; the NumPy module stays double).  ``split``:
-    one .c per routine instead of NAME.c, the helpers in NAME_helpers.h and a Makefile (:func:`split_files`).
+    one .c per routine instead of NAME.c, the helpers in NAME_helpers.h and a Makefile
+    (:func:`.targets.c.split_files`).
     ``slicing``: (threshold, size): the C of a routine of more work (operations plus statements) than the
     threshold is emitted as static functions of about that size each behind the public one (:mod:`.slicing`: one
-    huge function takes GCC minutes); None: every routine as one function.  ``targets``: the targets' names (a
-    comma-separated string or a list, :func:`.targets.select`; None: the default set, less ``latex`` when
-    ``latex`` is False): only their files are generated.  ``looped_above``: the C of a routine whose solves are
+    huge function takes GCC minutes); None: every routine as one function.  ``targets``: the targets (names, a
+    comma-separated string of them or the targets themselves, :func:`.targets.select`; None: the default set): only
+    their files are generated.  ``looped_above``: the C of a routine whose solves are
     one body applied to columns (:mod:`.targets.c_columns`) loops over them when it has more operations than this."""
     chosen = select(targets)
-    if not latex:
-        chosen = [t for t in chosen if t.name != "latex"]
     check_names(model)
     stages = _Stages(progress)
-    tree = Tree(model)
+    tree = Tree.of(model)
     omitted = omitted_routines(model)
     check_constraints(model)
     singular = {role: why for role, why in omitted.items() if ROUTINES[role].regular}
@@ -194,7 +192,7 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         sl = straight_line(prog, outs)
         if role in wanted:
             lines[role] = sl
-        emitted.append(emit_routine(model, prog, ROUTINES[role], outs, scalar, slicing, sl, chosen,
+        emitted.append(emit_routine(model, prog, ROUTINES[role], outs, chosen, scalar, slicing, sl,
                                     prog.columns.get(role), looped_above))
         del sl
     stages.done("printing")
@@ -217,12 +215,12 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         "velocities": model.coordinates if model.nq != model.nv else None,
         "nv": model.nv,
         "frames": model.frames if any(e.routine.role.startswith("frame_") for e in emitted) else (),
-        "sincos": any("aggsym_sincos" in line for r in emitted for line in r.c_body),
-        "sincos2": any("aggsym_sincos2(" in line for r in emitted for line in r.c_body),
-        "sign": any("aggsym_sign(" in line for r in emitted for line in r.c_body + r.functions),
-        "sliced": any(r.sliced for r in emitted),
+        "sincos": any("aggsym_sincos" in line for r in emitted for line in r.bodies["c"].lines),
+        "sincos2": any("aggsym_sincos2(" in line for r in emitted for line in r.bodies["c"].lines),
+        "sign": any("aggsym_sign(" in line for r in emitted for line in r.bodies["c"].lines + r.bodies["c"].functions),
+        "sliced": any(r.bodies["c"].sliced for r in emitted),
         "scalar_stores": any(r.routine.scalar_stores for r in emitted),
-        "zeros": any(r.zeros for r in emitted),
+        "zeros": any(r.bodies["c"].zeros for r in emitted),
         "zero_width": ZERO_BYTES // SCALAR_BYTES[scalar],
         "time": model.time_dependent,
         "elastic": any(b.pair.elastic for b in model.bodies),
@@ -231,7 +229,7 @@ def generate(model, progress=None, latex: bool = True, scalar: str = "double", s
         "passive_notes": routine_notes(model),  # role -> what it holds of them (the header's comment)
         "inertial_helpers": inertial_helpers(model),  # NAME_set_payload_<link>, set_inertial_<link>
     }
-    gen = Generated(model, emitted, targets=tuple(t.name for t in chosen))
+    gen = Generated(model, emitted, targets=tuple(chosen))
     job = Job(model, ctx, emitted, prog, outputs, lines, split, scalar, omitted, chosen)
     job.names = [name for t in chosen for name in t.file_names(job)]
     for k, target in enumerate(chosen):
@@ -400,9 +398,8 @@ def stale_files(outdir: Path, gen: Generated) -> list:
     previous = split.get("files") if isinstance(split, dict) else one_file
     if not isinstance(previous, list):
         return []
-    targets = [TARGETS[t] for t in gen.targets if t in TARGETS]
     return sorted({f for f in previous if isinstance(f, str) and f not in gen.files
-                   and any(t.owns(name, f) for t in targets)})
+                   and any(t.owns(name, f) for t in gen.targets)})
 
 
 def _umask() -> int:

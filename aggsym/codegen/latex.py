@@ -139,7 +139,7 @@ def _output_labels(model, role):
     if role == "inertia":
         return [[f"A_{{{i + 1},{j + 1}}}" if j >= i else None for i in range(n) for j in range(n)]]
     if role == "transvective_factors":
-        pairs = transvection_pairs(Tree(model))
+        pairs = transvection_pairs(Tree.of(model))
         return [[f"\\langle {t + 1},{k + 1}\\rangle" for t, k in pairs],
                 [f"(\\beta,\\beta)_{{{k + 1}}}" for k in range(n)]]
     return [[f"{ {'bias': 'b', 'gravity': 'g'}[role]}_{{{i + 1}}}" for i in range(n)]]
@@ -213,7 +213,7 @@ def cauchy_rows(model, notation, shown_factors):
     <t,k> (T F)_k for t descending (3.9), then q''_k = (T F)_k / (beta,beta)_k - sum_{t above k} <t,k> q''_t for
     k ascending (3.10); only the arguments ``shown_factors`` nonzero enter."""
     n = model.nv
-    pairs = [(t, k) for t, k in transvection_pairs(Tree(model))
+    pairs = [(t, k) for t, k in transvection_pairs(Tree.of(model))
              if shown_factors.get(f"\\langle {t + 1},{k + 1}\\rangle")]
     TF = []
     for t in reversed(range(n)):

@@ -226,7 +226,7 @@ def _number(value, scalar: str = "double") -> str:
 
 
 _COMMENT = re.compile(r"/\*.*?\*/", re.S)
-# a chunk of an output's zero entries (generate._zero_chunks): a store, no operation
+# a chunk of an output's zero entries (targets.c._zero_chunks): a store, no operation
 _ZEROS = re.compile(r"\bAGGSYM_ZEROS\([^;]*\);")
 # a numeric literal (not the digits of a name): one value token, whatever signs its exponent holds
 _LITERAL = re.compile(r"(?<![A-Za-z_0-9.])(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")

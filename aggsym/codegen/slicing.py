@@ -23,7 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 # A routine is sliced when its work (:func:`work`: operations plus statements) exceeds SLICE_THRESHOLD, into slices
-# of about SLICE_SIZE work each.  Chosen by measurement with GCC 12 at -O2 (benchmarks/compile_split.py, docs/generated-code.md):
+# of about SLICE_SIZE work each.  Chosen by measurement with GCC 12 at -O2 (benchmarks/generation/compile_split.py, docs/generated-code.md):
 # slices of 300..1000 compile alike (Talos' C: 2.3..2.8 s against 25 s), and slices of 300..600 run fastest (the
 # small functions keep their values in registers: Talos' C, forward dynamics and A^-1 9..18 % faster than one
 # function, chain24's and chain48's A, inverse and forward dynamics, A^-1 5..22 %); but a routine of about 4,500

@@ -19,7 +19,7 @@ def sample_configurations(model, rng, size=None):
 
     shape = (model.nq,) if size is None else (model.nq, size)
     q = rng.uniform(-np.pi, np.pi, shape)
-    for idx, b in zip(Tree(model).positions, model.bodies):
+    for idx, b in zip(Tree.of(model).positions, model.bodies):
         if b.pair.quaternion:
             quat = rng.normal(size=(4,) + shape[1:])
             q[idx[-4]:idx[-4] + 4] = quat / np.linalg.norm(quat, axis=0)

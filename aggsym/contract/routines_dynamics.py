@@ -47,7 +47,7 @@ def joint_wrench_layout(model) -> dict:
 def transvective_layout(model) -> dict:
     """The manifest's description of the outputs of ``transvective_factors``: enough to rebuild T and A^-1."""
     names = [c.name for c in model.coordinates]
-    pairs = transvective.transvection_pairs(Tree(model))
+    pairs = transvective.transvection_pairs(Tree.of(model))
     return {
         "indexing": "0-based coordinate indices in q order",
         "targs": [[t, k] for t, k in pairs],

@@ -36,7 +36,7 @@ def joint_wrench_shape(model):
 
 def transvection_count(model):
     """Shape of the targs output: one scalar per transvection."""
-    return (len(transvective.transvection_pairs(Tree(model))),)
+    return (len(transvective.transvection_pairs(Tree.of(model))),)
 
 
 def partition_block_shape(name):

@@ -103,7 +103,7 @@ def time_scalar(model: Model, backend, t=None):
 def bind(model: Model, backend, p=None, tree: Tree | None = None, t=None) -> Bound:
     """Evaluate the model's constant expressions on a backend (parameters symbolic or numeric), at time ``t``
     for a model with prescribed motions (default: the input t[0] on the symbolic backend, 0 on the numeric)."""
-    tree = tree or Tree(model)
+    tree = tree or Tree.of(model)
     params = parameter_scalars(model, backend, p)
     values = dict(zip(model.parameter_symbols, params))
     t = time_scalar(model, backend, t)

@@ -38,7 +38,7 @@ _INERTIA_ENTRIES = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))  # Ixx, Ixy,
 
 def blocks(model) -> list:
     """The bodies with a block of the regressor, in order (indices into model.bodies): those that move."""
-    return [k for k, moves in enumerate(Tree(model).moving) if moves]
+    return [k for k, moves in enumerate(Tree.of(model).moving) if moves]
 
 
 def _unit(j):

@@ -752,7 +752,7 @@ def inertia_inverse(bound, kin):
     on scratch programs of the same model (the explicit factors only when a floor on their products does not
     already exceed the generators' count) and the one with fewer operations is emitted; on floats the generators
     are used (both are exact).
-    Operation counts of the emitted C on the benchmark chains (``benchmarks/chain.py``), mul + add + div + call:
+    Operation counts of the emitted C on the benchmark chains (``benchmarks/harness/chain.py``), mul + add + div + call:
     n = 6: 1087 (factors), 12: 4205 (factors), 24: 17660, 48: 55748, 96: about 17 n^2 + 360 n (generators),
     against 710297 for the factors at n = 96."""
     if not bound.backend.symbolic or bound.backend.program is None:  # floats, duals: nothing to count on

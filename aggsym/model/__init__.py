@@ -1,5 +1,8 @@
-"""Model readers (YAML, URDF, xacro, MJCF; one registry: readers.py), validation, the immutable Model and its tree
-indexing."""
+"""The immutable Model (``types.py``) and its tree indexing (``tree.py``), in two wings: the readers of model files
+(``readers/``: YAML, URDF, xacro, MJCF, one registry) and the transforms of a model (``transforms/``).
+
+:func:`load` here is a file as its reader reads it; ``aggsym.load`` (:mod:`aggsym.pipeline`) also applies the options
+of ``aggsym generate`` and names the model after its file, as the command line does."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -14,7 +14,17 @@ from .types import Model
 
 
 class Tree:
-    """The flat, parent-before-child form of a model's graph."""
+    """The flat, parent-before-child form of a model's graph (:meth:`of`: a model's own, built once)."""
+
+    @classmethod
+    def of(cls, model: Model) -> "Tree":
+        """The tree of ``model``, built on first use and kept on the model (which is immutable), so that the
+        readers of one generation share one."""
+        tree = model.__dict__.get("_tree")
+        if tree is None or tree.model is not model:
+            tree = cls(model)
+            object.__setattr__(model, "_tree", tree)
+        return tree
 
     def __init__(self, model: Model):
         self.model = model

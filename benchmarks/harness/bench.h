@@ -80,7 +80,7 @@ typedef struct {
 
 /* A peer of a generated model: the same five routines by other code, timed beside the generated code and
    Pinocchio on the same states in the same batches (the generated C compiled -O3, the CasADi peer of
-   benchmarks/casadi_peer.py at -O2 and -O3).  Its model has the generated model's name, joints and parameters;
+   benchmarks/runtime/casadi_peer.py at -O2 and -O3).  Its model has the generated model's name, joints and parameters;
    only the five routines and their timers are set. */
 typedef struct {
     const char *label;          /* e.g. "aggsym -O3", "CasADi -O2" */
@@ -123,7 +123,7 @@ double bench_cpu_now_ns(void);  /* CLOCK_THREAD_CPUTIME_ID */
 #define BENCH_TIMER_QV(T, F) BENCH_TIMER(T, F(s->q + at_q, s->qd + at, s->p, out))
 #define BENCH_TIMER_QVX(T, F, X) BENCH_TIMER(T, F(s->q + at_q, s->qd + at, s->X + at, s->p, out))
 #define BENCH_TIMER_QVX2(T, F, X) BENCH_TIMER(T, F(s->q + at_q, s->qd + at, s->X + at, s->p, out, out + n * n))
-/* The five timers every model has (its bench_model record is written by benchmarks/runtime.py, with the
+/* The five timers every model has (its bench_model record is written by benchmarks/runtime/pinocchio_cpp.py, with the
    other routines it was generated with). */
 #define BENCH_MODEL_TIMERS(NAME)                                                                \
     BENCH_TIMER_Q(NAME##_t_inertia, NAME##_inertia)                                             \

@@ -1,5 +1,5 @@
 // The derivatives of constrained dynamics and of impacts: aggsym's generated C against Pinocchio C++ (the `pin`
-// wheel), same states, same process (benchmarks/constrained_derivatives.py builds and runs it).
+// wheel), same states, same process (benchmarks/runtime/constrained_derivatives.py builds and runs it).
 //
 //   constrained_derivatives_bench SECONDS STATES CALLS OUT.json NAME URDF ROOT CONTACTS [NAME URDF ROOT CONTACTS ...]
 //

@@ -1,7 +1,7 @@
-/* trig_bench.c: the time of one sin-and-cos of a double, for benchmarks/trig.py.
+/* trig_bench.c: the time of one sin-and-cos of a double, for benchmarks/runtime/trig.py.
  *
  * Built with -DAGGSYM_SINCOS_FILE=... naming a file that defines the generated code's aggsym_sincos (rendered by
- * benchmarks/trig.py from templates/c/helpers.c.j2), it times, per call, on the same N arguments (uniform in
+ * benchmarks/runtime/trig.py from templates/c/helpers.c.j2), it times, per call, on the same N arguments (uniform in
  * [-LO, LO], LO the first argument, default pi: joint angles, so that a quadrant branch mispredicts):
  *   libm        sin(x) and cos(x), two calls
  *   sincos      GNU sincos(x, &s, &c) where _GNU_SOURCE provides it (glibc), else not printed

@@ -561,7 +561,7 @@ def slip_velocities(q, qd, t, p=None):
     w = np.empty(batch + (1,))
     qd_0 = qd[..., 0]
     w[..., 0] = qd_0
-    return w[..., 0][()]
+    return w
 
 
 def delassus(q, t, p=None):

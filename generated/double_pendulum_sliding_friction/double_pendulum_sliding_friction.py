@@ -585,7 +585,7 @@ def constraint_residual(q, p=None):
     x0 = np.cos(q_1)
     x1 = np.cos(q_2)
     phi[..., 0] = p_4*x0 + p_5*x0*x1 - p_6
-    return phi[..., 0][()]
+    return phi
 
 
 def constraint_jacobian(q, p=None):
@@ -632,7 +632,7 @@ def constraint_bias(q, qd, p=None):
     x7 = x6 + p_5*qd_2
     x8 = p_4*qd_1 + p_5*x5
     gamma[..., 0] = x0*x2*(qd_2*x6 - x5*x8 - qd_2*x7) - x0*x3*x4*x8 + x1*(p_5*qd_2*x4 + x4*x7 - x5*qd_0*x3)
-    return gamma[..., 0][()]
+    return gamma
 
 
 def slip_velocities(q, qd, p=None):
@@ -800,7 +800,7 @@ def constrained_forward_dynamics(q, qd, tau, p=None):
         bad = np.argwhere(failed)
         raise np.linalg.LinAlgError('constrained_forward_dynamics: the constraints are singular (J A^-1 J^T has a pivot below 1e-12 of its mean diagonal, or is not finite), or Coulomb friction has no consistent solution, at '
                                     + ("the state" if not batch else "the states " + ", ".join(str(tuple(int(i) for i in b)) for b in bad[:10]) + (" ..." if len(bad) > 10 else "")))
-    return qdd, lambda_[..., 0][()]
+    return qdd, lambda_
 
 
 def frame_poses(q, p=None):

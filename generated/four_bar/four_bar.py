@@ -766,7 +766,7 @@ def slip_velocities(q, qd, p=None):
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], )
     w = np.empty(batch + (1,))
     w[..., 0] = 0
-    return w[..., 0][()]
+    return w
 
 
 def delassus(q, p=None):

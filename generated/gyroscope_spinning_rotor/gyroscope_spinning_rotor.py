@@ -440,7 +440,7 @@ def transvective_factors(q, t, p=None):
     x5 = 0.0015 + x4
     diag[..., 1] = 0.002 + x4
     diag[..., 0] = 0.004 + x5 + x3*x3*(0.0035 - x5)
-    return targs[..., 0][()], diag
+    return targs, diag
 
 
 def frame_poses(q, t, p=None):

@@ -422,7 +422,7 @@ def transvective_factors(q, p=None):
     x5 = x0*x4
     diag[..., 0] = p_2*p_2*0.3333333333333333*p_0 + p_2*p_2*(p_1 - x5 + x3*x3*x5)
     targs[..., 0] = 1 + p_2*x2*x4
-    return targs[..., 0][()], diag
+    return targs, diag
 
 
 def frame_poses(q, p=None):

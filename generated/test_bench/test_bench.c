@@ -136,7 +136,7 @@ static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, 
  * function.  The slices are never inlined: GCC and Clang would inline a static function called once back into
  * its caller.  With GCC on x86 at -O1 and above they are also compiled for size (optimize("Os")): straight-line
  * code this long runs at the speed the processor fetches and decodes it, and GCC 12's -O2 code of the slices is
- * larger and slower (Talos' forward dynamics 1.6 times slower, benchmarks/slicing_runtime.py).  Without
+ * larger and slower (Talos' forward dynamics 1.6 times slower, benchmarks/runtime/slicing.py).  Without
  * -ffast-math the results are the same, bit for bit (no option that changes rounding differs between the levels). */
 #if defined(AGGSYM_GCC_X86)
 #define AGGSYM_SLICE __attribute__((noinline, optimize("Os")))

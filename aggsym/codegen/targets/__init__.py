@@ -49,6 +49,9 @@ def select(names=None) -> list:
         return default_targets()
     if isinstance(names, str):
         names = [n.strip() for n in names.split(",") if n.strip()]
+    names = list(names)
+    if names and all(isinstance(n, Target) for n in names):  # (chosen already: kept, in registry order)
+        return [t for t in TARGETS.values() if t in names] + [t for t in names if t not in TARGETS.values()]
     names = [n.name if isinstance(n, Target) else n for n in names]
     unknown = [n for n in names if n not in TARGETS]
     if unknown:

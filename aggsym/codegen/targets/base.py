@@ -22,7 +22,7 @@ class Job:
     """What the targets of one generation render from.
 
     ``model``; ``ctx`` the templates' common context;
-    ``emitted`` the routines (:class:`~aggsym.codegen.targets.c.EmittedRoutine`, in order); ``prog`` and
+    ``emitted`` the routines (:class:`~aggsym.codegen.emit.EmittedRoutine`, in order); ``prog`` and
     ``outputs`` the straight-line program and {role: flat outputs}; ``lines`` {role: straight line} of the roles
     a target asked for (:attr:`Target.lines`); ``split``, ``scalar``, ``omitted`` as given to
     :func:`~aggsym.codegen.generate.generate`; ``targets`` the chosen targets; ``names`` every file this
@@ -73,10 +73,10 @@ class Target:
         ``name``: only such files are ever removed as stale."""
         return False
 
-    def print_routine(self, model, prog, lines, emitted) -> None:
-        """Print one routine into this target (``lines``: the routine's :class:`RoutineLines`), keeping the text
-        on ``emitted`` (e.g. ``emitted.bodies[self.name]``).  Default: nothing (the target renders from the
-        emitted routines alone)."""
+    def print_routine(self, model, prog, lines, emitted):
+        """This target's text of one routine (``lines``: the routine's :class:`RoutineLines`; ``emitted`` the
+        :class:`~aggsym.codegen.emit.EmittedRoutine` so far), kept by the emission as ``emitted.bodies[self.name]``
+        for :meth:`render`; None: nothing (the target renders from the emitted routines alone)."""
 
     def render(self, job: Job) -> dict:
         """{file name: text} of its files."""
@@ -86,13 +86,14 @@ class Target:
         """The file whose presence among generated files says this target was generated (for ``check``)."""
         return None
 
-    def unavailable(self, tools) -> str | None:
-        """Why its output cannot be run here (e.g. no compiler), or None (``tools`` as for :meth:`runner`)."""
+    def unavailable(self) -> str | None:
+        """Why its output cannot be run here (e.g. no compiler, a framework that does not import), or None."""
         return None
 
-    def runner(self, model, folder, manifest: dict, opt: str, tools):
+    def runner(self, model, folder, manifest: dict, opt: str):
         """A :class:`Runner` calling its generated code written in ``folder``, or None: nothing to run.
-        ``tools``: :mod:`aggsym.codegen.compile` (compiling, calling, importing)."""
+        ``opt`` the optimisation level of a compile; built of :mod:`aggsym.codegen.compile` (compiling, calling,
+        importing)."""
         return None
 
 

@@ -1,10 +1,12 @@
 """The C target: NAME.h and NAME.c (``--split``: NAME_ROUTINE.c per routine, NAME_helpers.h, a Makefile).
 
-How a routine's straight-line program is printed as C (:func:`emit_routine`): inputs read first, each named
+How a routine's straight-line program is printed as C (:func:`print_c`): inputs read first, each named
 temporary a ``const`` assignment, sin and cos of one angle in one ``aggsym_sincos`` call (two angles in one
 ``aggsym_sincos2``), runs of zero entries by ``AGGSYM_ZEROS``, a large routine as slices (:mod:`..slicing`).
-The C is printed for every generation, whatever the targets: the operation counts (the manifest's ``ops``,
-``aggsym ops``) are those of the emitted C.  Checked by compiling it and calling it against the numeric twin.
+The emission (:mod:`aggsym.codegen.emit`) prints the C of every routine whatever the targets: this printer counts
+the operations as it prints them (the manifest's ``ops``, ``aggsym ops``) and gives the texts that the other infix
+targets print alike (:attr:`~.base.RoutineLines.shared`).  Checked by compiling it and calling it against the
+numeric twin.
 """
 from __future__ import annotations
 
@@ -19,11 +21,12 @@ from ...contract import Routine, signature
 from ...core.functions import FUNCTIONS
 from ...core.program import COS, SIN, Node, straight_line
 from ...errors import AggsymError
-from ..names import c_prototype, c_symbol, python_parameters
-from ..printing import Infix, LiteralError, Spelling, _number
+from .. import compile as build
+from ..names import c_symbol
+from ..printing import Infix, Spelling, _number
 from ..slicing import Sliced, Statement, slice_routine, work
 from .base import RoutineLines, Runner, Target, file_pattern
-from .c_columns import LOOPED_ABOVE, columns_c
+from .c_columns import columns_c
 
 
 # the C spelling of the functions: <math.h>'s names (fabs for abs), sign the emitted aggsym_sign: (x > 0) - (x < 0),
@@ -40,59 +43,54 @@ def c_spelling(scalar: str = "double") -> Spelling:
 
 
 @dataclass
-class EmittedRoutine:
-    routine: Routine
-    inputs: tuple  # the input names in argument order for this model (contract.signature)
-    symbol: str  # C function name
-    prototype: str  # C prototype, without the semicolon
-    py_parameters: str  # the NumPy function's parameter list
-    c_body: list  # C statements
-    py_body: list  # Python statements (the NumPy target's; empty when it is not chosen)
-    ops: dict
-    temps: int
-    work: int = 0  # the C's size as slicing.work measures it (operations + statements)
-    sliced: Sliced | None = None  # the C as several functions (slicing.py), for a routine above the threshold
-    bodies: dict = field(default_factory=dict)  # target name -> what its print_routine kept (other targets)
-    functions: list = field(default_factory=list)  # C lines of static functions before it (.c_columns)
+class CBody:
+    """A routine's C (``EmittedRoutine.bodies["c"]``): its statements ``lines``, ``sliced`` the same as several
+    functions (:mod:`..slicing`) for a routine above the threshold, ``functions`` the C lines of static functions
+    before it (:mod:`.c_columns`)."""
+
+    lines: list
+    sliced: Sliced | None = None
+    functions: list = field(default_factory=list)
 
     @property
     def zeros(self) -> bool:
-        """Whether its C writes a chunk of zero entries with AGGSYM_ZEROS (templates/c/attributes.c.j2)."""
-        return any(line.startswith("AGGSYM_ZEROS(") for line in self.c_body)
+        """Whether it writes a chunk of zero entries with AGGSYM_ZEROS (templates/c/attributes.c.j2)."""
+        return any(line.startswith("AGGSYM_ZEROS(") for line in self.lines)
+
+
+@dataclass
+class PrintedC:
+    """What :func:`print_c` gives: the ``body``, the operations it counted while printing (``ops``: mul, add, div,
+    call), the number of named temporaries (``temps``), its size as :func:`..slicing.work` measures it (``work``)
+    and the straight line as the other targets print it (``lines``)."""
+
+    body: CBody
+    ops: dict
+    temps: int
+    work: int
+    lines: RoutineLines
 
 
 def _input_symbols(sl):
     return {sl.program.inputs[(kind, index)].id: f"{kind}_{index}" for kind, index in sl.inputs}
 
 
-def emit_routine(model, prog, routine: Routine, outputs, scalar: str = "double", slicing=None,
-                 sl=None, targets=None, columns=None, looped_above: int = LOOPED_ABOVE) -> EmittedRoutine:
-    """C statements of one routine, the operation count of the C (its arrays, temporaries and literals of the C
-    type ``scalar``, double or float), and the routine printed by each of ``targets`` (their
-    :meth:`~.base.Target.print_routine`; None: the NumPy target, as before targets).  ``slicing``: (threshold,
-    size), the C of a routine of more work than the threshold also as slices of about that size
-    (:mod:`..slicing`); None: never.  ``sl``: the outputs' :func:`~aggsym.core.program.straight_line` when
-    already formed.  ``columns``: the routine's :class:`~aggsym.core.columns.ColumnMap`, whose body the C prints
-    once and applies in a loop (:mod:`.c_columns`) when the routine's unrolled C has more than ``looped_above``
-    operations; the other targets print the outputs as they are."""
-    if targets is None:
-        from .numpy import NumPyTarget
-        targets = [NumPyTarget()]
-    try:
-        sl = sl or straight_line(prog, outputs)
-        emitted, lines = _emit_routine(model, prog, routine, outputs, scalar, slicing, sl)
-        if columns is not None and sum(emitted.ops[k] for k in ("mul", "add", "div")) > looped_above:
-            emitted = _emit_mapped(model, prog, routine, outputs, scalar, slicing, columns)
-        for target in targets:
-            target.print_routine(model, prog, lines, emitted)
-        return emitted
-    except LiteralError as exc:
-        raise AggsymError(f"{model.source or model.name}: routine {routine.role}: {exc}"
-                          + ("; generate with --scalar double, or choose units in which the model's numbers fit"
-                             if scalar == "float" else "")) from None
+def print_c(model, prog, routine: Routine, outputs, sl, scalar: str = "double", slicing=None, columns=None,
+            looped_above: int = 0) -> PrintedC:
+    """The C of one routine from its straight line ``sl`` (its arrays, temporaries and literals of the C type
+    ``scalar``, double or float).  ``slicing``: (threshold, size), the C of a routine of more work than the
+    threshold also as slices of about that size (:mod:`..slicing`); None: never.  ``columns``: the routine's
+    :class:`~aggsym.core.columns.ColumnMap`, whose body the C prints once and applies in a loop (:mod:`.c_columns`)
+    when the routine's unrolled C has more than ``looped_above`` operations; the other targets print the outputs
+    as they are (``lines`` is always the unrolled straight line's)."""
+    printed = _print_c(model, prog, routine, outputs, scalar, slicing, sl)
+    if columns is not None and sum(printed.ops[k] for k in ("mul", "add", "div")) > looped_above:
+        mapped = _print_mapped(model, prog, routine, outputs, scalar, slicing, columns)
+        return PrintedC(mapped.body, mapped.ops, mapped.temps, mapped.work, printed.lines)
+    return printed
 
 
-def _emit_mapped(model, prog, routine: Routine, outputs, scalar: str, slicing, cmap) -> EmittedRoutine:
+def _print_mapped(model, prog, routine: Routine, outputs, scalar: str, slicing, cmap) -> PrintedC:
     """The C of a routine with a column map: its straight line less the entries the body writes, plus the arrays
     the body reads (:func:`.c_columns.columns_c`)."""
     symbol = c_symbol(model, routine)
@@ -100,17 +98,16 @@ def _emit_mapped(model, prog, routine: Routine, outputs, scalar: str, slicing, c
     hole = float("nan")  # a written entry: neither computed nor counted as a zero (never printed)
     kept = [[hole if (o, k) in mapped.skip else x for k, x in enumerate(out)] for o, out in enumerate(outputs)]
     kept += [values for _, values in mapped.locals]
-    emitted, _ = _emit_routine(model, prog, routine, kept, scalar, slicing, straight_line(prog, kept), mapped)
+    printed = _print_c(model, prog, routine, kept, scalar, slicing, straight_line(prog, kept), mapped)
     for key, n in mapped.ops.items():
-        emitted.ops[key] += n
-    emitted.functions = mapped.functions
-    return emitted
+        printed.ops[key] += n
+    printed.body.functions = mapped.functions
+    return printed
 
 
-def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, sl, mapped=None):
-    """(EmittedRoutine without the other targets' text, RoutineLines for them).  ``mapped``: the
-    :class:`~.c_columns.ColumnsC` of a routine with a column map (``outputs`` then also holds its local arrays'
-    entries, after the routine's outputs)."""
+def _print_c(model, prog, routine: Routine, outputs, scalar: str, slicing, sl, mapped=None) -> PrintedC:
+    """:func:`print_c` without the column map.  ``mapped``: the :class:`~.c_columns.ColumnsC` of a routine with a
+    column map (``outputs`` then also holds its local arrays' entries, after the routine's outputs)."""
     inputs = signature(routine, model)
     allowed = set(inputs)
     for kind, _ in sl.inputs:
@@ -224,10 +221,9 @@ def _emit_routine(model, prog, routine: Routine, outputs, scalar: str, slicing, 
         arrays.update({name: f"{scalar} *{name}" for name in out_names})
         pieces = min(slicing[1], routine.slice_size or slicing[1])
         sliced = slice_routine(c_symbol(model, routine), arrays, stmts, scalar, pieces)
-    c_body = [line for st in stmts for line in st.lines]
-    emitted = EmittedRoutine(routine, inputs, c_symbol(model, routine), c_prototype(model, routine, scalar),
-                             python_parameters(model, routine), c_body, [], ops, len(sl.temps), size, sliced)
-    return emitted, RoutineLines(sl, names, outputs, zeros, trig, shared, scalar == "double")
+    body = CBody([line for st in stmts for line in st.lines], sliced)
+    return PrintedC(body, ops, len(sl.temps), size, RoutineLines(sl, names, outputs, zeros, trig, shared,
+                                                                scalar == "double"))
 
 
 # The bytes AGGSYM_ZEROS writes at once (templates/c/attributes.c.j2): 2 doubles, 4 floats
@@ -320,8 +316,8 @@ def _computable(prog, names, trig, arg, defined):
 HELPERS = ("aggsym_sincos(", "aggsym_sincos2(", "aggsym_sign(")  # the calls of the helpers that helpers.c.j2 defines
 
 
-def _helpers_used(r: EmittedRoutine) -> bool:
-    return any(h in line for line in r.c_body for h in HELPERS)
+def _helpers_used(r) -> bool:
+    return any(h in line for line in r.bodies["c"].lines for h in HELPERS)
 
 
 def split_names(name: str, emitted) -> dict:
@@ -398,22 +394,22 @@ class CTarget(Target):
     def main_file(self, name):
         return f"{name}.h"
 
-    def unavailable(self, tools):
+    def unavailable(self):
         try:
-            tools.compiler()
+            build.compiler()
         except AggsymError as exc:
             return str(exc)
         return None
 
-    def runner(self, model, folder, manifest, opt, tools):
+    def runner(self, model, folder, manifest, opt):
         scalar = manifest.get("scalar", "double")
         shared = folder / f"lib{model.name}.so"
         if "split" in manifest:  # --split: the Makefile's build of libNAME.a is what runs
-            flags = [f for f in tools.CFLAGS if f != "-shared"] + (tools.FLOAT_CFLAGS if scalar == "float" else [])
+            flags = [f for f in build.CFLAGS if f != "-shared"] + (build.FLOAT_CFLAGS if scalar == "float" else [])
             flags += [opt] + shlex.split(os.environ.get("CFLAGS", ""))
-            shared = tools.shared_from_archive(tools.build_split(folder, cflags=shlex.join(flags)), shared)
+            shared = build.shared_from_archive(build.build_split(folder, cflags=shlex.join(flags)), shared)
         else:
-            shared = tools.compile_shared(folder / f"{model.name}.c", shared, extra=(opt,), scalar=scalar)
-        lib = tools.CLibrary(shared, manifest)
+            shared = build.compile_shared(folder / f"{model.name}.c", shared, extra=(opt,), scalar=scalar)
+        lib = build.CLibrary(shared, manifest)
         return Runner(lib.call, manifest.get("float_tolerance", {}),
                       tuple(manifest.get("float_tolerance_per_condition", ())))

@@ -30,7 +30,7 @@ CAPTURED, COLUMN_VALUES = "aggsym_c", "aggsym_v"  # the public function's local 
 
 # A routine with a column map is looped when its unrolled C has more operations (mul + add + div) than this, and
 # stays unrolled below: the unrolled code does fewer operations (each solve folded on its own zeros) and runs
-# faster while it fits the caches.  Measured (GCC 12 -O2, benchmarks/constrained_derivatives.py, the ratio to
+# faster while it fits the caches.  Measured (GCC 12 -O2, benchmarks/runtime/constrained_derivatives.py, the ratio to
 # Pinocchio's value + derivatives, unrolled -> looped).  On a Xeon (2 MB of L2 per core), one column at a time,
 # one session: Talos's constrained forward dynamics derivatives, 286,272 operations unrolled, 1.93 -> 0.81; Talos's
 # impulse derivatives (121,397) 0.59 -> 0.66; solo12's constrained derivatives (88,364) 0.70 -> 0.64 and impulse

@@ -24,7 +24,9 @@ import math
 
 from ...contract import SCALAR_INPUTS, input_length
 from ...errors import AggsymError
+from ..compile import compiler, import_module
 from .base import Runner, Target, file_pattern
+from .numpy import scalar_output
 
 SCALARS = SCALAR_INPUTS  # inputs passed to the C as a pointer to one double, to Python as a number
 
@@ -58,8 +60,8 @@ class ExtensionTarget(Target):
             r = e.routine
             inputs = [{"name": i, "scalar": i in SCALARS,
                        "length": None if i in SCALARS else input_length(model, i, r)} for i in e.inputs]
-            outputs = [{"name": o.name, "py": o.py, "shape": o.shape(model), "size": math.prod(o.shape(model))}
-                       for o in r.written]
+            outputs = [{"name": o.name, "py": o.py, "shape": o.shape(model), "size": math.prod(o.shape(model)),
+                        "scalar": scalar_output(o)} for o in r.written]
             routines.append({"role": r.role, "doc": r.doc, "symbol": e.symbol, "status": r.status is not None,
                              "inputs": inputs, "outputs": outputs, "parameters": e.py_parameters,
                              "args": ", ".join("PARAMETERS if p is None else p" if i == "p" else i for i in e.inputs)})
@@ -71,12 +73,12 @@ class ExtensionTarget(Target):
     def main_file(self, name):
         return f"{name}_ext.py"
 
-    def unavailable(self, tools):
+    def unavailable(self):
         import sysconfig
         from pathlib import Path
 
         try:
-            tools.compiler()
+            compiler()
         except AggsymError as exc:
             return str(exc)
         include = sysconfig.get_paths().get("include")
@@ -84,6 +86,6 @@ class ExtensionTarget(Target):
             return f"Python's headers (Python.h) are not installed (looked in {include})"
         return None
 
-    def runner(self, model, folder, manifest, opt, tools):
-        module = tools.import_module(folder / f"{model.name}_ext.py")
+    def runner(self, model, folder, manifest, opt):
+        module = import_module(folder / f"{model.name}_ext.py")
         return Runner(lambda role, *args: getattr(module, role)(*args))

@@ -32,10 +32,11 @@ from __future__ import annotations
 from ...contract import ROUTINES, SCALAR_INPUTS, input_length, signature
 from ...core.functions import FUNCTIONS
 from ...model.tree import Tree
+from ..compile import import_module
 from ..printing import Spelling, _number
 from .base import Runner, Target
 from .jax_segments import cut, limits, segmented
-from .numpy import array_steps, quaternion_entries_read, step_statement
+from .numpy import array_steps, quaternion_entries_read, scalar_output, step_statement
 
 # the JAX spelling: jax.numpy's element-wise functions (the same names as NumPy's), double literals as the C's (a
 # Python float is weakly typed in JAX: it takes the dtype of the array it meets, so float32 stays float32)
@@ -97,7 +98,7 @@ def custom_directions(model, role: str, roles, reads: dict) -> dict | None:
         # only add zero columns, 3 of Talos's 7 directions of a JVP through all of forward dynamics)
         split = None
         if name == "q" and model.nq != model.nv:
-            Q, V, _ = Tree(model).position_split
+            Q, V, _ = Tree.of(model).position_split
             split = (Q, V, quaternion_entries_read(model, reads))
         out[name] = (source, index, ", ".join(signature(ROUTINES[source], model)), split)
     return out
@@ -153,13 +154,13 @@ class JaxTarget(Target):
         return file == f"{name}_jax.py"
 
     def print_routine(self, model, prog, lines, emitted):
-        emitted.bodies[self.name] = jax_body(model, prog, lines, emitted.routine, emitted.inputs)
+        return jax_body(model, prog, lines, emitted.routine, emitted.inputs)
 
     def render(self, job):
         roles = [e.routine.role for e in job.emitted]
         custom = {e.routine.role: custom_directions(job.model, e.routine.role, roles, e.bodies[self.name]["reads"])
                   for e in job.emitted}
-        ctx = {**job.ctx, "custom": {role: c for role, c in custom.items() if c},
+        ctx = {**job.ctx, "custom": {role: c for role, c in custom.items() if c}, "scalar_output": scalar_output,
                **dict(zip(("segment_size", "segmented_above", "gathered"), limits())),
                "jax_routines": [{"r": e, "role": e.routine.role, "inputs": list(e.inputs),
                                  "args": ", ".join(e.inputs), "body": e.bodies[self.name]["body"],
@@ -180,14 +181,14 @@ class JaxTarget(Target):
     def main_file(self, name):
         return f"{name}_jax.py"
 
-    def unavailable(self, tools):
+    def unavailable(self):
         try:
             import jax  # noqa: F401
         except ImportError as exc:
             return f"jax does not import here ({exc}); pip install aggsym[jax]"
         return None
 
-    def runner(self, model, folder, manifest, opt, tools):
+    def runner(self, model, folder, manifest, opt):
         """The module in float64 (``--scalar double``: x64 enabled for the check, held to ``--tol``) or float32
         (``--scalar float``: the inputs rounded to float32 as the check rounds them for the float C, held to the
         same per-routine bounds, the manifest's ``float_tolerance``, relative also to cond(A) for the routines that
@@ -197,7 +198,7 @@ class JaxTarget(Target):
         import numpy as np
 
         single = manifest.get("scalar", "double") == "float"
-        module = tools.import_module(folder / f"{model.name}_jax.py")
+        module = import_module(folder / f"{model.name}_jax.py")
         dtype = np.float32 if single else np.float64
         statuses = {role for role, sig in manifest["signatures"].items() if sig.get("returns", "void") != "void"}
 

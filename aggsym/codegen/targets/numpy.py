@@ -9,12 +9,14 @@ importing the module and calling it against the numeric twin.
 from __future__ import annotations
 
 import ast
+from dataclasses import dataclass
 
-from ...contract import SCALAR_INPUTS, input_length
+from ...contract import SCALAR_INPUTS, input_length, scalar
 from ...core.functions import FUNCTIONS
 from ...core.program import Node
 from ...model.tree import Tree
 from ..printing import Infix, Spelling, _number
+from ..compile import import_module
 from .base import Runner, Target, file_pattern
 
 
@@ -67,12 +69,19 @@ def array_steps(model, prog, lines, routine, inputs, spelling):
         yield ("temp", names[i], text(prog.nodes[i], i))
 
 
+def scalar_output(output) -> bool:
+    """Whether an output is one number per state in the array targets (shape (...,), not (..., 1)): the contract's
+    scalars (:func:`~aggsym.contract.shapes.scalar`: the energies), not a vector that has one entry for this model
+    (b, g, qdd of one coordinate, one constraint row, ...), which keeps its declared shape (..., 1)."""
+    return output.shape is scalar
+
+
 def quaternion_entries_read(model, reads: dict) -> tuple:
     """The entries of q's quaternion pairs (the tree's ``position_split``: a free-flyer's origin and quaternion, a
     ball's quaternion) that a routine's straight line reads (``reads``: per input the entries it reads, from the
     ``("input", ...)`` steps of :func:`array_steps`), in q's order: where the derivative routines, in the tangent
     space, give no column of their own."""
-    return tuple(i for i in Tree(model).position_split[2] if i in reads.get("q", ()))
+    return tuple(i for i in Tree.of(model).position_split[2] if i in reads.get("q", ()))
 
 
 def _names(tree) -> list:
@@ -122,6 +131,15 @@ def numpy_body(model, prog, lines, routine, inputs) -> list:
     return body
 
 
+@dataclass
+class NumPyBody:
+    """A routine's NumPy text (``EmittedRoutine.bodies["numpy"]``): its statements ``lines`` and {array input: the
+    length of its last dimension} (``lengths``, checked on entry)."""
+
+    lines: list
+    lengths: dict
+
+
 class NumPyTarget(Target):
     """NAME.py: the same functions without the prefix, outputs returned, ``p`` defaulting to PARAMETERS."""
 
@@ -138,17 +156,19 @@ class NumPyTarget(Target):
         return bool(file_pattern(name, ("py",)).fullmatch(file))
 
     def print_routine(self, model, prog, lines, emitted):
-        emitted.py_body = numpy_body(model, prog, lines, emitted.routine, emitted.inputs)
-        # the length of each array input's last dimension, checked on entry (a ValueError naming the argument)
-        emitted.bodies[self.name] = {i: input_length(model, i, emitted.routine) for i in emitted.inputs
-                                     if i not in SCALAR_INPUTS}
+        # the statements, and the length of each array input's last dimension, checked on entry (a ValueError
+        # naming the argument)
+        return NumPyBody(numpy_body(model, prog, lines, emitted.routine, emitted.inputs),
+                         {i: input_length(model, i, emitted.routine) for i in emitted.inputs
+                          if i not in SCALAR_INPUTS})
 
     def render(self, job):
-        return {f"{job.model.name}.py": self.template("model.py.j2").render(job.ctx)}
+        ctx = {**job.ctx, "scalar_output": scalar_output}  # (which outputs are returned without their one-entry axis)
+        return {f"{job.model.name}.py": self.template("model.py.j2").render(ctx)}
 
     def main_file(self, name):
         return f"{name}.py"
 
-    def runner(self, model, folder, manifest, opt, tools):
-        module = tools.import_module(folder / f"{model.name}.py")
+    def runner(self, model, folder, manifest, opt):
+        module = import_module(folder / f"{model.name}.py")
         return Runner(lambda role, *args: getattr(module, role)(*args))

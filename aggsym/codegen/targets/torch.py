@@ -33,9 +33,11 @@ from ...core.dual import along_inputs
 from ...core.functions import FUNCTIONS
 from ...core.program import Node, straight_line
 from ...model.tree import Tree
+from ..compile import import_module
 from ..printing import Spelling, _number
 from .base import RoutineLines, Runner, Target
-from .numpy import _unravel, array_steps, names_read, quaternion_entries_read, statement_parts, step_statement
+from .numpy import (_unravel, array_steps, names_read, quaternion_entries_read, scalar_output, statement_parts,
+                    step_statement)
 
 # torch's name of each function of aggsym/core/functions.py (element-wise, so that inputs carry batch dimensions)
 TORCH_NAMES = {"sin": "sin", "cos": "cos", "sqrt": "sqrt", "tan": "tan", "exp": "exp", "log": "log", "abs": "abs",
@@ -160,7 +162,7 @@ def _wiring(model, e, derivative, matrix, columns) -> dict:
     split = None
     if columns is not False:
         backward[0] = f"None if d_q is None else {backward[0]}"
-        Q, V, _ = Tree(model).position_split
+        Q, V, _ = Tree.of(model).position_split
         entries = columns["entries"] if columns else ()
         where = {**dict(zip(Q, V)), **{i: model.nv + t for t, i in enumerate(entries)}}
         index = [str(where.get(i, model.nv + len(entries))) for i in range(model.nq)]
@@ -215,7 +217,7 @@ class TorchTarget(Target):
         return file == f"{name}_torch.py"
 
     def print_routine(self, model, prog, lines, emitted):
-        emitted.bodies[self.name] = torch_body(model, prog, lines, emitted.routine, emitted.inputs)
+        return torch_body(model, prog, lines, emitted.routine, emitted.inputs)
 
     def render(self, job):
         model = job.model
@@ -237,7 +239,7 @@ class TorchTarget(Target):
                 "zero": body["zero"],
                 "outputs": [{"py": o.py, "shape": o.shape(model), "entries": body["outputs"][k],
                              "returned": o.returned} for k, o in enumerate(e.routine.outputs)],
-                "written": [{"py": o.py, "scalar": o.shape(model) == (1,)} for o in e.routine.written],
+                "written": [{"py": o.py, "scalar": scalar_output(o)} for o in e.routine.written],
                 "status": e.routine.status.py if e.routine.status else None,
                 "failure": e.routine.status.failure if e.routine.status else "",
                 "analytic": wired,
@@ -251,14 +253,14 @@ class TorchTarget(Target):
     def main_file(self, name):
         return f"{name}_torch.py"
 
-    def unavailable(self, tools):
+    def unavailable(self):
         try:
             import torch  # noqa: F401
         except ImportError:
             return "torch is not installed (pip install aggsym[torch])"
         return None
 
-    def runner(self, model, folder, manifest, opt, tools):
+    def runner(self, model, folder, manifest, opt):
         """The module called on float64 tensors, or on float32 ones when the manifest's scalar is float (``aggsym
         check --scalar float``), held then to the float C's bounds (the manifest's ``float_tolerance``, those of
         ``float_tolerance_per_condition`` also relative to cond(A)).  NaN outputs of a routine with a status are
@@ -266,7 +268,7 @@ class TorchTarget(Target):
         import numpy as np
         import torch
 
-        module = tools.import_module(folder / f"{model.name}_torch.py")
+        module = import_module(folder / f"{model.name}_torch.py")
         single = manifest.get("scalar", "double") == "float"
         dtype = torch.float32 if single else torch.float64
         statuses = {role for role, sig in manifest["signatures"].items() if sig.get("returns", "void") != "void"}

@@ -1,11 +1,11 @@
 """The model readers, one registry: which reader takes a file, and which options it accepts.
 
 A reader is one module with a ``load(path, **options) -> Model`` and one :class:`Reader` entry in :data:`READERS`
-(or :func:`register`): its name, the suffixes it claims, the keyword options of its ``load`` and the command-line
-options it accepts beyond those every model takes (``--armature``, ``--frames``, ``--routines``, ``--name``).
+(or :func:`register`): its name, the suffixes it claims and the keyword options of its ``load``.  Which of the
+options applied after reading a reader's models take is said by the table of options, :data:`aggsym.pipeline.OPTIONS`.
 A suffix that several formats share (``.xml``: URDF, MJCF) is listed in ``sniffed``: the reader takes such a file
 only when its ``sniff`` accepts the file's first :data:`SNIFF_BYTES` bytes.  :func:`reader_for` chooses;
-:func:`aggsym.model.load` and the command line (``aggsym/cli.py``) consult it.
+:func:`aggsym.model.load` and the pipeline (:mod:`aggsym.pipeline`) consult it.
 """
 from __future__ import annotations
 
@@ -26,7 +26,6 @@ class Reader:
     suffixes: tuple  # lower-case suffixes with the dot that this reader claims by the suffix alone
     load: Callable  # load(path, **options) -> Model
     options: tuple = ()  # the keyword options of load (floating_base, ...)
-    cli_options: tuple = ()  # command-line options it accepts beyond those every model takes ("--floating-base", ...)
     sniffed: tuple = ()  # suffixes shared with other formats: taken only when sniff(head) says so
     sniff: Callable | None = None  # sniff(first bytes of the file) -> bool
     note: str = ""  # said after an option the reader does not accept (what to do instead)
@@ -64,24 +63,16 @@ def _is_mjcf(head: bytes) -> bool:
     return b"<mujoco" in head
 
 
-URDF_CLI_OPTIONS = ("--floating-base", "--mimic", "--snap-angles", "--constraints", "--support",
-                    "--inertial-parameters", "--payload", "--gravity-parameter", "--passive")
-
-XACRO_CLI_OPTIONS = URDF_CLI_OPTIONS + ("--xacro-arg", "--package-path")
-
-MJCF_CLI_OPTIONS = ("--constraints", "--inertial-parameters", "--payload", "--frictionloss")
-
 READERS: list = [
     Reader("YAML", (".yaml", ".yml"), _load_yaml,
            note="a YAML model lists its constraints and support itself, and writes its masses and inertias as "
                 "expressions in its parameters"),
     Reader("URDF", (".urdf",), _load_urdf, options=("floating_base", "mimic", "snap_angles"),
-           cli_options=URDF_CLI_OPTIONS, sniffed=(".xml",), sniff=_is_urdf),
+           sniffed=(".xml",), sniff=_is_urdf),
     Reader("xacro", (".xacro",), _load_xacro,
            options=("floating_base", "mimic", "snap_angles", "xacro_args", "package_paths"),
-           cli_options=XACRO_CLI_OPTIONS,
            note="a xacro file is expanded by the xacro package, then read as URDF with the URDF options"),
-    Reader("MJCF", (".mjcf",), _load_mjcf, options=("frictionloss",), cli_options=MJCF_CLI_OPTIONS, sniffed=(".xml",), sniff=_is_mjcf,
+    Reader("MJCF", (".mjcf",), _load_mjcf, options=("frictionloss",), sniffed=(".xml",), sniff=_is_mjcf,
            note="an MJCF model's joints come from its file (a free joint is the quaternion free-flyer), as do its "
                 "angles"),
 ]
@@ -134,26 +125,4 @@ def listing(names) -> str:
     return " and ".join(names) if len(names) <= 2 else ", ".join(names[:-1]) + " and " + names[-1]
 
 
-def takers(option: str) -> list:
-    """The names of the readers that accept the command-line ``option``."""
-    return [r.name for r in READERS if option in r.cli_options]
-
-
-def check_cli_options(path, given) -> Reader:
-    """The file's reader; an error naming the reader and the option when it does not accept one of ``given``
-    (the command-line options the user gave that not every model takes)."""
-    from ...errors import AggsymError
-
-    reader = reader_for(path)
-    refused = [o for o in given if o not in reader.cli_options]
-    if refused:
-        which = listing(refused)
-        able = [r.name for r in READERS if all(o in r.cli_options for o in refused)]
-        why = [f"{listing(able)} models only"] if able else []
-        why += [reader.note] if reader.note else []
-        raise AggsymError(f"{path}: the {reader.name} reader does not accept {which}"
-                          + (f" ({'; '.join(why)})" if why else ""))
-    return reader
-
-
-__all__ = ["Reader", "READERS", "register", "reader_for", "check_cli_options", "known_suffixes", "listing", "takers"]
+__all__ = ["Reader", "READERS", "register", "reader_for", "known_suffixes", "listing"]

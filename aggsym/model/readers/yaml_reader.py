@@ -100,7 +100,10 @@ MAX_BODIES = 10_000  # bodies (rotors included) of a model, as for a URDF's link
 MAX_PARAMETERS = 10_000
 
 
-class _Reader:
+class YamlReader:
+    """A YAML file's values read into a model's parts, every mistake a ModelError with the file, the YAML path
+    and the line (a model: :meth:`read`; the side files of :mod:`.side_files` read their parts with it)."""
+
     def __init__(self, file: Path, text: str):
         self.doc = _Doc(file, text)
         self.file = file
@@ -747,49 +750,20 @@ def _kind(value) -> str:
     return f"{type(value).__name__} {text}"
 
 
+def read_text(path: Path) -> str:
+    """The text of a YAML file (a model or a side file), at most :data:`MAX_FILE_BYTES`; a :class:`ModelError`
+    naming the file otherwise."""
+    try:
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise ModelError(path, "", f"the file is larger than {MAX_FILE_BYTES // 2 ** 20} MiB")
+        return path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelError(path, "", f"cannot read the file: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise ModelError(path, "", "not a text file (UTF-8)") from None
+
+
 def load_yaml(path) -> Model:
     """Read and validate a YAML model; raises :class:`ModelError` naming the place of the first problem."""
     path = Path(path)
-    try:
-        if path.stat().st_size > MAX_FILE_BYTES:
-            raise ModelError(path, "", f"the file is larger than {MAX_FILE_BYTES // 2 ** 20} MiB")
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelError(path, "", f"cannot read the file: {exc.strerror}") from None
-    except UnicodeDecodeError:
-        raise ModelError(path, "", "not a text file (UTF-8)") from None
-    return _Reader(path, text).read()
-
-
-def load_constraints(path, model: Model) -> Model:
-    """A URDF robot's constraints from a side file (``aggsym generate robot.urdf --constraints feet.yaml``):
-    ``constraints:`` as in a YAML model, bodies and media named by URDF link (a point in the link's frame), and
-    ``stabilization:``.  Returns the model with them after its own (an MJCF model's equalities)."""
-    path = Path(path)
-    try:
-        if path.stat().st_size > MAX_FILE_BYTES:
-            raise ModelError(path, "", f"the file is larger than {MAX_FILE_BYTES // 2 ** 20} MiB")
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelError(path, "", f"cannot read the file: {exc.strerror}") from None
-    except UnicodeDecodeError:
-        raise ModelError(path, "", "not a text file (UTF-8)") from None
-    reader = _Reader(path, text)
-    for p in model.parameters:
-        reader.symbols[p.name] = p.symbol
-        reader.defaults[p.symbol] = float(p.value)
-    top = reader.mapping(reader.doc.root, (), SIDE_FILE_KEYS, required=("constraints",))
-    if model.couplings:
-        reader.fail(("constraints",), "constraints on a model with coupled (mimic) coordinates are not supported yet")
-    frames = {f.name: (f.body, f.rotation, f.translation) for f in model.link_table.frames}
-    constraints = reader.constraints(top["constraints"], frames, model.time_dependent)
-    own = {c.name for c in model.constraints}  # the model's own (an MJCF model's connect and weld) come first
-    for i, c in enumerate(constraints):
-        if c.name in own:
-            reader.fail(("constraints", i, "name"), f"the model already has a constraint named {c.name!r} (from its "
-                                                    f"file); choose another name")
-    constraints = tuple(model.constraints) + tuple(constraints)
-    stabilization = reader.stabilization(top.get("stabilization"), constraints)
-    return dataclasses.replace(model, constraints=constraints, stabilization=stabilization,
-                               regularization=reader.regularization(top.get("regularization"), constraints),
-                               proximal=reader.proximal(top.get("proximal"), constraints))
+    return YamlReader(path, read_text(path)).read()

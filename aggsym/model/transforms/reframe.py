@@ -292,7 +292,7 @@ def _reframed(model: Model, normals: bool, fewest: bool) -> tuple:
     is not :func:`eligible`."""
     if not eligible(model):
         return model, None, None
-    tree = Tree(model)
+    tree = Tree.of(model)
     N = len(tree)
     bodies = model.bodies
     t0 = [np.array([float(x) for x in b.pair.translation]) for b in bodies]
