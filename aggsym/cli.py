@@ -133,12 +133,12 @@ def _progress(quiet: bool, name: str):
     return lambda msg: print(f"aggsym: {name}: {msg}", file=sys.stderr, flush=True)
 
 
-def _targets(args, default=None):
-    """The targets named by --targets (else ``default``; None: the default set), chosen once, before any work: an
-    unknown one is exit 2."""
+def _targets(args):
+    """The targets named by --targets (None: the default set), chosen once, before any work: an unknown one is
+    exit 2."""
     from .codegen.targets import select
 
-    return select(default if args.targets is None else args.targets)
+    return select(args.targets)
 
 
 def cmd_generate(args) -> int:

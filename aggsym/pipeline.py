@@ -48,7 +48,11 @@ class Option:
     default: object = None
     readers: object = None
     cli: dict = dataclasses.field(default_factory=dict)
-    from_cli: Callable = staticmethod(lambda value: value)
+    from_cli: Callable = None  # (None: the value as argparse gives it)
+
+    def __post_init__(self):
+        if self.from_cli is None:
+            object.__setattr__(self, "from_cli", _as_given)
 
     def given(self, value) -> bool:
         """Whether ``value`` asks for something (not the default, None, False or an empty list)."""
@@ -56,6 +60,10 @@ class Option:
 
 
 READ = "read"  # Option.readers: the readers whose load takes the option
+
+
+def _as_given(value):
+    return value
 
 
 def _number(text: str) -> float:

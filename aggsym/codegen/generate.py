@@ -2,11 +2,10 @@
 ...: :mod:`.targets`, one registry).
 
 The recursions run once on the symbolic backend into one shared straight-line program (kinematics shared by
-all routines); each routine's outputs are then cut out of it (:func:`aggsym.core.program.straight_line`),
-printed as C (always: the operation counts are the C's) and by every chosen target
-(:meth:`~.targets.base.Target.print_routine`), and the targets render their files from the Jinja templates
-(layout only; a folder per target in the package data ``aggsym.templates``, ``templates/``).  What a routine is called,
-takes and returns comes from :mod:`aggsym.contract`.  Files are written only after everything has been
+all routines); each routine's outputs are then cut out of it and emitted (:mod:`.emit`: printed as C, which counts
+the operations, and by every chosen target), and the targets render their files from the Jinja templates (layout
+only; a folder per target, ``templates/TARGET/``, installed as the package ``aggsym.templates``).  What a routine is
+called, takes and returns comes from :mod:`aggsym.contract`.  Files are written only after everything has been
 generated, through a temporary folder, so a failure leaves the output folder as it was.
 """
 from __future__ import annotations
