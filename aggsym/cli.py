@@ -97,7 +97,12 @@ def _parser() -> argparse.ArgumentParser:
                    help="write only these targets' files: c (NAME.h, NAME.c or the --split files), numpy (NAME.py), "
                         "manifest (NAME.json), latex (NAME.tex), jax (NAME_jax.py), torch (NAME_torch.py), ext "
                         "(NAME_ext.c, NAME_ext.py: one state per call through the compiled C; with c and numpy); "
+                        "with c and jax or torch also kernels (NAME_kernels.c, NAME_kernels.py, NAME_kernels_jax.cc: "
+                        "the batch kernels the JAX and PyTorch modules call on the CPU); "
                         "default: c, numpy, manifest, latex")
+    g.add_argument("--no-kernels", action="store_true",
+                   help="with c and jax or torch: no batch kernels (NAME_kernels.c, .py, _jax.cc) behind the JAX and "
+                        "PyTorch modules, which then trace their straight lines on every platform")
     g.add_argument("--list-routines", action="store_true",
                    help="print the routines this model gets, one line each (what each computes), and write nothing")
     command("latex", "print the LaTeX document of the equations of motion")
@@ -138,7 +143,7 @@ def _targets(args):
     exit 2."""
     from .codegen.targets import select
 
-    return select(args.targets)
+    return select(args.targets, kernels=not getattr(args, "no_kernels", False))
 
 
 def cmd_generate(args) -> int:

@@ -11,6 +11,7 @@ from .base import Job, RoutineLines, Runner, Target
 from .c import CTarget
 from .ext import ExtensionTarget
 from .jax import JaxTarget
+from .kernels import KernelsTarget
 from .latex import LatexTarget
 from .manifest import ManifestTarget
 from .numpy import NumPyTarget
@@ -34,6 +35,15 @@ def unregister(name: str) -> None:
     TARGETS.pop(name, None)
 
 
+def with_kernels(targets, kernels: bool = True) -> list:
+    """``targets`` with the kernels target added (in registry order) when the C target and the JAX or PyTorch target
+    are among them and ``kernels``; otherwise as they are (:mod:`.kernels`: the batch kernels those modules call)."""
+    names = {t.name for t in targets}
+    if not kernels or KernelsTarget.name in names or "c" not in names or not names & {"jax", "torch"}:
+        return list(targets)
+    return [t for t in TARGETS.values() if t in targets or t.name == KernelsTarget.name]
+
+
 def known() -> str:
     return ", ".join(TARGETS)
 
@@ -42,9 +52,11 @@ def default_targets() -> list:
     return [t for t in TARGETS.values() if t.default]
 
 
-def select(names=None) -> list:
+def select(names=None, kernels: bool = True) -> list:
     """The targets named (a comma-separated string or an iterable of names or targets), in registry order; None:
-    the default set.  An unknown or missing name is an AggsymError naming the known targets."""
+    the default set.  An unknown or missing name is an AggsymError naming the known targets.  With the C target and
+    the JAX or PyTorch target, the kernels target too (:func:`with_kernels`), unless ``kernels`` is
+    False."""
     if names is None:
         return default_targets()
     if isinstance(names, str):
@@ -59,13 +71,14 @@ def select(names=None) -> list:
                           f"{', '.join(repr(n) for n in unknown)}; the known targets are: {known()}")
     if not names:
         raise AggsymError(f"--targets: no target named; the known targets are: {known()}")
-    return [t for name, t in TARGETS.items() if name in names]
+    return with_kernels([t for name, t in TARGETS.items() if name in names], kernels)
 
 
 for _target in (CTarget(), NumPyTarget(), ManifestTarget(), LatexTarget(), JaxTarget()):  # one line per target
     register(_target)
 register(TorchTarget())  # --targets torch (not in the default set)
 register(ExtensionTarget())  # --targets c,numpy,ext (not in the default set)
+register(KernelsTarget())  # with c and jax or torch (with_kernels), unless --no-kernels
 
 __all__ = ["Job", "RoutineLines", "Runner", "Target", "TARGETS", "register", "unregister", "select", "known",
-           "default_targets"]
+           "default_targets", "with_kernels"]

@@ -35,6 +35,7 @@ from ...model.tree import Tree
 from ..compile import import_module
 from ..printing import Spelling, _number
 from .base import Runner, Target
+from .kernel_table import kernels_context
 from .jax_segments import cut, limits, segmented
 from .numpy import array_steps, quaternion_entries_read, scalar_output, step_statement
 
@@ -161,6 +162,7 @@ class JaxTarget(Target):
         custom = {e.routine.role: custom_directions(job.model, e.routine.role, roles, e.bodies[self.name]["reads"])
                   for e in job.emitted}
         ctx = {**job.ctx, "custom": {role: c for role, c in custom.items() if c}, "scalar_output": scalar_output,
+               "kernels": kernels_context(job),
                **dict(zip(("segment_size", "segmented_above", "gathered"), limits())),
                "jax_routines": [{"r": e, "role": e.routine.role, "inputs": list(e.inputs),
                                  "args": ", ".join(e.inputs), "body": e.bodies[self.name]["body"],

@@ -11,6 +11,7 @@ from ..inertial_helpers import manifest_entry
 from ..names import c_symbol
 from .base import Target, file_pattern
 from .c import split_layout
+from .kernels import kernels_manifest
 
 
 class ManifestTarget(Target):
@@ -31,4 +32,6 @@ class ManifestTarget(Target):
                         functions={e.routine.role: c_symbol(job.model, e.routine) for e in emitted})
         if job.model.inertial_blocks:  # the helpers that write a link's ten inertial parameters (C and Python)
             data["inertial_helpers"] = manifest_entry(job.model)
+        if job.chosen("kernels"):  # the batch kernels behind the JAX and PyTorch modules
+            data["kernels"] = kernels_manifest(job)
         return {f"{job.model.name}.json": json.dumps(data, indent=2) + "\n"}

@@ -36,6 +36,7 @@ from ...model.tree import Tree
 from ..compile import import_module
 from ..printing import Spelling, _number
 from .base import RoutineLines, Runner, Target
+from .kernel_table import kernels_context
 from .numpy import (_unravel, array_steps, names_read, quaternion_entries_read, scalar_output, statement_parts,
                     step_statement)
 
@@ -244,8 +245,17 @@ class TorchTarget(Target):
                 "failure": e.routine.status.failure if e.routine.status else "",
                 "analytic": wired,
                 "lengths": [(i, input_length(model, i, e.routine)) for i in e.inputs if i not in SCALAR_INPUTS],
+                "kernel_shapes": [tuple(o.shape(model)) for o in e.routine.written],
+                "written_index": [k for k, o in enumerate(e.routine.outputs) if not o.returned],
             })
-        ctx = {**job.ctx, "torch_routines": routines, "quaternion": model.nq != model.nv,
+        kernels = kernels_context(job)
+        for r in routines:  # the quaternion columns by their kernel (when it is along the same entries)
+            k = kernels and kernels[r["role"]]["columns"]
+            split = r["analytic"] and r["analytic"]["split"]
+            r["kernel_columns"] = None
+            if k and split and split["columns"] and tuple(split["columns"]["entries"]) == k["entries"]:
+                r["kernel_columns"] = {"role": f"{r['role']}_quaternion_columns", "shape": k["shape"]}
+        ctx = {**job.ctx, "torch_routines": routines, "quaternion": model.nq != model.nv, "kernels": kernels,
                "analytic": [r["role"] for r in routines if r["analytic"]],
                "statuses": [r["role"] for r in routines if r["status"]]}
         return {f"{model.name}_torch.py": self.template("model_torch.py.j2").render(ctx)}
