@@ -214,35 +214,40 @@ def cmd_check(args) -> int:
     results = check_generated(model, gen.files, trials=args.trials, seed=args.seed, opt=args.opt,
                               targets=[t.name for t in checked])
     width = max(len(r.role) for r in results)
-    single = args.scalar == "float"
-    # the float C and the JAX module in float32: each held to its own bounds (its runner's, the manifest's
-    # float_tolerance); the others to --tol
-    bounded = {name for r in results for name in r.tolerances} if single else set()
+    columns = results[0].columns  # key -> heading: a column per runner of the targets checked
+    # the columns with bounds of their own (the float C, the modules in float32, derivatives against central
+    # differences: each its runner's); the others held to --tol
+    bounded = {name for r in results for name in r.tolerances}
     print(f"{model.name}: {args.trials} random states per routine; worst error against the numeric twin, relative "
-          f"to the largest value the routine returns"
-          + (f"; {' and '.join(t.column for t in checked if t.name in bounded)} in float, held to "
-             f"{'its bound' if len(bounded) == 1 else 'their bounds'}" if bounded else ""))
-    print(f"{'routine'.ljust(width)}  " + "  ".join(f"{t.column:>9}" + (f"  {t.column + ' bound':>9}"
-                                                                        if t.name in bounded else "")
-                                                    for t in checked))
+          f"to the largest value the routine returns; d ROUTINE: derivatives against central differences"
+          + (f"; {', '.join(columns[k] for k in columns if k in bounded)} held to "
+             f"{'its bounds' if len(bounded) == 1 else 'their bounds'}" if bounded else ""))
+    print(f"{'routine'.ljust(width)}  " + "  ".join(f"{heading:>9}" + (f"  {heading + ' bound':>9}"
+                                                                       if key in bounded else "")
+                                                    for key, heading in columns.items()))
     bad = []
     for r in results:
         cells, ok = [], True
-        for t in checked:
-            tol = r.tolerances.get(t.name, args.tol) if t.name in bounded else args.tol
-            cells.append(f"{r.errors[t.name]:9.2e}" + (f"  {tol:9.0e}" if t.name in bounded else ""))
-            ok = ok and r.errors[t.name] <= tol
+        for key in columns:
+            tol = r.tolerances.get(key, args.tol)
+            error = r.errors[key]
+            if error != error:  # (NaN: this column does not check this row)
+                cells.append(f"{'—':>9}" + (f"  {'':>9}" if key in bounded else ""))
+                continue
+            cells.append(f"{error:9.2e}" + (f"  {tol:9.0e}" if key in bounded else ""))
+            ok = ok and error <= tol
         flag = "" if ok else "  MISMATCH"
         print(f"{r.role.ljust(width)}  " + "  ".join(cells) + flag)
         if flag:
             bad.append(r.role)
-    others = " or ".join(t.column for t in checked if t.name not in bounded)
+    others = " or ".join(heading for key, heading in columns.items() if key not in bounded)
     if bad:
-        print(f"mismatch ({'a float target beyond its bound or ' + others + ' ' if bounded and others else ''}"
+        print(f"mismatch ({'a column beyond its bound or ' + others + ' ' if bounded and others else ''}"
               f"> {args.tol:g}) in: {', '.join(bad)}", file=sys.stderr)
         return 1
-    floats = ", ".join(t.column for t in checked if t.name in bounded)
-    print(f"ok: every routine within {'its float bound (' + floats + ') and ' if bounded else ''}{args.tol:g}"
+    floats = ", ".join(heading for key, heading in columns.items() if key in bounded)
+    bound = "its float bound" if args.scalar == "float" else "its bound"
+    print(f"ok: every routine within {bound + ' (' + floats + ') and ' if bounded else ''}{args.tol:g}"
           + (f" ({others})" if bounded and others else ""))
     return 0
 

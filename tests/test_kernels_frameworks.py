@@ -235,3 +235,15 @@ def test_cache_errors_no_kernels_and_the_manifest(tmp_path):
     assert main(["generate", str(model_path("double_pendulum")), "-o", str(plain), "-q", "--targets",
                  "c,numpy,jax,manifest", "--no-kernels"]) == 0
     assert not list(plain.glob("*kernels*")) and "kernels" not in json.loads((plain / "double_pendulum.json").read_text())
+
+
+def test_check_has_a_column_per_kernel_module_and_precision(capsys):
+    """aggsym check --targets c,numpy,jax,torch: the traced modules' columns and the kernels' (JAX and PyTorch, float64
+    and float32), and the derivative rows against central differences."""
+    from conftest import model_path
+
+    assert main(["check", str(model_path("double_pendulum")), "--targets", "c,numpy,jax,torch", "--trials", "2"]) == 0
+    out = capsys.readouterr().out
+    for heading in ("JAX k64", "JAX k32", "torch k64", "torch k32", "d forward_dynamics", "d inverse_dynamics"):
+        assert heading in out
+    assert "ok: every routine within its bound" in out

@@ -23,8 +23,9 @@ class CheckResult:
     ...), and the targets' own bounds where they have one (float C: the manifest's float_tolerance)."""
 
     role: str
-    errors: dict  # target name -> worst relative error
-    tolerances: dict = field(default_factory=dict)  # target name -> its bound; absent: the --tol
+    errors: dict  # column key (a target's name, or one of its runners') -> worst relative error; NaN: not checked
+    tolerances: dict = field(default_factory=dict)  # column key -> its bound; absent: the --tol
+    columns: dict = field(default_factory=dict)  # column key -> its heading, in order
 
     @property
     def c_error(self) -> float:
@@ -135,8 +136,10 @@ def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir
         tmp = Path(tmp)
         for name, text in files.items():
             (tmp / name).write_text(text, encoding="utf-8")
-        runners = {t.name: t.runner(model, tmp, manifest, opt) for t in checked}
-        runners = {name: r for name, r in runners.items() if r is not None}
+        runners, columns = {}, {}
+        for t in checked:
+            for key, (heading, runner) in t.runners(model, tmp, manifest, opt).items():
+                runners[key], columns[key] = runner, heading
         twin = NumericTwin(model)
         rng = np.random.default_rng(seed)
         results = []
@@ -163,8 +166,47 @@ def check_generated(model, files: dict, trials: int = 20, seed: int = 0, workdir
                     for r, x in zip(refs, outs):  # relative to the largest value the routine returns
                         worst[name] = max(worst[name], relative_error(x, r, own))
             results.append(CheckResult(role, worst, {name: r.bounds[role] for name, r in runners.items()
-                                                     if role in r.bounds}))
+                                                     if role in r.bounds}, columns))
+            derivatives = _derivatives(model, twin, role, runners, rng, min(trials, DERIVATIVE_TRIALS))
+            if derivatives is not None:
+                results.append(CheckResult(f"d {role}", *derivatives, columns))
         return results
+
+
+DERIVATIVE_TRIALS = 3  # states per differentiated routine
+DERIVATIVE_TOLERANCE = 1e-6  # central differences' own error (h = 1e-6), relative to the largest derivative
+
+
+def _derivatives(model, twin, role, runners, rng, trials):
+    """(errors, tolerances) of the runners that differentiate ``role`` (their :attr:`~.targets.base.Runner.jacobian`)
+    against central differences of the numeric twin along each array argument; None when none does."""
+    which = {name: r for name, r in runners.items() if r.jacobian is not None}
+    if not which or role not in ("forward_dynamics", "inverse_dynamics"):
+        return None
+    worst = {name: (0.0 if name in which else math.nan) for name in runners}
+    for _ in range(trials):
+        args = random_inputs(model, role, rng)
+        try:
+            cds = [_central(lambda x, k=k: twin.call(role, *[x if j == k else a for j, a in enumerate(args)]),
+                            np.asarray(a, dtype=float)) for k, a in enumerate(args)]
+        except np.linalg.LinAlgError:
+            continue
+        scale = max(float(np.max(np.abs(c))) for c in cds) or 1.0
+        for name, runner in which.items():
+            for got, cd in zip(runner.jacobian(role, *args), cds):
+                worst[name] = max(worst[name], relative_error(got, cd, scale))
+    return worst, {name: DERIVATIVE_TOLERANCE for name in which}
+
+
+def _central(f, x, h=1e-6):
+    """d f / d x by central differences (the direction last)."""
+    first = np.asarray(f(x), dtype=float)
+    out = np.empty(first.shape + (x.size,))
+    for i in range(x.size):
+        e = np.zeros_like(x)
+        e.flat[i] = h
+        out[..., i] = (np.asarray(f(x + e), dtype=float) - np.asarray(f(x - e), dtype=float)) / (2 * h)
+    return out
 
 
 def _rounded(args, dtype):

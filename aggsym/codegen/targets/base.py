@@ -90,6 +90,12 @@ class Target:
         """Why its output cannot be run here (e.g. no compiler, a framework that does not import), or None."""
         return None
 
+    def runners(self, model, folder, manifest: dict, opt: str) -> dict:
+        """{key: (column heading, :class:`Runner`)} of ``aggsym check``'s columns for this target: its
+        :meth:`runner` under its :attr:`column`, or several (the kernels: JAX and PyTorch, float64 and float32)."""
+        runner = self.runner(model, folder, manifest, opt)
+        return {} if runner is None else {self.name: (self.column, runner)}
+
     def runner(self, model, folder, manifest: dict, opt: str):
         """A :class:`Runner` calling its generated code written in ``folder``, or None: nothing to run.
         ``opt`` the optimisation level of a compile; built of :mod:`aggsym.codegen.compile` (compiling, calling,
@@ -101,11 +107,14 @@ class Target:
 class Runner:
     """A target's generated code, callable: ``call(role, *args)`` returns the outputs (one array, or a tuple)
     and raises numpy.linalg.LinAlgError where the routine reports a singular system.  ``bounds``: {role: its
-    own error bound} (float C), ``per_condition``: the roles whose error is also relative to cond(A)."""
+    own error bound} (float C), ``per_condition``: the roles whose error is also relative to cond(A); ``jacobian``:
+    where the target differentiates (the kernels' modules), the derivatives it gives of a routine's first output
+    (None for a routine it does not differentiate), held to central differences of the numeric twin."""
 
     call: object
     bounds: dict = field(default_factory=dict)
     per_condition: tuple = ()
+    jacobian: object = None  # (role, *args) -> the derivatives of its first output along each array argument, or None
 
 
 @dataclass

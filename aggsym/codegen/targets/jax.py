@@ -35,7 +35,7 @@ from ...model.tree import Tree
 from ..compile import import_module
 from ..printing import Spelling, _number
 from .base import Runner, Target
-from .kernel_table import kernels_context
+from .kernel_table import kernels_context, traced_modules
 from .jax_segments import cut, limits, segmented
 from .numpy import array_steps, quaternion_entries_read, scalar_output, step_statement
 
@@ -196,26 +196,49 @@ class JaxTarget(Target):
         same per-routine bounds, the manifest's ``float_tolerance``, relative also to cond(A) for the routines that
         solve with A).  A state where the module's outputs are NaN counts as a singular system (LinAlgError), as
         where the NumPy module raises."""
-        import jax
-        import numpy as np
-
         single = manifest.get("scalar", "double") == "float"
-        module = import_module(folder / f"{model.name}_jax.py")
-        dtype = np.float32 if single else np.float64
-        statuses = {role for role, sig in manifest["signatures"].items() if sig.get("returns", "void") != "void"}
-
-        def call(role, *args):
-            with _precision(jax, not single):
-                out = getattr(module, role)(*(np.asarray(a, dtype=dtype) for a in args))
-            outs = tuple(np.asarray(o, dtype=float) for o in (out if isinstance(out, tuple) else (out,)))
-            if role in statuses and any(np.isnan(o).any() for o in outs):
-                raise np.linalg.LinAlgError(f"{role}: the JAX module returned NaN: {manifest['signatures'][role]['returns']}")
-            return outs[0] if len(outs) == 1 else outs
-
+        with traced_modules():  # (the module as traced: its kernels, if any, are the kernels target's columns)
+            module = import_module(folder / f"{model.name}_jax.py")
+        call = jax_call(module, manifest, single)
         if single:
             return Runner(call, manifest.get("float_tolerance", {}),
                           tuple(manifest.get("float_tolerance_per_condition", ())))
         return Runner(call)
+
+
+def jax_call(module, manifest, single: bool):
+    """A generated JAX module's routines as :attr:`Runner.call`: float32 (``single``) or float64 arrays in, NumPy
+    arrays out; NaN outputs of a routine with a status raised as numpy.linalg.LinAlgError."""
+    import jax
+    import numpy as np
+
+    dtype = np.float32 if single else np.float64
+    statuses = {role for role, sig in manifest["signatures"].items() if sig.get("returns", "void") != "void"}
+
+    def call(role, *args):
+        with _precision(jax, not single):
+            out = getattr(module, role)(*(np.asarray(a, dtype=dtype) for a in args))
+        outs = tuple(np.asarray(o, dtype=float) for o in (out if isinstance(out, tuple) else (out,)))
+        if role in statuses and any(np.isnan(o).any() for o in outs):
+            raise np.linalg.LinAlgError(f"{role}: the JAX module returned NaN: {manifest['signatures'][role]['returns']}")
+        return outs[0] if len(outs) == 1 else outs
+    return call
+
+
+def jax_jacobian(module):
+    """:attr:`Runner.jacobian` of a JAX module: jax.jacfwd of a routine's first output along each array argument
+    (float64)."""
+    import jax
+    import numpy as np
+
+    def jacobian(role, *args):
+        arrays = [k for k, a in enumerate(args) if np.ndim(a)]
+        with _precision(jax, True):
+            f = getattr(module, role)
+            jac = jax.jacfwd(lambda *xs: (f(*xs)[0] if isinstance(f(*xs), tuple) else f(*xs)), tuple(arrays))(
+                *(np.asarray(a, dtype=np.float64) for a in args))
+        return [np.asarray(j, dtype=float) for j in jac]
+    return jacobian
 
 
 def _precision(jax, x64: bool):

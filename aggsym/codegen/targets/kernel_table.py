@@ -3,6 +3,9 @@ prints them): their order and indices, and per routine which kernel computes it.
 JAX and PyTorch targets read it without importing the kernels target, which reads theirs."""
 from __future__ import annotations
 
+import contextlib
+import os
+
 NAME = "kernels"  # the kernels target's name: its bodies are EmittedRoutine.bodies[NAME]
 
 
@@ -32,4 +35,18 @@ def kernels_context(job) -> dict | None:
     return out
 
 
-__all__ = ["NAME", "kernel_table", "kernels_context"]
+@contextlib.contextmanager
+def traced_modules():
+    """A context in which a generated JAX or PyTorch module imported takes its traced path (AGGSYM_KERNELS=0)."""
+    before = os.environ.get("AGGSYM_KERNELS")
+    os.environ["AGGSYM_KERNELS"] = "0"
+    try:
+        yield
+    finally:
+        if before is None:
+            del os.environ["AGGSYM_KERNELS"]
+        else:
+            os.environ["AGGSYM_KERNELS"] = before
+
+
+__all__ = ["NAME", "kernel_table", "kernels_context", "traced_modules"]

@@ -26,7 +26,8 @@ from ...core.dual import along_inputs
 from ...core.program import straight_line
 from ...errors import AggsymError
 from ..printing import _number
-from .base import RoutineLines, Target, environment
+from ..compile import import_module
+from .base import RoutineLines, Runner, Target, environment
 from .c import _trig_pairs
 from .jax import CUSTOM
 from .kernel_table import NAME as _TARGET_NAME, kernel_table
@@ -100,7 +101,7 @@ class KernelsTarget(Target):
     name = _TARGET_NAME
     stage = "kernels"
     column = "kernels"
-    checked_by_default = False  # (checked through the JAX and PyTorch modules that use them)
+    checked_by_default = False  # (aggsym check --targets c,jax or c,torch: the modules on them, a column each)
     folder = "kernels"
     templates = ("kernels.c.j2", "kernels_jax.cc.j2", "kernels.py.j2")
 
@@ -158,6 +159,39 @@ class KernelsTarget(Target):
 
     def main_file(self, name):
         return f"{name}_kernels.py"
+
+    def unavailable(self):
+        from ..compile import compiler
+
+        try:
+            compiler()
+        except AggsymError as exc:
+            return str(exc)
+        return None
+
+    def runners(self, model, folder, manifest, opt):
+        """The JAX and PyTorch modules beside the kernels, on the kernels: a column each in float64 (with their
+        derivatives: jacfwd, torch.func.jacrev) and in float32 (held to the float C's bounds)."""
+        from ...contract import float_tolerance
+        from .jax import jax_call, jax_jacobian
+        from .torch import torch_call, torch_jacobian
+
+        bounds = float_tolerance(model, [ROUTINES[r] for r in manifest["functions"]])
+        out = {}
+        for framework, heading, call, jacobian in (("jax", "JAX", jax_call, jax_jacobian),
+                                                   ("torch", "torch", torch_call, torch_jacobian)):
+            path = folder / f"{model.name}_{framework}.py"
+            if not path.exists():
+                continue
+            module = import_module(path)
+            if module._KERNELS is None:
+                raise AggsymError(f"{path.name}: the kernels are switched off (AGGSYM_KERNELS=0): unset it to check them")
+            out[f"kernels_{framework}"] = (f"{heading} k64", Runner(call(module, manifest, False),
+                                                                   jacobian=jacobian(module)))
+            out[f"kernels_{framework}32"] = (f"{heading} k32", Runner(call(module, manifest, True),
+                                                                     bounds["float_tolerance"],
+                                                                     tuple(bounds["float_tolerance_per_condition"])))
+        return out
 
 
 def kernel_environment():

@@ -36,7 +36,7 @@ from ...model.tree import Tree
 from ..compile import import_module
 from ..printing import Spelling, _number
 from .base import RoutineLines, Runner, Target
-from .kernel_table import kernels_context
+from .kernel_table import kernels_context, traced_modules
 from .numpy import (_unravel, array_steps, names_read, quaternion_entries_read, scalar_output, statement_parts,
                     step_statement)
 
@@ -275,24 +275,47 @@ class TorchTarget(Target):
         check --scalar float``), held then to the float C's bounds (the manifest's ``float_tolerance``, those of
         ``float_tolerance_per_condition`` also relative to cond(A)).  NaN outputs of a routine with a status are
         its failure: raised as numpy.linalg.LinAlgError, as the NumPy module does."""
-        import numpy as np
-        import torch
-
-        module = import_module(folder / f"{model.name}_torch.py")
+        with traced_modules():  # (the module as traced: its kernels, if any, are the kernels target's columns)
+            module = import_module(folder / f"{model.name}_torch.py")
         single = manifest.get("scalar", "double") == "float"
-        dtype = torch.float32 if single else torch.float64
-        statuses = {role for role, sig in manifest["signatures"].items() if sig.get("returns", "void") != "void"}
-
-        def call(role, *args):
-            tensors = [torch.as_tensor(np.asarray(a, dtype=float), dtype=dtype) for a in args]
-            with torch.no_grad():
-                got = getattr(module, role)(*tensors)
-            outs = tuple(x.double().numpy() for x in (got if isinstance(got, tuple) else (got,)))
-            if role in statuses and any(np.isnan(x).any() for x in outs):
-                raise np.linalg.LinAlgError(f"{role}: NaN outputs: the system is singular")
-            return outs[0] if len(outs) == 1 else outs
-
+        call = torch_call(module, manifest, single)
         if not single:
             return Runner(call)
         return Runner(call, manifest.get("float_tolerance", {}),
                       tuple(manifest.get("float_tolerance_per_condition", ())))
+
+
+def torch_call(module, manifest, single: bool):
+    """A generated PyTorch module's routines as :attr:`Runner.call`: float32 (``single``) or float64 tensors in,
+    NumPy arrays out; NaN outputs of a routine with a status raised as numpy.linalg.LinAlgError."""
+    import numpy as np
+    import torch
+
+    dtype = torch.float32 if single else torch.float64
+    statuses = {role for role, sig in manifest["signatures"].items() if sig.get("returns", "void") != "void"}
+
+    def call(role, *args):
+        tensors = [torch.as_tensor(np.asarray(a, dtype=float), dtype=dtype) for a in args]
+        with torch.no_grad():
+            got = getattr(module, role)(*tensors)
+        outs = tuple(x.double().numpy() for x in (got if isinstance(got, tuple) else (got,)))
+        if role in statuses and any(np.isnan(x).any() for x in outs):
+            raise np.linalg.LinAlgError(f"{role}: NaN outputs: the system is singular")
+        return outs[0] if len(outs) == 1 else outs
+    return call
+
+
+def torch_jacobian(module):
+    """:attr:`Runner.jacobian` of a PyTorch module: torch.func.jacrev of a routine's first output along each array
+    argument (float64)."""
+    import numpy as np
+    import torch
+
+    def jacobian(role, *args):
+        arrays = tuple(k for k, a in enumerate(args) if np.ndim(a))
+        f = getattr(module, role)
+        tensors = [torch.as_tensor(np.asarray(a, dtype=float), dtype=torch.float64) for a in args]
+        jac = torch.func.jacrev(lambda *xs: f(*xs)[0] if isinstance(f(*xs), tuple) else f(*xs), argnums=arrays)(*tensors)
+        return [j.detach().numpy() for j in jac]
+    return jacobian
+
