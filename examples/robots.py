@@ -1,7 +1,8 @@
 """Where the examples find their robots (example-robot-data's URDF files) and how they generate a module.
 
-``module(urdf, folder, routines, *options)`` runs ``aggsym generate URDF --targets jax,numpy --routines ...`` into
-``folder`` (once: an existing module is imported as it is) and returns (NumPy module, JAX module)."""
+``module(urdf, folder, routines, *options)`` runs ``aggsym generate URDF --targets c,numpy,jax --routines ...`` into
+``folder`` (once: an existing module is imported as it is) and returns (NumPy module, JAX module).  With the C
+target the JAX module runs on the batch kernels (NAME_kernels.c, compiled on its first import, cached)."""
 from __future__ import annotations
 
 import importlib.util
@@ -14,7 +15,8 @@ from aggsym.cli import main
 
 ROBOTS = {"panda": "panda_description/urdf/panda.urdf",
           "double_pendulum": "double_pendulum_description/urdf/double_pendulum.urdf",
-          "ur5": "ur_description/urdf/ur5_robot.urdf"}
+          "ur5": "ur_description/urdf/ur5_robot.urdf",
+          "talos": "talos_data/robots/talos_reduced.urdf"}
 
 
 def urdf(name: str) -> Path:
@@ -41,7 +43,7 @@ def module(robot: str, folder: Path, routines: str, *options: str):
     if not (folder / f"{name}_jax.py").is_file():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            code = main(["generate", str(urdf(robot)), "-q", "--name", name, "--targets", "numpy,jax,manifest",
+            code = main(["generate", str(urdf(robot)), "-q", "--name", name, "--targets", "c,numpy,jax,manifest",
                          "--routines", routines, "-o", str(folder), *options])
         if code != 0:
             raise SystemExit(code)

@@ -46,7 +46,7 @@ def panda_urdf() -> Path:
 def generated_module(model_file, folder):
     """The PyTorch module of a model's forward dynamics and its derivatives, generated into ``folder``."""
     model = select_routines(aggsym.load(model_file), ROUTINES)
-    write(generate(model, targets="torch,manifest"), folder)
+    write(generate(model, targets="c,torch,manifest"), folder)  # (with c: on the batch kernels)
     return import_module(Path(folder) / f"{model.name}_torch.py")
 
 

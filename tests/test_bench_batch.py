@@ -242,3 +242,31 @@ def test_the_jacrev_entries_are_judged_on_the_jacobian_alone():
                 "computeABADerivatives"] is True
     assert not any(what.startswith("talos forward dynamics") and "jacrev" in what for what in rows)
     assert "aggsym_jax_project_rev" in batch_peers.PROJECT_ENTRIES
+
+
+def test_the_kernels_targets_from_fake_results():
+    """Issue 51's rows: the kernel entries against Pinocchio's batched calls, the one-state C loop, the traced
+    module and adam; met and missed as the times say; the build from the robot's generation."""
+    data = fake_results()
+    speed = {"aggsym_jax_kernels": 0.1, "aggsym_jax_kernels_rev": 0.1, "aggsym_jax_kernels_all": 0.06,
+             "aggsym_torch_kernels": 0.12, "c_loop": 0.3, "pinocchio_parallel": 3.0, "pinocchio_parallel_all": 1.6}
+    for robot in ("panda", "talos"):
+        for routine in batch_peers.ROUTINES:
+            for entry, us in speed.items():
+                if routine in batch_peers.ENTRIES[entry][2]:
+                    data["rows"].append(_row(entry, robot, routine, us))
+    data["robots"]["talos"]["generation"] = {"kernels_build": {"ok": True, "seconds": 99.0, "maxrss_mib": 545.0}}
+    rows = {what: (measured, ok) for what, measured, ok in batch_report.kernel_targets(data)}
+    assert rows["talos forward dynamics, B = 4096: aggsym JAX kernels ≥ 10× faster per state than Pinocchio "
+                "abaInParallel, one thread"][1] is True
+    assert rows["panda forward dynamics, B = 4096: aggsym JAX kernels ≤ 0.4× the one-state C loop per state"][1] is True
+    assert rows["talos: the kernels' build (double, float, the XLA binding) ≤ 120 s"] == ("99 s, peak 545 MiB", True)
+    assert rows["panda: the kernels' build (double, float, the XLA binding) ≤ 120 s"][1] is None  # not measured
+    assert "Targets of issue 51 (the batch kernels)" in batch_report.markdown(data)
+    for r in data["rows"]:
+        if r["entry"] == "aggsym_jax_kernels":
+            for s in r["sizes"].values():
+                s["min_us"] *= 100
+    rows = {what: ok for what, _, ok in batch_report.kernel_targets(data)}
+    assert rows["talos forward dynamics, B = 4096: aggsym JAX kernels ≥ 10× faster per state than Pinocchio "
+                "abaInParallel, one thread"] is False

@@ -247,3 +247,22 @@ def test_check_has_a_column_per_kernel_module_and_precision(capsys):
     for heading in ("JAX k64", "JAX k32", "torch k64", "torch k32", "d forward_dynamics", "d inverse_dynamics"):
         assert heading in out
     assert "ok: every routine within its bound" in out
+
+
+def test_the_readmes_batched_snippet_runs(tmp_path):
+    """The README's JAX snippet (on the kernels), against arm3 generated as its comment says."""
+    import re
+
+    from conftest import ROOT
+
+    snippet = next(s for s in re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+                   if "arm3_jax" in s)
+    command = re.search(r"# aggsym generate (.*)\n", snippet).group(1).split()
+    folder = tmp_path / "build" / "arm3"
+    assert main(["generate", str(ROOT / "models" / "arm3.urdf"), "--targets", "c,numpy,jax", "-o", str(folder),
+                 "-q"]) == 0
+    assert command == ["models/arm3.urdf", "--targets", "c,numpy,jax", "-o", "build/arm3"]
+    run = subprocess.run([sys.executable, "-c", snippet + "\nprint(qdd.shape, A.shape, dqdd_dq.shape)"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "(4096, 3) (4096, 3, 3) (4096, 3, 3)" in run.stdout

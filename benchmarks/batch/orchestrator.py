@@ -43,7 +43,7 @@ from ..harness.measure import child_env, run_measured
 from ..harness.paths import BUILD as BENCH_BUILD, ROOT, read_json, result_path, write_json
 from ..harness.robots import FILES, robots_directory
 from . import report as batch_report
-from .peers import ENTRIES, PROJECT_ENTRIES, ROUTINES
+from .peers import ALL_CORES, C_LOOP, ENTRIES, PROJECT_ENTRIES, ROUTINES
 
 BUILD = BENCH_BUILD / "batch"
 # label -> (example-robot-data file, free-flyer, joints welded by name)
@@ -55,6 +55,7 @@ ROBOTS = {
 # matrix along tau, as the default routines give them)
 GENERATED = "inertia,inertia_inverse,inverse_dynamics,forward_dynamics,forward_dynamics_derivatives"
 PLAIN = "inertia,inverse_dynamics,forward_dynamics"
+KERNELS = "c,numpy,jax,torch,manifest"  # (with c: the batch kernels behind the JAX and PyTorch modules)
 
 
 # the frameworks and peers whose versions in this venv batch.json records
@@ -129,8 +130,14 @@ def prepare_robot(label: str, cfg) -> dict:
     module = f"{label}_batch"
     robot = {"label": label, "urdf": str(urdf), "floating": floating, "nq": model.nq, "nv": model.nv,
              "joints": joints, "module": module, "work": str(work), "gen": str(work / "gen"),
-             "gen_plain": str(work / "gen_plain"), "generation": {}}
+             "gen_plain": str(work / "gen_plain"), "gen_kernels": str(work / "gen_kernels"), "generation": {}}
     have = (work / "gen" / f"{module}.py").exists()
+    if not (cfg["reuse"] and (work / "gen_kernels" / f"{module}_kernels.py").exists()):
+        log(f"aggsym generate {label} --targets {KERNELS} --routines {GENERATED}")
+        robot["generation"]["kernels"] = generate(urdf, work / "gen_kernels", module, floating, KERNELS, GENERATED)
+        if robot["generation"]["kernels"]["ok"]:
+            robot["generation"]["kernels_build"] = build_kernels(robot)
+            robot["generation"]["c_loop"] = build_c_loop(robot)
     if not (cfg["reuse"] and have):
         for key, folder, targets, routines in (("full", "gen", "numpy,jax,torch,manifest", GENERATED),
                                                ("plain", "gen_plain", "jax", PLAIN)):
@@ -142,6 +149,38 @@ def prepare_robot(label: str, cfg) -> dict:
                          error=r["stderr"])
             robot["generation"][key] = r
     return robot
+
+
+def build_kernels(robot: dict) -> dict:
+    """The batch kernels of the kernels' generation built once (the first import of its JAX module, in the project's
+    venv: the C in double and float and the XLA binding), timed; the workers load them from the cache."""
+    import time
+
+    folder, module = robot["gen_kernels"], robot["module"]
+    script = f"import sys; sys.path.insert(0, {folder!r}); import {module}_jax, {module}_torch"
+    log(f"building the batch kernels of {robot['label']} ...")
+    t0 = time.perf_counter()
+    run = run_measured([interpreter("aggsym_jax_kernels"), "-c", script], env=child_env(), cwd=ROOT, timeout=3600)
+    seconds = time.perf_counter() - t0
+    log(f"  {'built' if run.ok else 'FAILED'} in {seconds:.1f} s, peak {run.maxrss_kib / 1024:.0f} MiB")
+    return {"ok": run.ok, "seconds": seconds, "maxrss_mib": run.maxrss_kib / 1024,
+            "stderr": run.stderr[-2000:] if not run.ok else ""}
+
+
+def build_c_loop(robot: dict) -> dict:
+    """The one-state C of the kernels' generation and a plain loop over it (:data:`peers.C_LOOP`) as a shared library
+    (``cc -O2``, portable flags: the C a controller links)."""
+    import subprocess
+    import time
+
+    folder, module = Path(robot["gen_kernels"]), robot["module"]
+    (folder / "loop.c").write_text(C_LOOP.format(module=module, nq=robot["nq"], nv=robot["nv"]))
+    cmd = [os.environ.get("CC", "cc"), "-O2", "-fPIC", "-shared", "-I", str(folder), str(folder / f"{module}.c"),
+           str(folder / "loop.c"), "-o", str(folder / f"lib{module}_loop.so"), "-lm"]
+    t0 = time.perf_counter()
+    run = subprocess.run(cmd, capture_output=True, text=True)
+    return {"ok": run.returncode == 0, "seconds": time.perf_counter() - t0, "cmd": " ".join(cmd),
+            "stderr": run.stderr[-2000:]}
 
 
 def states(robot: dict, n: int, seed: int = 32):
@@ -216,6 +255,7 @@ def run_worker(entry: str, robot: dict, routine: str, cfg, round_: int) -> dict:
     Path(str(stem) + ".job.json").write_text(json.dumps(job, indent=1))
     env = child_env()
     env.setdefault("OMP_NUM_THREADS", "1")
+    env["AGGSYM_THREADS"] = str(len(os.sched_getaffinity(0))) if entry in ALL_CORES else "1"
     run = run_measured([interpreter(entry), "-m", "benchmarks.batch.worker", str(stem) + ".job.json"], env=env,
                        cwd=ROOT, timeout=cfg["timeout"])
     if not run.ok or not Path(job["result"]).exists():
@@ -303,7 +343,8 @@ def section(cfg=None) -> dict:
                 if check["ok"]:
                     row["sizes"] = summarize(merged)
                 rows.append(row)
-                if entry in ("aggsym_jax", "aggsym_jax_project", "aggsym_torch") and routine != "jac":
+                if entry in ("aggsym_jax", "aggsym_jax_project", "aggsym_torch", "aggsym_jax_kernels",
+                             "aggsym_torch_kernels") and routine != "jac":
                     numpy_row = [r for r in runs if (r["entry"], r["robot"], r["routine"]) == ("numpy", label, routine)
                                  and "error" not in r]
                     if numpy_row:
@@ -328,6 +369,9 @@ def keep_earlier(data: dict, earlier: dict) -> dict:
     ran = {(r["robot"], r["entry"], r["routine"]) for r in data["rows"]}
     rows = [dict(r, earlier_run=True) for r in earlier.get("rows", [])
             if (r["robot"], r["entry"], r["routine"]) not in ran]
+    for label, robot in data.get("robots", {}).items():  # (a run that reused the generated modules keeps their builds)
+        before = earlier.get("robots", {}).get(label, {}).get("generation", {})
+        robot["generation"] = {**before, **robot.get("generation", {})}
     if not rows:
         return data
     kept = sorted({r["robot"] for r in rows})

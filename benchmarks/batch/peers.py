@@ -54,6 +54,26 @@ ENTRIES = {
                      "torch.autograd.grad through forward_dynamics (its analytic autograd.Function: the first pass "
                      "makes the derivative matrices, the others reuse them), one reverse pass per output over the "
                      "whole batch"),
+    "aggsym_jax_kernels": ("aggsym JAX kernels", "jax", ROUTINES,
+                           "the module generated with --targets c,jax: every routine its batch kernel (an XLA "
+                           "foreign-function call, one thread); jax.jacfwd through forward_dynamics, whose custom "
+                           "JVP calls the derivative routines' kernels"),
+    "aggsym_jax_kernels_rev": ("aggsym JAX kernels jacrev", "jax", ("jac",),
+                               "as aggsym JAX kernels, by jax.jacrev (the custom JVP transposed)"),
+    "aggsym_jax_kernels_all": ("aggsym JAX kernels, all cores", "jax", ROUTINES,
+                               "as aggsym JAX kernels, the batch split across every core (AGGSYM_THREADS)"),
+    "aggsym_torch_kernels": ("aggsym PyTorch kernels", "torch", ROUTINES,
+                             "the module generated with --targets c,torch: every routine its batch kernel (a "
+                             "torch.library custom op, one thread); torch.autograd.grad through forward_dynamics "
+                             "(its autograd.Function on the derivative routines' kernels), one reverse pass per "
+                             "output"),
+    "c_loop": ("one-state C loop", "numpy", ROUTINES,
+               "the generated one-state C (NAME.c, -O2, portable flags) called state by state in a C loop (ctypes "
+               "calls the loop once per batch); the Jacobian by NAME_forward_dynamics_derivatives"),
+    "pinocchio_parallel": ("Pinocchio abaInParallel, one thread", "numpy", ("fd",),
+                           "abaInParallel(1, ModelPool, ...): Pinocchio's own batched forward dynamics"),
+    "pinocchio_parallel_all": ("Pinocchio abaInParallel, all cores", "numpy", ("fd",),
+                               "abaInParallel(cores, ModelPool, ...)"),
     "numpy": ("aggsym NumPy", "numpy", ROUTINES, "forward_dynamics_derivatives of the generated NumPy module"),
     "adam_jax": ("adam JAX", "jax", ROUTINES, "jax.jacrev through adam's aba (as the issue measured it)"),
     "adam_torch": ("adam PyTorch", "torch", ROUTINES,
@@ -64,7 +84,10 @@ ENTRIES = {
 }
 # entries run by the project's own interpreter (.venv: the jax that `pip install aggsym[jax]` brings, newer than the
 # peers' venv, whose adam-robotics pins jax <= 0.6): the generated module as a user of aggsym meets it
-PROJECT_ENTRIES = ("aggsym_jax_project", "aggsym_jax_project_rev")
+PROJECT_ENTRIES = ("aggsym_jax_project", "aggsym_jax_project_rev", "aggsym_jax_kernels", "aggsym_jax_kernels_rev",
+                   "aggsym_jax_kernels_all")
+# the entries whose kernels (or Pinocchio's pool) use every core; the others run on one thread
+ALL_CORES = ("aggsym_jax_kernels_all", "pinocchio_parallel_all")
 GRAVITY = 9.81  # Pinocchio's, given to the peers that have their own default (adam: 9.80665)
 
 
@@ -218,6 +241,64 @@ def build_pinocchio(robot):
                   "jac": loop(jac, (nv, 2 * nv))}, put=lambda x: x, fetch=lambda out: out)
 
 
+def build_pinocchio_parallel(robot, threads: int):
+    """abaInParallel over a ModelPool: Pinocchio's batched forward dynamics (states as columns)."""
+    import numpy as np
+    import pinocchio as pin
+
+    model = pinocchio_model(robot)
+    pool = pin.ModelPool(model, threads)
+
+    def fd(q, v, tau):
+        out = np.empty((model.nv, q.shape[0]), order="F")
+        pin.abaInParallel(threads, pool, np.asfortranarray(q.T), np.asfortranarray(v.T), np.asfortranarray(tau.T), out)
+        return out.T
+    return Built({"fd": fd}, put=lambda x: x, fetch=lambda out: np.ascontiguousarray(out))
+
+
+def build_c_loop(robot):
+    """The one-state C of the kernels' generation in a plain C loop (:func:`c_loop_library`)."""
+    import ctypes
+
+    import numpy as np
+
+    folder, module = Path(robot["gen_kernels"]), robot["module"]
+    lib = ctypes.CDLL(str(folder / f"lib{module}_loop.so"))
+    nv = robot["nv"]
+
+    def loop(symbol, width, arrays):
+        fn = getattr(lib, symbol)
+        fn.restype = None
+
+        def run(*args):
+            args = [np.ascontiguousarray(a, dtype=np.float64) for a in args]
+            outs = [np.empty((args[0].shape[0],) + w) for w in width]
+            fn(ctypes.c_long(args[0].shape[0]), *[a.ctypes.data_as(ctypes.c_void_p) for a in args],
+               *[o.ctypes.data_as(ctypes.c_void_p) for o in outs])
+            return outs[0] if len(outs) == 1 else np.concatenate(outs, -1)
+        return run
+    return Built({"fd": loop("loop_forward_dynamics", [(nv,)], 3), "A": loop("loop_inertia", [(nv, nv)], 1),
+                  "id": loop("loop_inverse_dynamics", [(nv,)], 3),
+                  "jac": loop("loop_forward_dynamics_derivatives", [(nv, nv), (nv, nv)], 3)},
+                 put=lambda x: x, fetch=lambda out: out)
+
+
+C_LOOP = """#include "{module}.h"
+/* the one-state C in a plain loop over n states (contiguous, state-major) */
+void loop_forward_dynamics(long n, const double *q, const double *v, const double *tau, double *a)
+{{ for (long s = 0; s < n; ++s) {module}_forward_dynamics(q + s * {nq}, v + s * {nv}, tau + s * {nv}, 0, a + s * {nv}); }}
+void loop_inertia(long n, const double *q, double *A)
+{{ for (long s = 0; s < n; ++s) {module}_inertia(q + s * {nq}, 0, A + s * {nv} * {nv}); }}
+void loop_inverse_dynamics(long n, const double *q, const double *v, const double *a, double *tau)
+{{ for (long s = 0; s < n; ++s) {module}_inverse_dynamics(q + s * {nq}, v + s * {nv}, a + s * {nv}, 0, tau + s * {nv}); }}
+void loop_forward_dynamics_derivatives(long n, const double *q, const double *v, const double *tau, double *dq,
+                                       double *dv)
+{{ for (long s = 0; s < n; ++s)
+    {module}_forward_dynamics_derivatives(q + s * {nq}, v + s * {nv}, tau + s * {nv}, 0, dq + s * {nv} * {nv},
+                                          dv + s * {nv} * {nv}); }}
+"""
+
+
 def pinocchio_model(robot):
     import pinocchio as pin
 
@@ -230,8 +311,10 @@ def build_aggsym_jax(robot, which):
     import jax
 
     jax.config.update("jax_enable_x64", True)
-    folder = Path(robot["gen_plain"] if which == "plain" else robot["gen"])
+    folder = Path(robot["gen_plain"] if which == "plain" else robot["gen_kernels"] if which.startswith("kernels")
+                  else robot["gen"])
     mod = load_module(folder / f"{robot['module']}_jax.py", f"{robot['module']}_jax_{which}")
+    which = {"kernels": "custom", "kernels_rev": "custom_rev"}.get(which, which)
     nv, floating = robot["nv"], robot["floating"]
     if which == "routine":
         import jax.numpy as jnp
@@ -245,11 +328,12 @@ def build_aggsym_jax(robot, which):
     return _jax_built(routines)
 
 
-def build_aggsym_torch(robot):
+def build_aggsym_torch(robot, kernels: bool = False):
     import torch
 
     torch.set_num_threads(1)
-    mod = load_module(Path(robot["gen"]) / f"{robot['module']}_torch.py", f"{robot['module']}_torch")
+    folder = Path(robot["gen_kernels" if kernels else "gen"])
+    mod = load_module(folder / f"{robot['module']}_torch.py", f"{robot['module']}_torch" + ("_k" if kernels else ""))
     return _torch_built({"fd": mod.forward_dynamics, "A": mod.inertia, "id": mod.inverse_dynamics,
                          "jac": torch_jacobian(mod.forward_dynamics, robot["floating"], robot["nv"])})
 

@@ -216,6 +216,76 @@ def targets(data) -> list:
     return rows
 
 
+KERNEL_FIRST_CALL_SECONDS, KERNEL_BUILD_SECONDS, KERNEL_PEAK_MIB = 1.0, 120.0, 1024.0
+KERNEL_AGREEMENT = 1e-13
+
+
+def _label_of(data, entry) -> str:
+    return data.get("entries", {}).get(entry, {}).get("label", entry)
+
+
+def _vs(data, robot, routine, big, ours, theirs, factor, what=None):
+    """ours ≥ factor× faster per state than theirs (the entries' minimum times at B = big)."""
+    what = what or (f"{robot} {ROUTINE_TITLES[routine]}, B = {big}: {_label_of(data, ours)} ≥ {factor:g}× faster "
+                    f"per state than {_label_of(data, theirs)}")
+    return _ratio_row(what, _at(data, ours, robot, routine, big), _at(data, theirs, robot, routine, big), factor)
+
+
+def kernel_targets(data) -> list:
+    """(target, measured, met) for issue 51's targets: the kernel-backed modules at B = 4096 (or the largest B
+    measured) against Pinocchio's batched calls, the traced modules, MJX, adam and the one-state C loop; their
+    first calls, build, memory and agreement."""
+    rows = []
+    traced = lambda robot, e: e if _timed(data, e, robot, "fd") else e.replace("_project", "")  # noqa: E731
+    for robot in data.get("robots", {}):
+        big = "4096" if "4096" in _sizes(data) else _largest(data, robot)
+        if robot == HUMANOID:
+            rows.append(_vs(data, robot, "fd", big, "aggsym_jax_kernels", "pinocchio_parallel", 10))
+            rows.append(_vs(data, robot, "fd", big, "aggsym_jax_kernels", traced(robot, "aggsym_jax_project"), 10))
+            rows.append(_vs(data, robot, "fd", big, "aggsym_jax_kernels", "mjx", 50))
+            rows.append(_vs(data, robot, "jac", big, "aggsym_jax_kernels", "pinocchio", 3))
+            rows.append(_vs(data, robot, "jac", big, "aggsym_jax_kernels_rev", traced(robot, "aggsym_jax_project_rev"),
+                            20))
+            rows.append(_vs(data, robot, "fd", big, "aggsym_jax_kernels_all", "pinocchio_parallel_all", 10))
+        else:
+            for routine in ("fd", "A"):
+                ours, loop = _at(data, "aggsym_jax_kernels", robot, routine, big), _at(data, "c_loop", robot,
+                                                                                        routine, big)
+                rows.append((f"{robot} {ROUTINE_TITLES[routine]}, B = {big}: aggsym JAX kernels ≤ 0.4× the one-state "
+                             f"C loop per state", "—" if ours is None or loop is None else
+                             f"{ours / loop:.2f}× ({_us(ours)} vs {_us(loop)} µs)",
+                             None if ours is None or loop is None else ours <= 0.4 * loop))
+                rows.append(_vs(data, robot, routine, big, "aggsym_jax_kernels", traced(robot, "aggsym_jax_project"),
+                                4))
+        for routine in data.get("config", {}).get("routines", []):
+            jx, th = (_at(data, e, robot, routine, big) for e in ("aggsym_jax_kernels", "aggsym_torch_kernels"))
+            rows.append((f"{robot} {ROUTINE_TITLES[routine]}, B = {big}: PyTorch kernels within 1.5× of JAX kernels",
+                         "—" if jx is None or th is None else f"{th / jx:.2f}× ({_us(th)} vs {_us(jx)} µs)",
+                         None if jx is None or th is None else th <= 1.5 * jx))
+            rows.append(_vs(data, robot, routine, big, "aggsym_torch_kernels", "adam_torch", 30))
+            for entry in ("aggsym_jax_kernels", "aggsym_jax_kernels_rev", "aggsym_torch_kernels"):
+                r = _timed(data, entry, robot, routine)
+                if r is None:
+                    continue
+                first = max(s["first_call_seconds"] or 0.0 for s in r["sizes"].values())
+                rows.append((f"{robot} {ROUTINE_TITLES[routine]}: {_label_of(data, entry)} first call ≤ "
+                             f"{KERNEL_FIRST_CALL_SECONDS:g} s (every B)", f"{first:.2f} s",
+                             first <= KERNEL_FIRST_CALL_SECONDS))
+                mib = r.get("maxrss_mib")
+                rows.append((f"{robot} {ROUTINE_TITLES[routine]}: {_label_of(data, entry)} peak memory ≤ 1 GiB",
+                             "—" if mib is None else f"{mib:.0f} MiB", None if mib is None else mib <= KERNEL_PEAK_MIB))
+                d = r.get("against_numpy")
+                if d is not None:
+                    rows.append((f"{robot} {ROUTINE_TITLES[routine]}: {_label_of(data, entry)} equals the NumPy "
+                                 f"module to {KERNEL_AGREEMENT:g}", f"{d:.1e}", d <= KERNEL_AGREEMENT))
+        build = data.get("robots", {}).get(robot, {}).get("generation", {}).get("kernels_build")
+        rows.append((f"{robot}: the kernels' build (double, float, the XLA binding) ≤ {KERNEL_BUILD_SECONDS:g} s",
+                     "—" if not build else f"{build['seconds']:.0f} s, peak {build['maxrss_mib']:.0f} MiB"
+                     + ("" if build["ok"] else " (FAILED)"),
+                     None if not build else build["ok"] and build["seconds"] <= KERNEL_BUILD_SECONDS))
+    return rows
+
+
 def _ratio_row(what, ours, theirs, factor, strict=True):
     if ours is None or theirs is None:
         return (what, "not measured" if ours is None else "peer not measured", None)
@@ -226,9 +296,14 @@ def _ratio_row(what, ours, theirs, factor, strict=True):
 def targets_text(data) -> str:
     rows = targets(data)
     met = sum(1 for r in rows if r[2] is True)
+    kernels = kernel_targets(data)
+    met_k = sum(1 for r in kernels if r[2] is True)
     return (f"Targets of issue 32 (batched benchmark): {met} of {len(rows)} met\n"
             + _text(("target", "measured", "met"),
-                    [(w, m, {True: "yes", False: "NO", None: "not measured"}[ok]) for w, m, ok in rows]))
+                    [(w, m, {True: "yes", False: "NO", None: "not measured"}[ok]) for w, m, ok in rows])
+            + f"\n\nTargets of issue 51 (the batch kernels): {met_k} of {len(kernels)} met\n"
+            + _text(("target", "measured", "met"),
+                    [(w, m, {True: "yes", False: "NO", None: "not measured"}[ok]) for w, m, ok in kernels]))
 
 
 # ---------------------------------------------------------------------------------------------------- plot
@@ -294,6 +369,11 @@ def markdown(data) -> str:
     rows = targets(data)
     met = sum(1 for r in rows if r[2] is True)
     lines += [f"Targets of issue 32: {met} of {len(rows)} met.", "",
+              _table(("target", "measured", "met"), left=2, rows=
+                     [(w, m, {True: "yes", False: "**no**", None: "not measured"}[ok]) for w, m, ok in rows]), ""]
+    rows = kernel_targets(data)
+    met = sum(1 for r in rows if r[2] is True)
+    lines += [f"Targets of issue 51 (the batch kernels): {met} of {len(rows)} met.", "",
               _table(("target", "measured", "met"), left=2, rows=
                      [(w, m, {True: "yes", False: "**no**", None: "not measured"}[ok]) for w, m, ok in rows]), ""]
     return "\n".join(lines)

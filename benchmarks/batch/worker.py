@@ -46,9 +46,19 @@ def build(entry: str, robot: dict):
         return batch_peers.build_aggsym_jax(robot, {"aggsym_jax": "custom", "aggsym_jax_plain": "plain",
                                                     "aggsym_jax_routine": "routine",
                                                     "aggsym_jax_project": "custom", "aggsym_jax_rev": "custom_rev",
-                                                    "aggsym_jax_project_rev": "custom_rev"}[entry])
-    if entry == "aggsym_torch":
-        return batch_peers.build_aggsym_torch(robot)
+                                                    "aggsym_jax_project_rev": "custom_rev",
+                                                    "aggsym_jax_kernels": "kernels",
+                                                    "aggsym_jax_kernels_all": "kernels",
+                                                    "aggsym_jax_kernels_rev": "kernels_rev"}[entry])
+    if entry in ("aggsym_torch", "aggsym_torch_kernels"):
+        return batch_peers.build_aggsym_torch(robot, kernels=entry == "aggsym_torch_kernels")
+    if entry == "c_loop":
+        return batch_peers.build_c_loop(robot)
+    if entry.startswith("pinocchio_parallel"):
+        import os
+
+        return batch_peers.build_pinocchio_parallel(robot, len(os.sched_getaffinity(0)) if entry.endswith("_all")
+                                                    else 1)
     if entry == "adam_jax":
         return batch_peers.build_adam_jax(robot)
     if entry == "adam_torch":

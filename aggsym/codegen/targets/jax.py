@@ -22,6 +22,11 @@ routines do not cover (p, the time t, and the entries of a quaternion pair in q,
 in Pinocchio's tangent space rather than along the entries of q) is differentiated by tracing the plain function;
 of a quaternion pair's entries, only those the routine reads (a free-flyer's origin is never read by the dynamics).
 
+With the kernels target (:mod:`.kernels`: ``--targets c,jax``) the module also calls, on the CPU in float32 and
+float64, each routine's batch kernel as an XLA foreign-function call (``_kernel``, ``_kernel_function``): its JVP
+through the derivative routines' kernels where :data:`CUSTOM` has them (and the quaternion columns' kernel), the
+traced straight line for every other direction and every second derivative; elsewhere the traced module as above.
+
 A routine with a returned status (a system that can be singular) cannot raise on a value under ``jit``: its
 outputs are NaN in the states where the NumPy module raises LinAlgError.  Checked (``aggsym check``, column
 JAX) by importing the module, in float64 with ``--scalar double`` (held to ``--tol`` like the NumPy module) and

@@ -18,6 +18,11 @@ the routine reads are generated too, by forward mode on its straight line (:func
 free-flyer's dynamics, whose origin is never read).  The Function keeps the matrices that its first backward pass
 makes for the later passes through the same graph (a Jacobian row by row).
 
+With the kernels target (:mod:`.kernels`: ``--targets c,torch``) each routine's private function calls, on CPU
+tensors of float32 or float64, its batch kernel as a ``torch.library`` custom op (fake implementation, vmap rule)
+inside an ``autograd.Function`` whose derivatives are a vjp and a jvp of the traced straight line; the analytic
+Functions above then run on the derivative routines' kernels (and the quaternion columns' kernel).
+
 A routine with a status (a singular system: constrained forward dynamics, the support problems) cannot raise
 under ``vmap`` or ``torch.compile``: its outputs hold NaN at the states of the batch where the status is nonzero
 (the NumPy module raises LinAlgError there).  Checked by ``aggsym check`` against the numeric twin when torch is
@@ -246,6 +251,7 @@ class TorchTarget(Target):
                 "analytic": wired,
                 "lengths": [(i, input_length(model, i, e.routine)) for i in e.inputs if i not in SCALAR_INPUTS],
                 "kernel_shapes": [tuple(o.shape(model)) for o in e.routine.written],
+                "in_lengths": {i: input_length(model, i, e.routine) for i in e.inputs},
                 "written_index": [k for k, o in enumerate(e.routine.outputs) if not o.returned],
             })
         kernels = kernels_context(job)
