@@ -286,11 +286,13 @@ def build_c_loop(robot):
 C_LOOP = """#include "{module}.h"
 /* the one-state C in a plain loop over n states (contiguous, state-major) */
 void loop_forward_dynamics(long n, const double *q, const double *v, const double *tau, double *a)
-{{ for (long s = 0; s < n; ++s) {module}_forward_dynamics(q + s * {nq}, v + s * {nv}, tau + s * {nv}, 0, a + s * {nv}); }}
+{{ for (long s = 0; s < n; ++s)
+    {module}_forward_dynamics(q + s * {nq}, v + s * {nv}, tau + s * {nv}, 0, a + s * {nv}); }}
 void loop_inertia(long n, const double *q, double *A)
 {{ for (long s = 0; s < n; ++s) {module}_inertia(q + s * {nq}, 0, A + s * {nv} * {nv}); }}
 void loop_inverse_dynamics(long n, const double *q, const double *v, const double *a, double *tau)
-{{ for (long s = 0; s < n; ++s) {module}_inverse_dynamics(q + s * {nq}, v + s * {nv}, a + s * {nv}, 0, tau + s * {nv}); }}
+{{ for (long s = 0; s < n; ++s)
+    {module}_inverse_dynamics(q + s * {nq}, v + s * {nv}, a + s * {nv}, 0, tau + s * {nv}); }}
 void loop_forward_dynamics_derivatives(long n, const double *q, const double *v, const double *tau, double *dq,
                                        double *dv)
 {{ for (long s = 0; s < n; ++s)

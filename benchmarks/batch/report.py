@@ -273,7 +273,8 @@ def kernel_targets(data) -> list:
                              first <= KERNEL_FIRST_CALL_SECONDS))
                 mib = r.get("maxrss_mib")
                 rows.append((f"{robot} {ROUTINE_TITLES[routine]}: {_label_of(data, entry)} peak memory ≤ 1 GiB",
-                             "—" if mib is None else f"{mib:.0f} MiB", None if mib is None else mib <= KERNEL_PEAK_MIB))
+                             "—" if mib is None else f"{mib:.0f} MiB",
+                             None if mib is None else mib <= KERNEL_PEAK_MIB))
                 d = r.get("against_numpy")
                 if d is not None:
                     rows.append((f"{robot} {ROUTINE_TITLES[routine]}: {_label_of(data, entry)} equals the NumPy "

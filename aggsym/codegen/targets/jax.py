@@ -240,8 +240,11 @@ def jax_jacobian(module):
         arrays = [k for k, a in enumerate(args) if np.ndim(a)]
         with _precision(jax, True):
             f = getattr(module, role)
-            jac = jax.jacfwd(lambda *xs: (f(*xs)[0] if isinstance(f(*xs), tuple) else f(*xs)), tuple(arrays))(
-                *(np.asarray(a, dtype=np.float64) for a in args))
+
+            def first(*xs):
+                out = f(*xs)
+                return out[0] if isinstance(out, tuple) else out
+            jac = jax.jacfwd(first, tuple(arrays))(*(np.asarray(a, dtype=np.float64) for a in args))
         return [np.asarray(j, dtype=float) for j in jac]
     return jacobian
 

@@ -74,7 +74,8 @@ def _entry(model, role, inputs, kernel, written, shapes, symbol) -> dict:
             "status": -1 if kernel.status is None else kernel.status,
             "in_length": [input_length(model, i, ROUTINES.get(role)) for i in inputs],
             "reads": reads or [0], "reads_at": reads_at, "out_size": sizes or [0], "writes": writes or [0],
-            "writes_at": writes_at or [0], "n_constants": len(constants), "constants": constants or ["0.0"], "inputs": list(inputs),
+            "writes_at": writes_at or [0], "n_constants": len(constants), "constants": constants or ["0.0"],
+            "inputs": list(inputs),
             "shapes": [tuple(shapes[o]) for o in written]}
 
 
@@ -148,7 +149,8 @@ class KernelsTarget(Target):
         kernels = kernel_table(job.emitted)
         ctx = {**job.ctx, "kernels": kernels, "max_inputs": max(len(k["inputs"]) for k in kernels),
                "sincos": any("aggsym_sincos_lanes(" in line for k in kernels for line in k["functions"]),
-               "sign": any("aggsym_sign(" in line or "aggsym_vsign(" in line for k in kernels for line in k["functions"]),
+               "sign": any("aggsym_sign(" in line or "aggsym_vsign(" in line
+                           for k in kernels for line in k["functions"]),
                "flags_py": repr(FLAGS), "float_flags_py": repr(FLOAT_FLAGS), "cxx_flags_py": repr(CXX_FLAGS),
                "scalar_inputs": SCALAR_INPUTS}
         env = kernel_environment()
@@ -185,7 +187,8 @@ class KernelsTarget(Target):
                 continue
             module = import_module(path)
             if module._KERNELS is None:
-                raise AggsymError(f"{path.name}: the kernels are switched off (AGGSYM_KERNELS=0): unset it to check them")
+                raise AggsymError(f"{path.name}: the kernels are switched off (AGGSYM_KERNELS=0): unset it to "
+                                  "check them")
             out[f"kernels_{framework}"] = (f"{heading} k64", Runner(call(module, manifest, False),
                                                                    jacobian=jacobian(module)))
             out[f"kernels_{framework}32"] = (f"{heading} k32", Runner(call(module, manifest, True),

@@ -1,24 +1,25 @@
 """A routine's straight line as a batch kernel: the statements evaluated on W states at once, one lane each.
 
 The lane technique of :mod:`.c_columns`, applied to states instead of columns.  A block of W states lives in one
-workspace ``w`` of rows of W values (``real (*restrict w)[AGGSYM_W]``): a row per input entry the routine reads (gathered
-from the caller's arrays), a row per value that crosses from one loop to another (slots, reused once dead), a row
-per computed output entry (scattered to the caller's arrays after the block).  The statements go, in the straight
-line's order, into loops over the lanes::
+workspace ``w`` of rows, each a vector of W values (``aggsym_v *restrict w``, GCC's and Clang's vector extension:
+arithmetic acts lane by lane in the host's vector instructions, no intrinsics): a row per input entry the routine
+reads (gathered from the caller's arrays), a row per value that crosses from one block of statements to another
+(slots, reused once dead), a row per computed output entry (scattered to the caller's arrays after the block).  The
+statements go, in the straight line's order, into blocks of at most :data:`CHUNK`::
 
-    for (l = 0; l < AGGSYM_W; ++l) {
-        const real x12 = w[3][l]*w[7][l] + w[0][l];   /* used only in this loop: a register */
-        w[41][l] = x12*x12 - w[5][l];                  /* used later: a row */
+    {
+        const aggsym_v x12 = w[3]*w[7] + w[0];   /* used only in this block: a register */
+        w[41] = x12*x12 - w[5];                  /* used later: a row */
     }
 
-each loop of at most :data:`CHUNK` statements, a call of a function the compiler cannot vectorise (tan, exp, log,
-asin, acos, atan, atan2) in a loop of its own, and the sines and cosines of one angle by ``aggsym_sincos_lanes``
-(the one-state C's ``aggsym_sincos`` on the W lanes in vector registers: the same bits).  Every access goes through
-the one pointer ``w`` at constant rows, so that the compiler proves the lanes independent and runs each loop in
-vector registers (checked with ``-fopt-info-vec``); the same operations on the same operands in every lane, in
-the one-state C's order: per state, the one-state C's results to the bit where the compiler contracts nothing
-(``-ffp-contract=off``).  A long routine is cut into functions of about :data:`PART` statements (the compiler's
-time grows faster than a function's length), called in order.
+sqrt, fabs and sign on the vectors (``aggsym_vsqrt``, ...), a statement calling any other function (tan, exp, log,
+asin, acos, atan, atan2) lane by lane in a loop of its own, and the sines and cosines of one angle by
+``aggsym_sincos_lanes`` (the one-state C's ``aggsym_sincos`` on all lanes at once: the same bits).  The same
+operations on the same operands in every lane, in the one-state C's order: per state, the one-state C's results to
+the bit where the compiler contracts nothing (``-ffp-contract=off``).  A first version wrote each block as a loop
+over the lanes for the compiler to vectorise: the same bits, 2.5 times the compile time and slower.  A long routine
+is cut into functions of about :data:`PART` statements (the compiler's time grows faster than a function's length),
+called in order.
 """
 from __future__ import annotations
 
@@ -26,10 +27,10 @@ import re
 from dataclasses import dataclass
 
 from ...core.program import Node
-from ..printing import Infix, _number
+from ..printing import Infix
 from .c import c_spelling
 
-CHUNK = 48  # statements per loop over the lanes
+CHUNK = 48  # statements per block
 PART = 1500  # statements per function of a long routine
 # the functions of the vectors (templates/kernels/kernels.c.j2: sqrt and fabs instructions, sign comparisons) for
 # the C's; a statement calling any other is evaluated lane by lane, in a loop of its own
@@ -104,7 +105,7 @@ def lane_kernel(prog, lines, signature, status_index, symbol: str) -> LaneKernel
             continue
         text, refs = printed(prog.nodes[i])
         stmts.append(("call" if _SCALAR_CALL.search(text) else "plain", (names[i],), text, refs))
-    # the loops: runs of at most CHUNK plain statements, runs of calls, each sincos
+    # the blocks: runs of at most CHUNK plain statements, runs of calls (a lane loop), each sincos
     loops = []  # [kind, [statement indices]]
     for s, st in enumerate(stmts):
         kind = st[0]
@@ -172,7 +173,8 @@ def lane_kernel(prog, lines, signature, status_index, symbol: str) -> LaneKernel
             for s in members:
                 _, (target,), text, _ = stmts[s]
                 text = sub(_vector_text(text))
-                part.append(f"    w[{rows[target]}] = {text};" if target in rows else f"    const aggsym_v {target} = {text};")
+                part.append(f"    w[{rows[target]}] = {text};" if target in rows
+                            else f"    const aggsym_v {target} = {text};")
             part.append("}")
         count += len(members)
         if count >= PART:

@@ -321,7 +321,12 @@ def torch_jacobian(module):
         arrays = tuple(k for k, a in enumerate(args) if np.ndim(a))
         f = getattr(module, role)
         tensors = [torch.as_tensor(np.asarray(a, dtype=float), dtype=torch.float64) for a in args]
-        jac = torch.func.jacrev(lambda *xs: f(*xs)[0] if isinstance(f(*xs), tuple) else f(*xs), argnums=arrays)(*tensors)
+        jac = torch.func.jacrev(lambda *xs: _first(f(*xs)), argnums=arrays)(*tensors)
         return [j.detach().numpy() for j in jac]
     return jacobian
+
+
+def _first(out):
+    """A routine's first output (the output itself where it has one)."""
+    return out[0] if isinstance(out, tuple) else out
 
