@@ -267,3 +267,15 @@ def test_the_readmes_batched_snippet_runs(tmp_path):
                          capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
     assert "(4096, 3) (4096, 3, 3) (4096, 3, 3)" in run.stdout
+
+
+@pytest.mark.parametrize("option", [{"split": True}, {"scalar": "float"}])
+def test_the_kernels_go_with_any_layout_and_scalar_of_the_c(option):
+    """--split and --scalar float change the one-state C, not the kernels: the same three files, the same text."""
+    from conftest import model_path
+
+    model = aggsym.load(model_path("double_pendulum"))
+    plain = generate(model, targets="c,numpy,jax,manifest").files
+    other = generate(model, targets="c,numpy,jax,manifest", **option).files
+    for name in ("double_pendulum_kernels.c", "double_pendulum_kernels_jax.cc", "double_pendulum_kernels.py"):
+        assert other[name] == plain[name]

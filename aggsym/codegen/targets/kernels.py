@@ -142,9 +142,8 @@ class KernelsTarget(Target):
         return entries
 
     def render(self, job):
-        if job.split or job.scalar != "double":
-            raise AggsymError("--targets kernels is generated from the double C's straight lines: it cannot go with "
-                              + ("--split" if job.split else "--scalar float") + " (or generate with --no-kernels)")
+        """The three files, whatever the C's layout (``--split``) and scalar (``--scalar float``): the kernels are
+        printed from the straight lines themselves, in double and float alike."""
         model = job.model
         kernels = kernel_table(job.emitted)
         ctx = {**job.ctx, "kernels": kernels, "max_inputs": max(len(k["inputs"]) for k in kernels),
