@@ -19,20 +19,20 @@ derivative routines' tangent-space columns, so that a Jacobian along q needs no 
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import jinja2
 
 from ...contract import ROUTINES, SCALAR_INPUTS, input_length, routines_for
-from ...core.dual import along_inputs
-from ...core.program import straight_line
 from ...errors import AggsymError
 from ..printing import _number
 from ..compile import import_module
-from .base import RoutineLines, Runner, Target, environment
+from .base import Runner, Target, environment
 from .c import _trig_pairs
 from .jax import CUSTOM
 from .kernel_table import NAME as _TARGET_NAME, kernel_table
 from .kernels_c import lane_kernel
-from .numpy import quaternion_entries_read
+from .numpy import quaternion_columns_lines, quaternion_entries_read
 
 # the compilers' flags where the kernels run (NAME_kernels.py; in its cache key and the manifest): the host's vector
 # instructions, no contraction of a*b+c into one rounding (the one-state C's bits), no errno (sqrt in vectors)
@@ -53,8 +53,9 @@ def _reads(sl) -> dict:
     return reads
 
 
-def _entry(model, role, inputs, kernel, written, shapes, symbol) -> dict:
-    """A kernel as the C template's tables see it (written: the indices of the outputs written)."""
+def _entry(model, routine, role, inputs, kernel, written, shapes, symbol) -> dict:
+    """A kernel (named ``role``, of ``routine``'s inputs) as the C template's tables see it (written: the indices of
+    the outputs written)."""
     reads, reads_at = [], [0]
     for pairs in kernel.inputs:
         for entry, row in pairs:
@@ -72,7 +73,7 @@ def _entry(model, role, inputs, kernel, written, shapes, symbol) -> dict:
     sizes = [len(kernel.outputs[o]) for o in written]
     return {"role": role, "symbol": symbol, "functions": kernel.functions, "rows": kernel.rows,
             "status": -1 if kernel.status is None else kernel.status,
-            "in_length": [input_length(model, i, ROUTINES.get(role)) for i in inputs],
+            "in_length": [input_length(model, i, routine) for i in inputs],
             "reads": reads or [0], "reads_at": reads_at, "out_size": sizes or [0], "writes": writes or [0],
             "writes_at": writes_at or [0], "n_constants": len(constants), "constants": constants or ["0.0"],
             "inputs": list(inputs),
@@ -119,25 +120,18 @@ class KernelsTarget(Target):
         written = [k for k, o in enumerate(r.outputs) if not o.returned]
         shapes = [o.shape(model) for o in r.outputs]
         kernel = lane_kernel(prog, lines, emitted.inputs, status, emitted.symbol)
-        entries = [_entry(model, r.role, emitted.inputs, kernel, written, shapes, emitted.symbol)]
+        entries = [_entry(model, r, r.role, emitted.inputs, kernel, written, shapes, emitted.symbol)]
         spec = CUSTOM.get(r.role)
         roles = {x.role for x in routines_for(model)}
         if spec is not None and model.nq != model.nv and spec[0] in roles:
             qs = quaternion_entries_read(model, _reads(lines.sl))
             if qs:  # the columns along the quaternions' entries read (the derivative routines have none)
-                columns = along_inputs(prog, lines.outputs[0], [("q", i) for i in qs])
-                flat = [x for row in columns for x in row]
-                sl = straight_line(prog, [flat])
-                names = {prog.inputs[key].id: f"{key[0]}_{key[1]}" for key in sl.inputs}
-                names.update({i: f"x{k}" for k, i in enumerate(sl.temps)})
+                lines_q, rows = quaternion_columns_lines(prog, lines.outputs[0], qs)
+                lines_q = replace(lines_q, trig=_trig_pairs(prog, lines_q.sl.temps))  # (sin and cos together)
                 symbol = f"{emitted.symbol}_quaternion_columns"
-                lines_q = RoutineLines(sl, names, [flat], {}, _trig_pairs(prog, sl.temps), {}, False)
                 kq = lane_kernel(prog, lines_q, emitted.inputs, None, symbol)
-                entry = _entry(model, columns_role(r.role), emitted.inputs, kq, [0], [(len(columns), len(qs))],
-                               symbol)
+                entry = _entry(model, r, columns_role(r.role), emitted.inputs, kq, [0], [(rows, len(qs))], symbol)
                 entry.update(quaternions=list(qs), quaternions_py=repr(tuple(qs)), of=r.role)
-                for k, i in enumerate(entry["inputs"]):
-                    entry["in_length"][k] = input_length(model, i, r)
                 entries.append(entry)
         return entries
 

@@ -13,11 +13,12 @@ from dataclasses import dataclass
 
 from ...contract import SCALAR_INPUTS, input_length, scalar
 from ...core.functions import FUNCTIONS
-from ...core.program import Node
+from ...core.dual import along_inputs
+from ...core.program import Node, straight_line
 from ...model.tree import Tree
 from ..printing import Infix, Spelling, _number
 from ..compile import import_module
-from .base import Runner, Target, file_pattern
+from .base import RoutineLines, Runner, Target, file_pattern
 
 
 # the NumPy spelling: each function's NumPy form (element-wise, so that inputs may carry a leading batch
@@ -74,6 +75,19 @@ def scalar_output(output) -> bool:
     scalars (:func:`~aggsym.contract.shapes.scalar`: the energies), not a vector that has one entry for this model
     (b, g, qdd of one coordinate, one constraint row, ...), which keeps its declared shape (..., 1)."""
     return output.shape is scalar
+
+
+def quaternion_columns_lines(prog, output, entries) -> tuple:
+    """(lines, rows): the derivative of a routine's flat first output ``output`` along q's ``entries`` (those of its
+    quaternion pairs that it reads) as a straight line of its own, forward mode on the routine's
+    (:func:`~aggsym.core.dual.along_inputs`): one output of ``rows`` x len(entries), row-major, its inputs named
+    ``KIND_INDEX`` and its temps ``xK`` (no sin and cos pairs: :attr:`RoutineLines.trig` empty)."""
+    columns = along_inputs(prog, output, [("q", i) for i in entries])
+    flat = [x for row in columns for x in row]
+    sl = straight_line(prog, [flat])
+    names = {prog.inputs[key].id: f"{key[0]}_{key[1]}" for key in sl.inputs}
+    names.update({i: f"x{k}" for k, i in enumerate(sl.temps)})
+    return RoutineLines(sl, names, [flat], {}, {}, {}, False), len(columns)
 
 
 def quaternion_entries_read(model, reads: dict) -> tuple:

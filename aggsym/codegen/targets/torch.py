@@ -34,15 +34,15 @@ from __future__ import annotations
 import textwrap
 
 from ...contract import SCALAR_INPUTS, input_length, routines_for
-from ...core.dual import along_inputs
 from ...core.functions import FUNCTIONS
-from ...core.program import Node, straight_line
+from ...core.program import Node
 from ...model.tree import Tree
 from ..compile import import_module
 from ..printing import Spelling, _number
-from .base import RoutineLines, Runner, Target
+from .base import Runner, Target
 from .kernel_table import kernels_context, traced_modules
-from .numpy import (_unravel, array_steps, names_read, quaternion_entries_read, scalar_output, statement_parts,
+from .numpy import (_unravel, array_steps, names_read, quaternion_columns_lines, quaternion_entries_read, scalar_output,
+                    statement_parts,
                     step_statement)
 
 # torch's name of each function of aggsym/core/functions.py (element-wise, so that inputs carry batch dimensions)
@@ -82,13 +82,9 @@ def quaternion_columns(model, prog, lines, routine, inputs, reads) -> dict | Non
     entries = quaternion_entries_read(model, reads)
     if not entries:
         return None
-    columns = along_inputs(prog, lines.outputs[0], [(inputs[0], i) for i in entries])
-    flat = [x for row in columns for x in row]
-    sl = straight_line(prog, [flat])
-    names = {prog.inputs[key].id: f"{key[0]}_{key[1]}" for key in sl.inputs}
-    names.update({i: f"x{k}" for k, i in enumerate(sl.temps)})
-    shape = (len(columns), len(entries))
-    body = _printed(model, prog, RoutineLines(sl, names, [flat], {}, {}, {}, False), inputs, [shape],
+    columns, rows = quaternion_columns_lines(prog, lines.outputs[0], entries)
+    shape = (rows, len(entries))
+    body = _printed(model, prog, columns, inputs, [shape],
                     [f"{routine.role}: its columns along q's quaternion entries"])
     return {**body, "entries": entries, "shape": shape}
 
