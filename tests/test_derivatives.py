@@ -181,7 +181,7 @@ def test_both_ways_of_applying_the_factors_equal_pinocchio(name, rng):
 
 @pytest.mark.parametrize("robot,base", [("ur5", False), ("solo12", "quaternion")])
 def test_one_sweep_per_direction_makes_the_same_operations(robot, base):
-    """The straight-line program of dtau/d(q, qd) is built one dual sweep per direction (so that the C keeps few
+    """The dual form's straight-line program of dtau/d(q, qd) is built one dual sweep per direction (so that the C keeps few
     tangents live at a time): its outputs reach exactly as many operations as one sweep of all directions, and
     its entries are those of that sweep at a random state."""
     from aggsym.core.backend import Symbolic
@@ -202,7 +202,7 @@ def test_one_sweep_per_direction_makes_the_same_operations(robot, base):
         bound = bind(model, backend)
         kin = TreeKinematics(bound, prog.vector("q", model.nq))
         dq, dqd = inverse_dynamics_derivatives(bound, kin, prog.vector("qd", model.nv), prog.vector("qdd", model.nv),
-                                               by_direction=by_direction)
+                                               by_direction=by_direction, form="dual")
         flat = [x for m in (dq, dqd) for row in m for x in row]
         counts.append(sum(1 for i in prog.reachable(flat) if prog.ops[i][0] not in ("in", "neg")))
         numbers.append(np.array([float(x) for x in prog.evaluate(flat, values)]))

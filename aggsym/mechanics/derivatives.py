@@ -23,8 +23,9 @@ import dataclasses
 
 from ..core.columns import COLUMN_F, ColumnMap, Run
 from ..core.dual import Dual, DualBackend, lift, tangent
+from . import spatial_derivatives
 from .bound import scratch_operations
-from .passive import left_forces
+from .passive import has_passive, left_forces
 from .kinematics import TreeKinematics
 from .sweeps import inverse_dynamics
 from .transvective import articulated_factors, cauchy_solve, cauchy_solve_tree, forward_dynamics
@@ -69,16 +70,26 @@ def tangent_seeds(kin) -> list:
     return q
 
 
-def inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction=None) -> tuple:
+def inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction=None, form=None) -> tuple:
     """(dtau/dq, dtau/dqd) as n x n rows (entry (i, j): d tau_i / d q_j).
 
-    ``by_direction`` (the default on a straight-line program, not on numbers): one dual sweep per direction, q_j
+    ``form``: ``"spatial"`` (the composites of :mod:`.spatial_derivatives`, with the passive forces' derivatives on
+    dual numbers), ``"dual"`` (the whole sweep on dual numbers, below), or None: :func:`derivative_form` chooses.
+
+    ``by_direction`` (dual form) (the default on a straight-line program, not on numbers): one dual sweep per direction, q_j
     then qd_j for each coordinate j.  The sweeps share the primal values (value numbering) and each direction's
     tangents are the nodes that one sweep of all directions makes, so the operations are the same; but the nodes
     are made, and the C is emitted, direction by direction, so that only one direction's tangents are live at a
     time instead of every tangent of the forward sweep waiting for the backward one (Talos: 3852 values kept
     across the slices of the C against 909; dtau 6 % and dqdd 5 % faster, 12 % and 10 % with slices of 80)."""
     n = kin.tree.nv
+    if (form or derivative_form(bound, kin)) == "spatial":
+        dq, dqd = spatial_derivatives.inverse_dynamics_derivatives(bound, kin, qd, qdd)
+        if has_passive(bound.model):
+            left = _dual_left_forces(bound, kin, qd)
+            dq = [[a + tangent(t, j) for j, a in enumerate(row)] for row, t in zip(dq, left)]
+            dqd = [[a + tangent(t, n + j) for j, a in enumerate(row)] for row, t in zip(dqd, left)]
+        return dq, dqd
     if by_direction is None:
         by_direction = bound.backend.symbolic
     if not by_direction:
@@ -94,6 +105,42 @@ def inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction=None) -> tupl
     return dq, dqd
 
 
+def _dual_left_forces(bound, kin, qd) -> list:
+    """The passive forces C (q - q0) + D qd + ... (:func:`~.passive.left_forces`) as duals along q and qd."""
+    n = kin.tree.nv
+    dual = dataclasses.replace(bound, backend=DualBackend(bound.backend))
+    return left_forces(dual, tangent_seeds(kin), [Dual(x, {n + i: 1}) for i, x in enumerate(qd)])
+
+
+def derivative_form(bound, kin) -> str:
+    """Which form :func:`inverse_dynamics_derivatives` takes: ``"spatial"`` where
+    :func:`~.spatial_derivatives.covers` the model and, on a straight-line program, its outputs reach fewer
+    operations than the dual form's (both counted on scratch programs of the model, the dual one only up to the
+    spatial count; the first of equals is the spatial one); ``"dual"`` otherwise.  On numbers the spatial form is
+    taken wherever it covers the model (it is also the faster in Python).  The answer is kept in ``kin.memo``."""
+    key = "inverse_dynamics_derivatives form"
+    if key in kin.memo:
+        return kin.memo[key]
+    form = "dual"
+    if spatial_derivatives.covers(bound):
+        form = "spatial"
+        if bound.backend.symbolic:
+            n = kin.tree.nv
+
+            def build(way):
+                def rows(b, k, u):
+                    w = b.backend.program.vector("qdd", n)
+                    return [[x for row in m for x in row]
+                            for m in inverse_dynamics_derivatives(b, k, u, w, by_direction=False, form=way)]
+                return rows
+
+            ours = scratch_operations(bound, kin, build("spatial"))
+            if scratch_operations(bound, kin, build("dual"), ours) < ours:
+                form = "dual"
+    kin.memo[key] = form
+    return form
+
+
 def forward_dynamics_derivatives(bound, kin, qd, tau, columns=None) -> tuple:
     """(dqdd/dq, dqdd/dqd) as n x n rows, at q'' = forward dynamics (tau already less the elastic force);
     ``columns``: a list, to which the 2n solves are appended as one body applied to columns (a
@@ -107,6 +154,7 @@ def forward_dynamics_derivatives(bound, kin, qd, tau, columns=None) -> tuple:
     10330 against 12320, HyQ 3508 against 4276, Talos 49307 against 66495); on the straight-line program both
     are counted on scratch programs and the smaller is emitted, on floats the first is used."""
     solve = _with_arguments
+    way = derivative_form(bound, kin)
     if bound.backend.symbolic:
         n = kin.tree.nv
 
@@ -114,13 +162,13 @@ def forward_dynamics_derivatives(bound, kin, qd, tau, columns=None) -> tuple:
             def build(b, k, u):  # (counted: one sweep of all directions makes the same operations, faster)
                 return [[x for row in m for x in row]
                         for m in _forward_dynamics_derivatives(b, k, u, b.backend.program.vector("tau", n), solver,
-                                                               by_direction=False)]
+                                                               by_direction=False, form=way)]
             return build
 
         with_arguments = scratch_operations(bound, kin, form(_with_arguments))
         if scratch_operations(bound, kin, form(_on_the_tree), with_arguments) < with_arguments:
             solve = _on_the_tree
-    return _forward_dynamics_derivatives(bound, kin, qd, tau, solve, columns=columns)
+    return _forward_dynamics_derivatives(bound, kin, qd, tau, solve, columns=columns, form=way)
 
 
 def _with_arguments(kin, fac, columns):
@@ -131,11 +179,11 @@ def _on_the_tree(kin, fac, columns):
     return [cauchy_solve_tree(kin, fac, c) for c in columns]
 
 
-def _forward_dynamics_derivatives(bound, kin, qd, tau, solve, by_direction=None, columns=None) -> tuple:
+def _forward_dynamics_derivatives(bound, kin, qd, tau, solve, by_direction=None, columns=None, form=None) -> tuple:
     n = kin.tree.nv
     fac = articulated_factors(bound, kin, arguments=solve is _with_arguments)
     qdd = forward_dynamics(bound, kin, tau, qd, fac)
-    dq, dqd = inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction)
+    dq, dqd = inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction, form)
     out, runs = [], []
     for k, rows in enumerate((dq, dqd)):
         values = [[-rows[i][j] for i in range(n)] for j in range(n)]
@@ -148,4 +196,4 @@ def _forward_dynamics_derivatives(bound, kin, qd, tau, solve, by_direction=None,
     return tuple(out)
 
 
-__all__ = ["inverse_dynamics_derivatives", "forward_dynamics_derivatives"]
+__all__ = ["derivative_form", "inverse_dynamics_derivatives", "forward_dynamics_derivatives"]
