@@ -40,7 +40,9 @@ from ..core.columns import COLUMN_F, COLUMN_H, COLUMN_T, ColumnMap, Run
 from ..core.dual import Dual, DualBackend, lift, tangent
 from ..core.program import is_zero
 from .constraints import ConstraintKinematics, _transpose_times, constrained_forward_dynamics, rest_kinematics
-from .derivatives import tangent_seeds
+from . import spatial_derivatives
+from .bound import scratch_operations
+from .derivatives import inverse_dynamics_derivatives, tangent_seeds
 from .impacts import impact_rhs
 from .kinematics import TreeKinematics
 from .kkt import ConstrainedSystem, arguments_pay
@@ -72,12 +74,15 @@ def _matrix(columns, n):
     return [[c[i] for c in columns] for i in range(n)]
 
 
-def _forward_terms(bound, kin, qd, qdd, lam, directions):
-    """(E1 without the J^T lambda term, J^T lambda, E2) of the constrained forward dynamics on duals."""
+def _forward_terms(bound, kin, qd, qdd, lam, directions, sweeps=True):
+    """(E1 without the J^T lambda term, J^T lambda, E2) of the constrained forward dynamics on duals; without
+    ``sweeps`` E1 leaves out the inverse dynamics and the passive forces (their tangents come from
+    :func:`~.derivatives.inverse_dynamics_derivatives`)."""
     dual, dkin, q, rates = _dual_state(bound, kin, qd, directions)
     ck = ConstraintKinematics(dual, dkin)
     J = ck.jacobian()
-    e1 = [a + b for a, b in zip(inverse_dynamics(dual, dkin, rates, qdd), left_forces(dual, q, rates))]
+    e1 = [a + b for a, b in zip(inverse_dynamics(dual, dkin, rates, qdd), left_forces(dual, q, rates))] if sweeps \
+        else [0] * len(qd)
     if bound.model.has_friction:
         for c, Jf in zip(ck.items, ck.slip_jacobians()):
             if c.law == "viscous":
@@ -93,15 +98,15 @@ def _forward_terms(bound, kin, qd, qdd, lam, directions):
     return e1, jt, e2
 
 
-def _impulse_terms(bound, kin, qd, x, lam, r, directions):
-    """(A x, J^T Lambda, E2) of the impact on duals."""
+def _impulse_terms(bound, kin, qd, x, lam, r, directions, sweeps=True):
+    """(A x, J^T Lambda, E2) of the impact on duals (A x left out without ``sweeps``)."""
     dual, dkin, q, rates = _dual_state(bound, kin, qd, directions)
     ck = ConstraintKinematics(dual, dkin)
     J = ck.jacobian()
     n = len(qd)
     zero = [0] * n
-    ax = inverse_dynamics(dual, dkin, zero, x, gravity=False)
-    if bound.model.time_dependent:  # prescribed spins make terms at qd = 0 that are no part of A x
+    ax = inverse_dynamics(dual, dkin, zero, x, gravity=False) if sweeps else zero
+    if sweeps and bound.model.time_dependent:  # prescribed spins make terms at qd = 0 that are no part of A x
         ax = [a - b for a, b in zip(ax, inverse_dynamics(dual, dkin, zero, zero, gravity=False))]
     jt = _transpose_times(J, lam) if J else zero
     h = impact_rhs(J, ck.time_terms(), rates, r)
@@ -109,14 +114,17 @@ def _impulse_terms(bound, kin, qd, x, lam, r, directions):
     return ax, jt, e2
 
 
-def _columns(system, terms, directions, count):
+def _columns(system, terms, directions, count, known=None):
     """Per direction d of ``directions``: (x', (J^T lambda)', its column's values (f, h, (J')^T lambda)) from the
-    tangents of ``terms`` = (E1 less J^T lambda, J^T lambda, E2)."""
+    tangents of ``terms`` = (E1 less J^T lambda, J^T lambda, E2); ``known``: rows of E1's tangents along every
+    direction that the terms leave out (the inverse dynamics' derivatives in the spatial form), or None."""
     e1, jt, e2 = terms
     out = {}
     for d in directions:
         tj = [tangent(v, d) for v in jt]
         f = [tv - tangent(v, d) for v, tv in zip(e1, tj)]
+        if known is not None:
+            f = [x - row[d] for x, row in zip(f, known)]
         h = [-tangent(v, d) for v in e2]
         out[d] = (*_solved(system, f, h, tj), (f, h, tj))
     return out
@@ -140,17 +148,49 @@ def _column_map(system, n, m, columns, offsets=()):
     return cmap
 
 
-def constrained_forward_dynamics_derivatives(bound, kin, qd, tau, columns=None) -> tuple:
+def _form(bound, kin, role, build) -> str:
+    """Where :func:`~.spatial_derivatives.covers` the model, the form of E1's inverse-dynamics tangents: on a
+    straight-line program the one whose whole routine (``build(bound, kin, qd, form)``'s rows) reaches fewer
+    operations, counted on scratch programs (the dual one only up to the spatial count; the spatial one of equals),
+    on numbers the spatial one; ``"dual"`` where the spatial form does not cover the model.  Kept in ``kin.memo``."""
+    key = f"{role} form"
+    if key not in kin.memo:
+        form = "spatial" if spatial_derivatives.covers(bound) else "dual"
+        if form == "spatial" and bound.backend.symbolic:
+            def rows(way):
+                return lambda b, k, u: [[x for row in m for x in row] for m in build(b, k, u, way)]
+            ours = scratch_operations(bound, kin, rows("spatial"))
+            if scratch_operations(bound, kin, rows("dual"), ours) < ours:
+                form = "dual"
+        kin.memo[key] = form
+    return kin.memo[key]
+
+
+def _known(dq, dqd):
+    """The rows [dq | dqd] (n x 2n): E1's tangents along q's directions, then qd's."""
+    return [list(a) + list(b) for a, b in zip(dq, dqd)]
+
+
+def constrained_forward_dynamics_derivatives(bound, kin, qd, tau, columns=None, form=None) -> tuple:
     """(dqdd/dq, dqdd/dqd, dqdd/dtau, d(J^T lambda)/dq, .../dqd, .../dtau) as n x n rows, and the status of the
     solve (``tau`` as the routine receives it: the passive forces are taken here).  ``columns``: a list, to which
-    the solves are appended as a :class:`~aggsym.core.columns.ColumnMap` on a straight-line program."""
+    the solves are appended as a :class:`~aggsym.core.columns.ColumnMap` on a straight-line program.  ``form``
+    (``"spatial"``, ``"dual"``, None: :func:`_form` chooses): how E1's inverse dynamics is differentiated, by the
+    composites of :mod:`.spatial_derivatives` or within the dual sweeps."""
     n = kin.tree.nv
+    if form is None:
+        form = _form(bound, kin, "constrained_forward_dynamics_derivatives",
+                     lambda b, k, u, way: constrained_forward_dynamics_derivatives(
+                         b, k, u, b.backend.program.vector("tau", n), form=way)[:-1])
     qdd, lam, status = constrained_forward_dynamics(
         bound, kin, qd, [t - c for t, c in zip(tau, left_forces(bound, kin.q, qd))])
     system = ConstrainedSystem(bound, kin, arguments=arguments_pay(bound, kin, 3 * n))
+    sweeps = form == "dual"
+    known = None if sweeps else _known(*inverse_dynamics_derivatives(bound, kin, qd, qdd, form="spatial"))
     cols = {}
     for batch in _batches(bound, n, 2 * n):
-        cols.update(_columns(system, _forward_terms(bound, kin, qd, qdd, lam, set(batch)), batch, 2 * n))
+        cols.update(_columns(system, _forward_terms(bound, kin, qd, qdd, lam, set(batch), sweeps), batch, 2 * n,
+                             known))
     m = len(lam)
     for j in range(n):
         values = ([1 if i == j else 0 for i in range(n)], [0] * m, [0] * n)
@@ -165,15 +205,26 @@ def constrained_forward_dynamics_derivatives(bound, kin, qd, tau, columns=None) 
     return (*mats, status)
 
 
-def impulse_dynamics_derivatives(bound, kin, qd, r, columns=None) -> tuple:
+def impulse_dynamics_derivatives(bound, kin, qd, r, columns=None, form=None) -> tuple:
     """(dqd+/dq, dqd+/dqd-, d(J^T Lambda)/dq, d(J^T Lambda)/dqd-) as n x n rows, and the status of the solve;
-    ``columns`` as for :func:`constrained_forward_dynamics_derivatives`."""
+    ``columns`` and ``form`` as for :func:`constrained_forward_dynamics_derivatives` (the spatial form gives the
+    tangents of A x as those of the inverse dynamics at qd = 0, qdd = x, without gravity)."""
     n = kin.tree.nv
+    if form is None:
+        form = _form(bound, kin, "impulse_dynamics_derivatives",
+                     lambda b, k, u, way: impulse_dynamics_derivatives(
+                         b, k, u, b.backend.program.vector("r", 1)[0], form=way)[:-1])
     system = ConstrainedSystem(bound, kin, arguments=arguments_pay(bound, kin, 2 * n))
     x, lam = system.solve_transvected([0] * n, impact_rhs(system.J, system.ck.time_terms(), qd, r))
+    sweeps = form == "dual"
+    known = None
+    if not sweeps:
+        dq, _ = spatial_derivatives.inverse_dynamics_derivatives(bound, kin, [0] * n, x, gravity=False)
+        known = _known(dq, [[0] * n for _ in range(n)])
     cols = {}
     for batch in _batches(bound, n, 2 * n):
-        cols.update(_columns(system, _impulse_terms(bound, kin, qd, x, lam, r, set(batch)), batch, 2 * n))
+        cols.update(_columns(system, _impulse_terms(bound, kin, qd, x, lam, r, set(batch), sweeps), batch, 2 * n,
+                             known))
     dq = _matrix([cols[j][0] for j in range(n)], n)
     dqd = _matrix([cols[n + j][0] for j in range(n)], n)
     for i in range(n):

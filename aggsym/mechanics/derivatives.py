@@ -1,4 +1,10 @@
-"""Analytical derivatives of inverse and forward dynamics, by forward-mode differentiation of the recursions.
+"""Analytical derivatives of inverse and forward dynamics.
+
+dtau/d(q, qd) takes one of two forms, whichever reaches fewer operations on the straight-line program
+(:func:`derivative_form`): the composites of the tree (:mod:`.spatial_derivatives`: cheaper on general geometry and
+deep trees, Panda 4111 operations against 6545, Talos with its free-flyer 26015 against 50397) or the sweeps on dual
+numbers below (cheaper where parallel and orthogonal axes fold the tangents: UR5, HyQ), which also covers the
+models the first does not (added masses, prescribed spins, pairs whose axes turn with their own coordinates).
 
 The sweeps (2.39)-(2.46) run on dual numbers (:mod:`aggsym.core.dual`) seeded with unit tangents on q (directions
 0..n-1) and qd (directions n..2n-1): every intermediate of the straight-line program of tau = u* gets its

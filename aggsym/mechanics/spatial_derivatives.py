@@ -109,15 +109,15 @@ def _apply(th, x):
     return ZERO6 if th is None else th.apply(x)
 
 
-def inverse_dynamics_derivatives(bound, kin, qd, qdd) -> tuple:
-    """(dtau/dq, dtau/dqd) of the sweeps' u* (:func:`~.sweeps.inverse_dynamics`, without the passive forces) as
-    n x n rows, by the composites of the module's text."""
+def inverse_dynamics_derivatives(bound, kin, qd, qdd, gravity=True) -> tuple:
+    """(dtau/dq, dtau/dqd) of the sweeps' u* (:func:`~.sweeps.inverse_dynamics`, without the passive forces; without
+    gravity where ``gravity`` is False) as n x n rows, by the composites of the module's text."""
     tree = kin.tree
     n = tree.nv
     V = kin.velocities(qd)
-    base = gravity_base(bound)
+    base = gravity_base(bound) if gravity else ZERO6
     A = kin.accelerations(qd, qdd, V, base)
-    F = transmitted_wrenches(bound, kin, qd, qdd)
+    F = transmitted_wrenches(bound, kin, qd, qdd, gravity=gravity)
     Ic, Id, hc = _composites(bound, kin, V)
     cols = {}  # coordinate -> (S, c, psi', psi'') in its body's frame
     rows = {}  # coordinate -> (rho, sigma, X, Y) in its body's frame
