@@ -15,7 +15,8 @@ Settings (environment variables; defaults in brackets):
     AGGSYM_BENCH_STATES            precomputed random states per robot                  [1000]
     AGGSYM_BENCH_CALLS             calls per timed batch (cycling through the states)  [100]
     AGGSYM_BENCH_RUNTIME_ROBOTS    robots of section 3 (a subset, for a quick run)       [all: ur5,panda,hyq,
-                                   talos, their _ff variants, solo12_euler,chain24,chain48]
+                                   talos, their _ff variants, solo12_euler,chain24,chain48,
+                                   xarm7]
     AGGSYM_BENCH_PEER_ROBOTS       robots also timed against the CasADi peer and -O3    [ur5,panda,solo12_euler,
                                                                                          talos,chain24,chain48]
     AGGSYM_BENCH_CPU               the CPU the harness is pinned to                      [the last allowed]
@@ -59,12 +60,15 @@ from .harness.paths import BENCHMARKS, BUILD, ROOT, read_json, result_path, writ
 from .harness.robots import FILES, FIVE, ROBOT_FILES, robot_paths, robots_directory
 
 FREE_FLYER_SUFFIX = report.FREE_FLYER_SUFFIX  # the label of a robot generated with --floating-base quaternion
-# Section 3's robots beyond ROBOT_FILES, generated with the routines FIVE alone: label -> (example-robot-data
-# file or chain length, aggsym options, Pinocchio root for the CasADi peer)
+# the derivative routines (issue 52), timed beside the default set on the free-flyer robots and on xarm7
+DERIVATIVES = "inverse_dynamics_derivatives,forward_dynamics_derivatives"
+# Section 3's robots beyond ROBOT_FILES: label -> (example-robot-data file or chain length, aggsym options,
+# Pinocchio root for the CasADi peer, the routines generated)
 EXTRA_RUNTIME_ROBOTS = {
-    "solo12_euler": (FILES["solo12"], ("--floating-base", "euler", "--name", "solo12_euler"), "euler"),
-    "chain24": (24, (), None),
-    "chain48": (48, (), None),
+    "solo12_euler": (FILES["solo12"], ("--floating-base", "euler", "--name", "solo12_euler"), "euler", FIVE),
+    "chain24": (24, (), None, FIVE),
+    "chain48": (48, (), None, FIVE),
+    "xarm7": (FILES["xarm7"], (), None, f"{FIVE},{DERIVATIVES}"),
 }
 PEER_ROBOTS = "ur5,panda,solo12_euler,talos,chain24,chain48"
 # item 7 of issue 18: operations per coordinate of these arms' inverse and forward dynamics (section opsn)
@@ -201,20 +205,21 @@ def section_runtime(cfg) -> dict:
         outdir = BUILD / "runtime" / "gen" / label
         log(f"generating {name} with --floating-base quaternion into {outdir.relative_to(ROOT)} (not timed) ...")
         runs[label] = generate_measured(label, paths[name], outdir, timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"],
+                                        routines=f"default,{DERIVATIVES}",
                                         options=("--floating-base", "quaternion", "--name", label))
         if not runs[label]["ok"]:
             return {"error": f"generating {label} failed:\n{runs[label].get('stderr', '')}"}
     # solo12 on the Euler root and the chains as URDF: the five routines of the CasADi peer's table
     peer_roots = {name: None for name in ROBOT_FILES}
-    for label, (source, options, peer_root) in EXTRA_RUNTIME_ROBOTS.items():
+    for label, (source, options, peer_root, routines) in EXTRA_RUNTIME_ROBOTS.items():
         if not take(label):
             continue
         paths[label] = write_chain_urdf(source, BUILD / "chains") if isinstance(source, int) else root / source
         peer_roots[label] = peer_root
         outdir = BUILD / "runtime" / "gen" / label
-        log(f"generating {label} into {outdir.relative_to(ROOT)} with --routines {FIVE} (not timed) ...")
+        log(f"generating {label} into {outdir.relative_to(ROOT)} with --routines {routines} (not timed) ...")
         runs[label] = generate_measured(label, paths[label], outdir, timeout=cfg["AGGSYM_BENCH_GEN_TIMEOUT"],
-                                        routines=FIVE, options=options)
+                                        routines=routines, options=options)
         if not runs[label]["ok"]:
             return {"error": f"generating {label} failed:\n{runs[label].get('stderr', '')}"}
     labels = list(runs)

@@ -19,7 +19,8 @@ FILES = {
 }
 # the four robots of sections 1 and 3 (as in tests/helpers.py's ROBOTS)
 ROBOT_FILES = {name: FILES[name] for name in ("ur5", "panda", "hyq", "talos")}
-# the routines the peers have: EXTRA_RUNTIME_ROBOTS of benchmarks/run.py are generated with these alone, and the
+# the routines the peers have: EXTRA_RUNTIME_ROBOTS of benchmarks/run.py are generated with these (xarm7 with the
+# derivatives too), and the
 # -O3 build of a robot of ROBOT_FILES is compiled from a copy generated with these alone (its full file with the
 # derivatives and the regressor takes minutes to compile at -O3: talos' is 3.4 MB)
 FIVE = "inertia,nonlinear_effects,inverse_dynamics,forward_dynamics,inertia_inverse"
