@@ -120,7 +120,6 @@ def inverse_dynamics_derivatives(bound, kin, qd, qdd, gravity=True) -> tuple:
     F = transmitted_wrenches(bound, kin, qd, qdd, gravity=gravity)
     Ic, Id, hc = _composites(bound, kin, V)
     cols = {}  # coordinate -> (S, c, psi', psi'') in its body's frame
-    rows = {}  # coordinate -> (rho, sigma, X, Y) in its body's frame
     for k, p in enumerate(tree.parent):
         L = kin.L[k]
         vl = ZERO6 if p < 0 else L.twist(V[p])
@@ -128,13 +127,17 @@ def inverse_dynamics_derivatives(bound, kin, qd, qdd, gravity=True) -> tuple:
         for i, S in zip(tree.coords[k], kin.psi[k]):
             d1 = phi_motion(vl, S)
             d2 = add(phi_motion(al, S), phi_motion(vl, d1))
-            c = add(d1, phi_motion(V[k], S))
-            cols[i] = (S, c, d1, d2)
-            IdS = _apply(Id[k], S)
-            rows[i] = (sub(IdS, phi_force(S, hc[k])), _apply(Ic[k], S),
-                       add(add(IdS, phi_force(S, hc[k])), _apply(Ic[k], c)),
-                       add(add(add(phi_force(S, F[k]), _apply(Id[k], d1)), phi_force(d1, hc[k])),
-                           _apply(Ic[k], d2)))
+            cols[i] = (S, add(d1, phi_motion(V[k], S)), d1, d2)
+
+    def rows(k, i):
+        """(rho, sigma, X, Y) of coordinate i of body k, in its frame (made just before its walk, so that the
+        program holds one coordinate's four at a time)."""
+        S, c, d1, d2 = cols[i]
+        IdS = _apply(Id[k], S)
+        return (sub(IdS, phi_force(S, hc[k])), _apply(Ic[k], S),
+                add(add(IdS, phi_force(S, hc[k])), _apply(Ic[k], c)),
+                add(add(add(phi_force(S, F[k]), _apply(Id[k], d1)), phi_force(d1, hc[k])), _apply(Ic[k], d2)))
+
     dq = [[0] * n for _ in range(n)]
     dqd = [[0] * n for _ in range(n)]
     above = [False] * len(tree)  # whether some strict ancestor of the body carries a coordinate
@@ -142,7 +145,7 @@ def inverse_dynamics_derivatives(bound, kin, qd, qdd, gravity=True) -> tuple:
         above[k] = p >= 0 and (above[p] or bool(tree.coords[p]))
     for b in range(len(tree)):
         for i in tree.coords[b]:
-            rho, sigma, X, Y = rows[i]
+            rho, sigma, X, Y = rows(b, i)
             a = b
             while True:
                 for j in tree.coords[a]:
