@@ -491,7 +491,9 @@ def _runtime(results) -> str:
               "(named in the table).", "",
               "Beyond the five: the runtime section generates the four robots again (untimed, into "
               "`benchmarks/build/runtime/gen/`) with `aggsym generate ROBOT.urdf --routines "
-              f"{rt.get('routines', 'default,…')}` (section 1 times the default set alone).  "
+              f"{rt.get('routines', 'default,…')}` (section 1 times the default set alone); the free-flyer variants "
+              "(`NAME_ff`, `--floating-base quaternion`) with the default set and the two derivative routines, xarm7 "
+              "with the five and the two derivative routines.  "
               "`inverse_dynamics_derivatives` (∂τ/∂q, ∂τ/∂q̇) ↔ `computeRNEADerivatives(model, data, q, v, a)` "
               "(`dtau_dq`, `dtau_dv`: Pinocchio fills both full n×n matrices), `forward_dynamics_derivatives` "
               "(∂q̈/∂q, ∂q̈/∂q̇) ↔ `computeABADerivatives(model, data, q, v, tau)` (`ddq_dq`, `ddq_dv`); each of the "
