@@ -76,13 +76,14 @@ BENCH_LAYERS = {
     "harness": 0, "generation": 0, "runtime": 0, "batch": 0, "mjcf": 0,
     **{f"harness.{m}": 0 for m in ("paths", "measure", "generate", "environment", "robots", "chain", "tables", "plots",
                                     "cli", "build")},
-    **{f"generation.{m}": 1 for m in ("measured", "kane", "opcounts", "inputs", "scaling", "compile_split")},
+    **{f"generation.{m}": 1 for m in ("measured", "kane", "opcounts", "inputs", "scaling", "compile_split",
+                                       "derivative_counts")},
     **{f"runtime.{m}": 1 for m in ("pinocchio_cpp", "constrained", "casadi_peer", "constrained_derivatives",
                                     "python_call", "slicing", "trig")},
     **{f"mjcf.{m}": 1 for m in ("mujoco_reference", "mujoco_poses", "corpus")},
     "batch.peers": 1, "batch.engines": 1, "batch.report": 1, "batch.worker": 2, "batch.orchestrator": 2,
     "batch.__main__": 2,
-    "report_plots": 1, "report": 2, "run": 3,
+    "report_plots": 1, "report_derivatives": 1, "report": 2, "run": 3,
 }
 
 
