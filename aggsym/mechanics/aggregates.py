@@ -81,15 +81,18 @@ class Rigid:
         if all(is_zero(x) for x in o):
             return Rigid(m, hr, th)
         h = add(hr, scale(m, o))
-        ho = dot(hr, o)
-        oo = dot(o, o)
-        diag = 2 * ho + mul(m, oo)
+        # the parallel-axis terms of theta' = theta + 2 (h.o) E - h o^T - o h^T + m (o.o E - o o^T), the diagonal
+        # as sum over k != i of (2 h_k o_k + m o_k^2): no term of size |o|^2 cancels another (a point mass moved
+        # along an axis keeps its digits about that axis)
+        along = [mul(hr[k], o[k]) for k in range(3)]
+        parts = [along[k] + along[k] + mul(m, mul(o[k], o[k])) for k in range(3)]
         out = [[0] * 3 for _ in range(3)]
         for i in range(3):
             for j in range(i, 3):
-                x = th[i][j] - mul(hr[i], o[j]) - mul(o[i], hr[j]) - mul(m, mul(o[i], o[j]))
                 if i == j:
-                    x = x + diag
+                    x = th[i][i] + (parts[(i + 1) % 3] + parts[(i + 2) % 3])
+                else:
+                    x = th[i][j] - mul(hr[i], o[j]) - mul(o[i], hr[j]) - mul(m, mul(o[i], o[j]))
                 out[i][j] = out[j][i] = x
         return Rigid(m, h, tuple(tuple(r) for r in out))
 

@@ -242,11 +242,26 @@ class Inertial:
 
     @functools.cached_property
     def _mises_at_origin(self):
-        m = self.mass
-        r = sp.Matrix(self.com)
-        theta = sp.Matrix(self.inertia) + m * (r.dot(r) * sp.eye(3) - r * r.T)
-        h = tuple(sp.expand(m * x) for x in r)
-        return m, h, tuple(tuple(sp.expand(theta[i, j]) for j in range(3)) for i in range(3))
+        """theta_O entry by entry in the form without cancellation: ``theta_c,ii + m (r_j^2 + r_k^2)`` on the
+        diagonal (not ``m (r.r - r_i^2)``, which loses the digits of a point mass far along an axis and near it:
+        a head on its neck axis), ``theta_c,ij - m r_i r_j`` off it; where every number is a number, in exact
+        rational arithmetic on their binary values, rounded once (each entry the double nearest the exact one)."""
+        m, r, I = self.mass, self.com, self.inertia
+        exact = all(isinstance(sp.sympify(x), sp.Number) for x in (m, *r, *(v for row in I for v in row)))
+        if exact:
+            m, r = sp.Rational(m), [sp.Rational(x) for x in r]
+            I = [[sp.Rational(v) for v in row] for row in I]
+
+        def entry(i, j):
+            if i == j:
+                return I[i][i] + m * sum(r[k] ** 2 for k in range(3) if k != i)
+            return I[i][j] - m * r[i] * r[j]
+
+        def done(x):
+            return sp.Float(x, precision=53) if exact and not x.is_Integer else sp.expand(x)
+
+        h = tuple(done(m * x) for x in r)
+        return done(m), h, tuple(tuple(done(entry(i, j)) for j in range(3)) for i in range(3))
 
 
 @dataclass(frozen=True)

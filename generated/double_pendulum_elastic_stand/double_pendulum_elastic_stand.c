@@ -152,7 +152,7 @@ typedef double aggsym_zeros_t __attribute__((vector_size(16), aligned(sizeof(dou
 #endif
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 12 mul, 9 add, 0 div, 1 call */
+ * operations: 11 mul, 10 add, 0 div, 1 call */
 AGGSYM_SCALAR_STORES void double_pendulum_elastic_stand_inertia(const double *q, const double *p, double *A)
 {
     const double q_2 = q[2];
@@ -179,8 +179,9 @@ AGGSYM_SCALAR_STORES void double_pendulum_elastic_stand_inertia(const double *q,
     const double x4 = p_1*p_3*x2;
     A[2] = x4;
     A[6] = x4;
+    const double x5 = p_4*x4;
     A[0] = p_0 + p_1;
-    A[4] = p_6 + p_0*p_2*p_2 + x1 + x3*x3*(p_8 - x1) + 2*p_4*x4 + p_1*p_4*p_4;
+    A[4] = p_6 + p_0*p_2*p_2 + x1 + x3*x3*(p_8 - x1) + x5 + x5 + p_1*p_4*p_4;
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)
@@ -691,7 +692,7 @@ void double_pendulum_elastic_stand_transvective_factors(const double *q, const d
 }
 
 /* the slow/fast partition of Prop. 2.14: blocks of A(q), B(q, qd) (b = B qd) and C, slow (+) and fast (-, elastic) coordinates, see the manifest's layout
- * operations: 51 mul, 24 add, 0 div, 1 call */
+ * operations: 50 mul, 25 add, 0 div, 1 call */
 void double_pendulum_elastic_stand_elastic_partition(const double *q, const double *qd, const double *p, double *A_pp, double *A_mp, double *A_pm, double *A_mm, double *B_pp, double *B_mp, double *B_pm, double *B_mm, double *C_mm)
 {
     const double q_2 = q[2];
@@ -731,24 +732,25 @@ void double_pendulum_elastic_stand_elastic_partition(const double *q, const doub
     A_mp[0] = x6;
     A_pm[0] = x6;
     const double x7 = x6 + p_1*p_4;
+    const double x8 = p_4*x6;
     A_mm[0] = p_0 + p_1;
-    A_mm[3] = p_6 + p_0*p_2*p_2 + x2 + x5*x5*(p_8 - x2) + 2*p_4*x6 + p_1*p_4*p_4;
-    const double x8 = qd_1*x5;
-    const double x9 = qd_1*x4;
-    const double x10 = p_4*qd_1;
-    const double x11 = qd_0*x5;
-    B_mm[2] = x5*(x10*p_1*x4 + x6*x9) - x4*(x10*p_1*x5 + x6*x8);
-    const double x12 = p_8*x5;
-    const double x13 = p_4*x0 + x2*x4;
-    B_mp[1] = x8*x13 - x9*x12;
-    B_pp[0] = x0*x11;
-    const double x14 = qd_2*x5;
-    const double x15 = x0*x14;
-    const double x16 = -x15;
-    B_mp[0] = x16;
-    B_pm[0] = x16;
-    B_mm[3] = x5*(p_8*qd_2*x4 - x7*qd_0*x4 - qd_2*x13) + x4*(x7*x11 + qd_2*x12 - x2*x14) - p_4*x15;
-    B_pm[1] = x5*(x0*x10 + x3*x9) - x4*x3*x8 - p_4*x0*x8;
+    A_mm[3] = p_6 + p_0*p_2*p_2 + x2 + x5*x5*(p_8 - x2) + x8 + x8 + p_1*p_4*p_4;
+    const double x9 = qd_1*x5;
+    const double x10 = qd_1*x4;
+    const double x11 = p_4*qd_1;
+    const double x12 = qd_0*x5;
+    B_mm[2] = x5*(x11*p_1*x4 + x6*x10) - x4*(x11*p_1*x5 + x6*x9);
+    const double x13 = p_8*x5;
+    const double x14 = p_4*x0 + x2*x4;
+    B_mp[1] = x9*x14 - x10*x13;
+    B_pp[0] = x0*x12;
+    const double x15 = qd_2*x5;
+    const double x16 = x0*x15;
+    const double x17 = -x16;
+    B_mp[0] = x17;
+    B_pm[0] = x17;
+    B_mm[3] = x5*(p_8*qd_2*x4 - x7*qd_0*x4 - qd_2*x14) + x4*(x7*x12 + qd_2*x13 - x2*x15) - p_4*x16;
+    B_pm[1] = x5*(x0*x11 + x3*x10) - x4*x3*x9 - p_4*x0*x9;
 }
 
 /* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)

@@ -141,7 +141,7 @@ static inline void aggsym_sincos2(double x0, double x1, double *s0, double *c0, 
 #endif
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 91 mul, 79 add, 0 div, 3 call */
+ * operations: 90 mul, 79 add, 0 div, 3 call */
 AGGSYM_SCALAR_STORES void flywheel_on_body_inertia(const double *q, const double *t, const double *p, double *A)
 {
     const double q_1 = q[1];
@@ -174,27 +174,29 @@ AGGSYM_SCALAR_STORES void flywheel_on_body_inertia(const double *q, const double
     const double x22 = 0.05*x13;
     const double x23 = 0.02*x14;
     const double x24 = 0.25*x15;
-    const double x25 = 0.09809999999999999 + 2*(x22 + x23 - x24);
-    const double x26 = 0.0075 + x5*x19 + x6*x20 + 0.9512512425641976*x21 + 0.25*x14 - 0.02*x15;
-    const double x27 = 0.6462499999999999 + x25 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 - x22 - x22;
-    const double x28 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14;
-    const double x29 = 0.03375 + x5*x16 + x6*x17 + 0.9512512425641976*x18 + 0.25*x13 - 0.05*x15;
-    const double x30 = 0.6999 + x25 + x3*x19 + x4*x20 - 0.2548870022441787*x21 - x23 - x23;
-    const double x31 = 0.05675000000000002 + x25 + x24 + x5*(0.0100075*x5 + 0.000509*x6 - 4.280630591538889e-06) + x6*(2.8537537276925926e-06 + 0.000509*x5 + 0.012015*x6) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x6 - 4.5e-06*x5) + x24;
-    A[8] = x31;
-    const double x32 = x11*x29 - x12*x26 + x8*x31;
-    A[2] = x32;
-    A[6] = x32;
-    A[0] = x11*(x11*x27 - x12*x28 + x8*x29) - x12*(x11*x28 - x12*x30 + x8*x26) + x8*x32;
-    const double x33 = x10*x27 + x9*x28;
-    const double x34 = x10*x28 + x9*x30;
-    const double x35 = x10*x29 + x9*x26;
-    A[5] = x35;
-    A[7] = x35;
-    const double x36 = x11*x33 - x12*x34 + x8*x35;
-    A[1] = x36;
-    A[3] = x36;
-    A[4] = x10*x33 + x9*x34;
+    const double x25 = 0.0037500000000000007 + x22 + x22;
+    const double x26 = 0.0006000000000000001 + x23 + x23;
+    const double x27 = 0.09375 - x24 - x24;
+    const double x28 = 0.0075 + x5*x19 + x6*x20 + 0.9512512425641976*x21 + 0.25*x14 - 0.02*x15;
+    const double x29 = 0.65 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 + x26 + x27;
+    const double x30 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14;
+    const double x31 = 0.03375 + x5*x16 + x6*x17 + 0.9512512425641976*x18 + 0.25*x13 - 0.05*x15;
+    const double x32 = 0.7005 + x3*x19 + x4*x20 - 0.2548870022441787*x21 + x25 + x27;
+    const double x33 = 0.1505 + x5*(0.0100075*x5 + 0.000509*x6 - 4.280630591538889e-06) + x6*(2.8537537276925926e-06 + 0.000509*x5 + 0.012015*x6) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x6 - 4.5e-06*x5) + x25 + x26;
+    A[8] = x33;
+    const double x34 = x11*x31 - x12*x28 + x8*x33;
+    A[2] = x34;
+    A[6] = x34;
+    A[0] = x11*(x11*x29 - x12*x30 + x8*x31) - x12*(x11*x30 - x12*x32 + x8*x28) + x8*x34;
+    const double x35 = x10*x29 + x9*x30;
+    const double x36 = x10*x30 + x9*x32;
+    const double x37 = x10*x31 + x9*x28;
+    A[5] = x37;
+    A[7] = x37;
+    const double x38 = x11*x35 - x12*x36 + x8*x37;
+    A[1] = x38;
+    A[3] = x38;
+    A[4] = x10*x35 + x9*x36;
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)
@@ -279,9 +281,9 @@ void flywheel_on_body_bias(const double *q, const double *qd, const double *t, c
     const double x67 = x4*x61 - x5*x62 - 0.17364817766693033*x63;
     const double x68 = x6*x61 + x7*x62 - 0.2548870022441787*x63;
     const double x69 = x8*x61 + x9*x62 + 0.9512512425641976*x63;
-    const double x70 = 0.6499999999999999*x24 + 0.01*(x25 - x28) + 0.015*x37 - 0.55*x30 + 0.02*x69 + 0.25*x68 + x4*x64 - x5*x65 - 0.17364817766693033*x66;
-    const double x71 = 0.01*x39 + 0.7005*x25 + 0.4994999999999999*x28 + 0.015*(x31 - x26) + x6*x64 + x7*x65 - 0.2548870022441787*x66 - 0.25*x67 - 0.05*x69;
-    const double x72 = 0.015*x36 + 0.15050000000000002*x21 + 0.01*(x26 - x29) + 0.0505000000000001*x27 + 0.05*x68 - 0.02*x67 + x8*x64 + x9*x65 + 0.9512512425641976*x66;
+    const double x70 = 0.65*x24 + 0.01*(x25 - x28) + 0.015*x37 - 0.55*x30 + 0.02*x69 + 0.25*x68 + x4*x64 - x5*x65 - 0.17364817766693033*x66;
+    const double x71 = 0.01*x39 + 0.7005*x25 + 0.49950000000000006*x28 + 0.015*(x31 - x26) + x6*x64 + x7*x65 - 0.2548870022441787*x66 - 0.25*x67 - 0.05*x69;
+    const double x72 = 0.015*x36 + 0.1505*x21 + 0.01*(x26 - x29) + 0.05049999999999999*x27 + 0.05*x68 - 0.02*x67 + x8*x64 + x9*x65 + 0.9512512425641976*x66;
     b[2] = x72;
     b[0] = x14*x70 - x15*x71 + x11*x72;
     b[1] = x13*x70 + x12*x71;
@@ -423,9 +425,9 @@ void flywheel_on_body_nonlinear_effects(const double *q, const double *qd, const
     const double x73 = x4*x67 - x5*x68 - 0.17364817766693033*x69;
     const double x74 = x6*x67 + x7*x68 - 0.2548870022441787*x69;
     const double x75 = x8*x67 + x9*x68 + 0.9512512425641976*x69;
-    const double x76 = 14.715*x21 + 0.6499999999999999*x30 + 0.01*(x31 - x34) + 0.015*x42 - 0.55*x36 + 0.02*x75 + 0.25*x74 + x4*x70 - x5*x71 - 0.17364817766693033*x72;
-    const double x77 = 0.01*x43 + 0.7005*x31 + 0.4994999999999999*x34 + 0.015*(x37 - x32) + x6*x70 + x7*x71 - 0.2548870022441787*x72 - 0.25*x73 - 0.05*x75 - 14.715*x20 - 0.49050000000000005*x17;
-    const double x78 = 0.49050000000000005*x21 + 0.015*x41 + 0.15050000000000002*x27 + 0.01*(x32 - x35) + 0.0505000000000001*x33 + 0.05*x74 - 0.02*x73 + x8*x70 + x9*x71 + 0.9512512425641976*x72;
+    const double x76 = 14.715*x21 + 0.65*x30 + 0.01*(x31 - x34) + 0.015*x42 - 0.55*x36 + 0.02*x75 + 0.25*x74 + x4*x70 - x5*x71 - 0.17364817766693033*x72;
+    const double x77 = 0.01*x43 + 0.7005*x31 + 0.49950000000000006*x34 + 0.015*(x37 - x32) + x6*x70 + x7*x71 - 0.2548870022441787*x72 - 0.25*x73 - 0.05*x75 - 14.715*x20 - 0.49050000000000005*x17;
+    const double x78 = 0.49050000000000005*x21 + 0.015*x41 + 0.1505*x27 + 0.01*(x32 - x35) + 0.05049999999999999*x33 + 0.05*x74 - 0.02*x73 + x8*x70 + x9*x71 + 0.9512512425641976*x72;
     d[2] = x78;
     d[0] = x18*x76 - x19*x77 + x13*x78;
     d[1] = x15*x76 + x14*x77;
@@ -518,9 +520,9 @@ void flywheel_on_body_inverse_dynamics(const double *q, const double *qd, const 
     const double x70 = x4*x64 - x5*x65 - 0.17364817766693033*x66;
     const double x71 = x6*x64 + x7*x65 - 0.2548870022441787*x66;
     const double x72 = x8*x64 + x9*x65 + 0.9512512425641976*x66;
-    const double x73 = 14.715*x21 + 0.6499999999999999*x43 + 0.01*(x44 - x29) + 0.015*x47 - 0.55*x31 + 0.02*x72 + 0.25*x71 + x4*x67 - x5*x68 - 0.17364817766693033*x69;
-    const double x74 = 0.015*(x32 - x27) + 0.4994999999999999*x29 + 0.01*x48 + 0.7005*x44 + x6*x67 + x7*x68 - 0.2548870022441787*x69 - 0.25*x70 - 0.05*x72 - 14.715*x20 - 0.49050000000000005*x17;
-    const double x75 = 0.49050000000000005*x21 + 0.0505000000000001*x28 + 0.01*(x27 - x30) + 0.015*x46 + 0.15050000000000002*x45 + 0.05*x71 - 0.02*x70 + x8*x67 + x9*x68 + 0.9512512425641976*x69;
+    const double x73 = 14.715*x21 + 0.65*x43 + 0.01*(x44 - x29) + 0.015*x47 - 0.55*x31 + 0.02*x72 + 0.25*x71 + x4*x67 - x5*x68 - 0.17364817766693033*x69;
+    const double x74 = 0.015*(x32 - x27) + 0.49950000000000006*x29 + 0.01*x48 + 0.7005*x44 + x6*x67 + x7*x68 - 0.2548870022441787*x69 - 0.25*x70 - 0.05*x72 - 14.715*x20 - 0.49050000000000005*x17;
+    const double x75 = 0.49050000000000005*x21 + 0.05049999999999999*x28 + 0.01*(x27 - x30) + 0.015*x46 + 0.1505*x45 + 0.05*x71 - 0.02*x70 + x8*x67 + x9*x68 + 0.9512512425641976*x69;
     tau[2] = x75;
     tau[0] = x18*x73 - x19*x74 + x13*x75;
     tau[1] = x15*x73 + x14*x74;
@@ -563,7 +565,7 @@ void flywheel_on_body_kinetic_energy(const double *q, const double *qd, const do
     const double x22 = x5*x20 - x3*x19 + x7*x21;
     const double x23 = x4*x19 + x6*x20 + x8*x21;
     const double x24 = 0.17364817766693033*x19 - 0.2548870022441787*x20 + 0.9512512425641976*x21;
-    T[0] = 0.5*(x13*(0.6499999999999999*x13 + 0.01*x14 + 0.015*x15) + x14*(0.01*x13 + 0.7005*x14) + x15*(0.015*x13 + 0.15050000000000002*x15) + x22*(1.5*x22 + 0.0015*x17 + 0.003*x18) + x23*(1.5*x23 + 0.0045000000000000005*x18 - 0.0015*x16) + x24*(1.5*x24 - 0.003*x16 - 0.0045000000000000005*x17) + x16*(0.0100075*x16 + 0.000509*x17 - 4.5e-06*x18 - 0.003*x24 - 0.0015*x23) + x17*(0.0015*x22 - 0.0045000000000000005*x24 + 0.000509*x16 + 0.012015*x17 + 3e-06*x18) + x18*(0.0045000000000000005*x23 + 0.003*x22 + 3e-06*x17 - 4.5e-06*x16 + 0.0200195*x18));
+    T[0] = 0.5*(x13*(0.65*x13 + 0.01*x14 + 0.015*x15) + x14*(0.01*x13 + 0.7005*x14) + x15*(0.015*x13 + 0.1505*x15) + x22*(1.5*x22 + 0.0015*x17 + 0.003*x18) + x23*(1.5*x23 + 0.0045000000000000005*x18 - 0.0015*x16) + x24*(1.5*x24 - 0.003*x16 - 0.0045000000000000005*x17) + x16*(0.0100075*x16 + 0.000509*x17 - 4.5e-06*x18 - 0.003*x24 - 0.0015*x23) + x17*(0.0015*x22 - 0.0045000000000000005*x24 + 0.000509*x16 + 0.012015*x17 + 3e-06*x18) + x18*(0.0045000000000000005*x23 + 0.003*x22 + 3e-06*x17 - 4.5e-06*x16 + 0.0200195*x18));
 }
 
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs
@@ -646,9 +648,9 @@ void flywheel_on_body_momentum(const double *q, const double *qd, const double *
     const double x38 = 0.17364817766693033*x31 - 0.2548870022441787*x33 + 0.9512512425641976*x35;
     const double x39 = 1.5*x26;
     const double x40 = x32 + 1.5*x25;
-    const double x41 = 0.6499999999999999*x25 + 0.01*x26 + 0.015*x27;
+    const double x41 = 0.65*x25 + 0.01*x26 + 0.015*x27;
     const double x42 = 0.01*x25 + 0.7005*x26;
-    const double x43 = 0.015*x25 + 0.15050000000000002*x27;
+    const double x43 = 0.015*x25 + 0.1505*x27;
     const double x44 = 1.5*x36 + 0.0015*x29 + 0.003*x30;
     const double x45 = 1.5*x37 + 0.0045000000000000005*x30 - 0.0015*x28;
     const double x46 = 1.5*x38 - 0.003*x28 - 0.0045000000000000005*x29;
@@ -775,13 +777,13 @@ void flywheel_on_body_joint_wrenches(const double *q, const double *qd, const do
     W[0] = 49.050000000000004*x20 - 1.5*x48 - x36 + x77;
     W[1] = 1.5*x49 + 49.050000000000004*x21 + x51 + x78;
     W[2] = 1.5*x33 + 49.050000000000004*x17 + x53 + x79;
-    W[3] = 0.015*x50 + 0.01*(x46 - x29) + 14.715*x21 + 0.6499999999999999*x45 - 0.55*x31 + 0.02*x79 + 0.25*x78 + x4*x74 - x5*x75 - 0.17364817766693033*x76;
-    W[4] = 0.015*(x32 - x27) + 0.4994999999999999*x29 + 0.7005*x46 + 0.01*x52 - 14.715*x20 - 0.49050000000000005*x17 + x6*x74 + x7*x75 - 0.2548870022441787*x76 - 0.25*x77 - 0.05*x79;
-    W[5] = 0.0505000000000001*x28 + 0.01*(x27 - x30) + 0.15050000000000002*x47 + 0.49050000000000005*x21 + 0.015*x49 + 0.05*x78 - 0.02*x77 + x8*x74 + x9*x75 + 0.9512512425641976*x76;
+    W[3] = 0.015*x50 + 0.01*(x46 - x29) + 14.715*x21 + 0.65*x45 - 0.55*x31 + 0.02*x79 + 0.25*x78 + x4*x74 - x5*x75 - 0.17364817766693033*x76;
+    W[4] = 0.015*(x32 - x27) + 0.49950000000000006*x29 + 0.7005*x46 + 0.01*x52 - 14.715*x20 - 0.49050000000000005*x17 + x6*x74 + x7*x75 - 0.2548870022441787*x76 - 0.25*x77 - 0.05*x79;
+    W[5] = 0.05049999999999999*x28 + 0.01*(x27 - x30) + 0.1505*x47 + 0.49050000000000005*x21 + 0.015*x49 + 0.05*x78 - 0.02*x77 + x8*x74 + x9*x75 + 0.9512512425641976*x76;
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 258 mul, 217 add, 4 div, 4 call */
+ * operations: 257 mul, 217 add, 4 div, 4 call */
 void flywheel_on_body_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd)
 {
     const double q_0 = q[0];
@@ -828,90 +830,92 @@ void flywheel_on_body_forward_dynamics(const double *q, const double *qd, const 
     const double x31 = 0.05*x22;
     const double x32 = 0.02*x23;
     const double x33 = 0.25*x24;
-    const double x34 = 0.09809999999999999 + 2*(x31 + x32 - x33);
-    const double x35 = 0.0075 + x8*x28 + x9*x29 + 0.9512512425641976*x30 + 0.25*x23 - 0.02*x24;
-    const double x36 = 0.03375 + x8*x25 + x9*x26 + 0.9512512425641976*x27 + 0.25*x22 - 0.05*x24;
-    const double x37 = qd_0*x13;
-    const double x38 = qd_0*x18 + qd_1*x15;
-    const double x39 = qd_1*x14 - qd_0*x19;
-    const double x40 = qd_2 + x37;
-    const double x41 = qd_1*x37;
-    const double x42 = qd_1*qd_0*x12;
-    const double x43 = x15*x41;
-    const double x44 = qd_2*x38;
-    const double x45 = qd_2*x39 - x14*x41;
-    const double x46 = x43 - x44;
-    const double x47 = x38*x38;
-    const double x48 = x38*x39;
-    const double x49 = x38*x40;
-    const double x50 = x39*x39;
-    const double x51 = x39*x40;
-    const double x52 = x40*x40;
-    const double x53 = x4*x38 + x6*x39 + x8*x40;
-    const double x54 = x7*x39 - x5*x38 + x9*x40;
-    const double x55 = x44 - x43;
-    const double x56 = x45 - x51;
-    const double x57 = x42 + x48;
-    const double x58 = x45 + x51;
-    const double x59 = x1 + 0.9512512425641976*x40 - 0.17364817766693033*x38 - 0.2548870022441787*x39;
-    const double x60 = x7*x46 - x5*x45 + x9*x42;
-    const double x61 = x1*x53;
-    const double x62 = x4*x45 + x6*x46 + x8*x42 + x1*x54;
-    const double x63 = x60 - x61;
-    const double x64 = p_1 + 0.9512512425641976*x42 - 0.17364817766693033*x45 - 0.2548870022441787*x46;
-    const double x65 = x53*x53;
-    const double x66 = x53*x54;
-    const double x67 = x53*x59;
-    const double x68 = x54*x54;
-    const double x69 = x54*x59;
-    const double x70 = x59*x59;
-    const double x71 = x64 - x66;
-    const double x72 = x63 + x67;
-    const double x73 = x69 - x62;
-    const double x74 = x64 + x66;
-    const double x75 = x62 + x69;
-    const double x76 = 0.25*(x55 - x49) + 0.02*(x48 - x42) - 0.05*(x50 + x52) + 9.81*x20;
-    const double x77 = 0.05*x57 + 0.25*x56 - 0.02*(x47 + x52) + 9.81*x21;
-    const double x78 = 0.02*x58 + 0.05*(x49 + x55) + 0.25*(x47 + x50) + 9.81*x17;
-    const double x79 = x4*x76 + x6*x77 + x8*x78;
-    const double x80 = x7*x77 - x5*x76 + x9*x78;
-    const double x81 = 0.9512512425641976*x78 - 0.17364817766693033*x76 - 0.2548870022441787*x77;
-    const double x82 = 0.0015*x72 + 0.003*x71 - 0.0045000000000000005*(x68 + x70) + 1.5*x79;
-    const double x83 = 0.0045000000000000005*x74 + 0.0015*x73 + 0.003*(x65 + x70) + 1.5*x80;
-    const double x84 = 0.0045000000000000005*(x67 + x61 - x60) - 0.003*x75 - 0.0015*(x65 + x68) + 1.5*x81;
-    const double x85 = 0.0100075*x62 + 0.000509*(x63 - x67) - 4.5e-06*x74 + 3e-06*(x68 - x70) + 0.0080045*x69 - 0.003*x81 - 0.0015*x80;
-    const double x86 = 0.000509*x75 + 0.012015*x63 + 3e-06*x71 - 0.010011999999999998*x67 + 4.5e-06*(x65 - x70) + 0.0015*x79 - 0.0045000000000000005*x81;
-    const double x87 = 4.5e-06*x73 + 3e-06*x72 + 0.0200195*x64 + 0.000509*(x65 - x68) + 0.002007499999999999*x66 + 0.0045000000000000005*x80 + 0.003*x79;
-    const double x88 = x4*x82 - x5*x83 - 0.17364817766693033*x84;
-    const double x89 = x6*x82 + x7*x83 - 0.2548870022441787*x84;
-    const double x90 = x8*x82 + x9*x83 + 0.9512512425641976*x84;
-    const double x91 = 14.715*x21 + 0.6499999999999999*x45 + 0.01*(x46 - x49) + 0.015*x57 - 0.55*x51 + 0.02*x90 + 0.25*x89 + x4*x85 - x5*x86 - 0.17364817766693033*x87;
-    const double x92 = 0.01*x58 + 0.7005*x46 + 0.4994999999999999*x49 + 0.015*(x52 - x47) + x6*x85 + x7*x86 - 0.2548870022441787*x87 - 0.25*x88 - 0.05*x90 - 14.715*x20 - 0.49050000000000005*x17;
-    const double x93 = 0.49050000000000005*x21 + 0.015*x56 + 0.15050000000000002*x42 + 0.01*(x47 - x50) + 0.0505000000000001*x48 + 0.05*x89 - 0.02*x88 + x8*x85 + x9*x86 + 0.9512512425641976*x87;
-    const double x94 = x13*x14;
-    const double x95 = x13*x15;
-    const double x96 = x14*x18 + x15*x19;
-    const double x97 = 1/x96;
-    const double x98 = 1/(0.05675000000000002 + x34 + x33 + x8*(0.0100075*x8 + 0.000509*x9 - 4.280630591538889e-06) + x9*(2.8537537276925926e-06 + 0.000509*x8 + 0.012015*x9) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x9 - 4.5e-06*x8) + x33);
-    const double x99 = x36*x98;
-    const double x100 = x35*x98;
-    const double x101 = 0.0085 + x6*x25 + x7*x26 - 0.2548870022441787*x27 - 0.02*x22 - 0.05*x23 - x36*x100;
-    const double x102 = 1/(0.6999 + x34 + x6*x28 + x7*x29 - 0.2548870022441787*x30 - x32 - x32 - x35*x100);
-    const double x103 = x101*x102;
-    const double x104 = tau_0 - x18*x91 + x19*x92 - x13*x93;
-    const double x105 = tau_1 - x15*x91 - x14*x92;
-    const double x106 = tau_2 - x93;
-    const double x107 = x97*x96*x106;
-    const double x108 = x97*(x18*x105 - x15*x104 + x95*x106) - x100*x107;
-    const double x109 = 1/(0.6462499999999999 + x34 + x4*x25 - x5*x26 - 0.17364817766693033*x27 - x31 - x31 - x36*x99 - x101*x103)*(x97*(x14*x104 + x19*x105 - x94*x106) - x99*x107 - x103*x108);
-    const double x110 = x102*x108 - x103*x109;
-    qdd[0] = x97*(x14*x109 - x15*x110);
-    qdd[1] = x97*(x19*x109 + x18*x110);
-    qdd[2] = x97*(x95*x110 - x94*x109 + x96*(x98*x107 - x99*x109 - x100*x110));
+    const double x34 = 0.0037500000000000007 + x31 + x31;
+    const double x35 = 0.0006000000000000001 + x32 + x32;
+    const double x36 = 0.09375 - x33 - x33;
+    const double x37 = 0.0075 + x8*x28 + x9*x29 + 0.9512512425641976*x30 + 0.25*x23 - 0.02*x24;
+    const double x38 = 0.03375 + x8*x25 + x9*x26 + 0.9512512425641976*x27 + 0.25*x22 - 0.05*x24;
+    const double x39 = qd_0*x13;
+    const double x40 = qd_0*x18 + qd_1*x15;
+    const double x41 = qd_1*x14 - qd_0*x19;
+    const double x42 = qd_2 + x39;
+    const double x43 = qd_1*x39;
+    const double x44 = qd_1*qd_0*x12;
+    const double x45 = x15*x43;
+    const double x46 = qd_2*x40;
+    const double x47 = qd_2*x41 - x14*x43;
+    const double x48 = x45 - x46;
+    const double x49 = x40*x40;
+    const double x50 = x40*x41;
+    const double x51 = x40*x42;
+    const double x52 = x41*x41;
+    const double x53 = x41*x42;
+    const double x54 = x42*x42;
+    const double x55 = x4*x40 + x6*x41 + x8*x42;
+    const double x56 = x7*x41 - x5*x40 + x9*x42;
+    const double x57 = x46 - x45;
+    const double x58 = x47 - x53;
+    const double x59 = x44 + x50;
+    const double x60 = x47 + x53;
+    const double x61 = x1 + 0.9512512425641976*x42 - 0.17364817766693033*x40 - 0.2548870022441787*x41;
+    const double x62 = x7*x48 - x5*x47 + x9*x44;
+    const double x63 = x1*x55;
+    const double x64 = x4*x47 + x6*x48 + x8*x44 + x1*x56;
+    const double x65 = x62 - x63;
+    const double x66 = p_1 + 0.9512512425641976*x44 - 0.17364817766693033*x47 - 0.2548870022441787*x48;
+    const double x67 = x55*x55;
+    const double x68 = x55*x56;
+    const double x69 = x55*x61;
+    const double x70 = x56*x56;
+    const double x71 = x56*x61;
+    const double x72 = x61*x61;
+    const double x73 = x66 - x68;
+    const double x74 = x65 + x69;
+    const double x75 = x71 - x64;
+    const double x76 = x66 + x68;
+    const double x77 = x64 + x71;
+    const double x78 = 0.25*(x57 - x51) + 0.02*(x50 - x44) - 0.05*(x52 + x54) + 9.81*x20;
+    const double x79 = 0.05*x59 + 0.25*x58 - 0.02*(x49 + x54) + 9.81*x21;
+    const double x80 = 0.02*x60 + 0.05*(x51 + x57) + 0.25*(x49 + x52) + 9.81*x17;
+    const double x81 = x4*x78 + x6*x79 + x8*x80;
+    const double x82 = x7*x79 - x5*x78 + x9*x80;
+    const double x83 = 0.9512512425641976*x80 - 0.17364817766693033*x78 - 0.2548870022441787*x79;
+    const double x84 = 0.0015*x74 + 0.003*x73 - 0.0045000000000000005*(x70 + x72) + 1.5*x81;
+    const double x85 = 0.0045000000000000005*x76 + 0.0015*x75 + 0.003*(x67 + x72) + 1.5*x82;
+    const double x86 = 0.0045000000000000005*(x69 + x63 - x62) - 0.003*x77 - 0.0015*(x67 + x70) + 1.5*x83;
+    const double x87 = 0.0100075*x64 + 0.000509*(x65 - x69) - 4.5e-06*x76 + 3e-06*(x70 - x72) + 0.0080045*x71 - 0.003*x83 - 0.0015*x82;
+    const double x88 = 0.000509*x77 + 0.012015*x65 + 3e-06*x73 - 0.010011999999999998*x69 + 4.5e-06*(x67 - x72) + 0.0015*x81 - 0.0045000000000000005*x83;
+    const double x89 = 4.5e-06*x75 + 3e-06*x74 + 0.0200195*x66 + 0.000509*(x67 - x70) + 0.002007499999999999*x68 + 0.0045000000000000005*x82 + 0.003*x81;
+    const double x90 = x4*x84 - x5*x85 - 0.17364817766693033*x86;
+    const double x91 = x6*x84 + x7*x85 - 0.2548870022441787*x86;
+    const double x92 = x8*x84 + x9*x85 + 0.9512512425641976*x86;
+    const double x93 = 14.715*x21 + 0.65*x47 + 0.01*(x48 - x51) + 0.015*x59 - 0.55*x53 + 0.02*x92 + 0.25*x91 + x4*x87 - x5*x88 - 0.17364817766693033*x89;
+    const double x94 = 0.01*x60 + 0.7005*x48 + 0.49950000000000006*x51 + 0.015*(x54 - x49) + x6*x87 + x7*x88 - 0.2548870022441787*x89 - 0.25*x90 - 0.05*x92 - 14.715*x20 - 0.49050000000000005*x17;
+    const double x95 = 0.49050000000000005*x21 + 0.015*x58 + 0.1505*x44 + 0.01*(x49 - x52) + 0.05049999999999999*x50 + 0.05*x91 - 0.02*x90 + x8*x87 + x9*x88 + 0.9512512425641976*x89;
+    const double x96 = x13*x14;
+    const double x97 = x13*x15;
+    const double x98 = x14*x18 + x15*x19;
+    const double x99 = 1/x98;
+    const double x100 = 1/(0.1505 + x8*(0.0100075*x8 + 0.000509*x9 - 4.280630591538889e-06) + x9*(2.8537537276925926e-06 + 0.000509*x8 + 0.012015*x9) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x9 - 4.5e-06*x8) + x34 + x35);
+    const double x101 = x38*x100;
+    const double x102 = x37*x100;
+    const double x103 = 0.0085 + x6*x25 + x7*x26 - 0.2548870022441787*x27 - 0.02*x22 - 0.05*x23 - x38*x102;
+    const double x104 = 1/(0.7005 + x6*x28 + x7*x29 - 0.2548870022441787*x30 + x34 + x36 - x37*x102);
+    const double x105 = x103*x104;
+    const double x106 = tau_0 - x18*x93 + x19*x94 - x13*x95;
+    const double x107 = tau_1 - x15*x93 - x14*x94;
+    const double x108 = tau_2 - x95;
+    const double x109 = x99*x98*x108;
+    const double x110 = x99*(x18*x107 - x15*x106 + x97*x108) - x102*x109;
+    const double x111 = 1/(0.65 + x4*x25 - x5*x26 - 0.17364817766693033*x27 + x35 + x36 - x38*x101 - x103*x105)*(x99*(x14*x106 + x19*x107 - x96*x108) - x101*x109 - x105*x110);
+    const double x112 = x104*x110 - x105*x111;
+    qdd[0] = x99*(x14*x111 - x15*x112);
+    qdd[1] = x99*(x19*x111 + x18*x112);
+    qdd[2] = x99*(x97*x112 - x96*x111 + x98*(x100*x109 - x101*x111 - x102*x112));
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 104 mul, 86 add, 3 div, 3 call */
+ * operations: 103 mul, 86 add, 3 div, 3 call */
 AGGSYM_SCALAR_STORES void flywheel_on_body_inertia_inverse(const double *q, const double *t, const double *p, double *Ainv)
 {
     const double q_1 = q[1];
@@ -944,43 +948,45 @@ AGGSYM_SCALAR_STORES void flywheel_on_body_inertia_inverse(const double *q, cons
     const double x22 = 0.05*x13;
     const double x23 = 0.02*x14;
     const double x24 = 0.25*x15;
-    const double x25 = 0.09809999999999999 + 2*(x22 + x23 - x24);
-    const double x26 = 0.0075 + x5*x19 + x6*x20 + 0.9512512425641976*x21 + 0.25*x14 - 0.02*x15;
-    const double x27 = 0.03375 + x5*x16 + x6*x17 + 0.9512512425641976*x18 + 0.25*x13 - 0.05*x15;
-    const double x28 = 1/(0.05675000000000002 + x25 + x24 + x5*(0.0100075*x5 + 0.000509*x6 - 4.280630591538889e-06) + x6*(2.8537537276925926e-06 + 0.000509*x5 + 0.012015*x6) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x6 - 4.5e-06*x5) + x24);
-    const double x29 = x27*x28;
-    const double x30 = x26*x28;
-    const double x31 = 0.6462499999999999 + x25 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 - x22 - x22 - x27*x29;
-    const double x32 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14 - x27*x30;
-    const double x33 = 0.6999 + x25 + x3*x19 + x4*x20 - 0.2548870022441787*x21 - x23 - x23 - x26*x30;
-    const double x34 = x10*x29 + x9*x30;
-    const double x35 = x10*x31 + x9*x32;
-    const double x36 = x10*x32 + x9*x33;
-    const double x37 = 1/(x10*x35 + x9*x36);
-    const double x38 = x35*x37;
-    const double x39 = x36*x37;
-    const double x40 = x32 - x35*x39;
-    const double x41 = 1/(x11*(x11*(x31 - x35*x38) - x12*x40) - x12*(x11*x40 - x12*(x33 - x36*x39)));
-    Ainv[0] = x41;
-    const double x42 = x12*x39 - x11*x38;
-    const double x43 = x8 + x11*x29 - x12*x30 + x34*x42;
-    const double x44 = x41*x42;
-    Ainv[1] = x44;
-    Ainv[3] = x44;
-    const double x45 = x41*x43;
-    const double x46 = -x45;
-    Ainv[2] = x46;
-    Ainv[6] = x46;
-    Ainv[4] = x37 + x42*x44;
-    const double x47 = x34*x37;
-    const double x48 = -(x47 + x43*x44);
-    Ainv[5] = x48;
-    Ainv[7] = x48;
-    Ainv[8] = x28 + x43*x45 + x34*x47;
+    const double x25 = 0.0037500000000000007 + x22 + x22;
+    const double x26 = 0.0006000000000000001 + x23 + x23;
+    const double x27 = 0.09375 - x24 - x24;
+    const double x28 = 0.0075 + x5*x19 + x6*x20 + 0.9512512425641976*x21 + 0.25*x14 - 0.02*x15;
+    const double x29 = 0.03375 + x5*x16 + x6*x17 + 0.9512512425641976*x18 + 0.25*x13 - 0.05*x15;
+    const double x30 = 1/(0.1505 + x5*(0.0100075*x5 + 0.000509*x6 - 4.280630591538889e-06) + x6*(2.8537537276925926e-06 + 0.000509*x5 + 0.012015*x6) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x6 - 4.5e-06*x5) + x25 + x26);
+    const double x31 = x29*x30;
+    const double x32 = x28*x30;
+    const double x33 = 0.65 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 + x26 + x27 - x29*x31;
+    const double x34 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14 - x29*x32;
+    const double x35 = 0.7005 + x3*x19 + x4*x20 - 0.2548870022441787*x21 + x25 + x27 - x28*x32;
+    const double x36 = x10*x31 + x9*x32;
+    const double x37 = x10*x33 + x9*x34;
+    const double x38 = x10*x34 + x9*x35;
+    const double x39 = 1/(x10*x37 + x9*x38);
+    const double x40 = x37*x39;
+    const double x41 = x38*x39;
+    const double x42 = x34 - x37*x41;
+    const double x43 = 1/(x11*(x11*(x33 - x37*x40) - x12*x42) - x12*(x11*x42 - x12*(x35 - x38*x41)));
+    Ainv[0] = x43;
+    const double x44 = x12*x41 - x11*x40;
+    const double x45 = x8 + x11*x31 - x12*x32 + x36*x44;
+    const double x46 = x43*x44;
+    Ainv[1] = x46;
+    Ainv[3] = x46;
+    const double x47 = x43*x45;
+    const double x48 = -x47;
+    Ainv[2] = x48;
+    Ainv[6] = x48;
+    Ainv[4] = x39 + x44*x46;
+    const double x49 = x36*x39;
+    const double x50 = -(x49 + x45*x46);
+    Ainv[5] = x50;
+    Ainv[7] = x50;
+    Ainv[8] = x30 + x45*x47 + x36*x49;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 96 mul, 81 add, 2 div, 3 call */
+ * operations: 95 mul, 81 add, 2 div, 3 call */
 void flywheel_on_body_transvective_factors(const double *q, const double *t, const double *p, double *targs, double *diag)
 {
     const double q_1 = q[1];
@@ -1013,29 +1019,31 @@ void flywheel_on_body_transvective_factors(const double *q, const double *t, con
     const double x22 = 0.05*x13;
     const double x23 = 0.02*x14;
     const double x24 = 0.25*x15;
-    const double x25 = 0.09809999999999999 + 2*(x22 + x23 - x24);
-    const double x26 = 0.0075 + x5*x19 + x6*x20 + 0.9512512425641976*x21 + 0.25*x14 - 0.02*x15;
-    const double x27 = 0.03375 + x5*x16 + x6*x17 + 0.9512512425641976*x18 + 0.25*x13 - 0.05*x15;
-    const double x28 = 0.05675000000000002 + x25 + x24 + x5*(0.0100075*x5 + 0.000509*x6 - 4.280630591538889e-06) + x6*(2.8537537276925926e-06 + 0.000509*x5 + 0.012015*x6) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x6 - 4.5e-06*x5) + x24;
-    diag[2] = x28;
-    const double x29 = 1/x28;
-    const double x30 = x27*x29;
-    const double x31 = x26*x29;
-    const double x32 = 0.6462499999999999 + x25 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 - x22 - x22 - x27*x30;
-    const double x33 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14 - x27*x31;
-    const double x34 = 0.6999 + x25 + x3*x19 + x4*x20 - 0.2548870022441787*x21 - x23 - x23 - x26*x31;
-    targs[1] = x8 + x11*x30 - x12*x31;
-    targs[2] = x10*x30 + x9*x31;
-    const double x35 = x10*x32 + x9*x33;
-    const double x36 = x10*x33 + x9*x34;
-    const double x37 = x10*x35 + x9*x36;
-    diag[1] = x37;
-    const double x38 = 1/x37;
-    const double x39 = x35*x38;
-    const double x40 = x36*x38;
-    const double x41 = x33 - x35*x40;
-    targs[0] = x11*x39 - x12*x40;
-    diag[0] = x11*(x11*(x32 - x35*x39) - x12*x41) - x12*(x11*x41 - x12*(x34 - x36*x40));
+    const double x25 = 0.0037500000000000007 + x22 + x22;
+    const double x26 = 0.0006000000000000001 + x23 + x23;
+    const double x27 = 0.09375 - x24 - x24;
+    const double x28 = 0.0075 + x5*x19 + x6*x20 + 0.9512512425641976*x21 + 0.25*x14 - 0.02*x15;
+    const double x29 = 0.03375 + x5*x16 + x6*x17 + 0.9512512425641976*x18 + 0.25*x13 - 0.05*x15;
+    const double x30 = 0.1505 + x5*(0.0100075*x5 + 0.000509*x6 - 4.280630591538889e-06) + x6*(2.8537537276925926e-06 + 0.000509*x5 + 0.012015*x6) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x6 - 4.5e-06*x5) + x25 + x26;
+    diag[2] = x30;
+    const double x31 = 1/x30;
+    const double x32 = x29*x31;
+    const double x33 = x28*x31;
+    const double x34 = 0.65 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 + x26 + x27 - x29*x32;
+    const double x35 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14 - x29*x33;
+    const double x36 = 0.7005 + x3*x19 + x4*x20 - 0.2548870022441787*x21 + x25 + x27 - x28*x33;
+    targs[1] = x8 + x11*x32 - x12*x33;
+    targs[2] = x10*x32 + x9*x33;
+    const double x37 = x10*x34 + x9*x35;
+    const double x38 = x10*x35 + x9*x36;
+    const double x39 = x10*x37 + x9*x38;
+    diag[1] = x39;
+    const double x40 = 1/x39;
+    const double x41 = x37*x40;
+    const double x42 = x38*x40;
+    const double x43 = x35 - x37*x42;
+    targs[0] = x11*x41 - x12*x42;
+    diag[0] = x11*(x11*(x34 - x37*x41) - x12*x43) - x12*(x11*x43 - x12*(x36 - x38*x42));
 }
 
 /* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)

@@ -158,7 +158,7 @@ typedef double aggsym_zeros_t __attribute__((vector_size(16), aligned(sizeof(dou
 #endif
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 21 mul, 16 add, 0 div, 2 call */
+ * operations: 19 mul, 18 add, 0 div, 2 call */
 AGGSYM_SCALAR_STORES void four_bar_inertia(const double *q, const double *p, double *A)
 {
     const double q_1 = q[1];
@@ -177,11 +177,11 @@ AGGSYM_SCALAR_STORES void four_bar_inertia(const double *q, const double *p, dou
     aggsym_sincos2(q_1, q_2, &x5, &x4, &x7, &x6);
     const double x8 = x2*x6;
     const double x9 = p_1*x8;
-    const double x10 = 0.004 + 0.125*x1 + x3 + 2*x9 + 0.4*x1;
+    const double x10 = 0.004 + 0.125*x1 + x3 + x9 + x9 + 0.4*x1;
     A[4] = x10;
     const double x11 = x5*x2*x7;
     const double x12 = p_0*(x4*(0.25*p_1 + x8 + 0.4*p_1) - x11);
-    A[0] = 0.0002 + 0.05*x0 + x10 + 2*x12 + 0.9*x0;
+    A[0] = 0.0002 + 0.05*x0 + x10 + x12 + x12 + 0.9*x0;
     const double x13 = x10 + x12;
     A[1] = x13;
     A[3] = x13;

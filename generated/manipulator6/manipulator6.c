@@ -152,7 +152,7 @@ typedef double aggsym_zeros_t __attribute__((vector_size(16), aligned(sizeof(dou
 #endif
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 82 mul, 67 add, 0 div, 4 call */
+ * operations: 80 mul, 63 add, 0 div, 4 call */
 AGGSYM_SCALAR_STORES void manipulator6_inertia(const double *q, const double *p, double *A)
 {
     const double q_1 = q[1];
@@ -188,64 +188,63 @@ AGGSYM_SCALAR_STORES void manipulator6_inertia(const double *q, const double *p,
     const double x18 = 0.00358 - x13;
     const double x19 = x5*x5*x18;
     const double x20 = 0.4*x14;
-    const double x21 = 0.4160000000000001 + 0.8*x14;
+    const double x21 = 0.4160000000000001 + x20 + x20;
     const double x22 = x16 - 0.0048000000000000004*x7;
-    const double x23 = 1.94 + x14;
-    const double x24 = 0.05 + x15;
-    const double x25 = 0.2225 + x12 + x21;
-    const double x26 = -0.40192000000000005 + x21 - x19 - x20 - x20;
-    A[8] = x26;
-    A[13] = x26;
-    A[14] = x26;
-    const double x27 = x4*x5*x18 - 0.4*x15 - 0.009;
-    const double x28 = 0.22199999999999998 + x13 + x19 + x21;
-    const double x29 = x3*x3;
-    const double x30 = x2*x3;
-    const double x31 = x28 - x25;
-    const double x32 = x17 + x17;
-    const double x33 = x29*x31 - x30*x32;
-    const double x34 = x29*x32 + x30*x31 - x17;
-    const double x35 = 0.45*x23;
-    const double x36 = 1.539 + 0.9*x23;
-    const double x37 = x3*x27 + x2*x22 - 0.45*(x3*x24 + x2*x9);
-    const double x38 = 0.44000000000000006 + x25 + x33 + x36;
-    A[7] = -1.519 + x36 + x26 - x35 - x35;
-    const double x39 = x1*(x2*x27 - x3*x22 - 0.45*(x2*x24 - x3*x9));
-    const double x40 = x39 + x0*(0.001 + x37);
-    A[1] = x40;
-    A[6] = x40;
-    A[0] = 0.1 + x38 + x1*x1*(0.44000000000000006 + x28 - x33 + x36 - x38) + x0*x1*(x34 + x34);
-    const double x41 = x39 + x0*x37;
-    A[2] = x41;
-    A[12] = x41;
-    const double x42 = x12 + x20;
-    const double x43 = x0*(0.45*x2*x14 + x2*x42 - x3*x17) - x1*(0.45*x3*x14 + x3*x42 + x2*x17);
-    A[3] = x43;
-    A[18] = x43;
-    const double x44 = x4*x9;
-    const double x45 = 0.4*x44;
-    const double x46 = 0.00158*x4;
-    A[10] = x46;
-    A[16] = x46;
-    A[25] = x46;
-    A[26] = x46;
-    const double x47 = 0.00158*x5 - 0.0048000000000000004*x6;
-    const double x48 = x0*(x3*x47 - x2*x45 - 0.45*(x3*x8 + x2*x44)) + x1*(x3*x45 + x2*x47 - 0.45*(x2*x8 - x3*x44));
-    A[4] = x48;
-    A[24] = x48;
-    const double x49 = 0.0002*x7;
-    A[23] = x49;
-    A[33] = x49;
-    const double x50 = 0.0002*x6;
-    const double x51 = -x5*x50;
-    A[11] = x51;
-    A[17] = x51;
-    A[31] = x51;
-    A[32] = x51;
-    const double x52 = x4*x50;
-    const double x53 = x0*(x2*x49 + x3*x52) + x1*(x2*x52 - x3*x49);
-    A[5] = x53;
-    A[30] = x53;
+    const double x23 = 0.05 + x15;
+    const double x24 = 0.22249999999999998 + x12 + x21;
+    const double x25 = 0.01408 - x19;
+    A[8] = x25;
+    A[13] = x25;
+    A[14] = x25;
+    const double x26 = x4*x5*x18 - 0.4*x15 - 0.009;
+    const double x27 = 0.22199999999999998 + x13 + x19 + x21;
+    const double x28 = x3*x3;
+    const double x29 = x2*x3;
+    const double x30 = x27 - x24;
+    const double x31 = x17 + x17;
+    const double x32 = x28*x30 - x29*x31;
+    const double x33 = x28*x31 + x29*x30 - x17;
+    const double x34 = 0.45*(1.94 + x14);
+    const double x35 = 1.539 + x34 + x34;
+    const double x36 = x3*x26 + x2*x22 - 0.45*(x3*x23 + x2*x9);
+    const double x37 = 0.44000000000000006 + x24 + x32 + x35;
+    A[7] = 0.02 + x25;
+    const double x38 = x1*(x2*x26 - x3*x22 - 0.45*(x2*x23 - x3*x9));
+    const double x39 = x38 + x0*(0.001 + x36);
+    A[1] = x39;
+    A[6] = x39;
+    A[0] = 0.1 + x37 + x1*x1*(0.44000000000000006 + x27 - x32 + x35 - x37) + x0*x1*(x33 + x33);
+    const double x40 = x38 + x0*x36;
+    A[2] = x40;
+    A[12] = x40;
+    const double x41 = x12 + x20;
+    const double x42 = x0*(0.45*x2*x14 + x2*x41 - x3*x17) - x1*(0.45*x3*x14 + x3*x41 + x2*x17);
+    A[3] = x42;
+    A[18] = x42;
+    const double x43 = x4*x9;
+    const double x44 = 0.4*x43;
+    const double x45 = 0.00158*x4;
+    A[10] = x45;
+    A[16] = x45;
+    A[25] = x45;
+    A[26] = x45;
+    const double x46 = 0.00158*x5 - 0.0048000000000000004*x6;
+    const double x47 = x0*(x3*x46 - x2*x44 - 0.45*(x3*x8 + x2*x43)) + x1*(x3*x44 + x2*x46 - 0.45*(x2*x8 - x3*x43));
+    A[4] = x47;
+    A[24] = x47;
+    const double x48 = 0.0002*x7;
+    A[23] = x48;
+    A[33] = x48;
+    const double x49 = 0.0002*x6;
+    const double x50 = -x5*x49;
+    A[11] = x50;
+    A[17] = x50;
+    A[31] = x50;
+    A[32] = x50;
+    const double x51 = x4*x49;
+    const double x52 = x0*(x2*x48 + x3*x51) + x1*(x2*x51 - x3*x48);
+    A[5] = x52;
+    A[30] = x52;
 }
 
 /* b(q, qd), the velocity terms: d(q, qd) of the sweeps (2.44)-(2.46) without gravity, = b by (2.52) (with prescribed spins: every term of their rates and accelerations too)
@@ -337,11 +336,11 @@ void manipulator6_bias(const double *q, const double *qd, const double *p, doubl
     const double x71 = x5*(x9*x56 + x8*x57 - 0.016*x41 - 0.045*x41 + 2.6*x32) + x4*(0.045*(x40 - x20) + x6*x62 - x7*x61 + 2.6*x33);
     const double x72 = 0.8999999999999999*x28 + 0.05*x23 + x67;
     const double x73 = 0.8999999999999999*x29 - 0.05*(x17*x17 + x24) + x71;
-    const double x74 = 0.009*x28 + 0.0005000000000000282*x23 + x4*x69 - x5*x70;
+    const double x74 = 0.009*x28 + 0.0005000000000000004*x23 + x4*x69 - x5*x70;
     b[1] = x74;
     b[2] = x74;
-    const double x75 = 0.22199999999999998*x21 - 0.212*x22 - 0.009*x23 + x5*x69 + x4*x70 - 0.4*x67;
-    const double x76 = 0.009*(x18*x18 - x24) - 0.2225*x20 + 0.21149999999999997*x25 + x68 + 0.4*x71 + 0.022500000000000003*x12;
+    const double x75 = 0.22199999999999998*x21 - 0.21199999999999997*x22 - 0.009*x23 + x5*x69 + x4*x70 - 0.4*x67;
+    const double x76 = 0.009*(x18*x18 - x24) - 0.22249999999999998*x20 + 0.21149999999999997*x25 + x68 + 0.4*x71 + 0.022500000000000003*x12;
     b[0] = x0*(0.42000000000000004*x15 - 0.44000000000000006*x15 - 0.001*x13*x14 + 0.45*(x2*x73 - x3*x72) + x2*x76 + x3*x75) + x1*(0.02*x16 + 0.001*(x13*x13 - qd_1*qd_1) + x2*x75 - x3*x76 - 0.45*(x2*x72 + x3*x73));
 }
 
@@ -433,7 +432,7 @@ void manipulator6_coriolis(const double *q, const double *qd, const double *p, d
     const double x72 = 0.05*x49;
     const double x73 = 5*x47 + 0.8999999999999999*x50;
     const double x74 = 5*x48 + 0.8999999999999999*x49;
-    const double x75 = 0.8999999999999999*x48 + 0.2225*x49;
+    const double x75 = 0.8999999999999999*x48 + 0.22249999999999998*x49;
     const double x76 = 0.05*x47 + 0.009*x50;
     const double x77 = 0.8999999999999999*x47 + 0.22199999999999998*x50;
     const double x78 = 1.5*x53;
@@ -530,13 +529,13 @@ void manipulator6_coriolis(const double *q, const double *qd, const double *p, d
     const double x157 = x5*(x18*x123 - 1.5*x119 + x21*x130 - x20*x131 - 0.8*x119 + x9*x143 + x8*x144) + x4*(x6*x149 - x7*x148 - x17*x123 - 1.5*x120 - 0.045*x15);
     const double x158 = 5*x116 - 0.8999999999999999*x14 + x153;
     const double x159 = x157 - 0.05*x16 - 5*x28 - 0.8999999999999999*x15;
-    const double x160 = x154 + 0.4*x157 - 0.009*x16 - 0.010500000000000015*x15 - 0.8999999999999999*x28 - 0.2225*x15;
+    const double x160 = x154 + 0.4*x157 - 0.009*x16 - 0.0105*x15 - 0.8999999999999999*x28 - 0.22249999999999998*x15;
     const double x161 = 0.05*x31 + x117 + 0.05*x116 - x117 + x4*x155 - x5*x156;
     C[7] = x161;
     C[8] = x161;
     C[13] = x161;
     C[14] = x161;
-    const double x162 = 0.010500000000000015*x14 + 0.22199999999999998*x14 - 0.8999999999999999*x116 + x5*x155 + x4*x156 - 0.4*x153;
+    const double x162 = 0.0105*x14 + 0.22199999999999998*x14 - 0.8999999999999999*x116 + x5*x155 + x4*x156 - 0.4*x153;
     const double x163 = 0.45*(x2*x159 - x3*x158) + x2*x160 + x3*x162;
     const double x164 = x2*x162 - x3*x160 - 0.45*(x2*x158 + x3*x159);
     C[1] = x0*(x163 - 0.02*x13 - 0.44000000000000006*x13) + x1*(0.02*x12 - 0.001*qd_1 + 0.44000000000000006*x12 + x164);
@@ -779,11 +778,11 @@ void manipulator6_nonlinear_effects(const double *q, const double *qd, const dou
     const double x80 = x7*(x11*x54 + x10*x55 - 0.016*x39 - 0.045*x39 + 2.6*x73) + x6*(0.045*(x38 - x22) + x8*x60 - x9*x59 + 2.6*x74);
     const double x81 = 0.8999999999999999*x30 + 0.05*x25 + x76 - 5*x67;
     const double x82 = 5*x68 + 0.8999999999999999*x31 - 0.05*(x19*x19 + x26) + x80;
-    const double x83 = 0.009*(x20*x20 - x26) - 0.2225*x22 + 0.21149999999999997*x27 + x77 + 0.4*x80 + 0.8999999999999999*x68 - 0.05*x69;
-    const double x84 = 0.009*x30 + 0.0005000000000000282*x25 + x6*x78 - x7*x79 - 0.05*x67;
+    const double x83 = 0.009*(x20*x20 - x26) - 0.22249999999999998*x22 + 0.21149999999999997*x27 + x77 + 0.4*x80 + 0.8999999999999999*x68 - 0.05*x69;
+    const double x84 = 0.009*x30 + 0.0005000000000000004*x25 + x6*x78 - x7*x79 - 0.05*x67;
     d[1] = x84;
     d[2] = x84;
-    const double x85 = 0.8999999999999999*x67 + 0.22199999999999998*x23 - 0.212*x24 - 0.009*x25 + x7*x78 + x6*x79 - 0.4*x76;
+    const double x85 = 0.8999999999999999*x67 + 0.22199999999999998*x23 - 0.21199999999999997*x24 - 0.009*x25 + x7*x78 + x6*x79 - 0.4*x76;
     d[0] = 15.696000000000002*x0 + x2*(0.42000000000000004*x17 - 0.44000000000000006*x17 - 0.001*x15*x16 + 0.45*(x4*x82 - x5*x81) + x4*x83 + x5*x85) + x3*(0.02*x18 + 0.001*(x15*x15 - qd_1*qd_1) + x4*x85 - x5*x83 - 0.45*(x4*x81 + x5*x82));
 }
 
@@ -898,10 +897,10 @@ void manipulator6_inverse_dynamics(const double *q, const double *qd, const doub
     const double x88 = x7*(x11*x73 + x10*x74 - 0.016*x32 - 0.045*x32 + 2.6*x61) + x6*(0.045*(x31 + x66) + x8*x79 - x9*x78 + 2.6*x62);
     const double x89 = 0.05*x72 + 0.8999999999999999*x57 + x84 - 5*x52;
     const double x90 = 0.8999999999999999*x58 - 0.05*(x19*x19 + x24) + x88 + 5*x53;
-    const double x91 = 0.21149999999999997*x25 + 0.009*(x20*x20 - x24) + 0.2225*x54 + x85 + 0.4*x88 + 0.8999999999999999*x53 - 0.05*x44;
-    const double x92 = 0.0005000000000000282*x23 + 0.010500000000000015*x56 + 0.009*x57 + x6*x86 - x7*x87 - 0.05*x52;
+    const double x91 = 0.21149999999999997*x25 + 0.009*(x20*x20 - x24) + 0.22249999999999998*x54 + x85 + 0.4*x88 + 0.8999999999999999*x53 - 0.05*x44;
+    const double x92 = 0.0005000000000000004*x23 + 0.0105*x56 + 0.009*x57 + x6*x86 - x7*x87 - 0.05*x52;
     tau[2] = x92;
-    const double x93 = 0.22199999999999998*x55 - 0.009*x72 - 0.212*x22 + x7*x86 + x6*x87 - 0.4*x84 + 0.8999999999999999*x52;
+    const double x93 = 0.22199999999999998*x55 - 0.009*x72 - 0.21199999999999997*x22 + x7*x86 + x6*x87 - 0.4*x84 + 0.8999999999999999*x52;
     tau[1] = 0.001*x46 + 0.02*qdd_1 + x92;
     tau[0] = 15.696000000000002*x0 + 0.1*qdd_0 + x2*(0.42000000000000004*x17 + 0.44000000000000006*x48 + 0.001*(qdd_1 - x15*x16) + 0.45*(x4*x90 - x5*x89) + x4*x91 + x5*x93) + x3*(0.001*(x15*x15 - qd_1*qd_1) + 0.44000000000000006*x49 - 0.42000000000000004*x18 + x4*x93 - x5*x91 - 0.45*(x4*x89 + x5*x90));
 }
@@ -954,7 +953,7 @@ void manipulator6_kinetic_energy(const double *q, const double *qd, const double
     const double x33 = x6*x31 - x7*x28;
     const double x34 = x9*x30 - x8*x32;
     const double x35 = x9*x32 + x8*x30;
-    T[0] = 0.5*(qd_0*0.1*qd_0 + x10*(0.001*qd_1 + 0.44000000000000006*x10) + qd_1*(0.001*x10 + 0.02*qd_1) + x11*0.44000000000000006*x11 + x27*(0.8999999999999999*x12 + 5*x27) - x26*(0.05*x14 - 0.8999999999999999*x13 - 5*x26) + x12*(0.8999999999999999*x27 + 0.2225*x12) + x14*(0.010500000000000015*x14 - 0.009*x13 - 0.05*x26) + x13*(0.8999999999999999*x26 + 0.22199999999999998*x13 - 0.009*x14) + x28*(1.5*x28 + 0.045*x16) + x30*1.5*x30 + x31*(0.045*x17 + 1.5*x31) + x17*(0.045*x31 + 0.00435*x17) + x15*0.002*x15 + x16*(0.045*x28 + 0.00435*x16) + x32*(0.8*x32 + 0.016*x19) + x30*0.8*x30 + x33*(0.016*x18 + 0.8*x33) + x18*(0.00132*x18 + 0.016*x33) + x20*0.0008*x20 + x19*(0.016*x32 + 0.00132*x19) + x34*(0.012*x22 + 0.3*x34) + x35*(0.3*x35 - 0.012*x21) + x33*0.3*x33 + x21*(0.00078*x21 - 0.012*x35) + x22*(0.00078*x22 + 0.012*x34) + x23*0.0002*x23);
+    T[0] = 0.5*(qd_0*0.1*qd_0 + x10*(0.001*qd_1 + 0.44000000000000006*x10) + qd_1*(0.001*x10 + 0.02*qd_1) + x11*0.44000000000000006*x11 + x27*(0.8999999999999999*x12 + 5*x27) - x26*(0.05*x14 - 0.8999999999999999*x13 - 5*x26) + x12*(0.8999999999999999*x27 + 0.22249999999999998*x12) + x14*(0.0105*x14 - 0.009*x13 - 0.05*x26) + x13*(0.8999999999999999*x26 + 0.22199999999999998*x13 - 0.009*x14) + x28*(1.5*x28 + 0.045*x16) + x30*1.5*x30 + x31*(0.045*x17 + 1.5*x31) + x17*(0.045*x31 + 0.00435*x17) + x15*0.002*x15 + x16*(0.045*x28 + 0.00435*x16) + x32*(0.8*x32 + 0.016*x19) + x30*0.8*x30 + x33*(0.016*x18 + 0.8*x33) + x18*(0.00132*x18 + 0.016*x33) + x20*0.0008*x20 + x19*(0.016*x32 + 0.00132*x19) + x34*(0.012*x22 + 0.3*x34) + x35*(0.3*x35 - 0.012*x21) + x33*0.3*x33 + x21*(0.00078*x21 - 0.012*x35) + x22*(0.00078*x22 + 0.012*x34) + x23*0.0002*x23);
 }
 
 /* U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs
@@ -1052,8 +1051,8 @@ void manipulator6_momentum(const double *q, const double *qd, const double *p, d
     const double x55 = 0.05*x14;
     const double x56 = 0.05*x16 - 0.8999999999999999*x15 - 5*x27;
     const double x57 = 0.8999999999999999*x14 + 5*x28;
-    const double x58 = 0.8999999999999999*x28 + 0.2225*x14;
-    const double x59 = 0.010500000000000015*x16 - 0.009*x15 - 0.05*x27;
+    const double x58 = 0.8999999999999999*x28 + 0.22249999999999998*x14;
+    const double x59 = 0.0105*x16 - 0.009*x15 - 0.05*x27;
     const double x60 = 0.8999999999999999*x27 + 0.22199999999999998*x15 - 0.009*x16;
     const double x61 = 1.5*x29 + 0.045*x18;
     const double x62 = 0.045*x19 + 1.5*x32;
@@ -1259,11 +1258,11 @@ void manipulator6_joint_wrenches(const double *q, const double *qd, const double
     W[13] = x105;
     const double x106 = 0.8999999999999999*x63 + 5*x56 - 0.05*(x17*x17 + x24) + x103;
     W[14] = x106;
-    const double x107 = 0.21149999999999997*x25 + 0.009*(x18*x18 - x24) + 0.2225*x58 + 0.8999999999999999*x56 + 0.05*(x19 - x43) + x100 + 0.4*x103;
+    const double x107 = 0.21149999999999997*x25 + 0.009*(x18*x18 - x24) + 0.22249999999999998*x58 + 0.8999999999999999*x56 + 0.05*(x19 - x43) + x100 + 0.4*x103;
     W[15] = x107;
-    const double x108 = 0.0005000000000000282*x23 + 0.009*x61 + 0.010500000000000015*x60 - 0.05*x55 + x6*x101 - x7*x102;
+    const double x108 = 0.0005000000000000004*x23 + 0.009*x61 + 0.0105*x60 - 0.05*x55 + x6*x101 - x7*x102;
     W[16] = x108;
-    const double x109 = 0.22199999999999998*x59 + 0.8999999999999999*x55 - 0.009*x84 - 0.212*x22 + x7*x101 + x6*x102 - 0.4*x97;
+    const double x109 = 0.22199999999999998*x59 + 0.8999999999999999*x55 - 0.009*x84 - 0.21199999999999997*x22 + x7*x101 + x6*x102 - 0.4*x97;
     W[17] = x109;
     const double x110 = x4*x104 + x5*x106;
     const double x111 = x4*x106 - x5*x104;
@@ -1407,7 +1406,7 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
     const double x100 = 0.4*x96;
     const double x101 = 0.05 + 0.061*x7;
     const double x102 = x17*x94 - 0.0244*x7 - 0.009;
-    const double x103 = 1/(0.012500000000000015 - x95);
+    const double x103 = 1/(0.0125 - x95);
     const double x104 = x101*x103;
     const double x105 = x96*x103;
     const double x106 = x100*x103;
@@ -1419,7 +1418,7 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
     const double x112 = 5 + x93 - x96*x105;
     const double x113 = 0.8999999999999999 + 0.4*x93 - x96*x106;
     const double x114 = x99 + x96*x107;
-    const double x115 = 0.2225 + 0.16000000000000003*x93 - x100*x106;
+    const double x115 = 0.22249999999999998 + 0.16000000000000003*x93 - x100*x106;
     const double x116 = 0.4*x99 + x100*x107;
     const double x117 = 0.22199999999999998 + 0.4*x98 + x91 + x95 + 0.0244*x6 - x102*x107;
     const double x118 = x112 - x108;
@@ -1444,11 +1443,11 @@ void manipulator6_forward_dynamics(const double *q, const double *qd, const doub
     const double x137 = tau_3 - 0.061*x77 + x14*x76 - 0.0023499999999999997*x44 + 0.00435*x28 - x8*x65 - x9*x132;
     const double x138 = x15*x76 - 0.061*x73 + 0.00435*x42 - 0.0023499999999999997*x43 + x8*x132 - x9*x65 - x86*x137;
     const double x139 = x7*(x11*x60 + x10*x61 - 0.016*x45 - 0.045*x45 + 2.6*x76 - x84*x137) + x6*(2.6*x77 + 0.045*(x44 - x28) + x8*x64 - x9*x134 + x85*x137);
-    const double x140 = tau_2 - 0.009*x36 - 0.0005000000000000282*x31 - x6*x136 + x7*x138 + 0.05*x70;
+    const double x140 = tau_2 - 0.009*x36 - 0.0005000000000000004*x31 - x6*x136 + x7*x138 + 0.05*x70;
     const double x141 = 0.8999999999999999*x36 + 0.05*x31 + x135 - 5*x70 + x104*x140;
     const double x142 = 5*x71 + 0.8999999999999999*x37 - 0.05*(x25*x25 + x32) + x139 - x105*x140;
-    const double x143 = 0.8999999999999999*x71 - 0.05*x72 + 0.009*(x26*x26 - x32) - 0.2225*x28 + 0.21149999999999997*x33 + tau_3 + 0.4*x139 - x106*x140;
-    const double x144 = 0.8999999999999999*x70 + 0.22199999999999998*x29 - 0.212*x30 - 0.009*x31 + x7*x136 + x6*x138 - 0.4*x135 + x107*x140;
+    const double x143 = 0.8999999999999999*x71 - 0.05*x72 + 0.009*(x26*x26 - x32) - 0.22249999999999998*x28 + 0.21149999999999997*x33 + tau_3 + 0.4*x139 - x106*x140;
+    const double x144 = 0.8999999999999999*x70 + 0.22199999999999998*x29 - 0.21199999999999997*x30 - 0.009*x31 + x7*x136 + x6*x138 - 0.4*x135 + x107*x140;
     const double x145 = tau_1 - tau_2;
     const double x146 = 1/(0.1 + x131 + x3*x3*(0.44000000000000006 + x117 - x123 - 0.45*x129 - 0.45*(x129 - 0.45*(x108 + x120)) - x131) + x2*x3*(x130 + x130))*(tau_0 - 15.696000000000002*x0 - x2*(0.42000000000000004*x23 - 0.44000000000000006*x23 - 0.001*x21*x22 + 0.45*(x4*x142 - x5*x141) + x4*x143 + x5*x144 + 0.05*x145) - x3*(0.02*x24 + 0.001*(x21*x21 - qd_1*qd_1) + x4*x144 - x5*x143 - 0.45*(x4*x141 + x5*x142)));
     qdd[0] = x146;
@@ -1519,7 +1518,7 @@ AGGSYM_SCALAR_STORES void manipulator6_inertia_inverse(const double *q, const do
     const double x37 = 0.4*x33;
     const double x38 = 0.05 + 0.061*x5;
     const double x39 = x12*x31 - 0.0244*x5 - 0.009;
-    const double x40 = 1/(0.012500000000000015 - x32);
+    const double x40 = 1/(0.0125 - x32);
     const double x41 = x38*x40;
     const double x42 = x33*x40;
     const double x43 = x37*x40;
@@ -1531,7 +1530,7 @@ AGGSYM_SCALAR_STORES void manipulator6_inertia_inverse(const double *q, const do
     const double x49 = 5 + x30 - x33*x42;
     const double x50 = 0.8999999999999999 + 0.4*x30 - x33*x43;
     const double x51 = x36 + x33*x44;
-    const double x52 = 0.2225 + 0.16000000000000003*x30 - x37*x43;
+    const double x52 = 0.22249999999999998 + 0.16000000000000003*x30 - x37*x43;
     const double x53 = 0.4*x36 + x37*x44;
     const double x54 = 0.22199999999999998 + 0.4*x35 + x28 + x32 + 0.0244*x4 - x39*x44;
     const double x55 = x49 - x45;
@@ -1679,7 +1678,7 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x37 = x28 + x12*x26 - x11*x28 - x35;
     const double x38 = 0.4*x34;
     const double x39 = 0.05 + 0.061*x5;
-    const double x40 = 0.012500000000000015 - x33;
+    const double x40 = 0.0125 - x33;
     diag[2] = x40;
     const double x41 = x12*x32 - 0.0244*x5 - 0.009;
     const double x42 = 1/x40;
@@ -1694,7 +1693,7 @@ void manipulator6_transvective_factors(const double *q, const double *p, double 
     const double x51 = 5 + x31 - x34*x44;
     const double x52 = 0.8999999999999999 + 0.4*x31 - x34*x45;
     const double x53 = x37 + x34*x46;
-    const double x54 = 0.2225 + 0.16000000000000003*x31 - x38*x45;
+    const double x54 = 0.22249999999999998 + 0.16000000000000003*x31 - x38*x45;
     const double x55 = 0.4*x37 + x38*x46;
     const double x56 = 0.22199999999999998 + 0.4*x36 + x29 + x33 + 0.0244*x4 - x41*x46;
     const double x57 = x51 - x47;

@@ -152,7 +152,7 @@ typedef double aggsym_zeros_t __attribute__((vector_size(16), aligned(sizeof(dou
 #endif
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 12 mul, 4 add, 0 div, 1 call */
+ * operations: 11 mul, 5 add, 0 div, 1 call */
 AGGSYM_SCALAR_STORES void planar_2link_inertia(const double *q, const double *p, double *A)
 {
     const double q_1 = q[1];
@@ -168,7 +168,7 @@ AGGSYM_SCALAR_STORES void planar_2link_inertia(const double *q, const double *p,
     double x2_sin, x2;
     aggsym_sincos(q_1, &x2_sin, &x2);
     const double x3 = p_2*p_1*0.5*p_3*x2;
-    A[0] = x0*0.3333333333333333*p_0 + x1 + 2*x3 + p_1*x0;
+    A[0] = x0*0.3333333333333333*p_0 + x1 + x3 + x3 + p_1*x0;
     const double x4 = x1 + x3;
     A[1] = x4;
     A[2] = x4;

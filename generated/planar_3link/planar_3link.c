@@ -152,7 +152,7 @@ typedef double aggsym_zeros_t __attribute__((vector_size(16), aligned(sizeof(dou
 #endif
 
 /* A(q), the inertia matrix, n*n row-major, by composite bodies (2.32)-(2.34)
- * operations: 26 mul, 14 add, 0 div, 2 call */
+ * operations: 24 mul, 16 add, 0 div, 2 call */
 AGGSYM_SCALAR_STORES void planar_3link_inertia(const double *q, const double *p, double *A)
 {
     const double q_1 = q[1];
@@ -174,11 +174,11 @@ AGGSYM_SCALAR_STORES void planar_3link_inertia(const double *q, const double *p,
     aggsym_sincos2(q_1, q_2, &x5, &x4, &x7, &x6);
     const double x8 = x2*x6;
     const double x9 = p_4*x8;
-    const double x10 = x1*0.3333333333333333*p_1 + x3 + 2*x9 + p_2*x1;
+    const double x10 = x1*0.3333333333333333*p_1 + x3 + x9 + x9 + p_2*x1;
     A[4] = x10;
     const double x11 = x5*x2*x7;
     const double x12 = p_3*(x4*(p_1*0.5*p_4 + x8 + p_2*p_4) - x11);
-    A[0] = x0*0.3333333333333333*p_0 + x10 + 2*x12 + x0*(p_1 + p_2);
+    A[0] = x0*0.3333333333333333*p_0 + x10 + x12 + x12 + x0*(p_1 + p_2);
     const double x13 = x10 + x12;
     A[1] = x13;
     A[3] = x13;
