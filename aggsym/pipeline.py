@@ -255,8 +255,9 @@ def _check_together(path: Path, given: dict) -> None:
 
 def _named(model, path: Path, reader, name):
     """(model, origin): the model named ``name`` (``--name``), else after its file (``laikago_toes.urdf`` writes
-    ``laikago_toes.h``, whatever its ``<robot name>``), made an identifier; a YAML model keeps its ``name:``
-    (origin None: the file's own name unless it says otherwise)."""
+    ``laikago_toes.h``, whatever its ``<robot name>``), made an identifier, with ``_model`` after a name that is a C
+    keyword, a C library name or a Python module (``floor.xml`` writes ``floor_model.h``, with a warning); a YAML
+    model keeps its ``name:`` (origin None: the file's own name unless it says otherwise)."""
     from .codegen.escape import check_c_identifier, check_module_name
 
     if name is not None:
@@ -275,8 +276,16 @@ def _named(model, path: Path, reader, name):
     name = mangle(stem, "model")
     problem = check_c_identifier(name) or check_module_name(name)
     if problem:
-        raise AggsymError(f"{path}: the generated code is named after the file, and {problem}; give it a name "
-                          f"with --name NAME")
+        suffixed = f"{name}_model"  # (a keyword, a C library function, a Python module: the suffix makes a name)
+        if check_c_identifier(suffixed) or check_module_name(suffixed):
+            raise AggsymError(f"{path}: the generated code is named after the file, and {problem}; give it a name "
+                              f"with --name NAME")
+        import warnings
+
+        from .errors import ModelWarning
+        warnings.warn(ModelWarning(f"{path}: the generated code is named after the file, and {problem}: it is named "
+                                   f"{suffixed!r} instead (--name NAME gives another)"), stacklevel=2)
+        name = suffixed
     return dataclasses.replace(model, name=name), f"{path} (the file's name; --name NAME gives another)"
 
 

@@ -48,18 +48,30 @@ def test_name_still_chooses_the_name(arm, tmp_path, capsys):
     assert (tmp_path / "o" / "plane.h").exists() and not (tmp_path / "o" / "two_link_arm.h").exists()
 
 
-def test_a_file_name_that_is_no_identifier_is_made_one_or_refused_with_the_fix(tmp_path, capsys):
+def test_a_file_name_that_is_no_identifier_is_made_one(tmp_path, capsys):
     for file, name in (("2-link arm.urdf", "model_2_link_arm"), ("arm.v2.urdf", "arm_v2")):
         path = tmp_path / file
         path.write_text(URDF)
         code, out, err = run(capsys, "generate", path, "--list-routines")
         assert code == 0, err
         assert out.splitlines()[0].startswith(f"{name}_inertia "), out
-    path = tmp_path / "math.urdf"  # a standard module's name: `import math` would not find the generated module
-    path.write_text(URDF)
-    code, _, err = run(capsys, "generate", path, "-o", tmp_path / "o")
-    assert code == 2 and "named after the file" in err and "--name NAME" in err and "Traceback" not in err, err
-    assert not (tmp_path / "o").exists()
+    # a standard module's name (`import math` would not find the generated module), a C library function, a C
+    # keyword: the file's name with _model after it, and a warning naming the original and --name (issue 53)
+    for stem in ("math", "floor", "int"):
+        path = tmp_path / f"{stem}.urdf"
+        path.write_text(URDF)
+        out_dir = tmp_path / f"o_{stem}"
+        code, _, err = run(capsys, "generate", path, "-o", out_dir, "-q")
+        assert code == 0, err
+        assert "named after the file" in err and f"'{stem}_model'" in err and "--name NAME" in err, err
+        assert (out_dir / f"{stem}_model.h").exists() and not (out_dir / f"{stem}.h").exists()
+        assert (out_dir / f"{stem}_model.py").exists()
+    path = tmp_path / "floor.xml"  # the same for MJCF (the file of the issue)
+    path.write_text('<mujoco><worldbody><body name="b"><joint name="h" type="hinge" axis="0 1 0"/>'
+                    '<geom type="sphere" size="0.1" pos="0 0 -0.5" mass="1"/></body></worldbody></mujoco>')
+    code, out, err = run(capsys, "generate", path, "--list-routines")
+    assert code == 0 and out.startswith("floor_model_inertia "), (out, err)
+    assert "'floor_model'" in err, err
 
 
 def test_a_yaml_model_keeps_its_name(tmp_path, capsys):
