@@ -64,3 +64,26 @@ def test_point_masses_near_their_axes_keep_their_digits(base, tmp_path):
             scale = np.sqrt(np.outer(np.diag(P), np.diag(P)))
             worst = max(worst, float(np.max(np.abs(A - P) / scale)))
     assert worst < 1e-14
+
+
+def test_a_constant_turn_near_a_right_angle_keeps_the_small_diagonal_entry():
+    """Rigid.rotated with cos^2 given (the constant rotations of move_to_parent): a point mass far along x and near
+    it, turned by 1.5708 about z, so that its small theta_xx (about 2e-5 of theta_yy) becomes theta'_yy: kept to a
+    few units in the last place, where the double-angle form D + (A - D) s^2 loses digits to the large A."""
+    from fractions import Fraction
+
+    from aggsym.mechanics.aggregates import Rigid
+
+    m, r = 2.0, (0.61, 0.0013, -0.0021)
+    theta = tuple(tuple((m * (sum(x * x for x in r) if i == j else 0) - m * r[i] * r[j]) for j in range(3))
+                  for i in range(3))
+    th = Rigid(m, tuple(m * x for x in r), theta)
+    c, s = np.cos(1.5708), np.sin(1.5708)
+    exact = [[Fraction(x) for x in row] for row in theta]
+    C, S = Fraction(c), Fraction(s)
+    # (R theta R^T)_yy for R about z (axis 3): s^2 theta_xx + 2 s c theta_xy + c^2 theta_yy
+    want = float(S * S * exact[0][0] + 2 * S * C * exact[0][1] + C * C * exact[1][1])
+    direct = th.rotated(3, c, s, s * s, s * c, c * c).theta[1][1]
+    double_angle = th.rotated(3, c, s, s * s, s * c).theta[1][1]
+    assert abs(direct - want) <= 4 * np.spacing(want)
+    assert abs(double_angle - want) > abs(direct - want)

@@ -49,14 +49,16 @@ class Rigid:
         mu = add(add(cross(self.h, a), mv(self.theta, aw)), cross(w, mv(self.theta, w)))
         return f + mu
 
-    def rotated(self, axis, c, s, s2, sc) -> "Rigid":
+    def rotated(self, axis, c, s, s2, sc, c2=None) -> "Rigid":
         """C Theta C^T (2.7) for the elementary rotation C = diag(c_axis, c_axis) (Prop. 1.17), with cos c, sin s,
         s2 = sin^2 and sc = sin cos of its angle.
 
         The first moment and the entries joining the axis to its plane turn as 2-vectors; in the plane (i, j)
         the symmetric block [[A, B], [B, D]] becomes [[A - d, B - e], [B - e, D + d]] with
         d = (A - D) s2 + 2B sc and e = 2B s2 - (A - D) sc (a rotation by the double angle): 4 products where
-        the full congruence takes 12."""
+        the full congruence takes 12.  With ``c2`` = cos^2 given (a constant rotation), the diagonal is
+        ``c2 A + s2 D - 2 sc B`` and ``s2 A + c2 D + 2 sc B`` instead: near a right angle A - (A - D) s2 loses the
+        digits of a small D beside a large A (a point mass near the axis it is turned onto)."""
         a = axis - 1
         i, j = (a + 1) % 3, (a + 2) % 3
         h = list(self.h)
@@ -67,9 +69,14 @@ class Rigid:
         th[a][j] = th[j][a] = mul(s, x) + mul(c, y)
         A, B, D = self.theta[i][i], self.theta[i][j], self.theta[j][j]
         amd, b2 = A - D, B + B
-        d = mul(amd, s2) + mul(b2, sc)
-        e = mul(b2, s2) - mul(amd, sc)
-        th[i][i], th[j][j] = A - d, D + d
+        if c2 is None:
+            d = mul(amd, s2) + mul(b2, sc)
+            e = mul(b2, s2) - mul(amd, sc)
+            th[i][i], th[j][j] = A - d, D + d
+        else:
+            turn = mul(b2, sc)
+            e = mul(b2, s2) - mul(amd, sc)
+            th[i][i], th[j][j] = mul(c2, A) + mul(s2, D) - turn, mul(s2, A) + mul(c2, D) + turn
         th[i][j] = th[j][i] = B - e
         return Rigid(self.m, tuple(h), tuple(tuple(r) for r in th))
 
@@ -156,14 +163,16 @@ class General:
                 z22[i][j] = z22[j][i] = x22[i][j] + w_ji + oz_ij
         return General(x11, z12, tuple(tuple(r) for r in z22))
 
-    def rotated(self, axis, c, s, s2, sc) -> "General":
+    def rotated(self, axis, c, s, s2, sc, c2=None) -> "General":
         """R X R^T for R = diag(c_axis, c_axis), the elementary rotation (Prop. 1.17) of both 3-blocks, with cos c,
         sin s, s2 = sin^2 and sc = sin cos of its angle.
 
         In the plane (i, j) of the rotation a 2x2 block B = [[a, b], [e, d]] becomes
         ``[[a - delta, b - gamma], [e - gamma, d + delta]]`` with ``delta = (a - d) s2 + (b + e) sc`` and
         ``gamma = (b + e) s2 - (a - d) sc`` (its antisymmetric part is invariant): 4 products where R B R^T takes
-        16.  The entries joining the axis itself to the plane turn as 2-vectors."""
+        16.  The entries joining the axis itself to the plane turn as 2-vectors.  ``c2`` = cos^2 (a constant
+        rotation): the diagonal entries as ``c2 a + s2 d - (b + e) sc`` and ``s2 a + c2 d + (b + e) sc`` (see
+        :meth:`Rigid.rotated`)."""
         a = axis - 1
         i, j = (a + 1) % 3, (a + 2) % 3
         planes = ((i, j), (3 + i, 3 + j))
@@ -177,10 +186,16 @@ class General:
         for (p0, p1), (q0, q1) in ((planes[0], planes[0]), (planes[1], planes[1]), (planes[0], planes[1])):
             ba, bb, be, bd = M[p0][q0], M[p0][q1], M[p1][q0], M[p1][q1]
             amd, bpe = ba - bd, bb + be
-            delta = mul(amd, s2) + mul(bpe, sc)
-            gamma = mul(bpe, s2) - mul(amd, sc)
-            out[p0][q0] = out[q0][p0] = ba - delta
-            out[p1][q1] = out[q1][p1] = bd + delta
+            if c2 is None:
+                delta = mul(amd, s2) + mul(bpe, sc)
+                gamma = mul(bpe, s2) - mul(amd, sc)
+                out[p0][q0] = out[q0][p0] = ba - delta
+                out[p1][q1] = out[q1][p1] = bd + delta
+            else:
+                turn = mul(bpe, sc)
+                gamma = mul(bpe, s2) - mul(amd, sc)
+                out[p0][q0] = out[q0][p0] = mul(c2, ba) + mul(s2, bd) - turn
+                out[p1][q1] = out[q1][p1] = mul(s2, ba) + mul(c2, bd) + turn
             out[p0][q1] = out[q1][p0] = bb - gamma
             out[p1][q0] = out[q0][p1] = be - gamma
         return General.from_rows(out)
