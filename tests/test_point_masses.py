@@ -69,7 +69,8 @@ def test_point_masses_near_their_axes_keep_their_digits(base, tmp_path):
 def test_a_constant_turn_near_a_right_angle_keeps_the_small_diagonal_entry():
     """Rigid.rotated with cos^2 given (the constant rotations of move_to_parent): a point mass far along x and near
     it, turned by 1.5708 about z, so that its small theta_xx (about 2e-5 of theta_yy) becomes theta'_yy: kept to a
-    few units in the last place, where the double-angle form D + (A - D) s^2 loses digits to the large A."""
+    few units in the last place (by D + (A - D) c^2), where the double-angle form A - (A - D) s^2 loses digits to
+    the large A."""
     from fractions import Fraction
 
     from aggsym.mechanics.aggregates import Rigid

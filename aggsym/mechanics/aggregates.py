@@ -56,9 +56,10 @@ class Rigid:
         The first moment and the entries joining the axis to its plane turn as 2-vectors; in the plane (i, j)
         the symmetric block [[A, B], [B, D]] becomes [[A - d, B - e], [B - e, D + d]] with
         d = (A - D) s2 + 2B sc and e = 2B s2 - (A - D) sc (a rotation by the double angle): 4 products where
-        the full congruence takes 12.  With ``c2`` = cos^2 given (a constant rotation), the diagonal is
-        ``c2 A + s2 D - 2 sc B`` and ``s2 A + c2 D + 2 sc B`` instead: near a right angle A - (A - D) s2 loses the
-        digits of a small D beside a large A (a point mass near the axis it is turned onto)."""
+        the full congruence takes 12.  With ``c2`` = cos^2 given (a constant rotation) and smaller than s2, the
+        diagonal is ``D + d'`` and ``A - d'`` with d' = (A - D) c2 - 2B sc instead, the same products: near a right
+        angle A - (A - D) s2 loses the digits of a small D beside a large A (a point mass near the axis it is
+        turned onto), where D + (A - D) c2 keeps them."""
         a = axis - 1
         i, j = (a + 1) % 3, (a + 2) % 3
         h = list(self.h)
@@ -69,14 +70,14 @@ class Rigid:
         th[a][j] = th[j][a] = mul(s, x) + mul(c, y)
         A, B, D = self.theta[i][i], self.theta[i][j], self.theta[j][j]
         amd, b2 = A - D, B + B
-        if c2 is None:
+        if c2 is None or not c2 < s2:
             d = mul(amd, s2) + mul(b2, sc)
             e = mul(b2, s2) - mul(amd, sc)
             th[i][i], th[j][j] = A - d, D + d
         else:
-            turn = mul(b2, sc)
+            d = mul(amd, c2) - mul(b2, sc)
             e = mul(b2, s2) - mul(amd, sc)
-            th[i][i], th[j][j] = mul(c2, A) + mul(s2, D) - turn, mul(s2, A) + mul(c2, D) + turn
+            th[i][i], th[j][j] = D + d, A - d
         th[i][j] = th[j][i] = B - e
         return Rigid(self.m, tuple(h), tuple(tuple(r) for r in th))
 
@@ -171,8 +172,8 @@ class General:
         ``[[a - delta, b - gamma], [e - gamma, d + delta]]`` with ``delta = (a - d) s2 + (b + e) sc`` and
         ``gamma = (b + e) s2 - (a - d) sc`` (its antisymmetric part is invariant): 4 products where R B R^T takes
         16.  The entries joining the axis itself to the plane turn as 2-vectors.  ``c2`` = cos^2 (a constant
-        rotation): the diagonal entries as ``c2 a + s2 d - (b + e) sc`` and ``s2 a + c2 d + (b + e) sc`` (see
-        :meth:`Rigid.rotated`)."""
+        rotation) below s2: the diagonal entries as ``d + delta'`` and ``a - delta'``, delta' = (a - d) c2 -
+        (b + e) sc (see :meth:`Rigid.rotated`)."""
         a = axis - 1
         i, j = (a + 1) % 3, (a + 2) % 3
         planes = ((i, j), (3 + i, 3 + j))
@@ -186,16 +187,16 @@ class General:
         for (p0, p1), (q0, q1) in ((planes[0], planes[0]), (planes[1], planes[1]), (planes[0], planes[1])):
             ba, bb, be, bd = M[p0][q0], M[p0][q1], M[p1][q0], M[p1][q1]
             amd, bpe = ba - bd, bb + be
-            if c2 is None:
+            if c2 is None or not c2 < s2:
                 delta = mul(amd, s2) + mul(bpe, sc)
                 gamma = mul(bpe, s2) - mul(amd, sc)
                 out[p0][q0] = out[q0][p0] = ba - delta
                 out[p1][q1] = out[q1][p1] = bd + delta
             else:
-                turn = mul(bpe, sc)
+                delta = mul(amd, c2) - mul(bpe, sc)
                 gamma = mul(bpe, s2) - mul(amd, sc)
-                out[p0][q0] = out[q0][p0] = mul(c2, ba) + mul(s2, bd) - turn
-                out[p1][q1] = out[q1][p1] = mul(s2, ba) + mul(c2, bd) + turn
+                out[p0][q0] = out[q0][p0] = bd + delta
+                out[p1][q1] = out[q1][p1] = ba - delta
             out[p0][q1] = out[q1][p0] = bb - gamma
             out[p1][q0] = out[q0][p1] = be - gamma
         return General.from_rows(out)

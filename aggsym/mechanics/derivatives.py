@@ -82,8 +82,8 @@ def inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction=None, form=No
     ``form``: ``"spatial"`` (the composites of :mod:`.spatial_derivatives`, with the passive forces' derivatives on
     dual numbers), ``"dual"`` (the whole sweep on dual numbers, below), or None: :func:`derivative_form` chooses.
 
-    ``by_direction`` (dual form) (the default on a straight-line program, not on numbers): one dual sweep per direction, q_j
-    then qd_j for each coordinate j.  The sweeps share the primal values (value numbering) and each direction's
+    ``by_direction`` (the dual form; the default on a straight-line program, not on numbers): one dual sweep per
+    direction, q_j then qd_j for each coordinate j.  The sweeps share the primal values (value numbering) and each direction's
     tangents are the nodes that one sweep of all directions makes, so the operations are the same; but the nodes
     are made, and the C is emitted, direction by direction, so that only one direction's tangents are live at a
     time instead of every tangent of the forward sweep waiting for the backward one (Talos: 3852 values kept

@@ -196,7 +196,7 @@ class TreeKinematics:
         for axis, c, s in reversed(body.steps):  # the constructive rotation plane by plane, then its translation
             if is_zero(c) or is_zero(s):
                 X = X.moved(Motion(rotation(axis, c, s), ZERO3))
-            else:  # (the diagonal by cos^2 and sin^2: see Rigid.rotated)
+            else:  # (cos^2 given: near a right angle the diagonal turns by it, see Rigid.rotated)
                 X = X.rotated(axis, c, s, s * s, s * c, c * c)
         return X.moved(Motion(EYE3, body.L0.o))
 

@@ -247,7 +247,7 @@ class Inertial:
         a head on its neck axis), ``theta_c,ij - m r_i r_j`` off it; where every number is a number, in exact
         rational arithmetic on their binary values, rounded once (each entry the double nearest the exact one)."""
         m, r, I = self.mass, self.com, self.inertia
-        exact = all(isinstance(sp.sympify(x), sp.Number) for x in (m, *r, *(v for row in I for v in row)))
+        exact = all(isinstance(x, (sp.Number, int, float)) for x in (m, *r, *(v for row in I for v in row)))
         if exact:
             m, r = sp.Rational(m), [sp.Rational(x) for x in r]
             I = [[sp.Rational(v) for v in row] for row in I]
