@@ -247,7 +247,10 @@ class Inertial:
         a head on its neck axis), ``theta_c,ij - m r_i r_j`` off it; where every number is a number, in exact
         rational arithmetic on their binary values, rounded once (each entry the double nearest the exact one)."""
         m, r, I = self.mass, self.com, self.inertia
-        exact = all(isinstance(x, (sp.Number, int, float)) for x in (m, *r, *(v for row in I for v in row)))
+        numbers = (m, *r, *(v for row in I for v in row))
+        exact = all(isinstance(x, (sp.Number, int, float)) for x in numbers)
+        # (rationals given as such, a YAML model's 1/3, stay exact: only a float among them is rounded to)
+        exact = exact and any(isinstance(x, (sp.Float, float)) for x in numbers)
         if exact:
             m, r = sp.Rational(m), [sp.Rational(x) for x in r]
             I = [[sp.Rational(v) for v in row] for row in I]
@@ -258,7 +261,7 @@ class Inertial:
             return I[i][j] - m * r[i] * r[j]
 
         def done(x):
-            return sp.Float(x, precision=53) if exact and not x.is_Integer else sp.expand(x)
+            return (sp.Float(x, precision=53) if x != 0 else sp.S.Zero) if exact else sp.expand(x)
 
         h = tuple(done(m * x) for x in r)
         return done(m), h, tuple(tuple(done(entry(i, j)) for j in range(3)) for i in range(3))
