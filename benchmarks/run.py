@@ -209,7 +209,8 @@ def section_runtime(cfg) -> dict:
                                         options=("--floating-base", "quaternion", "--name", label))
         if not runs[label]["ok"]:
             return {"error": f"generating {label} failed:\n{runs[label].get('stderr', '')}"}
-    # solo12 on the Euler root and the chains as URDF: the five routines of the CasADi peer's table
+    # solo12 on the Euler root and the chains as URDF (the five routines of the CasADi peer's table), xarm7 (the
+    # five and the derivatives)
     peer_roots = {name: None for name in ROBOT_FILES}
     for label, (source, options, peer_root, routines) in EXTRA_RUNTIME_ROBOTS.items():
         if not take(label):
