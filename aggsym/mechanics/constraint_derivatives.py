@@ -41,8 +41,7 @@ from ..core.dual import Dual, DualBackend, lift, tangent
 from ..core.program import is_zero
 from .constraints import ConstraintKinematics, _transpose_times, constrained_forward_dynamics, rest_kinematics
 from . import spatial_derivatives
-from .bound import scratch_operations
-from .derivatives import inverse_dynamics_derivatives, tangent_seeds
+from .derivatives import cheaper_form, inverse_dynamics_derivatives, tangent_seeds
 from .impacts import impact_rhs
 from .kinematics import TreeKinematics
 from .kkt import ConstrainedSystem, arguments_pay
@@ -148,24 +147,6 @@ def _column_map(system, n, m, columns, offsets=()):
     return cmap
 
 
-def _form(bound, kin, role, build) -> str:
-    """Where :func:`~.spatial_derivatives.covers` the model, the form of E1's inverse-dynamics tangents: on a
-    straight-line program the one whose whole routine (``build(bound, kin, qd, form)``'s rows) reaches fewer
-    operations, counted on scratch programs (the dual one only up to the spatial count; the spatial one of equals),
-    on numbers the spatial one; ``"dual"`` where the spatial form does not cover the model.  Kept in ``kin.memo``."""
-    key = f"{role} form"
-    if key not in kin.memo:
-        form = "spatial" if spatial_derivatives.covers(bound) else "dual"
-        if form == "spatial" and bound.backend.symbolic:
-            def rows(way):
-                return lambda b, k, u: [[x for row in m for x in row] for m in build(b, k, u, way)]
-            ours = scratch_operations(bound, kin, rows("spatial"))
-            if scratch_operations(bound, kin, rows("dual"), ours) < ours:
-                form = "dual"
-        kin.memo[key] = form
-    return kin.memo[key]
-
-
 def _known(dq, dqd):
     """The rows [dq | dqd] (n x 2n): E1's tangents along q's directions, then qd's."""
     return [list(a) + list(b) for a, b in zip(dq, dqd)]
@@ -175,11 +156,12 @@ def constrained_forward_dynamics_derivatives(bound, kin, qd, tau, columns=None, 
     """(dqdd/dq, dqdd/dqd, dqdd/dtau, d(J^T lambda)/dq, .../dqd, .../dtau) as n x n rows, and the status of the
     solve (``tau`` as the routine receives it: the passive forces are taken here).  ``columns``: a list, to which
     the solves are appended as a :class:`~aggsym.core.columns.ColumnMap` on a straight-line program.  ``form``
-    (``"spatial"``, ``"dual"``, None: :func:`_form` chooses): how E1's inverse dynamics is differentiated, by the
-    composites of :mod:`.spatial_derivatives` or within the dual sweeps."""
+    (``"spatial"``, ``"dual"``, None: :func:`~.derivatives.cheaper_form` of the whole routine chooses): how E1's
+    inverse dynamics is differentiated, by the composites of :mod:`.spatial_derivatives` or within the dual
+    sweeps."""
     n = kin.tree.nv
     if form is None:
-        form = _form(bound, kin, "constrained_forward_dynamics_derivatives",
+        form = cheaper_form(bound, kin, "constrained_forward_dynamics_derivatives",
                      lambda b, k, u, way: constrained_forward_dynamics_derivatives(
                          b, k, u, b.backend.program.vector("tau", n), form=way)[:-1])
     qdd, lam, status = constrained_forward_dynamics(
@@ -211,7 +193,7 @@ def impulse_dynamics_derivatives(bound, kin, qd, r, columns=None, form=None) -> 
     tangents of A x as those of the inverse dynamics at qd = 0, qdd = x, without gravity)."""
     n = kin.tree.nv
     if form is None:
-        form = _form(bound, kin, "impulse_dynamics_derivatives",
+        form = cheaper_form(bound, kin, "impulse_dynamics_derivatives",
                      lambda b, k, u, way: impulse_dynamics_derivatives(
                          b, k, u, b.backend.program.vector("r", 1)[0], form=way)[:-1])
     system = ConstrainedSystem(bound, kin, arguments=arguments_pay(bound, kin, 2 * n))

@@ -83,8 +83,8 @@ def inverse_dynamics_derivatives(bound, kin, qd, qdd, by_direction=None, form=No
     dual numbers), ``"dual"`` (the whole sweep on dual numbers, below), or None: :func:`derivative_form` chooses.
 
     ``by_direction`` (the dual form; the default on a straight-line program, not on numbers): one dual sweep per
-    direction, q_j then qd_j for each coordinate j.  The sweeps share the primal values (value numbering) and each direction's
-    tangents are the nodes that one sweep of all directions makes, so the operations are the same; but the nodes
+    direction, q_j then qd_j for each coordinate j.  The sweeps share the primal values (value numbering) and each
+    direction's tangents are the nodes that one sweep of all directions makes, so the operations are the same; but the nodes
     are made, and the C is emitted, direction by direction, so that only one direction's tangents are live at a
     time instead of every tangent of the forward sweep waiting for the backward one (Talos: 3852 values kept
     across the slices of the C against 909; dtau 6 % and dqdd 5 % faster, 12 % and 10 % with slices of 80)."""
@@ -118,33 +118,31 @@ def _dual_left_forces(bound, kin, qd) -> list:
     return left_forces(dual, tangent_seeds(kin), [Dual(x, {n + i: 1}) for i, x in enumerate(qd)])
 
 
-def derivative_form(bound, kin) -> str:
-    """Which form :func:`inverse_dynamics_derivatives` takes: ``"spatial"`` where
-    :func:`~.spatial_derivatives.covers` the model and, on a straight-line program, its outputs reach fewer
-    operations than the dual form's (both counted on scratch programs of the model, the dual one only up to the
-    spatial count; the first of equals is the spatial one); ``"dual"`` otherwise.  On numbers the spatial form is
-    taken wherever it covers the model (it is also the faster in Python).  The answer is kept in ``kin.memo``."""
-    key = "inverse_dynamics_derivatives form"
-    if key in kin.memo:
-        return kin.memo[key]
-    form = "dual"
-    if spatial_derivatives.covers(bound):
-        form = "spatial"
-        if bound.backend.symbolic:
-            n = kin.tree.nv
+def cheaper_form(bound, kin, role, build) -> str:
+    """The form (``"spatial"`` or ``"dual"``) a routine differentiates the inverse dynamics in: ``"dual"`` where
+    :func:`~.spatial_derivatives.covers` does not hold; else on a straight-line program the one whose outputs
+    (``build(bound, kin, qd, form)``'s matrices) reach fewer operations, both counted on scratch programs of the
+    model (the dual one only up to the spatial count; the spatial one of equals); on numbers the spatial one (also
+    the faster in Python).  Kept in ``kin.memo`` under ``role``."""
+    key = f"{role} form"
+    if key not in kin.memo:
+        form = "spatial" if spatial_derivatives.covers(bound) else "dual"
+        if form == "spatial" and bound.backend.symbolic:
+            def rows(way):
+                return lambda b, k, u: [[x for row in m for x in row] for m in build(b, k, u, way)]
 
-            def build(way):
-                def rows(b, k, u):
-                    w = b.backend.program.vector("qdd", n)
-                    return [[x for row in m for x in row]
-                            for m in inverse_dynamics_derivatives(b, k, u, w, by_direction=False, form=way)]
-                return rows
-
-            ours = scratch_operations(bound, kin, build("spatial"))
-            if scratch_operations(bound, kin, build("dual"), ours) < ours:
+            ours = scratch_operations(bound, kin, rows("spatial"))
+            if scratch_operations(bound, kin, rows("dual"), ours) < ours:
                 form = "dual"
-    kin.memo[key] = form
-    return form
+        kin.memo[key] = form
+    return kin.memo[key]
+
+
+def derivative_form(bound, kin) -> str:
+    """Which form :func:`inverse_dynamics_derivatives` takes (:func:`cheaper_form` of its own matrices)."""
+    n = kin.tree.nv
+    return cheaper_form(bound, kin, "inverse_dynamics_derivatives", lambda b, k, u, way: inverse_dynamics_derivatives(
+        b, k, u, b.backend.program.vector("qdd", n), by_direction=False, form=way))
 
 
 def forward_dynamics_derivatives(bound, kin, qd, tau, columns=None) -> tuple:
@@ -202,4 +200,4 @@ def _forward_dynamics_derivatives(bound, kin, qd, tau, solve, by_direction=None,
     return tuple(out)
 
 
-__all__ = ["derivative_form", "inverse_dynamics_derivatives", "forward_dynamics_derivatives"]
+__all__ = ["cheaper_form", "derivative_form", "inverse_dynamics_derivatives", "forward_dynamics_derivatives"]
