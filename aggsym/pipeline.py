@@ -129,6 +129,10 @@ OPTIONS = (
            cli={"metavar": "PKG=DIR", "action": "append", "type": package_path, "default": []},
            help="$(find PKG) is DIR, and files there may be included (repeat for several; else the folders of "
                 "ROS_PACKAGE_PATH)"),
+    Option("root", "--model-root", readers=READ, cli={"metavar": "DIR"},
+           help="the folder inside which every file the model names must lie (MJCF includes, attached models, "
+                "meshes, textures, height fields; xacro includes and load_yaml): default the model's own folder; a "
+                "folder above it for a scene library that shares files between folders (symbolic links followed)"),
     Option("frictionloss", "--frictionloss", readers=READ, cli={"choices": ["list", "coulomb"]},
            help="MuJoCo's frictionloss (a constraint in MuJoCo) is listed in the manifest and left out of the "
                 "equations (list, the default), or taken as Coulomb friction f sign(qd) on the left side of forward "

@@ -230,7 +230,8 @@ UNSUPPORTED = {
     "include-outside": ('<mujoco><include file="../outside.xml"/><worldbody/></mujoco>',
                         ['<include file="../outside.xml">', "outside the model's folder"]),
     "include-absolute": ('<mujoco><include file="/etc/hostname"/><worldbody/></mujoco>',
-                         ['<include file="/etc/hostname">', "absolute path is refused"]),
+                         ['<include file="/etc/hostname">', "resolves to /etc/hostname, outside the model's folder",
+                          "--model-root / admits it"]),
 }
 
 

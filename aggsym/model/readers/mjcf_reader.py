@@ -556,15 +556,16 @@ class _Reader:
         }
 
 
-def load_mjcf(path, frictionloss: str = "list") -> Model:
+def load_mjcf(path, frictionloss: str = "list", root=None) -> Model:
     """Read an MJCF file through MuJoCo's compiler (the ``mujoco`` package: ``pip install 'aggsym[mjcf]'``); raises
     :class:`ModelError` with the file and the compiler's message, or naming what is not supported.
     ``frictionloss``: ``"list"`` (MuJoCo's frictionloss listed in the manifest, out of the equations) or
-    ``"coulomb"`` (taken as Coulomb friction f sign(qd) in the equations, on request)."""
+    ``"coulomb"`` (taken as Coulomb friction f sign(qd) in the equations, on request).  ``root``: the model root
+    (``--model-root``; default the file's folder), inside which every file the model names must resolve."""
     if frictionloss not in FRICTIONLOSS_OPTIONS:
         raise ValueError(f"frictionloss must be one of {', '.join(FRICTIONLOSS_OPTIONS)}, got {frictionloss!r}")
     path = Path(path)
-    screen(path)
+    screen(path, root)
     try:
         import mujoco
     except ImportError:

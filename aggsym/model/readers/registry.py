@@ -67,12 +67,12 @@ READERS: list = [
     Reader("YAML", (".yaml", ".yml"), _load_yaml,
            note="a YAML model lists its constraints and support itself, and writes its masses and inertias as "
                 "expressions in its parameters"),
-    Reader("URDF", (".urdf",), _load_urdf, options=("floating_base", "mimic", "snap_angles"),
+    Reader("URDF", (".urdf",), _load_urdf, options=("floating_base", "mimic", "snap_angles", "root"),
            sniffed=(".xml",), sniff=_is_urdf),
     Reader("xacro", (".xacro",), _load_xacro,
-           options=("floating_base", "mimic", "snap_angles", "xacro_args", "package_paths"),
+           options=("floating_base", "mimic", "snap_angles", "xacro_args", "package_paths", "root"),
            note="a xacro file is expanded by the xacro package, then read as URDF with the URDF options"),
-    Reader("MJCF", (".mjcf",), _load_mjcf, options=("frictionloss",), sniffed=(".xml",), sniff=_is_mjcf,
+    Reader("MJCF", (".mjcf",), _load_mjcf, options=("frictionloss", "root"), sniffed=(".xml",), sniff=_is_mjcf,
            note="an MJCF model's joints come from its file (a free joint is the quaternion free-flyer), as do its "
                 "angles"),
 ]

@@ -117,6 +117,7 @@ from .builder import Names, TreeBuilder, ball_names, floating_root
 from .builder import identifier as _identifier
 from .builder import quaternion_rotations as _quaternion_rotations, right_angle as _right_angle
 from .builder import rpy as _rpy
+from .model_root import ModelRoot
 from ..transforms.frames import default_frames
 from ..types import Coordinate, Coupling, JointDynamics, JointLimits, Model, Parameter
 from .sympy_numbers import double
@@ -630,12 +631,16 @@ def _check_options(floating_base, mimic, snap_angles):
     return floating_base
 
 
-def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent", snap_angles: float = 0.0) -> Model:
+def load_urdf(path, floating_base: bool | str = False, mimic: str = "independent", snap_angles: float = 0.0,
+              root=None) -> Model:
     """Read and validate a URDF file; raises :class:`ModelError` naming the element and line of a problem.
     ``snap_angles``: an approximation on request (off by default): the angles of joint and inertial origins
     (``rpy``) within this many radians of a multiple of pi/2 are taken as that multiple (recorded in
-    ``model.meta["snapped_angles"]`` and the manifest); below it the file's values are kept (to round-off)."""
+    ``model.meta["snapped_angles"]`` and the manifest); below it the file's values are kept (to round-off).
+    ``root`` (``--model-root``): a folder holding the file; a URDF reads no other file (its meshes, ``package://``
+    or ``file://``, are visuals and collisions, never opened), so the root only has to hold it."""
     path = Path(path)
+    ModelRoot.of(path, root)
     _check_options(floating_base, mimic, snap_angles)
     data = read_capped(path, path, MAX_BYTES, "a URDF")
     return urdf_from_bytes(path, data, floating_base, mimic, snap_angles)

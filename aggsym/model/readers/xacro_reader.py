@@ -24,8 +24,8 @@ code or read what it should not.  So here:
 * every expression (``${...}`` and ``$(eval ...)``) is parsed first and refused when it names a name or an
   attribute starting with ``_``, or an attribute of :data:`DENIED` (string formatting, frame and code objects,
   ``mro``); ``python.type`` and ``python.vars`` are removed from the table (:data:`REMOVED`);
-* every file read (the model, ``<xacro:include>``, ``xacro.load_yaml``) must lie inside the model's folder or a
-  package folder (``--package-path``, ``ROS_PACKAGE_PATH``), after following links; it is at most
+* every file read (the model, ``<xacro:include>``, ``xacro.load_yaml``) must lie inside the model root (the
+  model's folder, or ``--model-root``: :mod:`.model_root`) or a package folder (``--package-path``, ``ROS_PACKAGE_PATH``), after following links; it is at most
   :data:`MAX_BYTES`, and a document type declaring entities or naming an external DTD is refused, as the URDF
   reader does;
 * ``$(env VAR)``, ``$(optenv VAR default)`` and ``$(cwd)`` stay allowed (they read the environment, no file).
@@ -48,6 +48,7 @@ from pathlib import Path
 from xml.parsers import expat
 
 from ...errors import ModelError, ModelWarning
+from .model_root import ModelRoot
 
 MAX_BYTES = 16 * 2 ** 20  # the largest xacro file (or included file) read
 REMOVED = frozenset({"type", "vars"})  # taken out of the package's ``python`` namespace
@@ -76,13 +77,18 @@ def check_expression(text: str) -> None:
                            f"let a file run code or read files; see the xacro section of aggsym's docs/urdf.md)")
 
 
-def check_file(path: str, roots: list) -> str:
-    """``path`` resolved, when it lies inside one of ``roots``; else :class:`_Refused`."""
+def check_file(path: str, roots: list, bounds: ModelRoot | None = None) -> str:
+    """``path`` resolved, when it lies inside one of ``roots`` (the model root ``bounds`` first, then the package
+    folders); else :class:`_Refused` naming the ``--model-root`` that would admit it."""
     real = Path(path).resolve()
     if not any(real == root or root in real.parents for root in roots):
         shown = ", ".join(str(r) for r in roots)
-        raise _Refused(f"the file {path} is outside the model's folder and the package folders ({shown}); only "
-                       f"files there are read (give the package's folder with --package-path PKG=DIR)")
+        link = "" if Path(os.path.abspath(path)) == real else f" (through a symbolic link: {os.path.abspath(path)})"
+        hint = f"; or {bounds.hint(str(real))}" if bounds is not None else ""
+        named = "the model root" if bounds is not None and bounds.given else "the model's folder"
+        raise _Refused(f"the file {path} resolves to {real}{link}, outside {named} and the package folders "
+                       f"({shown}); only files there are read (give the package's folder with --package-path "
+                       f"PKG=DIR{hint})")
     return str(real)
 
 
@@ -126,15 +132,17 @@ def find_package(name: str, package_paths: dict) -> str:
                    f"{os.pathsep.join(searched) or 'not set'}); give --package-path {name}=DIR")
 
 
-def roots_of(path: Path, package_paths: dict) -> list:
-    """The folders whose files an expansion may read."""
-    roots = [path.resolve().parent] + [Path(d).resolve() for d in package_paths.values()]
+def roots_of(path: Path, package_paths: dict, bounds: ModelRoot | None = None) -> list:
+    """The folders whose files an expansion may read: the model root (``bounds``; default the model's folder),
+    the package folders given, those of ``ROS_PACKAGE_PATH``."""
+    bounds = bounds or ModelRoot.of(path)
+    roots = [Path(bounds.folder)] + [Path(d).resolve() for d in package_paths.values()]
     roots += [Path(p).resolve() for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
     return roots
 
 
 @contextlib.contextmanager
-def _hooks(xacro, roots: list, package_paths: dict):
+def _hooks(xacro, roots: list, package_paths: dict, bounds: ModelRoot):
     """The package's file reader, evaluator and ``find`` replaced for one expansion (restored after)."""
     from xacro import substitution_args as sa
 
@@ -143,7 +151,7 @@ def _hooks(xacro, roots: list, package_paths: dict):
 
     def checked_parse(inp, filename=None):
         if inp is None:  # a file: the model or an include
-            real = check_file(os.path.join(xacro.root_dir, filename), roots)
+            real = check_file(os.path.join(xacro.root_dir, filename), roots, bounds)
             try:
                 data = _read(real)
             except OSError as e:  # (as the package's parse reports it: an optional include may be absent)
@@ -172,7 +180,7 @@ def _hooks(xacro, roots: list, package_paths: dict):
         sa._eval_dict["find"] = saved[4]
 
 
-def _symbols(xacro, roots: list):
+def _symbols(xacro, roots: list, bounds: ModelRoot):
     """The package's global table without ``type`` and ``vars``, its ``load_yaml`` reading only inside ``roots``."""
     table = dict(xacro._global_symbols)
     python = xacro.NameSpace()
@@ -182,7 +190,7 @@ def _symbols(xacro, roots: list):
     load = namespace["load_yaml"]
 
     def load_yaml(filename):
-        check_file(xacro.abs_filename_spec(filename), roots)
+        check_file(xacro.abs_filename_spec(filename), roots, bounds)
         return load(filename)
 
     namespace["load_yaml"] = load_yaml
@@ -190,8 +198,10 @@ def _symbols(xacro, roots: list):
     return xacro.Table(table)
 
 
-def expand(path, xacro_args=None, package_paths=None) -> str:
-    """The URDF text that ``path`` expands to; a :class:`ModelError` naming the file (and line) on failure."""
+def expand(path, xacro_args=None, package_paths=None, root=None) -> str:
+    """The URDF text that ``path`` expands to; a :class:`ModelError` naming the file (and line) on failure.
+    ``root``: the model root (``--model-root``; default the file's folder), which bounds the files read with the
+    package folders."""
     path = Path(path)
     try:
         import xacro
@@ -202,14 +212,15 @@ def expand(path, xacro_args=None, package_paths=None) -> str:
     for name, folder in packages.items():
         if not Path(folder).is_dir():
             raise ModelError(path, "", f"--package-path {name}={folder}: no such folder")
-    roots = roots_of(path, packages)
+    bounds = ModelRoot.of(path, root)
+    roots = roots_of(path, packages, bounds)
     stderr = io.StringIO()
-    with _LOCK, _hooks(xacro, roots, packages), contextlib.redirect_stderr(stderr):
+    with _LOCK, _hooks(xacro, roots, packages, bounds), contextlib.redirect_stderr(stderr):
         xacro.init_stacks(str(path.resolve()))
         xacro.substitution_args_context["arg"] = args
         try:
             doc = xacro.parse(None, str(path.resolve()))
-            xacro.eval_all(doc.documentElement, xacro.Table(), _symbols(xacro, roots))
+            xacro.eval_all(doc.documentElement, xacro.Table(), _symbols(xacro, roots, bounds))
             text = doc.toprettyxml(indent="  ")
         except Exception as exc:  # the package's errors are of many kinds (its own, NameError, KeyError, ...)
             raise _model_error(xacro, path, exc) from None
@@ -253,11 +264,11 @@ def _model_error(xacro, path: Path, exc: Exception) -> ModelError:
     return ModelError(shown, "", f"xacro: {message}{context}", line)
 
 
-def load_xacro(path, xacro_args=None, package_paths=None, **urdf_options):
+def load_xacro(path, xacro_args=None, package_paths=None, root=None, **urdf_options):
     """Expand ``path`` (:func:`expand`) and read the URDF it gives (:func:`~.urdf_reader.load_urdf`'s options)."""
     from .urdf_reader import urdf_from_bytes
 
-    text = expand(path, xacro_args, package_paths)
+    text = expand(path, xacro_args, package_paths, root)
     return urdf_from_bytes(Path(path), text.encode("utf-8"), label=f"{path} (expanded by xacro)", **urdf_options)
 
 
