@@ -19,7 +19,8 @@ import pytest
 
 import aggsym
 from aggsym import cli
-from aggsym.contract import ROUTINES, massless_coordinates, sample_configurations, select_routines
+from aggsym.contract import ROUTINES, sample_configurations, select_routines
+from aggsym.contract.regularity import regularity
 from aggsym.errors import ModelWarning
 from aggsym.twin import NumericTwin
 from helpers import ROBOTS, generated_code, relative_error, robot_path
@@ -106,7 +107,7 @@ def worst_errors(model, call, pm, rng, states=2, roles=None) -> dict:
     """The largest relative error of every routine of the comparison over random states (those defined only where
     A(q) is regular left out where a joint moves no mass: the generator omits them there too)."""
     frames = [f.name for f in model.frames]
-    singular = massless_coordinates(model)[1]
+    singular = regularity(model).singular
     worst = {}
     for _ in range(states):
         q = sample_configurations(model, rng)

@@ -56,7 +56,7 @@ from .routines_regressor import (
     base_regressor_layout, drive_parameter_names, friction_regressor_layout, regressor_layout, standard_parameter_names,
 )
 from .analyses import (
-    BASE_RANK_TOLERANCE, BASE_SEED, base_parameters, massless_coordinates, pivoted_columns, redundant_constraints,
+    BASE_RANK_TOLERANCE, BASE_SEED, base_parameters, pivoted_columns, redundant_constraints,
     regressor_problem, sample_configurations,
 )
 from .selection import omitted_routines, select_routines
@@ -76,7 +76,7 @@ __all__ = [
     "SUPPORT_OUTPUTS", "SUPPORT_FAILURE", "support_layout", "frame_layout", "COM_CONVENTION", "regressor_layout",
     "standard_parameter_names", "base_regressor_layout", "friction_regressor_layout", "drive_parameter_names",
     "regressor_problem", "BASE_SEED", "BASE_RANK_TOLERANCE", "base_parameters", "pivoted_columns",
-    "sample_configurations", "massless_coordinates", "redundant_constraints",
+    "sample_configurations", "redundant_constraints",
     "omitted_routines", "select_routines",
     "FLOAT_TOLERANCE", "FLOAT_PER_CONDITION", "FLOAT_TOLERANCE_DEFAULT", "FLOAT_TIME", "float_tolerance", "manifest",
     "constraints_entry", "time_entry", "elastic_entry", "frames_entry",

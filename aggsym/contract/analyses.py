@@ -1,5 +1,5 @@
-"""Numerical analyses of a model at generation, on the numeric twin: random configurations, the coordinates that
-move no mass (A(q) singular), structurally redundant constraint rows, why the regressor does not hold, and the
+"""Numerical analyses of a model at generation, on the numeric twin: random configurations, structurally redundant
+constraint rows (whether A(q) is regular: :mod:`.regularity`), why the regressor does not hold, and the
 base-parameter reduction of the regressor (its exact coefficients: :mod:`.exact_relations`)."""
 from __future__ import annotations
 
@@ -24,30 +24,6 @@ def sample_configurations(model, rng, size=None):
             quat = rng.normal(size=(4,) + shape[1:])
             q[idx[-4]:idx[-4] + 4] = quat / np.linalg.norm(quat, axis=0)
     return q
-
-
-def massless_coordinates(model, samples: int = 2, tolerance: float = 1e-12) -> tuple:
-    """(coordinate indices with A_ii = 0, whether A(q) is singular), at the default parameters and a few fixed
-    random configurations: A_ii = psi_i^T A+ psi_i is the kinetic energy of a unit rate of coordinate i alone,
-    zero exactly when its joint moves no mass.  Zero and singular are judged relative to the largest entry."""
-    import numpy as np
-
-    from ..core.backend import Numeric
-    from ..mechanics.bound import bind
-
-    n = model.nv
-    if n == 0:
-        return (), False
-    bound = bind(model, Numeric())
-    rng = np.random.default_rng(0)
-    zero, singular = set(range(n)), False
-    for _ in range(samples):
-        q = [float(x) for x in sample_configurations(model, rng)]
-        A = np.array(run(ROUTINES["inertia"], bound, {"q": q})[0], dtype=float).reshape(n, n)
-        scale = max(float(np.abs(A).max()), 1e-300)
-        zero &= {i for i in range(n) if abs(A[i, i]) <= tolerance * scale}
-        singular = singular or float(np.linalg.eigvalsh(A)[0]) <= tolerance * scale
-    return tuple(sorted(zero)), singular
 
 
 def redundant_constraints(model, samples: int = 2, tolerance: float = 1e-9) -> list:

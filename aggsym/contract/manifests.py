@@ -8,6 +8,7 @@ from .. import __version__
 from ..mechanics import elastic
 from ..model.transforms.joint_dynamics import passive_entry
 from .registry import ROUTINES, input_length, signature
+from .regularity import mass_matrix_entry
 
 
 def frames_entry(model) -> list:
@@ -100,6 +101,9 @@ def manifest(model, routines, ops: dict, omitted=None, scalar: str = "double", l
         out["constraints"] = constraints_entry(model)
     if any(r.role.startswith("frame_") for r in routines):
         out["frames"] = frames_entry(model)
+    mass_matrix = mass_matrix_entry(model)
+    if mass_matrix is not None:  # A(q) not proved regular everywhere: degenerate bodies, where it is singular
+        out["mass_matrix"] = mass_matrix
     passive = passive_entry(model)
     if passive is not None:  # the joints' damping and friction: in forward and inverse dynamics or not
         out["passive"] = passive

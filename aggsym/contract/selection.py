@@ -3,15 +3,17 @@ does not hold, the routines that need a regular A(q) where it is singular) and t
 (:func:`select_routines`)."""
 from __future__ import annotations
 
-from .analyses import massless_coordinates, regressor_problem
+from .analyses import regressor_problem
+from .regularity import regularity
 from .registry import ROUTINES, routines_for
 
 
 def omitted_routines(model) -> dict:
     """{role: reason} of the routines left out: the regressor where tau = Y pi does not hold
-    (:func:`regressor_problem`), and, when A(q) is singular at the default parameters (a coordinate that moves no
-    mass, e.g. a massless finger joint), forward dynamics, A^-1 and the factors, undefined there (A, b, g, inverse
-    dynamics and the joint wrenches stay defined and are emitted)."""
+    (:func:`regressor_problem`), and, when A(q) is singular at every configuration at the default parameters
+    (:func:`~.regularity.regularity`: a coordinate that moves no mass, e.g. a massless finger joint), forward
+    dynamics, A^-1 and the factors, undefined there (A, b, g, inverse dynamics and the joint wrenches stay defined
+    and are emitted)."""
     out = {}
     wanted = [r.role for r in routines_for(model)]  # (a list: the order of emission, the same in every run)
     problem = regressor_problem(model)
@@ -20,11 +22,12 @@ def omitted_routines(model) -> dict:
                     if role in wanted})
     if not any(ROUTINES[role].regular for role in wanted):
         return out
-    zero, singular = massless_coordinates(model)
-    if not singular:
+    regular = regularity(model)
+    if not regular.singular:
         return out
+    zero = regular.zero
     names = ", ".join(f"{model.coordinates[i].name} (joint {model.coordinates[i].joint!r})" for i in zero)
-    reason = (f"A(q) is singular at the default parameters: {'coordinate(s) ' + names + ' move(s) no mass' if zero else 'its smallest eigenvalue is zero'}; "
+    reason = (f"A(q) is singular at the default parameters: {'coordinate(s) ' + names + ' move(s) no mass' if zero else 'its smallest eigenvalue is zero at every configuration'}; "
               f"--armature VALUE adds a rotor inertia on every coordinate")
     return {**out, **{role: reason for role in wanted if ROUTINES[role].regular}}
 
