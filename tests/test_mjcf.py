@@ -214,8 +214,8 @@ UNSUPPORTED = {
     "tendon-armature": (ARM.format(attrs="", extra="", after='<tendon><fixed name="t" armature="3"><joint joint="j1" '
                                                             'coef="1"/></fixed></tendon>'),
                         ['<tendon name="t">', "armature", "not supported yet"]),
-    "gravcomp": (ARM.replace('<body name="a">', '<body name="a" gravcomp="1">').format(attrs="", extra="", after=""),
-                 ['<body name="a">', "gravity compensation"]),
+    "actuatorgravcomp": (ARM.replace('<body name="a">', '<body name="a" gravcomp="1">').format(
+        attrs='actuatorgravcomp="true"', extra="", after=""), ['<joint name="j1">', "actuatorgravcomp", "not supported"]),
     "parameter-clash": ('<mujoco><worldbody><body name="f"><joint name="a-b" type="free" damping="1"/><geom size=".1"/>'
                         '</body><body name="h"><joint name="a_b" damping="1"/><geom size=".1"/></body></worldbody>'
                         '</mujoco>', ["runtime parameter the name 'damping_a_b'", "rename one"]),

@@ -66,6 +66,8 @@ def redundant_constraints(model, samples: int = 2, tolerance: float = 1e-9) -> l
 
 def regressor_problem(model) -> str | None:
     """Why tau = Y pi does not hold for a model (the regressor is then omitted), or None."""
+    if model.gravcomp:
+        return "gravity compensation (gravcomp) lifts a fraction of some bodies' weight; it is not in the regressor"
     if elastic.is_elastic(model):
         return "the elastic force C (q - q0) of (2.27) is in tau and not linear in the inertial parameters"
     if any(b.added_mass is not None for b in model.bodies):

@@ -173,11 +173,13 @@ register(Routine("joint_friction", ("qd", "p"), (Output("tau_f", nq_vector),), _
                  "A qdd + b + g = tau + tau_f", applies=lambda model: model.has_joint_dynamics, coupled=None))
 register(Routine("passive_forces", ("q", "qd", "p"), (Output("tau_p", nq_vector),),
                  lambda bound, kin, x: (passive.passive_forces(bound, kin.q, x["qd"]),),
-                 "tau_p = -(C (q - q0) + D qd + t + F sign(qd)), the springs (2.27), the viscous joint damping, the "
-                 "fixed tendons' springs and dampers (t) and the Coulomb joint friction asked for (F) as a "
+                 "tau_p = -(C (q - q0) + D qd + t + F sign(qd)) + tau_s, the springs (2.27), the viscous joint "
+                 "damping, the fixed tendons' springs and dampers (t), the Coulomb joint friction asked for (F) and "
+                 "the lifts of gravity compensation (tau_s, MuJoCo's gravcomp) as a "
                  "generalized force on the right side (MuJoCo's qfrc_passive, without F): A qdd + b + g = tau + "
                  "tau_p",
-                 applies=lambda model: bool(model.damping or model.tendons or model.coulomb), frame_free=True))
+                 applies=lambda model: bool(model.damping or model.tendons or model.coulomb or model.gravcomp),
+                 frame_free=True))
 register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_vector),),
                  lambda bound, kin, x: (transvective.forward_dynamics(
                      bound, kin, minus(x["tau"], passive.left_forces(bound, kin.q, x["qd"])), x["qd"]),),

@@ -57,6 +57,7 @@ class Bound:
     rotors: tuple = ()  # per coordinate: armature plus its own (model.dof_armature); empty: armature on every one
     damping: tuple = ()  # per coordinate: the viscous damping (model.damping); empty: none
     coulomb: tuple = ()  # per coordinate: the Coulomb friction (model.coulomb); empty: none
+    gravcomp: tuple = ()  # per body: (m_s, h_s) of its compensated weight (model.gravcomp) or None; empty: none
 
     def rotor(self, j: int):
         """The rotor inertia on coordinate j's own axis (the diagonal entry it adds to A)."""
@@ -144,7 +145,11 @@ def bind(model: Model, backend, p=None, tree: Tree | None = None, t=None) -> Bou
     rotors = tuple(s(a + model.armature if model.armature else a) for a in model.dof_armature)
     damping = tuple(s(d) for d in model.damping)
     coulomb = tuple(s(f) for f in model.coulomb)
-    return Bound(model, tree, backend, bodies, gravity, params, t, armature, rotors, damping, coulomb)
+    gravcomp = ()
+    if model.gravcomp:
+        lifted = {name: (s(m), tuple(s(x) for x in h)) for name, m, h in model.gravcomp}
+        gravcomp = tuple(lifted.get(b.name) for b in model.bodies)
+    return Bound(model, tree, backend, bodies, gravity, params, t, armature, rotors, damping, coulomb, gravcomp)
 
 
 def _steps(rotation, s):

@@ -61,4 +61,8 @@ def potential_energy(bound, kin):
         th = bound.bodies[k].rigid
         if th is not None and moves[k]:
             acc = acc + th.m * height[k] + dot(gam[k], th.h)
+    if bound.gravcomp:  # (the lifts' potential: MuJoCo's gravcomp, aggsym.mechanics.gravcomp)
+        from .gravcomp import compensated_potential
+
+        acc = acc - compensated_potential(bound, kin)
     return acc

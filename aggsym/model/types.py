@@ -507,6 +507,9 @@ class Model:
     # (MJCF ``frictionloss`` under ``--frictionloss coulomb``, URDF ``<dynamics friction>`` under ``--passive include``;
     # expressions); empty: none
     tendons: tuple = ()  # Tendon: fixed tendons with springs or dampers, their forces on the left side
+    gravcomp: tuple = ()  # (body name, m_s, (h_x, h_y, h_z)): the compensated weight of a body (MuJoCo's gravcomp),
+    # a mass and its first moment about the body origin in body axes, lifted against gravity among the passive
+    # forces (aggsym.mechanics.gravcomp; expressions); empty: none
     inertial_blocks: tuple = ()  # InertialBlock: links whose ten inertial parameters are entries of p (--payload,
     # --inertial-parameters), each with a generated helper that writes them
 

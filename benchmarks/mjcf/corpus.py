@@ -1,5 +1,6 @@
 """The MJCF reader against MuJoCo on two whole corpora: every model of dm_control's suite and of gymnasium's MuJoCo
-environments (the XML their wheels ship) that has a joint.
+environments (the XML their wheels ship) that has a joint; and on this project's probes (``benchmarks/mjcf/probes``:
+a gravity-compensated arm and free body, ...).
 
 For each: load it with aggsym (``aggsym.load``, MuJoCo's compiler underneath), and compare A, d = b + g - passive
 and qacc of the model as read and of its internal models (the frames the generated routines are built in) with
@@ -30,14 +31,19 @@ KKT_TOLERANCE = 1e-8
 OUT = result_path("mjcf_corpus")
 
 
+PROBES = Path(__file__).parent / "probes"  # aggsym's own MJCF files, one feature each (gravity compensation, ...)
+
+
 def corpora() -> dict:
-    """{corpus name: sorted XML files}: dm_control's suite and gymnasium's MuJoCo assets, from the installed wheels."""
+    """{corpus name: sorted XML files}: dm_control's suite and gymnasium's MuJoCo assets, from the installed wheels,
+    and this project's probes (:data:`PROBES`)."""
     import dm_control
     import gymnasium
 
     suite = Path(dm_control.__file__).parent / "suite"
     gym = Path(gymnasium.__file__).parent / "envs" / "mujoco" / "assets"
-    return {"dm_control suite": sorted(suite.glob("*.xml")), "gymnasium mujoco": sorted(gym.glob("*.xml"))}
+    return {"dm_control suite": sorted(suite.glob("*.xml")), "gymnasium mujoco": sorted(gym.glob("*.xml")),
+            "aggsym probes": sorted(PROBES.glob("*.xml"))}
 
 
 def has_joint(path) -> bool:

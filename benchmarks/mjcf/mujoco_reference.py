@@ -215,7 +215,7 @@ def compare(path, model=None, samples: int = 3, seed: int = 0, internal: bool = 
             if coupled is not None:
                 ref = coupled.Jc.T @ ref
             for each in [twin] + list(evaluators):
-                mine = (each.call("passive_forces", q, qd) if model.has_damping or model.tendons else
+                mine = (each.call("passive_forces", q, qd) if model.has_damping or model.tendons or model.gravcomp else
                         -each.call("elastic", q))
                 worst["passive"] = max(worst["passive"], float(np.max(np.abs(mine - ref)) /
                                                                max(np.max(np.abs(ref)), 1e-300)))

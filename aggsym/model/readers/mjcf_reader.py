@@ -43,6 +43,10 @@ The mapping
   ``f = -k s - d L'`` along the tendon (s the stretch beyond the rest length or dead band), ``-c f`` on the left.
   Forward and inverse dynamics then include the passive forces as MuJoCo's ``qacc`` and ``qfrc_passive`` do:
   A qdd + b + g + C (q - q0) + D qd + t = tau (``passive_forces`` gives -(C (q - q0) + D qd + t), MuJoCo's sign).
+  Gravity compensation (``gravcomp`` s on a body, ``Model.gravcomp``, :mod:`aggsym.mechanics.gravcomp`): the runtime
+  parameter ``gravcomp_<body>`` (default s) lifts that fraction of the body's weight at its centre of mass, among
+  the passive forces as in MuJoCo's ``qfrc_passive`` (g(q) keeps the whole weight, as ``qfrc_bias`` does); the
+  potential energy holds the lift's.  ``actuatorgravcomp`` (the lift routed through the actuators) is refused.
 * ``frictionloss`` (a constraint in MuJoCo, not a smooth force): listed per joint and tendon in the manifest; with
   ``frictionloss="coulomb"`` (``--frictionloss coulomb``, on request) taken as Coulomb friction: ``F sign(qd)`` on
   the left (``friction_<coordinate>``, ``Model.coulomb``) and ``-F sign(L')`` along a fixed tendon
@@ -56,7 +60,8 @@ The mapping
   (``model.couplings``) or joint-space constraint rows, each listed in ``meta["mjcf"]["equalities"]``; the others
   are refused there by name.  Refused with an error naming them, since they would change the equations: spatial
   tendons with a stiffness or damping, tendons with armature, polynomial or yielding tendon springs, flexes,
-  gravity compensation, actuators with damping or armature, polynomial damping or stiffness.
+  gravity compensation routed through the actuators, actuators with damping or armature, polynomial damping or
+  stiffness.
 * ``model.links`` (kind ``"link"``): every MuJoCo body (``world`` included when ``worldbody`` is there) and every
   site (a site sharing a body's name is listed as ``site:<name>``) as a frame on the body it belongs to, for
   ``--frames``, ``--payload``, ``--inertial-parameters`` and ``--constraints``; the leaves are the moving bodies
@@ -213,8 +218,11 @@ class _Reader:
         if m.nflex:
             self.fail("<deformable>", f"{m.nflex} flex object(s); flexes are not supported")
         heavy = [self.body_name(i) for i in range(m.nbody) if m.body_gravcomp[i] != 0]
-        if heavy:
-            self.fail(f'<body name="{heavy[0]}">', "gravity compensation (gravcomp) is not supported")
+        routed = [self.joint_name(j) for j in range(m.njnt) if hasattr(m, "jnt_actgravcomp") and m.jnt_actgravcomp[j]]
+        if heavy and routed:
+            self.fail(f'<joint name="{routed[0]}">', "actuatorgravcomp (gravity compensation routed through the "
+                                                    "actuators, qfrc_actuator) is not supported; the passive "
+                                                    "gravity compensation of gravcomp alone is")
         for a in range(m.nu):
             name = _name(m, mj, mj.mjtObj.mjOBJ_ACTUATOR, a, "actuator")
             for field, what in (("actuator_damping", "damping"), ("actuator_armature", "armature")):
@@ -348,6 +356,7 @@ class _Reader:
         body_links = set(names) if needs_world else set(names[1:])
         sites = self.sites(tree, names, welded, needs_world, body_links)
         tendons = self.tendon_forces = self.tendons(params, coordinate_of, springs, dampers)
+        gravcomp = self.gravcomp(tree, names, welded, params)
         for axis, value in zip("xyz", gravity):
             params.append(Parameter(f"gravity_{axis}", float(value)))
         seen: dict = {}
@@ -374,6 +383,7 @@ class _Reader:
                       dof_armature=tuple(armature) if any(a != 0 for a in armature) else (),
                       damping=tuple(damping) if any(d != 0 for d in damping) or pending_stiffness else (),
                       tendons=tendons, coulomb=tuple(coulomb) if any(f != 0 for f in coulomb) else (),
+                      gravcomp=gravcomp,
                       meta={"floating_base": "quaternion" if free_joints else False,
                             "warnings": list(self.warnings),
                             "mjcf": self.summary(free_joints, sites, springs, dampers, flags)})
@@ -386,6 +396,24 @@ class _Reader:
         if model.nv == 0:
             self.fail("", "the model has no joint; there are no equations of motion")
         return model
+
+    def gravcomp(self, tree, names, welded, params) -> tuple:
+        """The compensated weights of the bodies (``Model.gravcomp``, :mod:`aggsym.mechanics.gravcomp`): for each
+        moving MuJoCo body with a ``gravcomp`` s and a mass, the runtime parameter ``gravcomp_<body>`` (default s)
+        times its mass and its mass's first moment in the axes of the body it is merged into, summed per body."""
+        m = self.m
+        lifted: dict = {}
+        for i in range(1, m.nbody):
+            s = float(m.body_gravcomp[i])
+            if not s or welded[i] or names[i] not in tree.parts:
+                continue
+            params.append(Parameter(f"gravcomp_{identifier(names[i], set(), 'body')}", s))
+            mass, c, _ = tree.parts[names[i]]
+            body = tree.rows[tree.place[names[i]].body]["name"]
+            ms, h = lifted.get(body, (sp.Integer(0), (sp.Integer(0),) * 3))
+            symbol = params[-1].symbol
+            lifted[body] = (ms + symbol * mass, tuple(x + symbol * mass * y for x, y in zip(h, c)))
+        return tuple((body, ms, h) for body, (ms, h) in lifted.items())
 
     def home_pose(self) -> list:
         """MuJoCo's ``qpos0`` (the file's configuration: a hinge's or slide's ``ref``, a free body's pose as the
@@ -540,7 +568,11 @@ class _Reader:
                     "; frictionloss as Coulomb friction (--frictionloss coulomb): + F sign(qd) on the left "
                     "(friction_<coordinate>) and -F sign(L') along a tendon (tendon_friction_<tendon>), in "
                     "forward and inverse dynamics and passive_forces; zero at qd = 0 (MuJoCo's frictionloss is a "
-                    "constraint that can hold the joint still: not the same)" if self.coulomb else "")),
+                    "constraint that can hold the joint still: not the same)" if self.coulomb else "") + (
+                    "; gravity compensation (gravcomp_<body>, default the file's gravcomp) lifts that fraction of "
+                    "each listed body's weight at its centre of mass: among the passive forces (in passive_forces and "
+                    "on the left of forward and inverse dynamics, as in MuJoCo's qfrc_passive), not in g(q) (as "
+                    "qfrc_bias); the potential energy holds the lift's" if np.any(m.body_gravcomp) else "")),
             "frictionloss": "coulomb" if self.coulomb else "list",
             "springs": springs, "dampers": dampers, "gravity_disabled": bool(flags & DISABLE_GRAVITY),
             "not_in_the_equations": (
@@ -553,6 +585,8 @@ class _Reader:
                                                                   m.opt.viscosity else "")),
             "joints": joints, "actuators": actuators, "tendons": tendons, "inactive_equalities": inactive,
             "sites": list(sites),
+            **({"gravcomp": [{"body": self.body_name(i), "gravcomp": float(m.body_gravcomp[i])}
+                             for i in range(1, m.nbody) if m.body_gravcomp[i]]} if np.any(m.body_gravcomp) else {}),
         }
 
 

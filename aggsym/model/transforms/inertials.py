@@ -156,6 +156,10 @@ def with_inertial_parameters(model: Model, links=(), payload=None) -> Model:
                               f"links: {some})")
         if frames[name][0] in welded:
             raise _welded_refusal(model, name, frames[name][0], option)
+        if frames[name][0] in {body for body, _, _ in model.gravcomp}:
+            raise AggsymError(f"{model.source}: {option} {name}: its body {frames[name][0]!r} is gravity-compensated "
+                              f"(MuJoCo's gravcomp lifts a fraction of the file's mass); its inertial data cannot "
+                              f"be runtime parameters")
     if len(set(links)) != len(links):
         raise AggsymError(f"{model.source}: --inertial-parameters names a link twice")
     taken = {p.name for p in model.parameters}
