@@ -206,11 +206,12 @@ UNSUPPORTED = {
                             after='<tendon><spatial name="rope"><site site="s1"/><site site="s2"/></spatial></tendon>'
                                   '<equality><tendon name="tie" tendon1="rope"/></equality>'),
                  ['<tendon name="tie">', "spatial tendon", "not supported"]),
-    "tendon-spring": (ARM.format(attrs="", extra='<site name="s1"/><body name="b" pos="0 0 -.5"><joint name="j2"/>'
-                                                 '<geom size=".1"/><site name="s2"/></body>',
-                                 after='<tendon><spatial name="t" stiffness="3"><site site="s1"/><site site="s2"/>'
-                                       '</spatial></tendon>'),
-                      ['<tendon name="t">', "spatial tendon", "stiffness or damping", "not supported"]),
+    "tendon-wrap": (ARM.format(attrs="", extra='<site name="s1"/><geom name="w" type="sphere" size=".05" pos="0 .2 -.25"/>'
+                                               '<body name="b" pos="0 0 -.5"><joint name="j2"/>'
+                                               '<geom size=".1"/><site name="s2"/></body>',
+                               after='<tendon><spatial name="t" stiffness="3"><site site="s1"/><geom geom="w"/>'
+                                     '<site site="s2"/></spatial></tendon>'),
+                    ['<tendon name="t">', "wrapping around a geom", "not supported"]),
     "tendon-armature": (ARM.format(attrs="", extra="", after='<tendon><fixed name="t" armature="3"><joint joint="j1" '
                                                             'coef="1"/></fixed></tendon>'),
                         ['<tendon name="t">', "armature", "not supported yet"]),

@@ -275,13 +275,18 @@ def test_disabled_springs_and_dampers_leave_the_tendons_out(tmp_path):
     assert model.tendons == () and not [p for p in model.parameters if p.name.startswith("tendon_")]
 
 
-def test_spatial_tendon_spring_is_refused_by_name(tmp_path):
+def test_a_spatial_tendon_spring_is_read_beside_the_fixed_ones(tmp_path):
+    """A spatial tendon through two sites (tests/test_spatial_tendons.py has the rest): a SpatialTendon, not a
+    fixed one, and its passive force is MuJoCo's."""
     text = CHAIN.format(free="", after='<tendon><spatial name="rope" stiffness="1"><site site="s1"/><site site="s2"/>'
                                        '</spatial></tendon>').replace(
         '<geom size=".05"/>', '<geom size=".05"/><site name="s1"/>', 1).replace(
         '<geom size=".03"/>', '<geom size=".03"/><site name="s2"/>', 1)
-    with pytest.raises(ModelError, match=r'<tendon name="rope">.*spatial tendon.*stiffness or damping'):
-        quiet_load(write(tmp_path, text))
+    path = write(tmp_path, text)
+    model = quiet_load(path)
+    assert [t.name for t in model.spatial_tendons] == ["rope"] and not model.tendons
+    worst = compare(path, model=model, samples=3)
+    assert worst["passive"] <= 1e-12 and max(worst.values()) <= 1e-9, worst
 
 
 # frictionloss ----------------------------------------------------------------------------------------------------

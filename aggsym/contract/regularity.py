@@ -135,28 +135,25 @@ def generic_configurations(model, samples: int = SAMPLES) -> list:
     """``samples`` fixed configurations q: coordinate k of the joints (the base's own excluded) at an angle of the
     golden-ratio sequence, the same for a fixed base and a free-flyer of one file; a free-flyer at the origin with
     the identity quaternion; a ball pair's quaternion a fixed rotation about a fixed oblique axis."""
-    tree = Tree.of(model)
     out = []
     for s in range(samples):
-        q = [0.0] * model.nq
-        k = 0
-        for body, positions in zip(model.bodies, tree.positions):
+        value, k = {}, 0  # (by name: a coupled coordinate leaves q, its master stays)
+        for body in model.bodies:
             pair = body.pair
             if pair.free_flyer:
-                q[positions[-1]] = 1.0
+                value.update(zip(pair.positions, [0.0] * 6 + [1.0]))
                 continue
             if pair.quaternion:
                 angle = 0.5 + 0.9 * ((s + 1) * GOLDEN % 1.0)
-                axis = [0.48, -0.6, 0.64]
                 half = math.sin(angle / 2)
-                q[positions[-4]:positions[-4] + 4] = [a * half for a in axis] + [math.cos(angle / 2)]
+                value.update(zip(pair.positions, [a * half for a in (0.48, -0.6, 0.64)] + [math.cos(angle / 2)]))
                 k += 1
                 continue
-            for i in positions:
+            for c in pair.coordinates:
                 k += 1
                 # in (-pi, pi), irrational steps: no multiple of pi/4 nearer than a few hundredths of a radian
-                q[i] = -math.pi + 2 * math.pi * ((k * GOLDEN + (s + 1) * math.sqrt(2.0) / 7.0) % 1.0)
-        out.append(q)
+                value[c.name] = -math.pi + 2 * math.pi * ((k * GOLDEN + (s + 1) * math.sqrt(2.0) / 7.0) % 1.0)
+        out.append([value[name] for name, _, _ in model.positions])
     return out
 
 

@@ -7,6 +7,7 @@ from ..mechanics import elastic, joint_space, passive, sweeps, transvective
 from ..mechanics.bias import coriolis_matrix, gravity_vector
 from ..mechanics.energy import kinetic_energy, momentum, potential_energy
 from ..mechanics.inertia import inertia_matrix
+from ..mechanics.spatial_tendons import spatial_tendon_energy
 from ..model.tree import Tree
 from .registry import Output, Routine, flat, minus, register
 from .shapes import (
@@ -156,7 +157,8 @@ register(Routine("kinetic_energy", ("q", "qd", "p"), (Output("T", scalar),),
                  "Prop. 2.8); = 1/2 qd^T A(q) qd without prescribed spins", coupled="tree", frame_free=True))
 register(Routine("potential_energy", ("q", "p"), (Output("U", scalar),),
                  lambda bound, kin, x: ([potential_energy(bound, kin) + elastic.elastic_energy(bound, kin.q)
-                                         + joint_space.tendon_energy(bound, kin.q)],),  # (tendons: 1/2 k s^2)
+                                         + joint_space.tendon_energy(bound, kin.q)  # (tendons: 1/2 k s^2)
+                                         + spatial_tendon_energy(bound, kin)],),
                  "U(q), the potential energy of gravity plus 1/2 (q - q0)^T C (q - q0) of the elastic pairs",
                  coupled="tree", frame_free=True))
 register(Routine("momentum", ("q", "qd", "p"), (Output("h", momentum_shape),),
@@ -178,7 +180,8 @@ register(Routine("passive_forces", ("q", "qd", "p"), (Output("tau_p", nq_vector)
                  "the lifts of gravity compensation (tau_s, MuJoCo's gravcomp) as a "
                  "generalized force on the right side (MuJoCo's qfrc_passive, without F): A qdd + b + g = tau + "
                  "tau_p",
-                 applies=lambda model: bool(model.damping or model.tendons or model.coulomb or model.gravcomp),
+                 applies=lambda model: bool(model.damping or model.tendons or model.coulomb or model.gravcomp
+                                            or model.spatial_tendons),
                  frame_free=True))
 register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_vector),),
                  lambda bound, kin, x: (transvective.forward_dynamics(

@@ -345,6 +345,29 @@ class Tendon:
         return as_expr(self.lower) != as_expr(self.upper)
 
 
+@dataclass(frozen=True)
+class SpatialTendon:
+    """A spatial tendon through sites (MJCF ``<spatial>`` without wrapping geoms) with a spring or a damper: its
+    length L = sum over its ``branches`` of (the distances between consecutive sites) / the branch's divisor (a
+    ``<pulley divisor>`` starts a branch; the first has divisor 1); each branch ``(divisor, sites)``, each site
+    ``(body name, (x, y, z))`` a point fixed on a body, in its axes (the body WORLD: a point fixed in the world).
+    The force along it is a fixed tendon's (:class:`Tendon`: k, the dead band lower..upper, d, F), acting on the
+    coordinates as J^T f with J = dL/dq (:mod:`aggsym.mechanics.spatial_tendons`)."""
+
+    name: str
+    branches: tuple
+    stiffness: object = 0
+    lower: object = 0
+    upper: object = 0
+    damping: object = 0
+    friction: object = 0
+
+    @property
+    def deadband(self) -> bool:
+        """Whether the spring has a dead band (lower < upper): then its force is piecewise linear."""
+        return as_expr(self.lower) != as_expr(self.upper)
+
+
 CONSTRAINT_KINDS = {  # block: kind -> the forbidden relative motions, in the reference frame (ch. 4)
     "point": ("o1", "o2", "o3"),
     "weld": COORDINATE_CODES,
@@ -507,6 +530,7 @@ class Model:
     # (MJCF ``frictionloss`` under ``--frictionloss coulomb``, URDF ``<dynamics friction>`` under ``--passive include``;
     # expressions); empty: none
     tendons: tuple = ()  # Tendon: fixed tendons with springs or dampers, their forces on the left side
+    spatial_tendons: tuple = ()  # SpatialTendon: tendons through sites with springs or dampers (left side)
     gravcomp: tuple = ()  # (body name, m_s, (h_x, h_y, h_z)): the compensated weight of a body (MuJoCo's gravcomp),
     # a mass and its first moment about the body origin in body axes, lifted against gravity among the passive
     # forces (aggsym.mechanics.gravcomp; expressions); empty: none
@@ -617,7 +641,7 @@ class Model:
         sliding contact (chapter 4) dissipates it, and so does viscous joint damping (``damping``).  The armature's
         rotors keep it (T holds their 1/2 a qd^2)."""
         return (not self.time_dependent and not self.has_friction and not self.has_damping and not self.coulomb
-                and not any(not (_zero(t.damping) and _zero(t.friction)) for t in self.tendons))
+                and not any(not (_zero(t.damping) and _zero(t.friction)) for t in self.tendons + self.spatial_tendons))
 
     @property
     def has_damping(self) -> bool:

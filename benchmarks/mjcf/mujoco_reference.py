@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from aggsym.contract import ROUTINES
 from aggsym.mechanics.passive import has_passive
 from aggsym.model.readers.mjcf_reader import BALL, FREE
 
@@ -215,7 +216,7 @@ def compare(path, model=None, samples: int = 3, seed: int = 0, internal: bool = 
             if coupled is not None:
                 ref = coupled.Jc.T @ ref
             for each in [twin] + list(evaluators):
-                mine = (each.call("passive_forces", q, qd) if model.has_damping or model.tendons or model.gravcomp else
+                mine = (each.call("passive_forces", q, qd) if ROUTINES["passive_forces"].exists_for(model) else
                         -each.call("elastic", q))
                 worst["passive"] = max(worst["passive"], float(np.max(np.abs(mine - ref)) /
                                                                max(np.max(np.abs(ref)), 1e-300)))

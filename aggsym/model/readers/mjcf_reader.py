@@ -58,8 +58,10 @@ The mapping
   (``density``, ``viscosity``: a warning).  Active equalities (:mod:`aggsym.model.readers.mjcf_equalities`): ``connect``
   and ``weld`` become constraints (``model.constraints``), ``joint`` and fixed-tendon equalities couplings
   (``model.couplings``) or joint-space constraint rows, each listed in ``meta["mjcf"]["equalities"]``; the others
-  are refused there by name.  Refused with an error naming them, since they would change the equations: spatial
-  tendons with a stiffness or damping, tendons with armature, polynomial or yielding tendon springs, flexes,
+  are refused there by name.  Spatial tendons through sites and pulleys with a stiffness or damping
+  (``Model.spatial_tendons``, :mod:`aggsym.mechanics.spatial_tendons`): the same parameters as a fixed tendon's.
+  Refused with an error naming them, since they would change the equations: spatial tendons wrapping around geoms
+  with a stiffness or damping, tendons with armature, polynomial or yielding tendon springs, flexes,
   gravity compensation routed through the actuators, actuators with damping or armature, polynomial damping or
   stiffness.
 * ``model.links`` (kind ``"link"``): every MuJoCo body (``world`` included when ``worldbody`` is there) and every
@@ -83,7 +85,7 @@ from ..transforms.frames import default_frames
 from .link_numbers import exact
 from .mjcf_equalities import WRAP_JOINT, with_equalities
 from .mjcf_source import screen
-from ..types import Coordinate, JointLimits, Links, Model, Parameter, Tendon
+from ..types import WORLD, Coordinate, JointLimits, Links, Model, Parameter, SpatialTendon, Tendon
 
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3  # mjtJoint
 KINDS = {HINGE: "theta", SLIDE: "o"}
@@ -91,6 +93,7 @@ JOINT_TYPES = {FREE: "free", BALL: "ball", SLIDE: "slide", HINGE: "hinge"}
 DISABLE_FRICTIONLOSS, DISABLE_SPRING, DISABLE_DAMPER, DISABLE_GRAVITY = 4, 32, 64, 128  # mjtDisableBit
 FRICTIONLOSS_OPTIONS = ("list", "coulomb")
 WORLD_BODY = "worldbody"
+WRAP_PULLEY, WRAP_SPHERE, WRAP_CYLINDER = 2, 4, 5  # mjtWrap (WRAP_JOINT: 1, WRAP_SITE: 3)
 EQUALITY_TYPES = {0: "connect", 1: "weld", 2: "joint", 3: "tendon", 4: "flex"}
 CONVENTION = (
     "q is MuJoCo's qpos and qd its qvel entry for entry, except for a free joint J: q holds J_x J_y J_z "
@@ -209,12 +212,13 @@ class _Reader:
                     self.fail(where, f"{what} on a tendon is not supported (stiffness and damping are)")
             acts = ((springs and m.tendon_stiffness[t] != 0) or (dampers and m.tendon_damping[t] != 0) or
                     (self.coulomb and m.tendon_frictionloss[t] != 0))
-            if acts and any(int(m.wrap_type[w]) != WRAP_JOINT for w in range(int(m.tendon_adr[t]),
-                                                                             int(m.tendon_adr[t] + m.tendon_num[t]))):
-                self.fail(where, "a spatial tendon (it wraps sites or geoms) with a stiffness or damping"
-                                 + (" or (--frictionloss coulomb) a frictionloss" if self.coulomb else "")
-                                 + ": its length is not a linear form of the coordinates; not supported (fixed "
-                                   "tendons are)")
+            wraps = [int(m.wrap_type[w]) for w in range(int(m.tendon_adr[t]), int(m.tendon_adr[t] + m.tendon_num[t]))]
+            if acts and any(w in (WRAP_SPHERE, WRAP_CYLINDER) for w in wraps):
+                self.fail(where, "a spatial tendon wrapping around a geom (sphere or cylinder) with a stiffness or "
+                                 "damping" + (" or (--frictionloss coulomb) a frictionloss" if self.coulomb else "")
+                                 + " is not supported: its length switches between the straight and the wrapped "
+                                   "path (each wrap's branches would have to be generated); tendons through sites "
+                                   "and pulleys, and fixed tendons, are")
         if m.nflex:
             self.fail("<deformable>", f"{m.nflex} flex object(s); flexes are not supported")
         heavy = [self.body_name(i) for i in range(m.nbody) if m.body_gravcomp[i] != 0]
@@ -355,7 +359,8 @@ class _Reader:
             tree.rows[k]["pair"] = dataclasses.replace(pair, stiffness=((stiffness,),), rest=(rest,))
         body_links = set(names) if needs_world else set(names[1:])
         sites = self.sites(tree, names, welded, needs_world, body_links)
-        tendons = self.tendon_forces = self.tendons(params, coordinate_of, springs, dampers)
+        tendons, spatial = self.tendons(params, coordinate_of, springs, dampers, tree, body_links)
+        self.tendon_forces = tendons + spatial
         gravcomp = self.gravcomp(tree, names, welded, params)
         for axis, value in zip("xyz", gravity):
             params.append(Parameter(f"gravity_{axis}", float(value)))
@@ -382,7 +387,7 @@ class _Reader:
                       links=Links(table.kind, table.frames, table.leaves),
                       dof_armature=tuple(armature) if any(a != 0 for a in armature) else (),
                       damping=tuple(damping) if any(d != 0 for d in damping) or pending_stiffness else (),
-                      tendons=tendons, coulomb=tuple(coulomb) if any(f != 0 for f in coulomb) else (),
+                      tendons=tendons, spatial_tendons=spatial, coulomb=tuple(coulomb) if any(f != 0 for f in coulomb) else (),
                       gravcomp=gravcomp,
                       meta={"floating_base": "quaternion" if free_joints else False,
                             "warnings": list(self.warnings),
@@ -448,14 +453,16 @@ class _Reader:
         for i, coordinate in enumerate(velocities):
             rate_parameters(coordinate, int(m.jnt_dofadr[j]) + i)
 
-    def tendons(self, params: list, coordinate_of: dict, springs: bool, dampers: bool) -> tuple:
-        """The fixed tendons with a spring, a damper (or, with ``frictionloss="coulomb"``, a frictionloss) as
-        :class:`~aggsym.model.types.Tendon` s, their runtime parameters appended to ``params``:
+    def tendons(self, params: list, coordinate_of: dict, springs: bool, dampers: bool, tree, body_links) -> tuple:
+        """(fixed, spatial): the fixed tendons with a spring, a damper (or, with ``frictionloss="coulomb"``, a
+        frictionloss) as :class:`~aggsym.model.types.Tendon` s, the spatial ones through sites and pulleys as
+        :class:`~aggsym.model.types.SpatialTendon` s (:meth:`spatial_path`), their runtime parameters appended to
+        ``params``:
         ``tendon_stiffness_<tendon>`` and ``tendon_springlength_<tendon>`` (a dead band:
         ``tendon_springlower_<tendon>``, ``tendon_springupper_<tendon>``), ``tendon_damping_<tendon>``,
         ``tendon_friction_<tendon>``."""
         m = self.m
-        out, used = [], set()
+        out, spatial_out, used = [], [], set()
         for t in range(m.ntendon):
             k = float(m.tendon_stiffness[t]) if springs else 0.0
             d = float(m.tendon_damping[t]) if dampers else 0.0
@@ -465,7 +472,9 @@ class _Reader:
             name = self.tendon_name(t)
             tag = identifier(name, used, "tendon")
             terms = []
-            for w in range(int(m.tendon_adr[t]), int(m.tendon_adr[t] + m.tendon_num[t])):
+            wraps = range(int(m.tendon_adr[t]), int(m.tendon_adr[t] + m.tendon_num[t]))
+            spatial = any(int(m.wrap_type[w]) != WRAP_JOINT for w in wraps)
+            for w in wraps if not spatial else ():
                 j = int(m.wrap_objid[w])
                 if j not in coordinate_of:
                     self.fail(f'<tendon name="{name}">',
@@ -489,8 +498,37 @@ class _Reader:
             if f:
                 params.append(Parameter(f"tendon_friction_{tag}", f))
                 values["friction"] = params[-1].symbol
-            out.append(Tendon(name, tuple(terms), **values))
-        return tuple(out)
+            if spatial:
+                spatial_out.append(SpatialTendon(name, self.spatial_path(t, tree, body_links), **values))
+            else:
+                out.append(Tendon(name, tuple(terms), **values))
+        return tuple(out), tuple(spatial_out)
+
+    def spatial_path(self, t, tree, body_links) -> tuple:
+        """Tendon ``t``'s branches (:class:`~aggsym.model.types.SpatialTendon`): its sites, each as (body, point in the
+        body's axes) where the tree places it (a site on a body welded to the world, outside the tree: WORLD and
+        its world position, MuJoCo's), a ``<pulley>`` starting a new branch with its divisor."""
+        m, mj = self.m, self.mj
+        branches, divisor, sites = [], 1, []
+        world = None
+        for w in range(int(m.tendon_adr[t]), int(m.tendon_adr[t] + m.tendon_num[t])):
+            if int(m.wrap_type[w]) == WRAP_PULLEY:
+                branches.append((divisor, tuple(sites)))
+                divisor, sites = exact(float(m.wrap_prm[w])), []
+                continue
+            s = int(m.wrap_objid[w])
+            name = _name(m, mj, mj.mjtObj.mjOBJ_SITE, s, "site")
+            link = f"site:{name}" if name in body_links else name
+            if link in tree.place:
+                place = tree.place[link]
+                sites.append((tree.rows[place.body]["name"], tuple(place.t)))
+            else:  # (a body welded to the world, the world not in the tree: the site does not move)
+                if world is None:
+                    world = mj.MjData(m)
+                    mj.mj_kinematics(m, world)
+                sites.append((WORLD, tuple(exact(float(x)) for x in world.site_xpos[s])))
+        branches.append((divisor, tuple(sites)))
+        return tuple((d, path) for d, path in branches if len(path) >= 2)
 
     def model_name(self) -> str:
         raw = bytes(self.m.names)
