@@ -264,12 +264,14 @@ def test_oversized_file(tmp_path, capsys):
     refused(tmp_path, capsys, None, ["larger than 64 MiB"], name="big.xml")
 
 
-def test_fluid_is_a_warning(tmp_path):
+def test_the_inertia_box_fluid_is_in_the_equations(tmp_path):
+    """(tests/test_fluid.py has the rest.)  No warning: the bodies' boxes are in the passive forces."""
     path = tmp_path / "m.xml"
     path.write_text('<mujoco><option density="1000"/>' + ARM.format(attrs="", extra="", after="")[8:])
-    with pytest.warns(UserWarning, match="fluid forces"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
         model = load(path)
-    assert "this model has some" in model.meta["mjcf"]["not_in_the_equations"]
+    assert model.fluid and "this model has some" not in model.meta["mjcf"]["not_in_the_equations"]
 
 
 def test_compiler_warnings_become_model_warnings(tmp_path, monkeypatch):

@@ -368,6 +368,19 @@ class SpatialTendon:
         return as_expr(self.lower) != as_expr(self.upper)
 
 
+@dataclass(frozen=True)
+class FluidBox:
+    """One body's part of MuJoCo's inertia-box fluid model (``<option density viscosity wind>``): a MuJoCo body merged
+    into ``body``, its centre of mass ``com`` and its inertial frame's axes ``axes`` (3x3, columns in the body's
+    axes), the full dimensions ``box`` of its equivalent inertia box (MuJoCo's, from its principal moments and
+    mass).  The medium's density, viscosity and wind are ``Model.fluid_medium`` (:mod:`aggsym.mechanics.fluid`)."""
+
+    body: str
+    com: tuple
+    axes: tuple
+    box: tuple
+
+
 CONSTRAINT_KINDS = {  # block: kind -> the forbidden relative motions, in the reference frame (ch. 4)
     "point": ("o1", "o2", "o3"),
     "weld": COORDINATE_CODES,
@@ -531,6 +544,8 @@ class Model:
     # expressions); empty: none
     tendons: tuple = ()  # Tendon: fixed tendons with springs or dampers, their forces on the left side
     spatial_tendons: tuple = ()  # SpatialTendon: tendons through sites with springs or dampers (left side)
+    fluid: tuple = ()  # FluidBox: the bodies of MuJoCo's inertia-box fluid model (their drag on the left side)
+    fluid_medium: tuple = ()  # (density, viscosity, (wind_x, wind_y, wind_z)) expressions, with ``fluid``
     gravcomp: tuple = ()  # (body name, m_s, (h_x, h_y, h_z)): the compensated weight of a body (MuJoCo's gravcomp),
     # a mass and its first moment about the body origin in body axes, lifted against gravity among the passive
     # forces (aggsym.mechanics.gravcomp; expressions); empty: none
@@ -641,6 +656,7 @@ class Model:
         sliding contact (chapter 4) dissipates it, and so does viscous joint damping (``damping``).  The armature's
         rotors keep it (T holds their 1/2 a qd^2)."""
         return (not self.time_dependent and not self.has_friction and not self.has_damping and not self.coulomb
+                and not self.fluid
                 and not any(not (_zero(t.damping) and _zero(t.friction)) for t in self.tendons + self.spatial_tendons))
 
     @property

@@ -146,15 +146,16 @@ class Module:
         return np.asarray(getattr(self.module, role)(*args), dtype=float)
 
 
-def mujoco_model(path):
-    """The compiled model with constraints and actuation disabled and no fluid (the comparison's MuJoCo); ``path``
-    an MJCF file or an ``MjModel`` (:func:`compiled`)."""
+def mujoco_model(path, fluid: bool = False):
+    """The compiled model with constraints and actuation disabled and no fluid unless ``fluid`` (the comparison's
+    MuJoCo: the fluid kept where aggsym's model holds it); ``path`` an MJCF file or an ``MjModel`` (:func:`compiled`)."""
     import mujoco
 
     m = compiled(path)
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
-    m.opt.density = 0.0
-    m.opt.viscosity = 0.0
+    if not fluid:
+        m.opt.density = 0.0
+        m.opt.viscosity = 0.0
     return m
 
 
@@ -188,7 +189,7 @@ def compare(path, model=None, samples: int = 3, seed: int = 0, internal: bool = 
     model = load(path) if model is None else model
     twin = NumericTwin(model)
     internal = [NumericTwin(inner) for inner in routine_models(model)[1:]] if internal else []
-    m = mujoco_model(path)
+    m = mujoco_model(path, fluid=bool(model.fluid))
     data = mujoco.MjData(m)
     rng = np.random.default_rng(seed)
     worst = {"A": 0.0, "d": 0.0, "qdd": 0.0, "passive": 0.0}
@@ -223,12 +224,12 @@ def compare(path, model=None, samples: int = 3, seed: int = 0, internal: bool = 
     return worst
 
 
-def equality_model(path):
+def equality_model(path, fluid: bool = False):
     """The compiled model with only its equalities active (contacts, limits, frictionloss and actuation disabled, no
-    fluid) and a dense constraint Jacobian: MuJoCo's ``efc_J`` rows of type equality are J."""
+    fluid unless ``fluid``) and a dense constraint Jacobian: MuJoCo's ``efc_J`` rows of type equality are J."""
     import mujoco
 
-    m = mujoco_model(path)
+    m = mujoco_model(path, fluid)
     m.opt.disableflags &= ~(int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT) | int(mujoco.mjtDisableBit.mjDSBL_EQUALITY))
     m.opt.disableflags |= (int(mujoco.mjtDisableBit.mjDSBL_CONTACT) | int(mujoco.mjtDisableBit.mjDSBL_LIMIT) |
                            int(mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS))
@@ -263,8 +264,8 @@ def compare_constrained(path, model=None, samples: int = 3, seed: int = 0, step:
 
     model = load(path) if model is None else model
     twin = NumericTwin(model)
-    free = mujoco_model(path)
-    m = equality_model(path)
+    free = mujoco_model(path, fluid=bool(model.fluid))
+    m = equality_model(path, fluid=bool(model.fluid))
     d_free, d_eq = mujoco.MjData(free), mujoco.MjData(m)
     rng = np.random.default_rng(seed)
     worst = {"A": 0.0, "J": 0.0, "qdd": 0.0, "lambda": 0.0}

@@ -73,6 +73,7 @@ The mapping
 from __future__ import annotations
 
 import dataclasses
+import math
 import warnings
 from pathlib import Path
 
@@ -81,11 +82,12 @@ import sympy as sp
 
 from ...errors import ModelError, ModelWarning
 from .builder import TreeBuilder, ball_names, floating_root, identifier, link_table, quaternion_rotations
+from .link_numbers import add, rotation_matrix, turn
 from ..transforms.frames import default_frames
 from .link_numbers import exact
 from .mjcf_equalities import WRAP_JOINT, with_equalities
 from .mjcf_source import screen
-from ..types import WORLD, Coordinate, JointLimits, Links, Model, Parameter, SpatialTendon, Tendon
+from ..types import WORLD, Coordinate, FluidBox, JointLimits, Links, Model, Parameter, SpatialTendon, Tendon
 
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3  # mjtJoint
 KINDS = {HINGE: "theta", SLIDE: "o"}
@@ -233,9 +235,58 @@ class _Reader:
                 if hasattr(m, field) and np.any(getattr(m, field)[a]):
                     self.fail(f"actuator {name!r}", f"an actuator with {what} (it changes the equations of motion) "
                                                     f"is not supported")
-        if m.opt.density or m.opt.viscosity:
-            self.warn("<option>", f"fluid forces (density={m.opt.density:g}, viscosity={m.opt.viscosity:g}) are not "
-                                  f"in the equations of motion; MuJoCo adds them to qfrc_passive")
+        ellipsoids = self.ellipsoid_bodies()
+        if (m.opt.density or m.opt.viscosity) and ellipsoids:
+            self.warn("<option>", f"fluid forces of MuJoCo's ellipsoid model (fluidshape=\"ellipsoid\" on the geoms "
+                                  f"of {', '.join(repr(self.body_name(i)) for i in ellipsoids[:5])}"
+                                  f"{', ...' if len(ellipsoids) > 5 else ''}) are not in the equations of motion; "
+                                  f"MuJoCo adds them to qfrc_passive (the inertia-box model of the other bodies is "
+                                  f"in them)")
+
+    def ellipsoid_bodies(self) -> list:
+        """The bodies MuJoCo gives the ellipsoid fluid model (some geom of theirs has fluidshape="ellipsoid")."""
+        m = self.m
+        return [i for i in range(1, m.nbody) if any(m.geom_fluid[int(m.body_geomadr[i]) + j][0] > 0
+                                                    for j in range(int(m.body_geomnum[i])))]
+
+    def fluid(self, tree, names, welded, params) -> tuple:
+        """(the bodies of MuJoCo's inertia-box fluid model as :class:`~aggsym.model.types.FluidBox` es, the medium
+        (density, viscosity, wind)): every moving body of mass >= 1e-15 (MuJoCo's mjMINVAL) that does not use the
+        ellipsoid model, its box as MuJoCo computes it; the runtime parameters ``fluid_density``,
+        ``fluid_viscosity``, ``wind_x wind_y wind_z`` where they are not zero."""
+        m = self.m
+        if not (m.opt.density > 0 or m.opt.viscosity > 0):
+            return (), ()
+        medium = []
+        for name, value in (("fluid_density", float(m.opt.density)), ("fluid_viscosity", float(m.opt.viscosity))):
+            if value > 0:
+                params.append(Parameter(name, value))
+                medium.append(params[-1].symbol)
+            else:
+                medium.append(sp.Integer(0))
+        wind = []
+        for axis, value in zip("xyz", (float(x) for x in m.opt.wind)):
+            if value:
+                params.append(Parameter(f"wind_{axis}", value))
+                wind.append(params[-1].symbol)
+            else:
+                wind.append(sp.Integer(0))
+        skip = set(self.ellipsoid_bodies())
+        boxes = []
+        for i in range(1, m.nbody):
+            mass = float(m.body_mass[i])
+            if mass < 1e-15 or i in skip or welded[i] or names[i] not in tree.place:
+                continue
+            inertia = [float(x) for x in m.body_inertia[i]]
+            box = tuple(math.sqrt(max(1e-15, inertia[j] + inertia[k] - inertia[a]) / mass * 6.0)
+                        for a, j, k in ((0, 1, 2), (1, 0, 2), (2, 0, 1)))
+            place = tree.place[names[i]]
+            w, x, y, z = (float(v) for v in m.body_iquat[i])
+            turned = rotation_matrix(place.rotation + (quaternion_rotations(x, y, z, w)
+                                                       if (w, x, y, z) != (1.0, 0.0, 0.0, 0.0) else []))
+            com = add(place.t, turn(place.R, tuple(exact(float(v)) for v in m.body_ipos[i])))
+            boxes.append(FluidBox(tree.rows[place.body]["name"], tuple(com), tuple(map(tuple, turned)), box))
+        return tuple(boxes), (medium[0], medium[1], tuple(wind))
 
     # the tree ------------------------------------------------------------------------------------------------
     def read(self) -> Model:
@@ -362,6 +413,7 @@ class _Reader:
         tendons, spatial = self.tendons(params, coordinate_of, springs, dampers, tree, body_links)
         self.tendon_forces = tendons + spatial
         gravcomp = self.gravcomp(tree, names, welded, params)
+        fluid, medium = self.fluid(tree, names, welded, params)
         for axis, value in zip("xyz", gravity):
             params.append(Parameter(f"gravity_{axis}", float(value)))
         seen: dict = {}
@@ -388,7 +440,7 @@ class _Reader:
                       dof_armature=tuple(armature) if any(a != 0 for a in armature) else (),
                       damping=tuple(damping) if any(d != 0 for d in damping) or pending_stiffness else (),
                       tendons=tendons, spatial_tendons=spatial, coulomb=tuple(coulomb) if any(f != 0 for f in coulomb) else (),
-                      gravcomp=gravcomp,
+                      gravcomp=gravcomp, fluid=fluid, fluid_medium=medium,
                       meta={"floating_base": "quaternion" if free_joints else False,
                             "warnings": list(self.warnings),
                             "mjcf": self.summary(free_joints, sites, springs, dampers, flags)})
@@ -619,10 +671,16 @@ class _Reader:
                 + "joint and tendon limits, contacts, inactive equalities "
                 "(active ones are constraints or couplings: equalities), actuators (their forces are tau's to "
                 "give: actuators lists each with its "
-                "transmission target and gear), fluid forces" + (" (this model has some)" if m.opt.density or
-                                                                  m.opt.viscosity else "")),
+                "transmission target and gear), fluid forces of MuJoCo's ellipsoid model" + (
+                    " (this model has some)" if (m.opt.density or m.opt.viscosity) and self.ellipsoid_bodies()
+                    else "")),
             "joints": joints, "actuators": actuators, "tendons": tendons, "inactive_equalities": inactive,
             "sites": list(sites),
+            **({"fluid": {"model": "inertia box (MuJoCo's mj_inertiaBoxFluidModel)",
+                          "density": float(m.opt.density), "viscosity": float(m.opt.viscosity),
+                          "wind": [float(x) for x in m.opt.wind],
+                          "ellipsoid_model_left_out": [self.body_name(i) for i in self.ellipsoid_bodies()]}}
+               if m.opt.density or m.opt.viscosity else {}),
             **({"gravcomp": [{"body": self.body_name(i), "gravcomp": float(m.body_gravcomp[i])}
                              for i in range(1, m.nbody) if m.body_gravcomp[i]]} if np.any(m.body_gravcomp) else {}),
         }

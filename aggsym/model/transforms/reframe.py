@@ -70,9 +70,9 @@ def eligible(model: Model) -> bool:
     """Whether :func:`reframe` applies: a URDF model (its pairs hold one coordinate each below the root), numeric
     constant configurations, no constraints, support, couplings, prescribed motions, added masses or ball pairs, no
     gravity compensation (its weights are per body, and grouping moves mass between bodies) and no spatial tendons
-    (their sites are points in the bodies' frames)."""
+    (their sites are points in the bodies' frames) and no fluid model (its boxes are the bodies' own)."""
     if not model.link_table.from_file or model.constraints or model.support or model.couplings or model.gravcomp \
-            or model.spatial_tendons:
+            or model.spatial_tendons or model.fluid:
         return False
     for k, b in enumerate(model.bodies):
         if b.pair.prescribed or b.added_mass is not None or b.pair.ball:
