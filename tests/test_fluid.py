@@ -58,6 +58,15 @@ def test_the_suites_swimmers_against_mujoco(name):
     assert worst["passive"] <= 1e-12 and max(worst.values()) <= 1e-9, worst
 
 
+def test_the_fruit_fly_against_mujoco():
+    """dm_control's fruit fly (108 dofs, its wings and body in the inertia-box fluid)."""
+    path = SUITE.parent / "locomotion" / "walkers" / "assets" / "fruitfly_v2" / "fruitfly.xml"
+    model = load(path)
+    assert len(model.fluid) > 60 and model.nv == 108
+    worst = compare(path, model=model, samples=2, seed=1, internal=False)
+    assert worst["passive"] <= 1e-12 and max(worst.values()) <= 1e-9, worst
+
+
 def test_the_medium_is_a_runtime_parameter(probe):
     model, _, module, _ = probe
     names = [p.name for p in model.parameters]

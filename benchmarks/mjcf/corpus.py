@@ -36,14 +36,15 @@ PROBES = Path(__file__).parent / "probes"  # aggsym's own MJCF files, one featur
 
 def corpora() -> dict:
     """{corpus name: sorted XML files}: dm_control's suite and gymnasium's MuJoCo assets, from the installed wheels,
-    and this project's probes (:data:`PROBES`)."""
+    dm_control's fruit fly (its wings in the fluid), and this project's probes (:data:`PROBES`)."""
     import dm_control
     import gymnasium
 
     suite = Path(dm_control.__file__).parent / "suite"
     gym = Path(gymnasium.__file__).parent / "envs" / "mujoco" / "assets"
+    fly = Path(dm_control.__file__).parent / "locomotion" / "walkers" / "assets" / "fruitfly_v2" / "fruitfly.xml"
     return {"dm_control suite": sorted(suite.glob("*.xml")), "gymnasium mujoco": sorted(gym.glob("*.xml")),
-            "aggsym probes": sorted(PROBES.glob("*.xml"))}
+            "dm_control walkers": [fly], "aggsym probes": sorted(PROBES.glob("*.xml"))}
 
 
 def has_joint(path) -> bool:
