@@ -201,3 +201,40 @@ def test_an_euler_floating_base_is_not_certified(tmp_path):
     q = np.array([0.1, 0.2, 0.3, 0.4, np.pi / 2, 0.6, 0.7, 0.8, 0.9])
     A = np.asarray(twin.call("inertia", q))
     assert np.linalg.eigvalsh(A)[0] <= 1e-12 * np.abs(A).max()
+
+
+def test_rods_turned_across_their_axes_are_certified():
+    """planar_2link's links have no inertia about their own axis (a rod's spatial inertia, rank 5), but their hinge
+    turns them across it: S^T M S > 0, so each is pinned once its parent is."""
+    from pathlib import Path
+
+    model = aggsym.load(Path(__file__).parent.parent / "models" / "planar_2link.yaml")
+    assert all(b.inertial is not None for b in model.bodies)
+    assert regularity(model).kind == "everywhere"
+
+
+MJCF_BODY = ('<mujoco><worldbody><body name="base"><joint name="z0" axis="0 0 1"/><geom size=".1" mass="2"/>'
+             '<body name="limb" pos="0.3 0 0">{joints}<geom type="box" size=".1 .05 .02" pos=".1 0 0" mass="1.5"/>'
+             '</body></body></worldbody></mujoco>')
+
+
+def test_a_body_with_two_joints_is_certified_and_one_with_three_is_not(tmp_path):
+    """MuJoCo's bodies with several joints are chains through massless bodies here: two joints have independent
+    twists at every configuration (certified, checked at one); three can align (gimbal lock), and A is singular
+    there, which the judgement leaves open."""
+    pytest.importorskip("mujoco")
+    two = tmp_path / "two.xml"
+    two.write_text(MJCF_BODY.format(joints='<joint name="a" axis="1 0 0"/><joint name="b" axis="0 1 0"/>'))
+    assert regularity(aggsym.load(two)).kind == "everywhere"
+    three = tmp_path / "three.xml"
+    three.write_text(MJCF_BODY.format(joints='<joint name="a" axis="1 0 0"/><joint name="b" axis="0 1 0"/>'
+                                             '<joint name="c" axis="0 0 1"/>'))
+    model = aggsym.load(three)
+    r = regularity(model)
+    assert r.kind == "sampled" and {name for name, _ in r.degenerate} == {"limb_a", "limb_b"}, r
+    twin = NumericTwin(model)
+    A = np.asarray(twin.call("inertia", np.array([0.3, 0.7, np.pi / 2, -0.4])))
+    assert np.linalg.eigvalsh(A)[0] <= 1e-12 * np.abs(A).max()
+    coaxial = tmp_path / "coaxial.xml"  # (two joints about one line: singular everywhere)
+    coaxial.write_text(MJCF_BODY.format(joints='<joint name="a" axis="1 0 0"/><joint name="b" axis="-2 0 0"/>'))
+    assert regularity(aggsym.load(coaxial)).singular

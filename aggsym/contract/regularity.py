@@ -120,14 +120,71 @@ def full_rank(pair) -> bool:
     return pair.quaternion or sum(c.kind == "rotation" for c in pair.coordinates) <= 2
 
 
-def _at_rest(model, tree, solid, pinned) -> bool:
-    """Whether every body is reached by the walk of the module's text."""
+def _unit_twists(model, tree, k, coords) -> list:
+    """Body k's twists (omega, v) in its axes for a unit rate of each of ``coords`` alone, at one fixed
+    configuration."""
+    from ..core.backend import Numeric
+    from ..mechanics.bound import bind
+    from ..mechanics.kinematics import TreeKinematics
+
+    kin = TreeKinematics(bind(model, Numeric()), [float(x) for x in generic_configurations(model, 1)[0]])
+    out = []
+    for i in coords:
+        qd = [0.0] * tree.nv
+        qd[i] = 1.0
+        v = [float(x) for x in kin.velocities(qd)[k]]
+        out.append(v[3:] + v[:3])
+    return out
+
+
+def _moves_mass(model, tree, k, M) -> bool:
+    """Whether body k's own pair (one coordinate, or a quaternion pair: its motion subspace S is constant in the
+    body's axes) moves mass in every direction of its rates: S^T M_b S positive definite (a rod turning about an
+    axis across it, a point mass off a hinge's axis); then, its parent at rest, T = 0 forces its rates to 0."""
+    import numpy as np
+
+    pair = model.bodies[k].pair
+    if M is None or not (pair.quaternion or len(pair.coordinates) == 1):
+        return False
+    S = np.array(_unit_twists(model, tree, k, tree.coords[k])).T
+    G = S.T @ M @ S
+    eig = np.linalg.eigvalsh((G + G.T) / 2)
+    return bool(eig[0] > TOLERANCE * max(float(np.abs(M).max()) * float(np.abs(S).max()) ** 2, 1e-300))
+
+
+def _two_twists_independent(model, tree, k, coords) -> bool:
+    """Whether the unit rates of the two coordinates ``coords`` (on the path from an ancestor at rest to body k)
+    move body k by independent twists.  Constant in q: the second twist is the first pair's motion applied to its
+    value at q = 0, and that motion leaves the first twist where it is, so the two are parallel everywhere or
+    nowhere; judged at one configuration, relative to the larger twist."""
+    import numpy as np
+
+    s = np.linalg.svd(np.array(_unit_twists(model, tree, k, coords)), compute_uv=False)
+    return bool(s[-1] > TOLERANCE * s[0])
+
+
+def _at_rest(model, tree, solid, pinned, inertias) -> bool:
+    """Whether every body is reached by the walk of the module's text; a solid body at the end of a chain of
+    degenerate bodies (each the only child of the one before: MJCF's bodies with two joints) from one at rest pins
+    the chain when the chain has at most two coordinates and their twists are independent
+    (:func:`_two_twists_independent`)."""
     rest = [False] * len(tree)
     for k, (p, body) in enumerate(zip(tree.parent, model.bodies)):
         coords = tree.coords[k]
         parent_rest = p < 0 or rest[p]
         rest[k] = parent_rest and (not coords or (solid[k] and full_rank(body.pair))
-                                   or all(pinned[i] for i in coords))
+                                   or all(pinned[i] for i in coords) or _moves_mass(model, tree, k, inertias[k]))
+        if rest[k] or not solid[k] or not full_rank(body.pair):
+            continue
+        path, j = [k], p
+        while j >= 0 and not rest[j] and not solid[j] and len(tree.children[j]) == 1:
+            path.append(j)
+            j = tree.parent[j]
+        chain = [i for b in path for i in tree.coords[b]]
+        if (j < 0 or rest[j]) and len(path) > 1 and len(chain) <= 2 and \
+                (len(chain) < 2 or _two_twists_independent(model, tree, k, chain)):
+            for b in path:
+                rest[b] = True
     return all(rest)
 
 
@@ -199,7 +256,8 @@ def regularity(model) -> Regularity:
         return Regularity("everywhere")
     tree = Tree.of(model)
     values = _defaults(model)
-    degenerate = [(b.name, _degeneracy(spatial_inertia(b, values))) for b in model.bodies]
+    inertias = [spatial_inertia(b, values) for b in model.bodies]
+    degenerate = [(b.name, _degeneracy(M)) for b, M in zip(model.bodies, inertias)]
     solid = [what is None for _, what in degenerate]
     armature = _number(model.armature, values) if model.armature else 0.0
     own = [_number(a, values) for a in model.dof_armature] or [0.0] * n
@@ -210,7 +268,8 @@ def regularity(model) -> Regularity:
                   enumerate(model.bodies) if tree.coords[k] and not full_rank(b.pair))
     open_ += ("rotors carried by bodies",) if any(b.carrier for b in model.bodies) else ()
     open_ += ("coupled coordinates",) if model.couplings else ()
-    if not model.couplings and not any(b.carrier for b in model.bodies) and _at_rest(model, tree, solid, pinned):
+    simple = not model.couplings and not any(b.carrier for b in model.bodies)
+    if simple and _at_rest(model, tree, solid, pinned, inertias):
         return Regularity("everywhere")
     bound = bind(model, Numeric())
     zero, singular = set(range(n)), True
