@@ -185,19 +185,23 @@ def tendon_forces(bound, q, qd) -> list:
     return out
 
 
-def tendon_energy(bound, q):
-    """1/2 k stretch^2 summed over the tendons' springs."""
+def spring_energy(bound, tendons, length) -> object:
+    """1/2 k stretch^2 summed over the springs of ``tendons`` (fixed or spatial), ``length(tendon)`` their length."""
     acc = 0
-    where = None
-    for tendon in bound.model.tendons:
+    for tendon in tendons:
         k = bound.scalar(tendon.stiffness)
         if is_zero(k):
             continue
-        where = places(bound) if where is None else where
-        s = _stretch(bound, tendon, linear_form(bound, tendon.terms, where).value(q))
+        s = _stretch(bound, tendon, length(tendon))
         acc = acc + mul(k, s * s)
     return 0 if is_zero(acc) else bound.rational(1, 2) * acc
 
 
-__all__ = ["BoundJointRow", "LinearForm", "bind_joint_row", "linear_form", "places", "tendon_energy",
+def tendon_energy(bound, q):
+    """1/2 k stretch^2 summed over the fixed tendons' springs."""
+    where = places(bound) if bound.model.tendons else None
+    return spring_energy(bound, bound.model.tendons, lambda t: linear_form(bound, t.terms, where).value(q))
+
+
+__all__ = ["BoundJointRow", "LinearForm", "bind_joint_row", "linear_form", "places", "spring_energy", "tendon_energy",
            "tendon_forces"]

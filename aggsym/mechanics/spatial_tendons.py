@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from ..core.program import is_zero
 from ..model.types import WORLD
-from .joint_space import _stretch
+from .joint_space import _stretch, spring_energy
 from .kinematics import ZERO6, TreeKinematics, generalized, world_poses
 from .linalg import add, cross, dot, mtv, mul, mv, scale, sub
 
@@ -122,16 +122,10 @@ def spatial_tendon_forces(bound, q, qd) -> list:
 
 def spatial_tendon_energy(bound, kin):
     """1/2 k s^2 summed over the spatial tendons' springs."""
-    acc = 0
-    poses = None
-    for tendon in bound.model.spatial_tendons:
-        k = bound.scalar(tendon.stiffness)
-        if is_zero(k):
-            continue
-        poses = world_poses(kin) if poses is None else poses
-        s = _stretch(bound, tendon, tendon_length(bound, kin, tendon, poses))
-        acc = acc + mul(k, s * s)
-    return 0 if is_zero(acc) else bound.rational(1, 2) * acc
+    if not bound.model.spatial_tendons:
+        return 0
+    poses = world_poses(kin)
+    return spring_energy(bound, bound.model.spatial_tendons, lambda t: tendon_length(bound, kin, t, poses))
 
 
 __all__ = ["spatial_tendon_energy", "spatial_tendon_forces", "tendon_length"]

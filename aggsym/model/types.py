@@ -351,8 +351,8 @@ class SpatialTendon:
     length L = sum over its ``branches`` of (the distances between consecutive sites) / the branch's divisor (a
     ``<pulley divisor>`` starts a branch; the first has divisor 1); each branch ``(divisor, sites)``, each site
     ``(body name, (x, y, z))`` a point fixed on a body, in its axes (the body WORLD: a point fixed in the world).
-    The force along it is a fixed tendon's (:class:`Tendon`: k, the dead band lower..upper, d, F), acting on the
-    coordinates as J^T f with J = dL/dq (:mod:`aggsym.mechanics.spatial_tendons`)."""
+    The force along it is a fixed tendon's (:class:`Tendon`: k, the dead band lower..upper, d, F, its
+    ``deadband``), acting on the coordinates as J^T f with J = dL/dq (:mod:`aggsym.mechanics.spatial_tendons`)."""
 
     name: str
     branches: tuple
@@ -362,10 +362,7 @@ class SpatialTendon:
     damping: object = 0
     friction: object = 0
 
-    @property
-    def deadband(self) -> bool:
-        """Whether the spring has a dead band (lower < upper): then its force is piecewise linear."""
-        return as_expr(self.lower) != as_expr(self.upper)
+    deadband = Tendon.deadband
 
 
 @dataclass(frozen=True)
