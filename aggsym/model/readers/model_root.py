@@ -27,7 +27,8 @@ def _inside(folder: str, target: str) -> bool:
 
 @dataclass(frozen=True)
 class ModelRoot:
-    """The root ``folder`` (resolved) of the model file ``model`` (resolved); ``given``: by ``--model-root``."""
+    """The root ``folder`` (resolved) of the model file ``model`` (its folder resolved, the file itself not followed:
+    MuJoCo and xacro resolve relative names from the folder the file is named in); ``given``: by ``--model-root``."""
 
     folder: str
     model: str
@@ -36,7 +37,7 @@ class ModelRoot:
     @classmethod
     def of(cls, path, root=None) -> "ModelRoot":
         """The root of the model file ``path``: its folder, or ``root`` (an existing folder holding the file)."""
-        model = os.path.realpath(path)
+        model = os.path.join(os.path.realpath(os.path.dirname(os.path.abspath(path))), os.path.basename(path))
         if root is None or root == "":
             return cls(os.path.dirname(model), model)
         folder = os.path.realpath(os.path.expanduser(str(root)))
