@@ -19,6 +19,7 @@ body), as in Pinocchio.
 from __future__ import annotations
 
 from .bias import gravity_accelerations
+from .gravcomp import compensated_potential
 from .kinematics import moving_bodies, world_poses
 from .linalg import add, dot, mul
 
@@ -62,7 +63,5 @@ def potential_energy(bound, kin):
         if th is not None and moves[k]:
             acc = acc + th.m * height[k] + dot(gam[k], th.h)
     if bound.gravcomp:  # (the lifts' potential: MuJoCo's gravcomp, aggsym.mechanics.gravcomp)
-        from .gravcomp import compensated_potential
-
         acc = acc - compensated_potential(bound, kin)
     return acc

@@ -11,10 +11,11 @@ With them, the equations read
     A(q) q'' + b(q, q') + g(q) + C (q - q0) + D q' + t(q, q') + F sign(q') = tau,
 
 D and F diagonal (``model.damping``, ``model.coulomb``: one entry per coordinate, expressions of the model),
-t the tendons' ``-c f``.  :func:`left_forces` is the sum of these passive terms (what forward and inverse dynamics
+t the tendons' ``-c f`` (fixed) and ``-J^T f`` (spatial), and, where a model has them, the fluid's drag and the
+lifts of gravity compensation moved to the left as well.  :func:`left_forces` is the sum of these passive terms (what forward and inverse dynamics
 move to the left, and what their derivatives differentiate), :func:`passive_forces` its negative: the force on
 the right side, MuJoCo's ``qfrc_passive`` sign (which holds no Coulomb term: MuJoCo's frictionloss is a
-constraint).  Without damping, tendons and friction :func:`left_forces` is exactly
+constraint).  Without damping, tendons, friction, fluid and gravity compensation :func:`left_forces` is exactly
 :func:`~.elastic.elastic_forces` (the same scalars: such models give the same programs).
 """
 from __future__ import annotations
