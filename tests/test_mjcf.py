@@ -212,9 +212,12 @@ UNSUPPORTED = {
                                after='<tendon><spatial name="t" stiffness="3"><site site="s1"/><geom geom="w"/>'
                                      '<site site="s2"/></spatial></tendon>'),
                     ['<tendon name="t">', "wrapping around a geom", "not supported"]),
-    "tendon-armature": (ARM.format(attrs="", extra="", after='<tendon><fixed name="t" armature="3"><joint joint="j1" '
-                                                            'coef="1"/></fixed></tendon>'),
-                        ['<tendon name="t">', "armature", "not supported yet"]),
+    "tendon-armature-coupled": (ARM.format(attrs="", extra='<body name="b" pos="0 0 -.5"><joint name="j2"/>'
+                                                        '<geom size=".1"/></body>',
+                                           after='<tendon><fixed name="t" armature="3"><joint joint="j1" coef="1"/>'
+                                                 '<joint joint="j2" coef="1"/></fixed></tendon><equality>'
+                                                 '<joint joint1="j2" joint2="j1"/></equality>'),
+                                ['<tendon name="t">', "armature with coupled coordinates", "not supported"]),
     "actuatorgravcomp": (ARM.replace('<body name="a">', '<body name="a" gravcomp="1">').format(
         attrs='actuatorgravcomp="true"', extra="", after=""), ['<joint name="j1">', "actuatorgravcomp", "not supported"]),
     "parameter-clash": ('<mujoco><worldbody><body name="f"><joint name="a-b" type="free" damping="1"/><geom size=".1"/>'

@@ -5,6 +5,10 @@ from __future__ import annotations
 
 from .analyses import regressor_problem
 from .regularity import regularity
+
+
+def _zero(x) -> bool:
+    return getattr(x, "is_zero", False) is True or x == 0
 from .registry import ROUTINES, routines_for
 
 
@@ -22,6 +26,13 @@ def omitted_routines(model) -> dict:
                     if role in wanted})
     if not any(ROUTINES[role].regular for role in wanted):
         return out
+    armed = [t.name for t in model.tendons if not _zero(t.armature)]
+    if armed:  # (aggsym.mechanics.tendon_armature: forward dynamics and A^-1 hold it, not the tree's factors)
+        out.update({role: f"the armature of tendon(s) {', '.join(repr(n) for n in armed)} couples coordinates "
+                          f"outside the tree's factorization; forward_dynamics and inertia_inverse hold it "
+                          f"(Sherman-Morrison), the routines built on the factors do not yet"
+                    for role in wanted if ROUTINES[role].regular and role not in ("forward_dynamics",
+                                                                                   "inertia_inverse")})
     regular = regularity(model)
     if not regular.singular:
         return out

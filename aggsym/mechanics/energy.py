@@ -22,6 +22,7 @@ from .bias import gravity_accelerations
 from .gravcomp import compensated_potential
 from .kinematics import moving_bodies, world_poses
 from .linalg import add, dot, mul
+from .tendon_armature import kinetic as tendon_kinetic
 
 
 def kinetic_energy(bound, kin, qd):
@@ -35,6 +36,8 @@ def kinetic_energy(bound, kin, qd):
             acc = acc + mul(bound.rotor(j), mul(rate, rate))
     else:
         acc = acc + mul(bound.armature, dot(qd, qd))  # the rotors of the armature
+    if bound.model.tendons:  # the fixed tendons' armature: a (c . q')^2
+        acc = acc + tendon_kinetic(bound, qd)
     return bound.rational(1, 2) * acc
 
 

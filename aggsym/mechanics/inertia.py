@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from ..core.program import is_zero
 from .linalg import dot
+from .tendon_armature import add_to_inertia
 
 
 def composite_inertias(bound, kin):
@@ -47,11 +48,14 @@ def inertia_matrix(bound, kin, plus=None):
 
 
 def with_armature(bound, A):
-    """A + armature E (plus each coordinate's own rotor inertia, ``model.dof_armature``)."""
+    """A + armature E (plus each coordinate's own rotor inertia, ``model.dof_armature``, and the fixed tendons'
+    armature a c c^T, :mod:`.tendon_armature`)."""
     if bound.has_rotors:
         for i in range(len(A)):
             if not is_zero(bound.rotor(i)):
                 A[i][i] = A[i][i] + bound.rotor(i)
+    if bound.model.tendons:
+        A = add_to_inertia(bound, A)
     return A
 
 

@@ -50,6 +50,7 @@ from .aggregates import Rigid
 from .group import phi_force
 from .kinematics import ZERO6, combine, project, world_frame_vectors
 from .linalg import ZERO3, add, cross, dot, is_identity, mtv, mul, neg, scale, sub
+from .tendon_armature import add_to_torques
 
 __all__ = ["gravity_base", "gravity_wrenches", "forward_sweep", "Origin", "origin_sweep", "transport",
            "body_wrench", "body_wrench_rest", "body_wrenches", "backward_sweep", "transmitted_wrenches",
@@ -294,6 +295,8 @@ def inverse_dynamics(bound, kin, qd, qdd, H=None, gravity=True, transvect=None):
     origins = origin_sweep(bound, kin, qd, qdd, _gravity(bound, gravity))
     rest = body_wrenches(bound, kin, qd, qdd, H, gravity, origins=origins, rest=True)
     tau = generalized_forces_lumped(bound, kin, origins, rest, transvect)
+    if bound.model.tendons and transvect is None:  # the fixed tendons' armature: + a c (c . q'')
+        tau = add_to_torques(bound, tau, qdd)
     if bound.rotors:  # each coordinate's own rotor: + a_j q''_j
         return [t + mul(bound.rotor(j), a) for j, (t, a) in enumerate(zip(tau, qdd))]
     return [t + mul(bound.armature, a) for t, a in zip(tau, qdd)]  # a rotor on every axis: + armature q

@@ -69,6 +69,7 @@ from .inertia import composite_inertias
 from .bound import scratch_operations
 from .kinematics import world_poses
 from .linalg import dot, mul, mv, scale, sub
+from .tendon_armature import armature_rows, corrected_inverse, corrected_solution
 
 __all__ = [
     "Factors", "coordinate_parents", "coordinates_above", "transvection_pairs", "articulated_factors",
@@ -461,6 +462,15 @@ def forward_dynamics(bound, kin, tau, qd, fac=None):
 
     Without ``fac``, a pair whose columns Psi span body axes (:func:`unit_bases`: the Euler floating base, a
     spherical pair) is solved in those axes (:func:`forward_dynamics_in_bases`)."""
+    if bound.model.tendons and armature_rows(bound):  # (the fixed tendons' armature: A' = A + sum a c c^T)
+        tree_fac = articulated_factors(bound, kin, arguments=False) if fac is None else fac
+        return corrected_solution(bound, kin, _tree_forward_dynamics(bound, kin, tau, qd, fac),
+                                  lambda v: cauchy_solve_tree(kin, tree_fac, v))
+    return _tree_forward_dynamics(bound, kin, tau, qd, fac)
+
+
+def _tree_forward_dynamics(bound, kin, tau, qd, fac):
+    """:func:`forward_dynamics` with the tree's A (no tendon armature)."""
     if fac is None:
         bases = unit_bases(bound, kin)
         if bases:
@@ -755,6 +765,13 @@ def inertia_inverse(bound, kin):
     Operation counts of the emitted C on the benchmark chains (``benchmarks/harness/chain.py``), mul + add + div + call:
     n = 6: 1087 (factors), 12: 4205 (factors), 24: 17660, 48: 55748, 96: about 17 n^2 + 360 n (generators),
     against 710297 for the factors at n = 96."""
+    if bound.model.tendons and armature_rows(bound):  # (the fixed tendons' armature: Sherman-Morrison)
+        return corrected_inverse(bound, _tree_inertia_inverse(bound, kin))
+    return _tree_inertia_inverse(bound, kin)
+
+
+def _tree_inertia_inverse(bound, kin):
+    """:func:`inertia_inverse` of the tree's A (no tendon armature)."""
     if not bound.backend.symbolic or bound.backend.program is None:  # floats, duals: nothing to count on
         return inverse_by_generators(bound, kin)
     fast = scratch_operations(bound, kin, lambda b, k, _: inverse_by_generators(b, k))

@@ -328,7 +328,8 @@ class Tendon:
         linear spring about its rest length),  minus d L',  minus F sign(L') (Coulomb friction, on request)
 
     acts on the coordinates as ``c f`` (a force on the right side; on the left of the equations of motion
-    ``-c f``).  ``stiffness``, ``lower``, ``upper``, ``damping`` and ``friction`` are expressions (runtime
+    ``-c f``).  ``armature``: an inertia a along the tendon, a c c^T in A (:mod:`aggsym.mechanics.tendon_armature`).
+    ``stiffness``, ``lower``, ``upper``, ``damping``, ``friction`` and ``armature`` are expressions (runtime
     parameters)."""
 
     name: str
@@ -338,6 +339,7 @@ class Tendon:
     upper: object = 0
     damping: object = 0
     friction: object = 0
+    armature: object = 0
 
     @property
     def deadband(self) -> bool:

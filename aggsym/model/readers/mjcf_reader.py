@@ -40,7 +40,9 @@ The mapping
   Fixed tendons with a ``stiffness`` or ``damping`` (``Model.tendons``, :mod:`aggsym.mechanics.joint_space`):
   ``tendon_stiffness_<tendon>``, ``tendon_springlength_<tendon>`` (``tendon_lengthspring``; a dead band lower <
   upper: ``tendon_springlower_<tendon>``, ``tendon_springupper_<tendon>``), ``tendon_damping_<tendon>``: the force
-  ``f = -k s - d L'`` along the tendon (s the stretch beyond the rest length or dead band), ``-c f`` on the left.
+  ``f = -k s - d L'`` along the tendon (s the stretch beyond the rest length or dead band), ``-c f`` on the left;
+  ``tendon_armature_<tendon>`` (``tendon_armature``): an inertia a along a fixed tendon, a c c^T in A
+  (:mod:`aggsym.mechanics.tendon_armature`).
   Forward and inverse dynamics then include the passive forces as MuJoCo's ``qacc`` and ``qfrc_passive`` do:
   A qdd + b + g + C (q - q0) + D qd + t = tau (``passive_forces`` gives -(C (q - q0) + D qd + t), MuJoCo's sign).
   Gravity compensation (``gravcomp`` s on a body, ``Model.gravcomp``, :mod:`aggsym.mechanics.gravcomp`): the runtime
@@ -61,7 +63,7 @@ The mapping
   are refused there by name.  Spatial tendons through sites and pulleys with a stiffness or damping
   (``Model.spatial_tendons``, :mod:`aggsym.mechanics.spatial_tendons`): the same parameters as a fixed tendon's.
   Refused with an error naming them, since they would change the equations: spatial tendons wrapping around geoms
-  with a stiffness or damping, tendons with armature, polynomial or yielding tendon springs, flexes,
+  with a stiffness or damping, spatial tendons with armature, polynomial or yielding tendon springs, flexes,
   gravity compensation routed through the actuators, actuators with damping or armature, polynomial damping or
   stiffness.
 * ``model.links`` (kind ``"link"``): every MuJoCo body (``world`` included when ``worldbody`` is there) and every
@@ -204,9 +206,10 @@ class _Reader:
         dampers = not m.opt.disableflags & DISABLE_DAMPER
         for t in range(m.ntendon):
             where = f'<tendon name="{self.tendon_name(t)}">'
-            if hasattr(m, "tendon_armature") and m.tendon_armature[t]:
-                self.fail(where, "a tendon with armature (an inertia along the tendon: it changes A) is not "
-                                 "supported yet (tendon springs and dampers are)")
+            wraps = [int(m.wrap_type[w]) for w in range(int(m.tendon_adr[t]), int(m.tendon_adr[t] + m.tendon_num[t]))]
+            if hasattr(m, "tendon_armature") and m.tendon_armature[t] and any(w != WRAP_JOINT for w in wraps):
+                self.fail(where, "a spatial tendon with armature (its Jacobian depends on q: A and the bias would "
+                                 "change with it) is not supported yet; a fixed tendon's armature is")
             for field, what in (("tendon_stiffnesspoly", "a polynomial stiffness (stiffnesspoly)"),
                                 ("tendon_dampingpoly", "a polynomial damping (dampingpoly)"),
                                 ("tendon_springyield", "a spring with a yield (springyield)")):
@@ -214,7 +217,6 @@ class _Reader:
                     self.fail(where, f"{what} on a tendon is not supported (stiffness and damping are)")
             acts = ((springs and m.tendon_stiffness[t] != 0) or (dampers and m.tendon_damping[t] != 0) or
                     (self.coulomb and m.tendon_frictionloss[t] != 0))
-            wraps = [int(m.wrap_type[w]) for w in range(int(m.tendon_adr[t]), int(m.tendon_adr[t] + m.tendon_num[t]))]
             if acts and any(w in (WRAP_SPHERE, WRAP_CYLINDER) for w in wraps):
                 self.fail(where, "a spatial tendon wrapping around a geom (sphere or cylinder) with a stiffness or "
                                  "damping" + (" or (--frictionloss coulomb) a frictionloss" if self.coulomb else "")
@@ -447,6 +449,10 @@ class _Reader:
         model = dataclasses.replace(model, frames=default_frames(model))
         home = dict(zip((name for name, _, _ in model.positions), self.home_pose()))
         model = with_equalities(self, model)
+        armed = [t.name for t in model.tendons if t.armature != 0]
+        if armed and model.couplings:
+            self.fail(f'<tendon name="{armed[0]}">', "a tendon's armature with coupled coordinates (a joint or "
+                                                      "tendon equality that becomes a coupling) is not supported")
         meta = dict(model.meta)
         meta["mjcf"] = dict(meta["mjcf"], qpos0=[home[name] for name, _, _ in model.positions])
         model = dataclasses.replace(model, meta=meta)
@@ -519,7 +525,8 @@ class _Reader:
             k = float(m.tendon_stiffness[t]) if springs else 0.0
             d = float(m.tendon_damping[t]) if dampers else 0.0
             f = float(m.tendon_frictionloss[t]) if self.coulomb else 0.0
-            if not (k or d or f):
+            a = float(m.tendon_armature[t]) if hasattr(m, "tendon_armature") else 0.0
+            if not (k or d or f or a):
                 continue
             name = self.tendon_name(t)
             tag = identifier(name, used, "tendon")
@@ -550,6 +557,9 @@ class _Reader:
             if f:
                 params.append(Parameter(f"tendon_friction_{tag}", f))
                 values["friction"] = params[-1].symbol
+            if a:  # (aggsym.mechanics.tendon_armature: a c c^T in A)
+                params.append(Parameter(f"tendon_armature_{tag}", a))
+                values["armature"] = params[-1].symbol
             if spatial:
                 spatial_out.append(SpatialTendon(name, self.spatial_path(t, tree, body_links), **values))
             else:
