@@ -95,7 +95,8 @@ def _parser() -> argparse.ArgumentParser:
                         "Makefile building libNAME.a (make -j2; CC, CFLAGS default -O2 -std=c99) instead of NAME.c")
     g.add_argument("--targets", metavar="A,B,...",
                    help="write only these targets' files: c (NAME.h, NAME.c or the --split files), numpy (NAME.py), "
-                        "manifest (NAME.json), latex (NAME.tex), jax (NAME_jax.py), torch (NAME_torch.py), ext "
+                        "manifest (NAME.json), latex (NAME.tex), jax (NAME_jax.py), torch (NAME_torch.py), casadi "
+                        "(NAME_casadi.py: casadi.Function over SX), ext "
                         "(NAME_ext.c, NAME_ext.py: one state per call through the compiled C; with c and numpy); "
                         "with c and jax or torch also kernels (NAME_kernels.c, NAME_kernels.py, NAME_kernels_jax.cc: "
                         "the batch kernels the JAX and PyTorch modules call on the CPU); "
@@ -119,7 +120,7 @@ def _parser() -> argparse.ArgumentParser:
                         "errors and --opt), and that library is what runs")
     c.add_argument("--targets", metavar="A,B,...",
                    help="check only these targets (default: every target with something to run here: c, numpy, and jax "
-                        "and torch where they import; ext when named)")
+                        "and torch where they import; ext and casadi when named)")
     command("ops", "operation counts per routine beside the book's tables and Featherstone's counts")
     return parser
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 from ...errors import AggsymError
 from .base import Job, RoutineLines, Runner, Target
 from .c import CTarget
+from .casadi import CasadiTarget
 from .ext import ExtensionTarget
 from .jax import JaxTarget
 from .kernels import KernelsTarget
@@ -78,6 +79,7 @@ for _target in (CTarget(), NumPyTarget(), ManifestTarget(), LatexTarget(), JaxTa
     register(_target)
 register(TorchTarget())  # --targets torch (not in the default set)
 register(ExtensionTarget())  # --targets c,numpy,ext (not in the default set)
+register(CasadiTarget())  # --targets casadi (not in the default set)
 register(KernelsTarget())  # with c and jax or torch (with_kernels), unless --no-kernels
 
 __all__ = ["Job", "RoutineLines", "Runner", "Target", "TARGETS", "register", "unregister", "select", "known",
