@@ -79,7 +79,7 @@ BENCH_LAYERS = {
     **{f"generation.{m}": 1 for m in ("measured", "kane", "opcounts", "inputs", "scaling", "compile_split",
                                        "derivative_counts")},
     **{f"runtime.{m}": 1 for m in ("pinocchio_cpp", "constrained", "casadi_peer", "constrained_derivatives",
-                                    "python_call", "slicing", "trig")},
+                                    "python_call", "slicing", "trig", "casadi_target")},
     **{f"mjcf.{m}": 1 for m in ("mujoco_reference", "mujoco_poses", "corpus")},
     "batch.peers": 1, "batch.engines": 1, "batch.report": 1, "batch.worker": 2, "batch.orchestrator": 2,
     "batch.__main__": 2,
