@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .contract import ROUTINES, input_length, run, signature
+from .contract import ROUTINES, input_length, routine_of, run, signature
 from .core.backend import Numeric
 from .mechanics.bound import bind
 from .model.tree import Tree
@@ -36,7 +36,7 @@ class NumericTwin:
         """Evaluate routine ``role`` with its inputs (q, qd, ..., and t for a time-dependent model) in order.
 
         Returns a NumPy array of the output's shape, or a tuple of arrays for a routine with several outputs."""
-        routine = ROUTINES[role]
+        routine = routine_of(self.model, role)
         if self.model.couplings and routine.coupled is None:
             raise ValueError(f"{role} is not a routine of {self.model.name}: its coordinates are coupled "
                              "(--mimic couple), and the routine has no coupled form")

@@ -238,3 +238,105 @@ def test_a_body_with_two_joints_is_certified_and_one_with_three_is_not(tmp_path)
     coaxial = tmp_path / "coaxial.xml"  # (two joints about one line: singular everywhere)
     coaxial.write_text(MJCF_BODY.format(joints='<joint name="a" axis="1 0 0"/><joint name="b" axis="-2 0 0"/>'))
     assert regularity(aggsym.load(coaxial)).singular
+
+
+SOLVES = ("forward_dynamics", "inertia_inverse", "transvective_factors", "forward_dynamics_derivatives")
+
+
+def _solves(module, q):
+    """Which of SOLVES raise LinAlgError at q (the NumPy module's report of a nonzero status)."""
+    nv = len(module.VELOCITIES) if hasattr(module, "VELOCITIES") else len(q)
+    raised = set()
+    for role in SOLVES:
+        args = [q] + ([np.zeros(nv), np.ones(nv)] if role.startswith("forward") else [])
+        try:
+            with np.errstate(all="ignore"):
+                getattr(module, role)(*args)
+        except np.linalg.LinAlgError:
+            raised.add(role)
+    return raised
+
+
+@pytest.mark.compiler
+@pytest.mark.parametrize("base", [None, "quaternion"])
+def test_the_point_mass_heads_singular_states_are_reported(head, base, tmp_path):
+    """Issue 53, item 2: A(q) is singular wherever the neck pitch is 0; forward dynamics, A^-1, the factors and the
+    derivatives of forward dynamics are generated with a status (C int, NumPy LinAlgError), nonzero at the home
+    pose and near it, zero where Pinocchio's M is well conditioned, and a nonzero one only where Pinocchio's M
+    has cond >= 1e11; the header and the manifest say so."""
+    from aggsym.contract import select_routines
+    from helpers import generated_code
+
+    model = aggsym.load(head, floating_base=base) if base else aggsym.load(head)
+    model = select_routines(model, ["default", "forward_dynamics_derivatives"])
+    lib, module, manifest = generated_code(model, tmp_path)
+    for role in SOLVES:
+        assert manifest["signatures"][role]["returns"].startswith("int: 0, or nonzero when A(q) is singular")
+    assert manifest["signatures"]["inertia"]["returns"] == "void"
+    assert manifest["mass_matrix"]["reported_by"] == list(SOLVES)
+    header = (tmp_path / "head.h").read_text()
+    assert "int head_forward_dynamics(" in header and "head (a point mass: no rotational inertia)" in header
+    pm = pin.buildModelFromUrdf(str(head), pin.JointModelFreeFlyer()) if base else pinocchio_model(head)
+    data = pm.createData()
+    pitch = [c.name for c in model.coordinates].index("neck_pitch") + (1 if base else 0)
+    neutral = np.array(model_neutral(model))
+    for angle in (0.0, 3e-7, -2e-7):
+        q = neutral.copy()
+        q[pitch] = angle
+        assert _solves(module, q) == set(SOLVES), angle
+        with pytest.raises(np.linalg.LinAlgError), np.errstate(all="ignore"):
+            lib.call("forward_dynamics", q, np.zeros(model.nv), np.ones(model.nv))
+    rng = np.random.default_rng(5)
+    for k in range(24):
+        q = rng.uniform(-np.pi, np.pi, model.nq)
+        if base:
+            q[3:7] /= np.linalg.norm(q[3:7])
+        if k % 3 == 0:  # (a third of them near the singular set)
+            q[pitch] = float(f"{rng.uniform(-1, 1) * 10.0 ** -rng.integers(2, 9):.5g}")
+        Q = q if base else pinocchio_q(pm, q)
+        M = pin.crba(pm, data, Q)
+        cond = np.linalg.cond(np.triu(M) + np.triu(M, 1).T)
+        raised = _solves(module, q)
+        assert raised in (set(), set(SOLVES)), raised
+        if raised:
+            assert cond >= 1e11, (q[pitch], cond)
+        elif cond <= 1e6:
+            qd, tau = rng.normal(size=(2, model.nv))
+            assert relative_error(lib.call("forward_dynamics", q, qd, tau), pin.aba(pm, data, Q, qd, tau)) <= 1e-9
+        if cond <= 1e10:
+            assert not raised, (q[pitch], cond)
+
+
+def test_gimbal_lock_of_an_euler_base_is_reported():
+    """The spacecraft's free flight in Euler angles: A(q) singular where the middle angle is pi/2 (gimbal lock),
+    where forward dynamics and A^-1 now report it (before: a silent garbage q''); regular elsewhere."""
+    from conftest import model_path
+
+    twin = NumericTwin(aggsym.load(model_path("spacecraft")))
+    rng = np.random.default_rng(11)
+    q = rng.uniform(-1.2, 1.2, 12)
+    for middle, singular in ((np.pi / 2, True), (-np.pi / 2, True), (1.5707, False), (0.31416, False)):
+        q[4] = middle
+        assert (np.linalg.cond(twin.inertia(q)) > 1e12) == singular
+        for role, args in (("forward_dynamics", (q, np.zeros(12), np.ones(12))), ("inertia_inverse", (q,))):
+            if singular:
+                with pytest.raises(np.linalg.LinAlgError, match="singular or nearly so"), np.errstate(all="ignore"):
+                    twin.call(role, *args)
+            else:
+                twin.call(role, *args)
+
+
+def test_a_certified_model_has_no_status(tmp_path):
+    """A model proved regular everywhere keeps the contract's void forward dynamics, and no mass_matrix entry."""
+    from aggsym.codegen.generate import generate
+
+    text = head_urdf(inertia=(0.0071, 0.0063, 0.0052)).replace(
+        '<link name="neck"/>', '<link name="neck"><inertial><mass value="0.21"/>' + INERTIA.format(1e-4, 2e-4, 3e-4)
+        + '</inertial></link>')
+    path = tmp_path / "solid_head.urdf"
+    path.write_text(text)
+    files = generate(aggsym.load(path), targets="c,manifest").files
+    manifest = json.loads(files["solid_head.json"])
+    assert "mass_matrix" not in manifest
+    assert all(manifest["signatures"][role]["returns"] == "void" for role in ("forward_dynamics", "inertia_inverse"))
+    assert "void solid_head_forward_dynamics(" in files["solid_head.h"]

@@ -24,8 +24,10 @@ from pathlib import Path
 
 from .. import __version__
 from ..contract import (
-    INPUT_KINDS, ROUTINES, input_length, omitted_routines, redundant_constraints, routines_for, run, signature,
+    INPUT_KINDS, ROUTINES, input_length, mass_matrix_note, omitted_routines, redundant_constraints, routine_of,
+    routines_for, run, signature,
 )
+from ..contract.singular_states import FAILURE as SINGULAR_FAILURE
 from ..core.backend import Symbolic
 from ..core.program import straight_line
 from ..mechanics.bound import bind, program_operations
@@ -191,7 +193,7 @@ def generate(model, progress=None, scalar: str = "double", split: bool = False,
         sl = straight_line(prog, outs)
         if role in wanted:
             lines[role] = sl
-        emitted.append(emit_routine(model, prog, ROUTINES[role], outs, chosen, scalar, slicing, sl,
+        emitted.append(emit_routine(model, prog, routine_of(model, role), outs, chosen, scalar, slicing, sl,
                                     prog.columns.get(role), looped_above))
         del sl
     stages.done("printing")
@@ -224,6 +226,8 @@ def generate(model, progress=None, scalar: str = "double", split: bool = False,
         "time": model.time_dependent,
         "elastic": any(b.pair.elastic for b in model.bodies),
         "omitted": dict(omitted),  # role -> why it is left out (the header says so where it would be)
+        "mass_matrix": mass_matrix_note(model, [e.routine for e in emitted]),  # where A(q) may be singular, or None
+        "singular_failure": SINGULAR_FAILURE,
         "passive": passive_entry(model),  # the joints' damping and friction: in forward/inverse dynamics or not
         "passive_notes": routine_notes(model),  # role -> what it holds of them (the header's comment)
         "inertial_helpers": inertial_helpers(model),  # NAME_set_payload_<link>, set_inertial_<link>

@@ -26,7 +26,8 @@ The package, one concern a module: :mod:`.registry` (Routine, Output, ROUTINES, 
 :mod:`.routines_frames`, :mod:`.routines_regressor`: imported below in that order, which is the order of
 registration, hence of emission and of the manifest), :mod:`.analyses` (numerical analyses of a model),
 :mod:`.exact_relations` (the base parameters' exact coefficients),
-:mod:`.selection` (the routines left out, ``--routines``) and :mod:`.manifests` (the manifest, the float
+:mod:`.selection` (the routines left out, ``--routines``), :mod:`.singular_states` (the status of the routines
+that solve with A(q) where it may be singular on a set) and :mod:`.manifests` (the manifest, the float
 tolerances).  The C names (``NAME_role``, prototypes, header macros) are the C target's:
 :mod:`aggsym.codegen.names`.
 """
@@ -60,6 +61,7 @@ from .analyses import (
     regressor_problem, sample_configurations,
 )
 from .selection import omitted_routines, select_routines
+from .singular_states import mass_matrix_note, reports_singular_states, routine_of
 from .manifests import (
     FLOAT_PER_CONDITION, FLOAT_TIME, FLOAT_TOLERANCE, FLOAT_TOLERANCE_DEFAULT, constraints_entry, elastic_entry,
     float_tolerance, frames_entry, manifest, time_entry,
@@ -67,6 +69,7 @@ from .manifests import (
 
 __all__ = [
     "INPUT_KINDS", "Output", "Routine", "ROUTINES", "SCALAR_INPUTS", "register", "signature", "input_length", "routines_for", "run",
+    "routine_of", "reports_singular_states", "mass_matrix_note",
     "nq_vector", "nq_square", "positions_vector", "scalar", "momentum_shape", "joint_wrench_shape",
     "transvection_count", "partition_block_shape", "constraint_rows_vector", "constraint_jacobian_shape",
     "constraint_square", "slip_vector", "support_lengths", "support_block", "six", "mechanism_vector", "frame_count",

@@ -9,6 +9,7 @@ from ..mechanics import elastic
 from ..model.transforms.joint_dynamics import passive_entry
 from .registry import ROUTINES, input_length, signature
 from .regularity import mass_matrix_entry
+from .singular_states import status_entry
 
 
 def frames_entry(model) -> list:
@@ -103,7 +104,7 @@ def manifest(model, routines, ops: dict, omitted=None, scalar: str = "double", l
         out["frames"] = frames_entry(model)
     mass_matrix = mass_matrix_entry(model)
     if mass_matrix is not None:  # A(q) not proved regular everywhere: degenerate bodies, where it is singular
-        out["mass_matrix"] = mass_matrix
+        out["mass_matrix"] = {**mass_matrix, **status_entry(routines)}
     passive = passive_entry(model)
     if passive is not None:  # the joints' damping and friction: in forward and inverse dynamics or not
         out["passive"] = passive

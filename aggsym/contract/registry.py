@@ -76,6 +76,9 @@ class Routine:
 
 
 ROUTINES: dict[str, Routine] = {}
+# (model, role) -> the routine as that model emits it: ROUTINES[role] here; aggsym.contract.singular_states puts its
+# routine_of in (the package imports it), so that this module imports nothing of the judgement of A(q)
+EMITTED_AS = [lambda model, role: ROUTINES[role]]
 
 
 def register(routine: Routine) -> Routine:
@@ -106,10 +109,11 @@ def input_length(model, name: str, routine: Routine | None = None) -> int:
 def routines_for(model, roles=None, omitted=()) -> list:
     """The routines emitted for a model, in emission order: those named (``roles``, else the model's own selection
     ``model.routines``, else every routine of the contract that applies and is not on request), less the
-    ``omitted`` ones (:func:`omitted_routines`)."""
+    ``omitted`` ones (:func:`omitted_routines`), each as the model emits it (:data:`EMITTED_AS`: with a status
+    where A(q) may be singular on a set of configurations, :func:`~.singular_states.routine_of`)."""
     if roles is None:
         roles = model.routines
-    return [r for role, r in ROUTINES.items()
+    return [EMITTED_AS[0](model, role) for role, r in ROUTINES.items()
             if (role in roles if roles is not None else not r.on_request) and r.exists_for(model)
             and role not in omitted]
 

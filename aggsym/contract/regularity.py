@@ -245,7 +245,16 @@ def mass_matrix_entry(model) -> dict | None:
 
 
 def regularity(model) -> Regularity:
-    """The regularity of A(q) at the default parameters (the module's text)."""
+    """The regularity of A(q) at the default parameters (the module's text), judged once per model (kept on the
+    model object: the routines of :mod:`.singular_states` ask for it wherever a model's routines are listed)."""
+    cached = model.__dict__.get("_regularity")
+    if cached is None:
+        cached = _judged(model)
+        object.__setattr__(model, "_regularity", cached)  # (a frozen dataclass; not a field: replace() judges anew)
+    return cached
+
+
+def _judged(model) -> Regularity:
     import numpy as np
 
     from ..core.backend import Numeric

@@ -2,6 +2,12 @@
 #include <math.h>
 #include "added_mass_body_in_fluid.h"
 
+/* sign(x): -1, 0 or 1, and nan for nan (a returned status then stays nonzero when a solve meets a nan) */
+static double aggsym_sign(double x)
+{
+    return x != x ? x : (double)(x > 0.0) - (double)(x < 0.0);
+}
+
 /* sin(x) and cos(x) together, without a branch for |x| < 1e6.  x = k pi/2 + r, k the nearest integer to x 2/pi
  * (adding 1.5 2^52 rounds it in the floating-point unit, its low bits then those of k), |r| <= pi/4 (Cody-Waite):
  * pi/2 = P1 + P2 + P3 + P4 (+ 2^-142), P1 and P2 of at most 33 significant bits, P3 of 19, P4 a double, so for
@@ -697,9 +703,10 @@ void added_mass_body_in_fluid_joint_wrenches(const double *q, const double *qd, 
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 146 mul, 77 add, 1 div, 3 call */
-void added_mass_body_in_fluid_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
+ * operations: 210 mul, 127 add, 4 div, 9 call */
+int added_mass_body_in_fluid_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
+    double status[1];
     const double q_3 = q[3];
     const double q_4 = q[4];
     const double q_5 = q[5];
@@ -730,58 +737,99 @@ void added_mass_body_in_fluid_forward_dynamics(const double *q, const double *qd
     const double x13 = x0*x4 - x5*x6;
     const double x14 = x1*x5 - x4*x8;
     const double x15 = x5*x8 + x1*x4;
-    const double x16 = qd_0*x3;
-    const double x17 = qd_0*x10 + qd_1*x12 + qd_2*x14;
-    const double x18 = qd_1*x13 - qd_0*x11 + qd_2*x15;
-    const double x19 = x16 - qd_1*x7 + qd_2*x9;
-    const double x20 = qd_3*x3;
-    const double x21 = qd_3*x10 + qd_4*x5;
-    const double x22 = qd_4*x4 - qd_3*x11;
-    const double x23 = qd_5 + x20;
-    const double x24 = qd_1*x0 + qd_2*x1;
-    const double x25 = qd_2*x0 - qd_1*x1;
-    const double x26 = qd_3*x25;
-    const double x27 = qd_3*x24;
-    const double x28 = qd_0*x2 - x3*x25;
-    const double x29 = qd_4*x20;
-    const double x30 = x3*x27 - qd_4*(x16 + x2*x25);
-    const double x31 = 0.08377580409572785*(qd_5*x22 - x4*x29);
-    const double x32 = 22.182181931693595*x17;
-    const double x33 = 39.67329996836601*x18;
-    const double x34 = 39.67329996836601*x19;
-    const double x35 = 0.08377580409572785*x21;
-    const double x36 = 22.182181931693595*(x4*x30 + x5*x26 + qd_5*(x4*x24 - x5*x28)) + x22*x34 - x23*x33;
-    const double x37 = 39.67329996836601*(x4*x26 - x5*x30 - qd_5*(x4*x28 + x5*x24)) + x23*x32 - x21*x34;
-    const double x38 = 39.67329996836601*(qd_4*x28 - x2*x27) + x21*x33 - x22*x32;
-    const double x39 = 1.8512830142411616*(x5*x29 - qd_5*x21) + x19*x32 - x17*x34 + x23*x35 - x21*1.8512830142411616*x23;
-    const double x40 = 1.8512830142411616*qd_4*qd_3*x2 + x17*x33 - x18*x32 + x21*1.8512830142411616*x22 - x22*x35;
-    const double x41 = x3*x4;
-    const double x42 = x3*x5;
-    const double x43 = x4*x10 + x5*x11;
-    const double x44 = 1/x43;
-    const double x45 = tau_0 - x10*x36 + x11*x37 - x3*x38;
-    const double x46 = tau_1 - x12*x36 - x13*x37 + x7*x38;
-    const double x47 = tau_2 - x14*x36 - x15*x37 - x9*x38;
-    const double x48 = tau_3 - x10*x31 + x11*x39 - x3*x40;
-    const double x49 = tau_4 - x5*x31 - x4*x39;
-    const double x50 = tau_5 - x40;
-    const double x51 = 0.04508122794589534*(x10*x45 + x12*x46 + x14*x47);
-    const double x52 = 0.025205868954620923*(x13*x46 - x11*x45 + x15*x47);
-    const double x53 = 0.025205868954620923*(x3*x45 - x7*x46 + x9*x47);
-    const double x54 = 11.936620731892146*x44*(x4*x48 + x11*x49 - x41*x50);
-    const double x55 = 0.5401659240145401*x44*(x10*x49 - x5*x48 + x42*x50);
-    qdd[0] = x10*x51 - x11*x52 + x3*x53;
-    qdd[1] = x12*x51 + x13*x52 - x7*x53;
-    qdd[2] = x14*x51 + x15*x52 + x9*x53;
-    qdd[3] = x44*(x4*x54 - x5*x55);
-    qdd[4] = x44*(x11*x54 + x10*x55);
-    qdd[5] = x44*(x42*x55 - x41*x54 + x43*0.5401659240145401*x44*x43*x50);
+    const double x16 = 22.182181931693595*x14;
+    const double x17 = 39.67329996836601*x15;
+    const double x18 = 39.67329996836601*x9;
+    const double x19 = x14*x16 + x15*x17 + x9*x18;
+    const double x20 = 0.08377580409572785*x5;
+    const double x21 = 1.8512830142411616*x4;
+    const double x22 = x5*x20 + x4*x21;
+    const double x23 = qd_0*x3;
+    const double x24 = qd_0*x10 + qd_1*x12 + qd_2*x14;
+    const double x25 = qd_1*x13 - qd_0*x11 + qd_2*x15;
+    const double x26 = x23 - qd_1*x7 + qd_2*x9;
+    const double x27 = qd_3*x3;
+    const double x28 = qd_3*x10 + qd_4*x5;
+    const double x29 = qd_4*x4 - qd_3*x11;
+    const double x30 = qd_5 + x27;
+    const double x31 = qd_1*x0 + qd_2*x1;
+    const double x32 = qd_2*x0 - qd_1*x1;
+    const double x33 = qd_3*x32;
+    const double x34 = qd_3*x31;
+    const double x35 = qd_0*x2 - x3*x32;
+    const double x36 = qd_4*x27;
+    const double x37 = x3*x34 - qd_4*(x23 + x2*x32);
+    const double x38 = 0.08377580409572785*(qd_5*x29 - x4*x36);
+    const double x39 = 22.182181931693595*x24;
+    const double x40 = 39.67329996836601*x25;
+    const double x41 = 39.67329996836601*x26;
+    const double x42 = 0.08377580409572785*x28;
+    const double x43 = 22.182181931693595*(x4*x37 + x5*x33 + qd_5*(x4*x31 - x5*x35)) + x29*x41 - x30*x40;
+    const double x44 = 39.67329996836601*(x4*x33 - x5*x37 - qd_5*(x4*x35 + x5*x31)) + x30*x39 - x28*x41;
+    const double x45 = 39.67329996836601*(qd_4*x35 - x2*x34) + x28*x40 - x29*x39;
+    const double x46 = 1.8512830142411616*(x5*x36 - qd_5*x28) + x26*x39 - x24*x41 + x30*x42 - x28*1.8512830142411616*x30;
+    const double x47 = 1.8512830142411616*qd_4*qd_3*x2 + x24*x40 - x25*x39 + x28*1.8512830142411616*x29 - x29*x42;
+    const double x48 = x3*x4;
+    const double x49 = x3*x5;
+    const double x50 = x4*x10 + x5*x11;
+    const double x51 = 1/x50;
+    const double x52 = tau_0 - x10*x43 + x11*x44 - x3*x45;
+    const double x53 = tau_1 - x12*x43 - x13*x44 + x7*x45;
+    const double x54 = tau_2 - x14*x43 - x15*x44 - x9*x45;
+    const double x55 = tau_3 - x10*x38 + x11*x46 - x3*x47;
+    const double x56 = tau_4 - x5*x38 - x4*x46;
+    const double x57 = tau_5 - x47;
+    const double x58 = 0.04508122794589534*(x10*x52 + x12*x53 + x14*x54);
+    const double x59 = 0.025205868954620923*(x13*x53 - x11*x52 + x15*x54);
+    const double x60 = 0.025205868954620923*(x3*x52 - x7*x53 + x9*x54);
+    const double x61 = 11.936620731892146*x51*(x4*x55 + x11*x56 - x48*x57);
+    const double x62 = 0.5401659240145401*x51*(x10*x56 - x5*x55 + x49*x57);
+    qdd[0] = x10*x58 - x11*x59 + x3*x60;
+    qdd[1] = x12*x58 + x13*x59 - x7*x60;
+    qdd[2] = x14*x58 + x15*x59 + x9*x60;
+    qdd[3] = x51*(x4*x61 - x5*x62);
+    qdd[4] = x51*(x11*x61 + x10*x62);
+    qdd[5] = x51*(x49*x62 - x48*x61 + x50*0.5401659240145401*x51*x50*x57);
+    const double x63 = 1/x22;
+    const double x64 = x21*x63;
+    const double x65 = x20*x64;
+    const double x66 = x10*(x10*(0.08377580409572785 - x20*x20*x63) + x11*x65) + x11*(x10*x65 + x11*(1.8512830142411616 - x21*x64));
+    const double x67 = 1/x19;
+    const double x68 = x17*x67;
+    const double x69 = x18*x67;
+    const double x70 = 22.182181931693595 - x16*x16*x67;
+    const double x71 = x16*x68;
+    const double x72 = x16*x69;
+    const double x73 = 39.67329996836601 - x17*x68;
+    const double x74 = x17*x69;
+    const double x75 = 39.67329996836601 - x18*x69;
+    const double x76 = x12*x70 - x13*x71 + x7*x72;
+    const double x77 = x13*x73 - x12*x71 + x7*x74;
+    const double x78 = x12*x72 + x13*x74 + x7*x75;
+    const double x79 = x12*x76 + x13*x77 + x7*x78;
+    const double x80 = 1/x79;
+    const double x81 = x77*x80;
+    const double x82 = x78*x80;
+    const double x83 = x71 + x76*x81;
+    const double x84 = x76*x82 - x72;
+    const double x85 = x77*x82 - x74;
+    const double x86 = x10*(x10*(x70 - x76*x76*x80) + x11*x83 + x3*x84) - x11*(x3*x85 - x10*x83 - x11*(x73 - x77*x81)) + x3*(x10*x84 - x11*x85 + x3*(x75 - x78*x82));
+    const double x87 = 1.6666666666666667e-13*(1.8512830142411616 + x22 + x66 + x19 + x79 + x86);
+    const double x88 = aggsym_sign(x87 - x86);
+    const double x89 = aggsym_sign(x87 - x79);
+    const double x90 = aggsym_sign(x87 - x19);
+    const double x91 = aggsym_sign(x87 - x66);
+    const double x92 = aggsym_sign(x87 - x22);
+    const double x93 = aggsym_sign(x87 - 1.8512830142411616);
+    status[0] = 6 + x88 + x89 + x90 + x91 + x92 + x93;
+    return status[0] != 0.0;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 101 mul, 52 add, 5 div, 3 call */
-AGGSYM_SCALAR_STORES void added_mass_body_in_fluid_inertia_inverse(const double *q, const double *p, double *Ainv)
+ * operations: 102 mul, 69 add, 5 div, 9 call */
+AGGSYM_SCALAR_STORES int added_mass_body_in_fluid_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
+    double status[1];
     const double q_3 = q[3];
     const double q_4 = q[4];
     const double q_5 = q[5];
@@ -814,73 +862,88 @@ AGGSYM_SCALAR_STORES void added_mass_body_in_fluid_inertia_inverse(const double 
     const double x16 = 22.182181931693595*x14;
     const double x17 = 39.67329996836601*x15;
     const double x18 = 39.67329996836601*x9;
-    const double x19 = 0.08377580409572785*x5;
-    const double x20 = 1.8512830142411616*x4;
-    const double x21 = 1/(x5*x19 + x4*x20);
-    const double x22 = x19*x21;
-    const double x23 = x20*x21;
-    const double x24 = x19*x23;
-    const double x25 = 1/(x10*(x10*(0.08377580409572785 - x19*x22) + x11*x24) + x11*(x10*x24 + x11*(1.8512830142411616 - x20*x23)));
-    Ainv[21] = x25;
-    const double x26 = 1/(x14*x16 + x15*x17 + x9*x18);
-    const double x27 = x16*x26;
-    const double x28 = x17*x26;
-    const double x29 = x18*x26;
-    const double x30 = 22.182181931693595 - x16*x27;
-    const double x31 = x16*x28;
-    const double x32 = x16*x29;
-    const double x33 = 39.67329996836601 - x17*x28;
-    const double x34 = x17*x29;
-    const double x35 = 39.67329996836601 - x18*x29;
-    const double x36 = x12*x27 + x13*x28;
-    const double x37 = x7*x29;
-    const double x38 = x12*x30 - x13*x31 + x7*x32;
-    const double x39 = x13*x33 - x12*x31 + x7*x34;
-    const double x40 = x12*x32 + x13*x34 + x7*x35;
-    const double x41 = 1/(x12*x38 + x13*x39 + x7*x40);
-    const double x42 = x38*x41;
-    const double x43 = x39*x41;
-    const double x44 = x40*x41;
-    const double x45 = x31 + x38*x43;
-    const double x46 = x38*x44 - x32;
-    const double x47 = x39*x44 - x34;
-    const double x48 = 1/(x10*(x10*(x30 - x38*x42) + x11*x45 + x3*x46) - x11*(x3*x47 - x10*x45 - x11*(x33 - x39*x43)) + x3*(x10*x46 - x11*x47 + x3*(x35 - x40*x44)));
-    Ainv[0] = x48;
-    const double x49 = x3*x44 - x10*x42 + x11*x43;
-    const double x50 = x10*x27 - x11*x28 + x3*x29 + (x36 - x37)*x49;
-    const double x51 = x37 - x36;
-    const double x52 = x11*x23 - x10*x22;
-    const double x53 = x48*x49;
-    Ainv[1] = x53;
-    Ainv[6] = x53;
-    const double x54 = x48*x50;
-    const double x55 = -x54;
-    Ainv[2] = x55;
-    Ainv[12] = x55;
-    Ainv[7] = x41 + x49*x53;
-    const double x56 = x41*x51;
-    const double x57 = x56 - x50*x53;
-    Ainv[8] = x57;
-    Ainv[13] = x57;
-    Ainv[14] = x26 + x50*x54 + x51*x56;
-    const double x58 = x25*x52;
-    Ainv[22] = x58;
-    Ainv[27] = x58;
-    const double x59 = x3*x25;
-    const double x60 = -x59;
-    Ainv[23] = x60;
-    Ainv[33] = x60;
-    Ainv[28] = x21 + x52*x58;
-    const double x61 = -x3*x58;
-    Ainv[29] = x61;
-    Ainv[34] = x61;
-    Ainv[35] = 0.5401659240145401 + x3*x59;
+    const double x19 = x14*x16 + x15*x17 + x9*x18;
+    const double x20 = 0.08377580409572785*x5;
+    const double x21 = 1.8512830142411616*x4;
+    const double x22 = x5*x20 + x4*x21;
+    const double x23 = 1/x22;
+    const double x24 = x20*x23;
+    const double x25 = x21*x23;
+    const double x26 = x20*x25;
+    const double x27 = x10*(x10*(0.08377580409572785 - x20*x24) + x11*x26) + x11*(x10*x26 + x11*(1.8512830142411616 - x21*x25));
+    const double x28 = 1/x27;
+    Ainv[21] = x28;
+    const double x29 = 1/x19;
+    const double x30 = x16*x29;
+    const double x31 = x17*x29;
+    const double x32 = x18*x29;
+    const double x33 = 22.182181931693595 - x16*x30;
+    const double x34 = x16*x31;
+    const double x35 = x16*x32;
+    const double x36 = 39.67329996836601 - x17*x31;
+    const double x37 = x17*x32;
+    const double x38 = 39.67329996836601 - x18*x32;
+    const double x39 = x12*x33 - x13*x34 + x7*x35;
+    const double x40 = x13*x36 - x12*x34 + x7*x37;
+    const double x41 = x12*x35 + x13*x37 + x7*x38;
+    const double x42 = x12*x39 + x13*x40 + x7*x41;
+    const double x43 = 1/x42;
+    const double x44 = x39*x43;
+    const double x45 = x40*x43;
+    const double x46 = x41*x43;
+    const double x47 = x34 + x39*x45;
+    const double x48 = x39*x46 - x35;
+    const double x49 = x40*x46 - x37;
+    const double x50 = x10*(x10*(x33 - x39*x44) + x11*x47 + x3*x48) - x11*(x3*x49 - x10*x47 - x11*(x36 - x40*x45)) + x3*(x10*x48 - x11*x49 + x3*(x38 - x41*x46));
+    const double x51 = 1/x50;
+    Ainv[0] = x51;
+    const double x52 = 1.6666666666666667e-13*(1.8512830142411616 + x22 + x27 + x19 + x42 + x50);
+    const double x53 = aggsym_sign(x52 - x50);
+    const double x54 = aggsym_sign(x52 - x42);
+    const double x55 = aggsym_sign(x52 - x19);
+    const double x56 = aggsym_sign(x52 - x27);
+    const double x57 = aggsym_sign(x52 - x22);
+    const double x58 = aggsym_sign(x52 - 1.8512830142411616);
+    status[0] = 6 + x53 + x54 + x55 + x56 + x57 + x58;
+    const double x59 = x12*x30 + x13*x31;
+    const double x60 = x7*x32;
+    const double x61 = x3*x46 - x10*x44 + x11*x45;
+    const double x62 = x10*x30 - x11*x31 + x3*x32 + (x59 - x60)*x61;
+    const double x63 = x60 - x59;
+    const double x64 = x11*x25 - x10*x24;
+    const double x65 = x51*x61;
+    Ainv[1] = x65;
+    Ainv[6] = x65;
+    const double x66 = x51*x62;
+    const double x67 = -x66;
+    Ainv[2] = x67;
+    Ainv[12] = x67;
+    Ainv[7] = x43 + x61*x65;
+    const double x68 = x43*x63;
+    const double x69 = x68 - x62*x65;
+    Ainv[8] = x69;
+    Ainv[13] = x69;
+    Ainv[14] = x29 + x62*x66 + x63*x68;
+    const double x70 = x28*x64;
+    Ainv[22] = x70;
+    Ainv[27] = x70;
+    const double x71 = x3*x28;
+    const double x72 = -x71;
+    Ainv[23] = x72;
+    Ainv[33] = x72;
+    Ainv[28] = x23 + x64*x70;
+    const double x73 = -x3*x70;
+    Ainv[29] = x73;
+    Ainv[34] = x73;
+    Ainv[35] = 0.5401659240145401 + x3*x71;
+    return status[0] != 0.0;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 88 mul, 44 add, 3 div, 3 call */
-void added_mass_body_in_fluid_transvective_factors(const double *q, const double *p, double *targs, double *diag)
+ * operations: 89 mul, 61 add, 3 div, 9 call */
+int added_mass_body_in_fluid_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
+    double status[1];
     const double q_3 = q[3];
     const double q_4 = q[4];
     const double q_5 = q[5];
@@ -920,34 +983,45 @@ void added_mass_body_in_fluid_transvective_factors(const double *q, const double
     const double x24 = x20*x23;
     const double x25 = x21*x23;
     const double x26 = x20*x25;
-    targs[9] = x10*x24 - x11*x25;
-    diag[3] = x10*(x10*(0.08377580409572785 - x20*x24) + x11*x26) + x11*(x10*x26 + x11*(1.8512830142411616 - x21*x25));
-    const double x27 = 1/x19;
-    const double x28 = x16*x27;
-    const double x29 = x17*x27;
-    const double x30 = x18*x27;
-    const double x31 = 22.182181931693595 - x16*x28;
-    const double x32 = x16*x29;
+    const double x27 = x10*(x10*(0.08377580409572785 - x20*x24) + x11*x26) + x11*(x10*x26 + x11*(1.8512830142411616 - x21*x25));
+    diag[3] = x27;
+    const double x28 = 1/x19;
+    const double x29 = x16*x28;
+    const double x30 = x17*x28;
+    const double x31 = x18*x28;
+    const double x32 = 22.182181931693595 - x16*x29;
     const double x33 = x16*x30;
-    const double x34 = 39.67329996836601 - x17*x29;
-    const double x35 = x17*x30;
-    const double x36 = 39.67329996836601 - x18*x30;
-    targs[1] = x10*x28 - x11*x29 + x3*x30;
-    targs[2] = x12*x28 + x13*x29 - x7*x30;
-    const double x37 = x12*x31 - x13*x32 + x7*x33;
-    const double x38 = x13*x34 - x12*x32 + x7*x35;
-    const double x39 = x12*x33 + x13*x35 + x7*x36;
-    const double x40 = x12*x37 + x13*x38 + x7*x39;
-    diag[1] = x40;
-    const double x41 = 1/x40;
-    const double x42 = x37*x41;
-    const double x43 = x38*x41;
-    const double x44 = x39*x41;
-    const double x45 = x32 + x37*x43;
-    const double x46 = x37*x44 - x33;
-    const double x47 = x38*x44 - x35;
-    targs[0] = x10*x42 - x11*x43 - x3*x44;
-    diag[0] = x10*(x10*(x31 - x37*x42) + x11*x45 + x3*x46) - x11*(x3*x47 - x10*x45 - x11*(x34 - x38*x43)) + x3*(x10*x46 - x11*x47 + x3*(x36 - x39*x44));
+    const double x34 = x16*x31;
+    const double x35 = 39.67329996836601 - x17*x30;
+    const double x36 = x17*x31;
+    const double x37 = 39.67329996836601 - x18*x31;
+    const double x38 = x12*x32 - x13*x33 + x7*x34;
+    const double x39 = x13*x35 - x12*x33 + x7*x36;
+    const double x40 = x12*x34 + x13*x36 + x7*x37;
+    const double x41 = x12*x38 + x13*x39 + x7*x40;
+    diag[1] = x41;
+    const double x42 = 1/x41;
+    const double x43 = x38*x42;
+    const double x44 = x39*x42;
+    const double x45 = x40*x42;
+    const double x46 = x33 + x38*x44;
+    const double x47 = x38*x45 - x34;
+    const double x48 = x39*x45 - x36;
+    const double x49 = x10*(x10*(x32 - x38*x43) + x11*x46 + x3*x47) - x11*(x3*x48 - x10*x46 - x11*(x35 - x39*x44)) + x3*(x10*x47 - x11*x48 + x3*(x37 - x40*x45));
+    diag[0] = x49;
+    const double x50 = 1.6666666666666667e-13*(1.8512830142411616 + x22 + x27 + x19 + x41 + x49);
+    const double x51 = aggsym_sign(x50 - x49);
+    const double x52 = aggsym_sign(x50 - x41);
+    const double x53 = aggsym_sign(x50 - x19);
+    const double x54 = aggsym_sign(x50 - x27);
+    const double x55 = aggsym_sign(x50 - x22);
+    const double x56 = aggsym_sign(x50 - 1.8512830142411616);
+    status[0] = 6 + x51 + x52 + x53 + x54 + x55 + x56;
+    targs[9] = x10*x24 - x11*x25;
+    targs[1] = x10*x29 - x11*x30 + x3*x31;
+    targs[2] = x12*x29 + x13*x30 - x7*x31;
+    targs[0] = x10*x43 - x11*x44 - x3*x45;
+    return status[0] != 0.0;
 }
 
 /* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)

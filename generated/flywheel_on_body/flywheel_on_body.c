@@ -2,6 +2,12 @@
 #include <math.h>
 #include "flywheel_on_body.h"
 
+/* sign(x): -1, 0 or 1, and nan for nan (a returned status then stays nonzero when a solve meets a nan) */
+static double aggsym_sign(double x)
+{
+    return x != x ? x : (double)(x > 0.0) - (double)(x < 0.0);
+}
+
 /* sin(x) and cos(x) together, without a branch for |x| < 1e6.  x = k pi/2 + r, k the nearest integer to x 2/pi
  * (adding 1.5 2^52 rounds it in the floating-point unit, its low bits then those of k), |r| <= pi/4 (Cody-Waite):
  * pi/2 = P1 + P2 + P3 + P4 (+ 2^-142), P1 and P2 of at most 33 significant bits, P3 of 19, P4 a double, so for
@@ -783,9 +789,10 @@ void flywheel_on_body_joint_wrenches(const double *q, const double *qd, const do
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 257 mul, 217 add, 4 div, 4 call */
-void flywheel_on_body_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd)
+ * operations: 275 mul, 234 add, 5 div, 7 call */
+int flywheel_on_body_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd)
 {
+    double status[1];
     const double q_0 = q[0];
     const double q_1 = q[1];
     const double q_2 = q[2];
@@ -835,89 +842,106 @@ void flywheel_on_body_forward_dynamics(const double *q, const double *qd, const 
     const double x36 = 0.09375 - x33 - x33;
     const double x37 = 0.0075 + x8*x28 + x9*x29 + 0.9512512425641976*x30 + 0.25*x23 - 0.02*x24;
     const double x38 = 0.03375 + x8*x25 + x9*x26 + 0.9512512425641976*x27 + 0.25*x22 - 0.05*x24;
-    const double x39 = qd_0*x13;
-    const double x40 = qd_0*x18 + qd_1*x15;
-    const double x41 = qd_1*x14 - qd_0*x19;
-    const double x42 = qd_2 + x39;
-    const double x43 = qd_1*x39;
-    const double x44 = qd_1*qd_0*x12;
-    const double x45 = x15*x43;
-    const double x46 = qd_2*x40;
-    const double x47 = qd_2*x41 - x14*x43;
-    const double x48 = x45 - x46;
-    const double x49 = x40*x40;
-    const double x50 = x40*x41;
-    const double x51 = x40*x42;
-    const double x52 = x41*x41;
-    const double x53 = x41*x42;
-    const double x54 = x42*x42;
-    const double x55 = x4*x40 + x6*x41 + x8*x42;
-    const double x56 = x7*x41 - x5*x40 + x9*x42;
-    const double x57 = x46 - x45;
-    const double x58 = x47 - x53;
-    const double x59 = x44 + x50;
-    const double x60 = x47 + x53;
-    const double x61 = x1 + 0.9512512425641976*x42 - 0.17364817766693033*x40 - 0.2548870022441787*x41;
-    const double x62 = x7*x48 - x5*x47 + x9*x44;
-    const double x63 = x1*x55;
-    const double x64 = x4*x47 + x6*x48 + x8*x44 + x1*x56;
-    const double x65 = x62 - x63;
-    const double x66 = p_1 + 0.9512512425641976*x44 - 0.17364817766693033*x47 - 0.2548870022441787*x48;
-    const double x67 = x55*x55;
-    const double x68 = x55*x56;
-    const double x69 = x55*x61;
-    const double x70 = x56*x56;
-    const double x71 = x56*x61;
-    const double x72 = x61*x61;
-    const double x73 = x66 - x68;
-    const double x74 = x65 + x69;
-    const double x75 = x71 - x64;
-    const double x76 = x66 + x68;
-    const double x77 = x64 + x71;
-    const double x78 = 0.25*(x57 - x51) + 0.02*(x50 - x44) - 0.05*(x52 + x54) + 9.81*x20;
-    const double x79 = 0.05*x59 + 0.25*x58 - 0.02*(x49 + x54) + 9.81*x21;
-    const double x80 = 0.02*x60 + 0.05*(x51 + x57) + 0.25*(x49 + x52) + 9.81*x17;
-    const double x81 = x4*x78 + x6*x79 + x8*x80;
-    const double x82 = x7*x79 - x5*x78 + x9*x80;
-    const double x83 = 0.9512512425641976*x80 - 0.17364817766693033*x78 - 0.2548870022441787*x79;
-    const double x84 = 0.0015*x74 + 0.003*x73 - 0.0045000000000000005*(x70 + x72) + 1.5*x81;
-    const double x85 = 0.0045000000000000005*x76 + 0.0015*x75 + 0.003*(x67 + x72) + 1.5*x82;
-    const double x86 = 0.0045000000000000005*(x69 + x63 - x62) - 0.003*x77 - 0.0015*(x67 + x70) + 1.5*x83;
-    const double x87 = 0.0100075*x64 + 0.000509*(x65 - x69) - 4.5e-06*x76 + 3e-06*(x70 - x72) + 0.0080045*x71 - 0.003*x83 - 0.0015*x82;
-    const double x88 = 0.000509*x77 + 0.012015*x65 + 3e-06*x73 - 0.010011999999999998*x69 + 4.5e-06*(x67 - x72) + 0.0015*x81 - 0.0045000000000000005*x83;
-    const double x89 = 4.5e-06*x75 + 3e-06*x74 + 0.0200195*x66 + 0.000509*(x67 - x70) + 0.002007499999999999*x68 + 0.0045000000000000005*x82 + 0.003*x81;
-    const double x90 = x4*x84 - x5*x85 - 0.17364817766693033*x86;
-    const double x91 = x6*x84 + x7*x85 - 0.2548870022441787*x86;
-    const double x92 = x8*x84 + x9*x85 + 0.9512512425641976*x86;
-    const double x93 = 14.715*x21 + 0.65*x47 + 0.01*(x48 - x51) + 0.015*x59 - 0.55*x53 + 0.02*x92 + 0.25*x91 + x4*x87 - x5*x88 - 0.17364817766693033*x89;
-    const double x94 = 0.01*x60 + 0.7005*x48 + 0.49950000000000006*x51 + 0.015*(x54 - x49) + x6*x87 + x7*x88 - 0.2548870022441787*x89 - 0.25*x90 - 0.05*x92 - 14.715*x20 - 0.49050000000000005*x17;
-    const double x95 = 0.49050000000000005*x21 + 0.015*x58 + 0.1505*x44 + 0.01*(x49 - x52) + 0.05049999999999999*x50 + 0.05*x91 - 0.02*x90 + x8*x87 + x9*x88 + 0.9512512425641976*x89;
-    const double x96 = x13*x14;
-    const double x97 = x13*x15;
-    const double x98 = x14*x18 + x15*x19;
-    const double x99 = 1/x98;
-    const double x100 = 1/(0.1505 + x8*(0.0100075*x8 + 0.000509*x9 - 4.280630591538889e-06) + x9*(2.8537537276925926e-06 + 0.000509*x8 + 0.012015*x9) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x9 - 4.5e-06*x8) + x34 + x35);
-    const double x101 = x38*x100;
-    const double x102 = x37*x100;
-    const double x103 = 0.0085 + x6*x25 + x7*x26 - 0.2548870022441787*x27 - 0.02*x22 - 0.05*x23 - x38*x102;
-    const double x104 = 1/(0.7005 + x6*x28 + x7*x29 - 0.2548870022441787*x30 + x34 + x36 - x37*x102);
-    const double x105 = x103*x104;
-    const double x106 = tau_0 - x18*x93 + x19*x94 - x13*x95;
-    const double x107 = tau_1 - x15*x93 - x14*x94;
-    const double x108 = tau_2 - x95;
-    const double x109 = x99*x98*x108;
-    const double x110 = x99*(x18*x107 - x15*x106 + x97*x108) - x102*x109;
-    const double x111 = 1/(0.65 + x4*x25 - x5*x26 - 0.17364817766693033*x27 + x35 + x36 - x38*x101 - x103*x105)*(x99*(x14*x106 + x19*x107 - x96*x108) - x101*x109 - x105*x110);
-    const double x112 = x104*x110 - x105*x111;
-    qdd[0] = x99*(x14*x111 - x15*x112);
-    qdd[1] = x99*(x19*x111 + x18*x112);
-    qdd[2] = x99*(x97*x112 - x96*x111 + x98*(x100*x109 - x101*x111 - x102*x112));
+    const double x39 = 0.1505 + x8*(0.0100075*x8 + 0.000509*x9 - 4.280630591538889e-06) + x9*(2.8537537276925926e-06 + 0.000509*x8 + 0.012015*x9) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x9 - 4.5e-06*x8) + x34 + x35;
+    const double x40 = qd_0*x13;
+    const double x41 = qd_0*x18 + qd_1*x15;
+    const double x42 = qd_1*x14 - qd_0*x19;
+    const double x43 = qd_2 + x40;
+    const double x44 = qd_1*x40;
+    const double x45 = qd_1*qd_0*x12;
+    const double x46 = x15*x44;
+    const double x47 = qd_2*x41;
+    const double x48 = qd_2*x42 - x14*x44;
+    const double x49 = x46 - x47;
+    const double x50 = x41*x41;
+    const double x51 = x41*x42;
+    const double x52 = x41*x43;
+    const double x53 = x42*x42;
+    const double x54 = x42*x43;
+    const double x55 = x43*x43;
+    const double x56 = x4*x41 + x6*x42 + x8*x43;
+    const double x57 = x7*x42 - x5*x41 + x9*x43;
+    const double x58 = x47 - x46;
+    const double x59 = x48 - x54;
+    const double x60 = x45 + x51;
+    const double x61 = x48 + x54;
+    const double x62 = x1 + 0.9512512425641976*x43 - 0.17364817766693033*x41 - 0.2548870022441787*x42;
+    const double x63 = x7*x49 - x5*x48 + x9*x45;
+    const double x64 = x1*x56;
+    const double x65 = x4*x48 + x6*x49 + x8*x45 + x1*x57;
+    const double x66 = x63 - x64;
+    const double x67 = p_1 + 0.9512512425641976*x45 - 0.17364817766693033*x48 - 0.2548870022441787*x49;
+    const double x68 = x56*x56;
+    const double x69 = x56*x57;
+    const double x70 = x56*x62;
+    const double x71 = x57*x57;
+    const double x72 = x57*x62;
+    const double x73 = x62*x62;
+    const double x74 = x67 - x69;
+    const double x75 = x66 + x70;
+    const double x76 = x72 - x65;
+    const double x77 = x67 + x69;
+    const double x78 = x65 + x72;
+    const double x79 = 0.25*(x58 - x52) + 0.02*(x51 - x45) - 0.05*(x53 + x55) + 9.81*x20;
+    const double x80 = 0.05*x60 + 0.25*x59 - 0.02*(x50 + x55) + 9.81*x21;
+    const double x81 = 0.02*x61 + 0.05*(x52 + x58) + 0.25*(x50 + x53) + 9.81*x17;
+    const double x82 = x4*x79 + x6*x80 + x8*x81;
+    const double x83 = x7*x80 - x5*x79 + x9*x81;
+    const double x84 = 0.9512512425641976*x81 - 0.17364817766693033*x79 - 0.2548870022441787*x80;
+    const double x85 = 0.0015*x75 + 0.003*x74 - 0.0045000000000000005*(x71 + x73) + 1.5*x82;
+    const double x86 = 0.0045000000000000005*x77 + 0.0015*x76 + 0.003*(x68 + x73) + 1.5*x83;
+    const double x87 = 0.0045000000000000005*(x70 + x64 - x63) - 0.003*x78 - 0.0015*(x68 + x71) + 1.5*x84;
+    const double x88 = 0.0100075*x65 + 0.000509*(x66 - x70) - 4.5e-06*x77 + 3e-06*(x71 - x73) + 0.0080045*x72 - 0.003*x84 - 0.0015*x83;
+    const double x89 = 0.000509*x78 + 0.012015*x66 + 3e-06*x74 - 0.010011999999999998*x70 + 4.5e-06*(x68 - x73) + 0.0015*x82 - 0.0045000000000000005*x84;
+    const double x90 = 4.5e-06*x76 + 3e-06*x75 + 0.0200195*x67 + 0.000509*(x68 - x71) + 0.002007499999999999*x69 + 0.0045000000000000005*x83 + 0.003*x82;
+    const double x91 = x4*x85 - x5*x86 - 0.17364817766693033*x87;
+    const double x92 = x6*x85 + x7*x86 - 0.2548870022441787*x87;
+    const double x93 = x8*x85 + x9*x86 + 0.9512512425641976*x87;
+    const double x94 = 14.715*x21 + 0.65*x48 + 0.01*(x49 - x52) + 0.015*x60 - 0.55*x54 + 0.02*x93 + 0.25*x92 + x4*x88 - x5*x89 - 0.17364817766693033*x90;
+    const double x95 = 0.01*x61 + 0.7005*x49 + 0.49950000000000006*x52 + 0.015*(x55 - x50) + x6*x88 + x7*x89 - 0.2548870022441787*x90 - 0.25*x91 - 0.05*x93 - 14.715*x20 - 0.49050000000000005*x17;
+    const double x96 = 0.49050000000000005*x21 + 0.015*x59 + 0.1505*x45 + 0.01*(x50 - x53) + 0.05049999999999999*x51 + 0.05*x92 - 0.02*x91 + x8*x88 + x9*x89 + 0.9512512425641976*x90;
+    const double x97 = x13*x14;
+    const double x98 = x13*x15;
+    const double x99 = x14*x18 + x15*x19;
+    const double x100 = 1/x99;
+    const double x101 = 1/x39;
+    const double x102 = x38*x101;
+    const double x103 = x37*x101;
+    const double x104 = 0.65 + x4*x25 - x5*x26 - 0.17364817766693033*x27 + x35 + x36 - x38*x102;
+    const double x105 = 0.0085 + x6*x25 + x7*x26 - 0.2548870022441787*x27 - 0.02*x22 - 0.05*x23 - x38*x103;
+    const double x106 = 0.7005 + x6*x28 + x7*x29 - 0.2548870022441787*x30 + x34 + x36 - x37*x103;
+    const double x107 = 1/x106;
+    const double x108 = x105*x107;
+    const double x109 = tau_0 - x18*x94 + x19*x95 - x13*x96;
+    const double x110 = tau_1 - x15*x94 - x14*x95;
+    const double x111 = tau_2 - x96;
+    const double x112 = x100*x99*x111;
+    const double x113 = x100*(x18*x110 - x15*x109 + x98*x111) - x103*x112;
+    const double x114 = 1/(x104 - x105*x108)*(x100*(x14*x109 + x19*x110 - x97*x111) - x102*x112 - x108*x113);
+    const double x115 = x107*x113 - x108*x114;
+    qdd[0] = x100*(x14*x114 - x15*x115);
+    qdd[1] = x100*(x19*x114 + x18*x115);
+    qdd[2] = x100*(x98*x115 - x97*x114 + x99*(x101*x112 - x102*x114 - x103*x115));
+    const double x116 = x15*x104 + x14*x105;
+    const double x117 = x15*x105 + x14*x106;
+    const double x118 = x15*x116 + x14*x117;
+    const double x119 = 1/x118;
+    const double x120 = x117*x119;
+    const double x121 = x105 - x116*x120;
+    const double x122 = x18*(x18*(x104 - x116*x116*x119) - x19*x121) - x19*(x18*x121 - x19*(x106 - x117*x120));
+    const double x123 = 3.3333333333333334e-13*(x39 + x118 + x122);
+    const double x124 = aggsym_sign(x123 - x122);
+    const double x125 = aggsym_sign(x123 - x118);
+    const double x126 = aggsym_sign(x123 - x39);
+    status[0] = 3 + x124 + x125 + x126;
+    return status[0] != 0.0;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 103 mul, 86 add, 3 div, 3 call */
-AGGSYM_SCALAR_STORES void flywheel_on_body_inertia_inverse(const double *q, const double *t, const double *p, double *Ainv)
+ * operations: 104 mul, 94 add, 3 div, 6 call */
+AGGSYM_SCALAR_STORES int flywheel_on_body_inertia_inverse(const double *q, const double *t, const double *p, double *Ainv)
 {
+    double status[1];
     const double q_1 = q[1];
     const double q_2 = q[2];
     const double t_0 = t[0];
@@ -953,42 +977,52 @@ AGGSYM_SCALAR_STORES void flywheel_on_body_inertia_inverse(const double *q, cons
     const double x27 = 0.09375 - x24 - x24;
     const double x28 = 0.0075 + x5*x19 + x6*x20 + 0.9512512425641976*x21 + 0.25*x14 - 0.02*x15;
     const double x29 = 0.03375 + x5*x16 + x6*x17 + 0.9512512425641976*x18 + 0.25*x13 - 0.05*x15;
-    const double x30 = 1/(0.1505 + x5*(0.0100075*x5 + 0.000509*x6 - 4.280630591538889e-06) + x6*(2.8537537276925926e-06 + 0.000509*x5 + 0.012015*x6) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x6 - 4.5e-06*x5) + x25 + x26);
-    const double x31 = x29*x30;
-    const double x32 = x28*x30;
-    const double x33 = 0.65 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 + x26 + x27 - x29*x31;
-    const double x34 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14 - x29*x32;
-    const double x35 = 0.7005 + x3*x19 + x4*x20 - 0.2548870022441787*x21 + x25 + x27 - x28*x32;
-    const double x36 = x10*x31 + x9*x32;
-    const double x37 = x10*x33 + x9*x34;
-    const double x38 = x10*x34 + x9*x35;
-    const double x39 = 1/(x10*x37 + x9*x38);
-    const double x40 = x37*x39;
-    const double x41 = x38*x39;
-    const double x42 = x34 - x37*x41;
-    const double x43 = 1/(x11*(x11*(x33 - x37*x40) - x12*x42) - x12*(x11*x42 - x12*(x35 - x38*x41)));
-    Ainv[0] = x43;
-    const double x44 = x12*x41 - x11*x40;
-    const double x45 = x8 + x11*x31 - x12*x32 + x36*x44;
-    const double x46 = x43*x44;
-    Ainv[1] = x46;
-    Ainv[3] = x46;
-    const double x47 = x43*x45;
-    const double x48 = -x47;
-    Ainv[2] = x48;
-    Ainv[6] = x48;
-    Ainv[4] = x39 + x44*x46;
-    const double x49 = x36*x39;
-    const double x50 = -(x49 + x45*x46);
-    Ainv[5] = x50;
-    Ainv[7] = x50;
-    Ainv[8] = x30 + x45*x47 + x36*x49;
+    const double x30 = 0.1505 + x5*(0.0100075*x5 + 0.000509*x6 - 4.280630591538889e-06) + x6*(2.8537537276925926e-06 + 0.000509*x5 + 0.012015*x6) + 0.9512512425641976*(0.019043574250513954 + 3e-06*x6 - 4.5e-06*x5) + x25 + x26;
+    const double x31 = 1/x30;
+    const double x32 = x29*x31;
+    const double x33 = x28*x31;
+    const double x34 = 0.65 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 + x26 + x27 - x29*x32;
+    const double x35 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14 - x29*x33;
+    const double x36 = 0.7005 + x3*x19 + x4*x20 - 0.2548870022441787*x21 + x25 + x27 - x28*x33;
+    const double x37 = x10*x34 + x9*x35;
+    const double x38 = x10*x35 + x9*x36;
+    const double x39 = x10*x37 + x9*x38;
+    const double x40 = 1/x39;
+    const double x41 = x37*x40;
+    const double x42 = x38*x40;
+    const double x43 = x35 - x37*x42;
+    const double x44 = x11*(x11*(x34 - x37*x41) - x12*x43) - x12*(x11*x43 - x12*(x36 - x38*x42));
+    const double x45 = 1/x44;
+    Ainv[0] = x45;
+    const double x46 = 3.3333333333333334e-13*(x30 + x39 + x44);
+    const double x47 = aggsym_sign(x46 - x44);
+    const double x48 = aggsym_sign(x46 - x39);
+    const double x49 = aggsym_sign(x46 - x30);
+    status[0] = 3 + x47 + x48 + x49;
+    const double x50 = x10*x32 + x9*x33;
+    const double x51 = x12*x42 - x11*x41;
+    const double x52 = x8 + x11*x32 - x12*x33 + x50*x51;
+    const double x53 = x45*x51;
+    Ainv[1] = x53;
+    Ainv[3] = x53;
+    const double x54 = x45*x52;
+    const double x55 = -x54;
+    Ainv[2] = x55;
+    Ainv[6] = x55;
+    Ainv[4] = x40 + x51*x53;
+    const double x56 = x40*x50;
+    const double x57 = -(x56 + x52*x53);
+    Ainv[5] = x57;
+    Ainv[7] = x57;
+    Ainv[8] = x31 + x52*x54 + x50*x56;
+    return status[0] != 0.0;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 95 mul, 81 add, 2 div, 3 call */
-void flywheel_on_body_transvective_factors(const double *q, const double *t, const double *p, double *targs, double *diag)
+ * operations: 96 mul, 89 add, 2 div, 6 call */
+int flywheel_on_body_transvective_factors(const double *q, const double *t, const double *p, double *targs, double *diag)
 {
+    double status[1];
     const double q_1 = q[1];
     const double q_2 = q[2];
     const double t_0 = t[0];
@@ -1032,8 +1066,6 @@ void flywheel_on_body_transvective_factors(const double *q, const double *t, con
     const double x34 = 0.65 + 0.984807753012208*x1*x16 - 0.984807753012208*x2*x17 - 0.17364817766693033*x18 + x26 + x27 - x29*x32;
     const double x35 = 0.0085 + x3*x16 + x4*x17 - 0.2548870022441787*x18 - 0.02*x13 - 0.05*x14 - x29*x33;
     const double x36 = 0.7005 + x3*x19 + x4*x20 - 0.2548870022441787*x21 + x25 + x27 - x28*x33;
-    targs[1] = x8 + x11*x32 - x12*x33;
-    targs[2] = x10*x32 + x9*x33;
     const double x37 = x10*x34 + x9*x35;
     const double x38 = x10*x35 + x9*x36;
     const double x39 = x10*x37 + x9*x38;
@@ -1042,8 +1074,17 @@ void flywheel_on_body_transvective_factors(const double *q, const double *t, con
     const double x41 = x37*x40;
     const double x42 = x38*x40;
     const double x43 = x35 - x37*x42;
+    const double x44 = x11*(x11*(x34 - x37*x41) - x12*x43) - x12*(x11*x43 - x12*(x36 - x38*x42));
+    diag[0] = x44;
+    const double x45 = 3.3333333333333334e-13*(x30 + x39 + x44);
+    const double x46 = aggsym_sign(x45 - x44);
+    const double x47 = aggsym_sign(x45 - x39);
+    const double x48 = aggsym_sign(x45 - x30);
+    status[0] = 3 + x46 + x47 + x48;
+    targs[1] = x8 + x11*x32 - x12*x33;
+    targs[2] = x10*x32 + x9*x33;
     targs[0] = x11*x41 - x12*x42;
-    diag[0] = x11*(x11*(x34 - x37*x41) - x12*x43) - x12*(x11*x43 - x12*(x36 - x38*x42));
+    return status[0] != 0.0;
 }
 
 /* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)

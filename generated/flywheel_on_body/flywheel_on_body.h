@@ -6,6 +6,12 @@
  * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
  * p is the parameter vector (2 entries; NULL: the defaults FLYWHEEL_ON_BODY_P_DEFAULTS).
  *
+ * A(q) is regular at generic configurations (full rank at 3 fixed ones); not proved regular everywhere, it may be
+ * singular on a set of them: pivot: a pair of three rotations (its axes can align); rotors carried by bodies.
+ * forward_dynamics, inertia_inverse, transvective_factors return nonzero where A(q) is singular or nearly so: a
+ * pivot (beta,beta)^k of its transvective factors (3.12) is at or below 1e-12 of their mean (cond(A) >= 1e+12);
+ * the manifest's mass_matrix names the bodies.
+ *
  * Coordinates (q order):
  *   q[0]  psi1  (rotation, joint pivot)
  *   q[1]  psi2  (rotation, joint pivot)
@@ -69,11 +75,14 @@ void flywheel_on_body_momentum(const double *q, const double *qd, const double *
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void flywheel_on_body_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *t, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */
-void flywheel_on_body_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd);
+/* returns 0, or nonzero where A(q) is singular or nearly so (the header's opening comment) */
+int flywheel_on_body_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd);
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19) */
-void flywheel_on_body_inertia_inverse(const double *q, const double *t, const double *p, double *Ainv);
+/* returns 0, or nonzero where A(q) is singular or nearly so (the header's opening comment) */
+int flywheel_on_body_inertia_inverse(const double *q, const double *t, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
-void flywheel_on_body_transvective_factors(const double *q, const double *t, const double *p, double *targs, double *diag);
+/* returns 0, or nonzero where A(q) is singular or nearly so (the header's opening comment) */
+int flywheel_on_body_transvective_factors(const double *q, const double *t, const double *p, double *targs, double *diag);
 /* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
 void flywheel_on_body_frame_poses(const double *q, const double *t, const double *p, double *X);
 /* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */

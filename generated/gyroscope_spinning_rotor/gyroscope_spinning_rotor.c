@@ -2,6 +2,12 @@
 #include <math.h>
 #include "gyroscope_spinning_rotor.h"
 
+/* sign(x): -1, 0 or 1, and nan for nan (a returned status then stays nonzero when a solve meets a nan) */
+static double aggsym_sign(double x)
+{
+    return x != x ? x : (double)(x > 0.0) - (double)(x < 0.0);
+}
+
 /* sin(x) and cos(x) together, without a branch for |x| < 1e6.  x = k pi/2 + r, k the nearest integer to x 2/pi
  * (adding 1.5 2^52 rounds it in the floating-point unit, its low bits then those of k), |r| <= pi/4 (Cody-Waite):
  * pi/2 = P1 + P2 + P3 + P4 (+ 2^-142), P1 and P2 of at most 33 significant bits, P3 of 19, P4 a double, so for
@@ -437,9 +443,10 @@ void gyroscope_spinning_rotor_joint_wrenches(const double *q, const double *qd, 
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 45 mul, 26 add, 2 div, 3 call */
-void gyroscope_spinning_rotor_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd)
+ * operations: 46 mul, 31 add, 2 div, 5 call */
+int gyroscope_spinning_rotor_forward_dynamics(const double *q, const double *qd, const double *tau, const double *t, const double *p, double *qdd)
 {
+    double status[1];
     const double q_0 = q[0];
     const double q_1 = q[1];
     const double qd_0 = qd[0];
@@ -457,23 +464,31 @@ void gyroscope_spinning_rotor_forward_dynamics(const double *q, const double *qd
     aggsym_sincos(q_1, &x6, &x5);
     const double x7 = x1*0.0011048*x1 + x2*0.0011048*x2;
     const double x8 = 0.0015 + x7;
-    const double x9 = qd_0*x5;
-    const double x10 = qd_0*x6;
-    const double x11 = qd_1*x10;
-    const double x12 = x1*x9 + x2*qd_1;
-    const double x13 = x1*qd_1 - x2*x9;
-    const double x14 = p_0 + x10;
-    const double x15 = 0.002*qd_1*x9;
-    const double x16 = 0.0011048*(p_0*x13 - x1*x11) + 0.0008952000000000001*x13*x14;
-    const double x17 = 0.0011048*(x2*x11 - p_0*x12) - 0.0008952000000000001*x12*x14;
-    qdd[0] = 1/(0.004 + x8 + x6*x6*(0.0035 - x8))*(tau_0 - x5*(x1*x16 - x2*x17 - 0.0015*x11 - 0.0005*x11) - x6*(x15 + x15) + 0.0024*x5*(1.9244737576459987*x3 + 9.218384609909762*x4));
-    qdd[1] = 1/(0.002 + x7)*(tau_1 - x2*x16 - x1*x17 + 0.0065962400664231376*x5 + 0.0024*x6*(9.218384609909762*x3 - 1.9244737576459987*x4));
+    const double x9 = 0.002 + x7;
+    const double x10 = 0.004 + x8 + x6*x6*(0.0035 - x8);
+    const double x11 = qd_0*x5;
+    const double x12 = qd_0*x6;
+    const double x13 = qd_1*x12;
+    const double x14 = x1*x11 + x2*qd_1;
+    const double x15 = x1*qd_1 - x2*x11;
+    const double x16 = p_0 + x12;
+    const double x17 = 0.002*qd_1*x11;
+    const double x18 = 0.0011048*(p_0*x15 - x1*x13) + 0.0008952000000000001*x15*x16;
+    const double x19 = 0.0011048*(x2*x13 - p_0*x14) - 0.0008952000000000001*x14*x16;
+    qdd[0] = 1/x10*(tau_0 - x5*(x1*x18 - x2*x19 - 0.0015*x13 - 0.0005*x13) - x6*(x17 + x17) + 0.0024*x5*(1.9244737576459987*x3 + 9.218384609909762*x4));
+    qdd[1] = 1/x9*(tau_1 - x2*x18 - x1*x19 + 0.0065962400664231376*x5 + 0.0024*x6*(9.218384609909762*x3 - 1.9244737576459987*x4));
+    const double x20 = 5e-13*(x9 + x10);
+    const double x21 = aggsym_sign(x20 - x10);
+    const double x22 = aggsym_sign(x20 - x9);
+    status[0] = 2 + x21 + x22;
+    return status[0] != 0.0;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 7 mul, 6 add, 2 div, 2 call */
-AGGSYM_SCALAR_STORES void gyroscope_spinning_rotor_inertia_inverse(const double *q, const double *t, const double *p, double *Ainv)
+ * operations: 8 mul, 11 add, 2 div, 4 call */
+AGGSYM_SCALAR_STORES int gyroscope_spinning_rotor_inertia_inverse(const double *q, const double *t, const double *p, double *Ainv)
 {
+    double status[1];
     const double q_1 = q[1];
     const double t_0 = t[0];
     static const double p_defaults[1] = {300.0};
@@ -485,14 +500,22 @@ AGGSYM_SCALAR_STORES void gyroscope_spinning_rotor_inertia_inverse(const double 
     aggsym_sincos2(x0, q_1, &x2, &x1, &x3, &x3_cos);
     const double x4 = x1*0.0011048*x1 + x2*0.0011048*x2;
     const double x5 = 0.0015 + x4;
-    Ainv[3] = 1/(0.002 + x4);
-    Ainv[0] = 1/(0.004 + x5 + x3*x3*(0.0035 - x5));
+    const double x6 = 0.002 + x4;
+    const double x7 = 0.004 + x5 + x3*x3*(0.0035 - x5);
+    Ainv[3] = 1/x6;
+    Ainv[0] = 1/x7;
+    const double x8 = 5e-13*(x6 + x7);
+    const double x9 = aggsym_sign(x8 - x7);
+    const double x10 = aggsym_sign(x8 - x6);
+    status[0] = 2 + x9 + x10;
+    return status[0] != 0.0;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 7 mul, 6 add, 0 div, 2 call */
-void gyroscope_spinning_rotor_transvective_factors(const double *q, const double *t, const double *p, double *targs, double *diag)
+ * operations: 8 mul, 11 add, 0 div, 4 call */
+int gyroscope_spinning_rotor_transvective_factors(const double *q, const double *t, const double *p, double *targs, double *diag)
 {
+    double status[1];
     const double q_1 = q[1];
     const double t_0 = t[0];
     static const double p_defaults[1] = {300.0};
@@ -504,8 +527,15 @@ void gyroscope_spinning_rotor_transvective_factors(const double *q, const double
     aggsym_sincos2(x0, q_1, &x2, &x1, &x3, &x3_cos);
     const double x4 = x1*0.0011048*x1 + x2*0.0011048*x2;
     const double x5 = 0.0015 + x4;
-    diag[1] = 0.002 + x4;
-    diag[0] = 0.004 + x5 + x3*x3*(0.0035 - x5);
+    const double x6 = 0.002 + x4;
+    diag[1] = x6;
+    const double x7 = 0.004 + x5 + x3*x3*(0.0035 - x5);
+    diag[0] = x7;
+    const double x8 = 5e-13*(x6 + x7);
+    const double x9 = aggsym_sign(x8 - x7);
+    const double x10 = aggsym_sign(x8 - x6);
+    status[0] = 2 + x9 + x10;
+    return status[0] != 0.0;
 }
 
 /* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8)

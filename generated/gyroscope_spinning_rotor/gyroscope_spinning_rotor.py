@@ -366,6 +366,7 @@ def forward_dynamics(q, qd, tau, t, p=None):
     p = PARAMETERS if p is None else _vector(p, 1, 'p', 'forward_dynamics')
     batch = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1], tau.shape[:-1], t.shape[:-1], )
     qdd = np.empty(batch + (2,))
+    status = np.empty(batch + (1,))
     q_0 = q[..., 0]
     q_1 = q[..., 1]
     qd_0 = qd[..., 0]
@@ -383,17 +384,28 @@ def forward_dynamics(q, qd, tau, t, p=None):
     x6 = np.sin(q_1)
     x7 = x1*0.0011048*x1 + x2*0.0011048*x2
     x8 = 0.0015 + x7
-    x9 = qd_0*x5
-    x10 = qd_0*x6
-    x11 = qd_1*x10
-    x12 = x1*x9 + x2*qd_1
-    x13 = x1*qd_1 - x2*x9
-    x14 = p_0 + x10
-    x15 = 0.002*qd_1*x9
-    x16 = 0.0011048*(p_0*x13 - x1*x11) + 0.0008952000000000001*x13*x14
-    x17 = 0.0011048*(x2*x11 - p_0*x12) - 0.0008952000000000001*x12*x14
-    qdd[..., 0] = 1/(0.004 + x8 + x6*x6*(0.0035 - x8))*(tau_0 - x5*(x1*x16 - x2*x17 - 0.0015*x11 - 0.0005*x11) - x6*(x15 + x15) + 0.0024*x5*(1.9244737576459987*x3 + 9.218384609909762*x4))
-    qdd[..., 1] = 1/(0.002 + x7)*(tau_1 - x2*x16 - x1*x17 + 0.0065962400664231376*x5 + 0.0024*x6*(9.218384609909762*x3 - 1.9244737576459987*x4))
+    x9 = 0.002 + x7
+    x10 = 0.004 + x8 + x6*x6*(0.0035 - x8)
+    x11 = qd_0*x5
+    x12 = qd_0*x6
+    x13 = qd_1*x12
+    x14 = x1*x11 + x2*qd_1
+    x15 = x1*qd_1 - x2*x11
+    x16 = p_0 + x12
+    x17 = 0.002*qd_1*x11
+    x18 = 0.0011048*(p_0*x15 - x1*x13) + 0.0008952000000000001*x15*x16
+    x19 = 0.0011048*(x2*x13 - p_0*x14) - 0.0008952000000000001*x14*x16
+    qdd[..., 0] = 1/x10*(tau_0 - x5*(x1*x18 - x2*x19 - 0.0015*x13 - 0.0005*x13) - x6*(x17 + x17) + 0.0024*x5*(1.9244737576459987*x3 + 9.218384609909762*x4))
+    qdd[..., 1] = 1/x9*(tau_1 - x2*x18 - x1*x19 + 0.0065962400664231376*x5 + 0.0024*x6*(9.218384609909762*x3 - 1.9244737576459987*x4))
+    x20 = 5e-13*(x9 + x10)
+    x21 = np.sign(x20 - x10)
+    x22 = np.sign(x20 - x9)
+    status[..., 0] = 2 + x21 + x22
+    failed = np.reshape(status[..., 0] != 0.0, batch)
+    if np.any(failed):
+        bad = np.argwhere(failed)
+        raise np.linalg.LinAlgError("forward_dynamics: A(q) is singular or nearly so: a pivot (beta,beta)^k of its transvective factors (3.12) is at or below 1e-12 of their mean (cond(A) >= 1e+12); the manifest's mass_matrix names the bodies, at "
+                                    + ("the state" if not batch else "the states " + ", ".join(str(tuple(int(i) for i in b)) for b in bad[:10]) + (" ..." if len(bad) > 10 else "")))
     return qdd
 
 
@@ -404,6 +416,7 @@ def inertia_inverse(q, t, p=None):
     p = PARAMETERS if p is None else _vector(p, 1, 'p', 'inertia_inverse')
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     Ainv = np.empty(batch + (2, 2))
+    status = np.empty(batch + (1,))
     q_1 = q[..., 1]
     t_0 = t[..., 0]
     p_0 = p[..., 0]
@@ -415,8 +428,19 @@ def inertia_inverse(q, t, p=None):
     x3 = np.sin(q_1)
     x4 = x1*0.0011048*x1 + x2*0.0011048*x2
     x5 = 0.0015 + x4
-    Ainv[..., 1, 1] = 1/(0.002 + x4)
-    Ainv[..., 0, 0] = 1/(0.004 + x5 + x3*x3*(0.0035 - x5))
+    x6 = 0.002 + x4
+    x7 = 0.004 + x5 + x3*x3*(0.0035 - x5)
+    Ainv[..., 1, 1] = 1/x6
+    Ainv[..., 0, 0] = 1/x7
+    x8 = 5e-13*(x6 + x7)
+    x9 = np.sign(x8 - x7)
+    x10 = np.sign(x8 - x6)
+    status[..., 0] = 2 + x9 + x10
+    failed = np.reshape(status[..., 0] != 0.0, batch)
+    if np.any(failed):
+        bad = np.argwhere(failed)
+        raise np.linalg.LinAlgError("inertia_inverse: A(q) is singular or nearly so: a pivot (beta,beta)^k of its transvective factors (3.12) is at or below 1e-12 of their mean (cond(A) >= 1e+12); the manifest's mass_matrix names the bodies, at "
+                                    + ("the state" if not batch else "the states " + ", ".join(str(tuple(int(i) for i in b)) for b in bad[:10]) + (" ..." if len(bad) > 10 else "")))
     return Ainv
 
 
@@ -428,6 +452,7 @@ def transvective_factors(q, t, p=None):
     batch = np.broadcast_shapes(q.shape[:-1], t.shape[:-1], )
     targs = np.empty(batch + (1,))
     diag = np.empty(batch + (2,))
+    status = np.empty(batch + (1,))
     q_1 = q[..., 1]
     t_0 = t[..., 0]
     p_0 = p[..., 0]
@@ -438,8 +463,19 @@ def transvective_factors(q, t, p=None):
     x3 = np.sin(q_1)
     x4 = x1*0.0011048*x1 + x2*0.0011048*x2
     x5 = 0.0015 + x4
-    diag[..., 1] = 0.002 + x4
-    diag[..., 0] = 0.004 + x5 + x3*x3*(0.0035 - x5)
+    x6 = 0.002 + x4
+    diag[..., 1] = x6
+    x7 = 0.004 + x5 + x3*x3*(0.0035 - x5)
+    diag[..., 0] = x7
+    x8 = 5e-13*(x6 + x7)
+    x9 = np.sign(x8 - x7)
+    x10 = np.sign(x8 - x6)
+    status[..., 0] = 2 + x9 + x10
+    failed = np.reshape(status[..., 0] != 0.0, batch)
+    if np.any(failed):
+        bad = np.argwhere(failed)
+        raise np.linalg.LinAlgError("transvective_factors: A(q) is singular or nearly so: a pivot (beta,beta)^k of its transvective factors (3.12) is at or below 1e-12 of their mean (cond(A) >= 1e+12); the manifest's mass_matrix names the bodies, at "
+                                    + ("the state" if not batch else "the states " + ", ".join(str(tuple(int(i) for i in b)) for b in bad[:10]) + (" ..." if len(bad) > 10 else "")))
     return targs, diag
 
 

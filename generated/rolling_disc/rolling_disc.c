@@ -647,9 +647,10 @@ void rolling_disc_joint_wrenches(const double *q, const double *qd, const double
 }
 
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n)
- * operations: 48 mul, 22 add, 4 div, 3 call */
-void rolling_disc_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
+ * operations: 64 mul, 45 add, 5 div, 9 call */
+int rolling_disc_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd)
 {
+    double status[1];
     const double q_3 = q[3];
     const double q_4 = q[4];
     const double q_5 = q[5];
@@ -674,30 +675,48 @@ void rolling_disc_forward_dynamics(const double *q, const double *qd, const doub
     aggsym_sincos2(q_3, q_4, &x4, &x3, &x6, &x5);
     double x8, x7;
     aggsym_sincos(q_5, &x8, &x7);
-    const double x9 = qd_3*x6;
-    const double x10 = qd_3*x5;
-    const double x11 = qd_4*x9;
-    const double x12 = qd_4*x7 - x8*x10;
-    const double x13 = qd_4*x8 + x7*x10;
-    const double x14 = qd_5 + x9;
-    const double x15 = x1*(x8*x11 - qd_5*x13) - (x2 - x1)*x13*x14;
-    const double x16 = x1*(qd_5*x12 - x7*x11) - x12*x14*(x1 - x2);
-    const double x17 = 1/p_0;
-    const double x18 = x17*(tau_0*x3 + tau_1*x4);
-    const double x19 = x17*(tau_1*x3 - tau_0*x4);
-    qdd[2] = x17*(tau_2 - p_0*p_2);
-    const double x20 = 1/(x1 - x1*x6*x6)*(tau_3 - x5*(x7*x16 - x8*x15) - tau_5*x6);
-    qdd[3] = x20;
-    qdd[4] = 1/x1*(tau_4 - x7*x15 - x8*x16);
-    qdd[5] = 1/x2*(tau_5 - x2*qd_4*x10) - x6*x20;
-    qdd[0] = x3*x18 - x4*x19;
-    qdd[1] = x4*x18 + x3*x19;
+    const double x9 = p_0*x3;
+    const double x10 = p_0*x4;
+    const double x11 = x3*x9 + x4*x10;
+    const double x12 = qd_3*x6;
+    const double x13 = qd_3*x5;
+    const double x14 = qd_4*x12;
+    const double x15 = qd_4*x7 - x8*x13;
+    const double x16 = qd_4*x8 + x7*x13;
+    const double x17 = qd_5 + x12;
+    const double x18 = x1*(x8*x14 - qd_5*x16) - (x2 - x1)*x16*x17;
+    const double x19 = x1*(qd_5*x15 - x7*x14) - x15*x17*(x1 - x2);
+    const double x20 = x1 - x1*x6*x6;
+    const double x21 = 1/p_0;
+    const double x22 = x21*(tau_0*x3 + tau_1*x4);
+    const double x23 = x21*(tau_1*x3 - tau_0*x4);
+    qdd[2] = x21*(tau_2 - p_0*p_2);
+    const double x24 = 1/x20*(tau_3 - x5*(x7*x19 - x8*x18) - tau_5*x6);
+    qdd[3] = x24;
+    qdd[4] = 1/x1*(tau_4 - x7*x18 - x8*x19);
+    qdd[5] = 1/x2*(tau_5 - x2*qd_4*x13) - x6*x24;
+    qdd[0] = x3*x22 - x4*x23;
+    qdd[1] = x4*x22 + x3*x23;
+    const double x25 = 1/x11;
+    const double x26 = x9*x25;
+    const double x27 = x10*x26;
+    const double x28 = x3*(x3*(p_0 - x10*x10*x25) + x4*x27) + x4*(x3*x27 + x4*(p_0 - x9*x26));
+    const double x29 = 1.6666666666666667e-13*(x2 + x1 + x20 + p_0 + x11 + x28);
+    const double x30 = aggsym_sign(x29 - x28);
+    const double x31 = aggsym_sign(x29 - x11);
+    const double x32 = aggsym_sign(x29 - p_0);
+    const double x33 = aggsym_sign(x29 - x20);
+    const double x34 = aggsym_sign(x29 - x1);
+    const double x35 = aggsym_sign(x29 - x2);
+    status[0] = 6 + x30 + x31 + x32 + x33 + x34 + x35;
+    return status[0] != 0.0;
 }
 
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19)
- * operations: 24 mul, 8 add, 6 div, 2 call */
-AGGSYM_SCALAR_STORES void rolling_disc_inertia_inverse(const double *q, const double *p, double *Ainv)
+ * operations: 25 mul, 25 add, 6 div, 8 call */
+AGGSYM_SCALAR_STORES int rolling_disc_inertia_inverse(const double *q, const double *p, double *Ainv)
 {
+    double status[1];
     const double q_3 = q[3];
     const double q_4 = q[4];
     static const double p_defaults[3] = {0.5, 0.1, 9.81};
@@ -721,30 +740,44 @@ AGGSYM_SCALAR_STORES void rolling_disc_inertia_inverse(const double *q, const do
     Ainv[34] = 0;
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
-    double x3, x2, x4, x4_cos;
-    aggsym_sincos2(q_3, q_4, &x3, &x2, &x4, &x4_cos);
-    const double x5 = p_0*x2;
+    const double x2 = x0*0.5*p_0;
+    double x4, x3, x5, x5_cos;
+    aggsym_sincos2(q_3, q_4, &x4, &x3, &x5, &x5_cos);
     const double x6 = p_0*x3;
+    const double x7 = p_0*x4;
+    const double x8 = x3*x6 + x4*x7;
     Ainv[28] = 1/x1;
-    const double x7 = 1/(x1 - x1*x4*x4);
-    Ainv[21] = x7;
+    const double x9 = x1 - x1*x5*x5;
+    const double x10 = 1/x9;
+    Ainv[21] = x10;
     Ainv[14] = 1/p_0;
-    const double x8 = 1/(x2*x5 + x3*x6);
-    Ainv[7] = x8;
-    const double x9 = x5*x8;
-    const double x10 = x6*x9;
-    Ainv[0] = 1/(x2*(x2*(p_0 - x6*x6*x8) + x3*x10) + x3*(x2*x10 + x3*(p_0 - x5*x9)));
-    const double x11 = x4*x7;
-    Ainv[35] = 1/(x0*0.5*p_0) + x4*x11;
-    const double x12 = -x11;
-    Ainv[23] = x12;
-    Ainv[33] = x12;
+    const double x11 = 1/x8;
+    Ainv[7] = x11;
+    const double x12 = x6*x11;
+    const double x13 = x7*x12;
+    const double x14 = x3*(x3*(p_0 - x7*x7*x11) + x4*x13) + x4*(x3*x13 + x4*(p_0 - x6*x12));
+    Ainv[0] = 1/x14;
+    const double x15 = 1.6666666666666667e-13*(x2 + x1 + x9 + p_0 + x8 + x14);
+    const double x16 = aggsym_sign(x15 - x14);
+    const double x17 = aggsym_sign(x15 - x8);
+    const double x18 = aggsym_sign(x15 - p_0);
+    const double x19 = aggsym_sign(x15 - x9);
+    const double x20 = aggsym_sign(x15 - x1);
+    const double x21 = aggsym_sign(x15 - x2);
+    status[0] = 6 + x16 + x17 + x18 + x19 + x20 + x21;
+    const double x22 = x5*x10;
+    Ainv[35] = 1/x2 + x5*x22;
+    const double x23 = -x22;
+    Ainv[23] = x23;
+    Ainv[33] = x23;
+    return status[0] != 0.0;
 }
 
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11)
- * operations: 22 mul, 7 add, 1 div, 2 call */
-void rolling_disc_transvective_factors(const double *q, const double *p, double *targs, double *diag)
+ * operations: 23 mul, 24 add, 1 div, 8 call */
+int rolling_disc_transvective_factors(const double *q, const double *p, double *targs, double *diag)
 {
+    double status[1];
     const double q_3 = q[3];
     const double q_4 = q[4];
     static const double p_defaults[3] = {0.5, 0.1, 9.81};
@@ -763,19 +796,31 @@ void rolling_disc_transvective_factors(const double *q, const double *p, double 
     const double x0 = p_1*p_1;
     const double x1 = x0*0.25*p_0;
     diag[4] = x1;
-    diag[5] = x0*0.5*p_0;
-    double x3, x2, x4, x4_cos;
-    aggsym_sincos2(q_3, q_4, &x3, &x2, &x4, &x4_cos);
-    targs[13] = x4;
-    const double x5 = p_0*x2;
+    const double x2 = x0*0.5*p_0;
+    diag[5] = x2;
+    double x4, x3, x5, x5_cos;
+    aggsym_sincos2(q_3, q_4, &x4, &x3, &x5, &x5_cos);
+    targs[13] = x5;
     const double x6 = p_0*x3;
-    const double x7 = x2*x5 + x3*x6;
-    diag[1] = x7;
-    diag[3] = x1 - x1*x4*x4;
-    const double x8 = 1/x7;
-    const double x9 = x5*x8;
-    const double x10 = x6*x9;
-    diag[0] = x2*(x2*(p_0 - x6*x6*x8) + x3*x10) + x3*(x2*x10 + x3*(p_0 - x5*x9));
+    const double x7 = p_0*x4;
+    const double x8 = x3*x6 + x4*x7;
+    diag[1] = x8;
+    const double x9 = x1 - x1*x5*x5;
+    diag[3] = x9;
+    const double x10 = 1/x8;
+    const double x11 = x6*x10;
+    const double x12 = x7*x11;
+    const double x13 = x3*(x3*(p_0 - x7*x7*x10) + x4*x12) + x4*(x3*x12 + x4*(p_0 - x6*x11));
+    diag[0] = x13;
+    const double x14 = 1.6666666666666667e-13*(x2 + x1 + x9 + p_0 + x8 + x13);
+    const double x15 = aggsym_sign(x14 - x13);
+    const double x16 = aggsym_sign(x14 - x8);
+    const double x17 = aggsym_sign(x14 - p_0);
+    const double x18 = aggsym_sign(x14 - x9);
+    const double x19 = aggsym_sign(x14 - x1);
+    const double x20 = aggsym_sign(x14 - x2);
+    status[0] = 6 + x15 + x16 + x17 + x18 + x19 + x20;
+    return status[0] != 0.0;
 }
 
 /* phi(q): the constraints' holonomic residual, m rows (ch. 4): the contact point's offset from its attachment and the rotation vector of the relative orientation, in the reference axes

@@ -5,6 +5,12 @@
  * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
  * p is the parameter vector (0 entries; pass NULL).
  *
+ * A(q) is regular at generic configurations (full rank at 3 fixed ones); not proved regular everywhere, it may be
+ * singular on a set of them: free_flight: a pair of three rotations (its axes can align); ball_joint: a pair of
+ * three rotations (its axes can align). forward_dynamics, inertia_inverse, transvective_factors return nonzero
+ * where A(q) is singular or nearly so: a pivot (beta,beta)^k of its transvective factors (3.12) is at or below
+ * 1e-12 of their mean (cond(A) >= 1e+12); the manifest's mass_matrix names the bodies.
+ *
  * Coordinates (q order):
  *   q[0]  x11  (translation, joint free_flight)
  *   q[1]  y11  (translation, joint free_flight)
@@ -85,11 +91,14 @@ void spacecraft_momentum(const double *q, const double *qd, const double *p, dou
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void spacecraft_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */
-void spacecraft_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd);
+/* returns 0, or nonzero where A(q) is singular or nearly so (the header's opening comment) */
+int spacecraft_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd);
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19) */
-void spacecraft_inertia_inverse(const double *q, const double *p, double *Ainv);
+/* returns 0, or nonzero where A(q) is singular or nearly so (the header's opening comment) */
+int spacecraft_inertia_inverse(const double *q, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
-void spacecraft_transvective_factors(const double *q, const double *p, double *targs, double *diag);
+/* returns 0, or nonzero where A(q) is singular or nearly so (the header's opening comment) */
+int spacecraft_transvective_factors(const double *q, const double *p, double *targs, double *diag);
 /* the coefficients of the support equation A qdd + B qd + I gammadd + J gammad + g = L T (3.1)-(3.3): A = A+_11 M, I_beta = L A+_lk M f_beta, B and J the support-side columns of B(q, qd) (2.17), g the weights at the support, L the world wrench T moved to the support */
 void spacecraft_support_coefficients(const double *q, const double *qd, const double *gamma, const double *gammad, const double *p, double *support_A, double *support_B, double *support_I, double *support_J, double *support_L, double *support_g);
 /* the direct problem (3.4) 1: the support's qdd from its state, the mechanism's motion gamma(t) and the external wrench T */

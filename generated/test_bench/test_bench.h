@@ -5,6 +5,15 @@
  * C99, <math.h> only (and <stddef.h> here, for NULL), no globals, no allocation, reentrant.  Matrices row-major.
  * p is the parameter vector (0 entries; pass NULL).
  *
+ * A(q) is regular at generic configurations (full rank at 3 fixed ones); not proved regular everywhere, it may be
+ * singular on a set of them: frame11 (massless); frame12 (massless); frame13 (massless); frame14 (massless);
+ * frame15 (massless); s1_7 (massless); s1_9 (massless); s1_10 (massless); s2_7 (massless); s2_9 (massless); s2_10
+ * (massless); s3_7 (massless); s3_9 (massless); s3_10 (massless); s4_7 (massless); s4_9 (massless); s4_10
+ * (massless); s5_7 (massless); s5_9 (massless); s5_10 (massless); s6_7 (massless); s6_9 (massless); s6_10
+ * (massless). forward_dynamics, inertia_inverse, transvective_factors return nonzero where A(q) is singular or
+ * nearly so: a pivot (beta,beta)^k of its transvective factors (3.12) is at or below 1e-12 of their mean (cond(A)
+ * >= 1e+12); the manifest's mass_matrix names the bodies.
+ *
  * Coordinates (q order):
  *   q[0]  o1_11  (translation, joint platform_o1)
  *   q[1]  o2_12  (translation, joint platform_o2)
@@ -115,11 +124,14 @@ void test_bench_momentum(const double *q, const double *qd, const double *p, dou
 /* W: per joint, the wrench (f, mu) from parent to child in the child frame (2.42) */
 void test_bench_joint_wrenches(const double *q, const double *qd, const double *qdd, const double *p, double *W);
 /* qdd = T^T diag(1/(beta,beta)) T (tau - b - g - c), the transvective Cauchy form (3.20), evaluated in O(n) */
-void test_bench_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd);
+/* returns 0, or nonzero where A(q) is singular or nearly so (the header's opening comment) */
+int test_bench_forward_dynamics(const double *q, const double *qd, const double *tau, const double *p, double *qdd);
 /* A(q)^-1 = T^T diag(1/(beta,beta)) T, n*n row-major (3.19) */
-void test_bench_inertia_inverse(const double *q, const double *p, double *Ainv);
+/* returns 0, or nonzero where A(q) is singular or nearly so (the header's opening comment) */
+int test_bench_inertia_inverse(const double *q, const double *p, double *Ainv);
 /* the arguments <t,k> of the transvections of T (3.8), (3.9) and the pivots (beta,beta)^k of T A(q) T^T = diag (3.11) */
-void test_bench_transvective_factors(const double *q, const double *p, double *targs, double *diag);
+/* returns 0, or nonzero where A(q) is singular or nearly so (the header's opening comment) */
+int test_bench_transvective_factors(const double *q, const double *p, double *targs, double *diag);
 /* per frame: its origin in the world, then the rotation matrix from frame axes to world axes (Pinocchio's oMf.rotation), row-major: the world pose L (1.13) composed from the root (Prop. 1.8) */
 void test_bench_frame_poses(const double *q, const double *p, double *X);
 /* per frame a 6 x n block: the velocity of its origin and its angular velocity per unit rate of each coordinate, world axes (Pinocchio's LOCAL_WORLD_ALIGNED): the columns of S (1.42) moved to the frame's origin */

@@ -26,7 +26,8 @@ qdd|tau (d tau / d qdd = A, d qdd / d tau = A^-1), CasADi's AD of the SX graph a
 generated derivatives; calling a Function on SX symbols inlines its graph, whose Jacobian is CasADi's AD.  With
 quaternion pairs (a free-flyer, ball joints) the derivative routines are in Pinocchio's tangent space (nv
 columns) while the Function's q has nq entries: there nothing is attached and CasADi's AD differentiates along
-q's entries.
+q's entries.  Nor where A(q) may be singular on a set of configurations (:mod:`aggsym.contract.singular_states`):
+there the routines have a status output, and CasADi's AD differentiates the graph.
 """
 from __future__ import annotations
 
@@ -111,6 +112,8 @@ def _analytic(model, emitted, e, analytic) -> dict | None:
         return None
     derivative, matrix = analytic[e.routine.role]
     by_role = {x.routine.role: x for x in emitted}
+    if any(by_role[r].routine.status is not None for r in (e.routine.role, derivative, matrix)):
+        return None  # (A(q) may be singular on a set: the routines' status outputs; CasADi's AD differentiates them)
     inputs = list(e.inputs)
     return {"derivative": derivative, "matrix": matrix, "derivative_inputs": list(by_role[derivative].inputs),
             "matrix_inputs": list(by_role[matrix].inputs), "third": inputs[2], "plain": inputs[3:]}
