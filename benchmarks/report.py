@@ -707,7 +707,7 @@ def _extras(results) -> str:
     measured)."""
     from .batch import report as batch_report
     from .generation import compile_split, scaling
-    from .runtime import constrained_derivatives, python_call, trig
+    from .runtime import casadi_target, constrained_derivatives, python_call, trig
 
     parts = []
     for key, title, module in (("scaling", "Scaling of generation (benchmarks/generation/scaling.py)", scaling),
@@ -719,7 +719,9 @@ def _extras(results) -> str:
                                                "call (benchmarks/runtime/python_call.py)", python_call),
                                ("constrained_derivatives", "Derivatives of constrained dynamics and of impacts against "
                                                            "Pinocchio (benchmarks/runtime/constrained_derivatives.py)",
-                                constrained_derivatives)):
+                                constrained_derivatives),
+                               ("casadi_target", "The CasADi target against the CasADi SX Featherstone peer "
+                                                 "(benchmarks/runtime/casadi_target.py)", casadi_target)):
         data = results.get(key)
         if data:
             parts += [f"## {title}", "", module.markdown(data), ""]

@@ -22,7 +22,7 @@ Settings (environment variables; defaults in brackets):
     AGGSYM_BENCH_CPU               the CPU the harness is pinned to                      [the last allowed]
     AGGSYM_BENCH_SECTIONS          sections to run: generation,runtime,kane,inputs,     [all]
                                    opsn,scaling,trig,split,batch,python,
-                                   constrained_derivatives
+                                   constrained_derivatives,casadi
                                    (a section left out is read back from its JSON of an earlier run)
     AGGSYM_BENCH_BATCH_PYTHON      the interpreter of the batch section's own venv      [.venv-batch/bin/python]
                                    (the AGGSYM_BENCH_BATCH_* settings: benchmarks/batch/orchestrator.py)
@@ -88,7 +88,7 @@ def config() -> dict:
         "AGGSYM_BENCH_CALLS": int(env.get("AGGSYM_BENCH_CALLS", "100")),
         "AGGSYM_BENCH_SECTIONS": env.get("AGGSYM_BENCH_SECTIONS",
                                          "generation,runtime,kane,inputs,opsn,scaling,trig,split,batch,python,"
-                                         "constrained_derivatives"),
+                                         "constrained_derivatives,casadi"),
         "AGGSYM_BENCH_BATCH_PYTHON": env.get("AGGSYM_BENCH_BATCH_PYTHON", str(ROOT / ".venv-batch" / "bin" / "python")),
         "AGGSYM_BENCH_RUNTIME_ROBOTS": env.get("AGGSYM_BENCH_RUNTIME_ROBOTS", ""),
         "AGGSYM_BENCH_PEER_ROBOTS": env.get("AGGSYM_BENCH_PEER_ROBOTS", PEER_ROBOTS),
@@ -367,7 +367,9 @@ def section_extras(sections) -> dict:
     :mod:`benchmarks.generation.compile_split`); issue 35's python (the generated Python's per-call time for one state
     beside Pinocchio's Python call, :mod:`benchmarks.runtime.python_call`, python_call.json); issue 34's
     constrained_derivatives (the derivatives of constrained dynamics and of impacts against Pinocchio C++,
-    :mod:`benchmarks.runtime.constrained_derivatives`, constrained_derivatives.json)."""
+    :mod:`benchmarks.runtime.constrained_derivatives`, constrained_derivatives.json); issue 54's casadi (the CasADi
+    target's forward dynamics and Jacobians through CasADi's C against the SX Featherstone peer,
+    :mod:`benchmarks.runtime.casadi_target`, casadi_target.json)."""
     out = {}
     if "scaling" in sections:
         from .generation import scaling
@@ -390,6 +392,17 @@ def section_extras(sections) -> dict:
         _save("python_call", out["python_call"])
     else:
         out["python_call"] = _load("python_call")
+    if "casadi" in sections:
+        from .runtime import casadi_target
+
+        try:
+            out["casadi_target"] = casadi_target.run(log=log)
+        except Exception as exc:  # reported, not fatal
+            out["casadi_target"] = {"error": f"{exc.__class__.__name__}: {exc}"}
+            log(f"casadi section failed: {out['casadi_target']['error']}")
+        _save("casadi_target", out["casadi_target"])
+    else:
+        out["casadi_target"] = _load("casadi_target")
     if "constrained_derivatives" in sections:
         from .runtime import constrained_derivatives
 
@@ -405,7 +418,7 @@ def section_extras(sections) -> dict:
 
 
 SECTION_FILES = ("generation", "kane", "opcounts", "runtime", "inputs", "opsn", "scaling", "trig", "split", "batch",
-                 "python_call", "constrained_derivatives")
+                 "python_call", "constrained_derivatives", "casadi_target")
 
 
 def report_only() -> int:

@@ -4,7 +4,7 @@ Where A(q) is regular at generic configurations but not proved regular at every 
 of kind ``"sampled"``: a point-mass head whose neck pitch can be 0, an Euler-angle base at gimbal lock), forward
 dynamics, A^-1, the transvective factors and the derivatives of forward dynamics are generated as everywhere, with
 one more output: a returned status (the C function's ``int``, the NumPy module's ``LinAlgError``, NaN in the JAX
-and PyTorch modules), as the constrained routines have (DESIGN.md, the generated-code contract).
+and PyTorch modules), as the constrained routines have (docs/generated-code.md).
 
 The status counts the coordinates whose pivot is at or below :data:`PIVOT` of the mean pivot,
 ``(beta,beta)^k <= PIVOT * sum_j (beta,beta)^j / n``, as the constrained routines judge their pivots against

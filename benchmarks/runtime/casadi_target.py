@@ -10,7 +10,9 @@ each robot's NAME_casadi.py with the derivative routines (``--targets casadi``),
 - the runtime of CasADi's generated C of each (``casadi.CodeGenerator``, compiled ``cc -O2``), ns per call: the best
   of 7 passes over 64 random states, in one process per function, timed by a small C driver.
 
-Timings on a shared machine are noisy: the load average is printed beside them.  Not part of ``make bench``.
+Timings on a shared machine are noisy: the load average is printed beside them.  In ``make bench`` as the section
+``casadi`` (:func:`run`, casadi_target.json, :func:`markdown` in REPORT.md), with the target of issue 54: forward
+dynamics and its Jacobian from aggsym's Functions at most :data:`TARGET` of the peer's runtime.
 """
 from __future__ import annotations
 
@@ -32,6 +34,7 @@ from ..harness.robots import robot_paths
 from . import casadi_peer
 
 ROBOTS = ("ur5", "panda", "talos")
+TARGET = 0.5  # issue 54: aggsym's forward dynamics and its Jacobian through CasADi's C, as a fraction of the peer's
 DRIVER = r"""
 #include <stdio.h>
 #include <time.h>
@@ -159,25 +162,61 @@ def measure(robot: str, urdf, folder: Path) -> dict:
     return out
 
 
+def _base(entries: dict, label: str) -> float:
+    """The peer's ns of the same function (forward dynamics or its Jacobian)."""
+    return entries["peer fd" if "fd" in label else "peer jac (CasADi AD)"]["ns"]
+
+
+def run(robots=ROBOTS, log=print) -> dict:
+    """Every robot measured (:func:`measure`), the load average before and after: the section ``casadi``."""
+    paths = robot_paths()
+    results = {"load_before": os.getloadavg()[0], "robots": {}}
+    with tempfile.TemporaryDirectory() as tmp:
+        for robot in robots:
+            r = results["robots"][robot] = measure(robot, paths[robot], Path(tmp) / robot)
+            log(f"{robot} (nq = {r['nq']}): generated in {r['generate_s']} s, functions() in {r['functions_s']} s")
+            for label, e in r["entries"].items():
+                log(f"  {label:24s} n_instructions {e['n_instructions']:8d}  n_nodes {e['n_nodes']:8d}  "
+                    f"{e['ns']:10.1f} ns  ({e['ns'] / _base(r['entries'], label):.2f} of the peer's)")
+            sys.stdout.flush()
+    results["load_after"] = os.getloadavg()[0]
+    log(f"load average {results['load_before']:.2f} before, {results['load_after']:.2f} after")
+    return results
+
+
+def markdown(results: dict) -> str:
+    """The section's table for REPORT.md: per robot and function, the sizes, ns per call and the ratio to the peer,
+    with the target of issue 54 (forward dynamics and the faster of aggsym's Jacobians at most TARGET)."""
+    if results.get("error") and not results.get("robots"):
+        return f"Not run: {results['error']}"
+    lines = ["Forward dynamics and its Jacobian along (q, qd, tau) through CasADi's code generator (`cc -O2`, both "
+             "sides; ns per call, the best of 7 passes over 64 states): aggsym's `--targets casadi` Functions against "
+             "the CasADi SX Featherstone peer (`benchmarks/runtime/casadi_peer.py`).  `python -m "
+             f"benchmarks.runtime.casadi_target`; load average {results.get('load_before', 0):.2f} before, "
+             f"{results.get('load_after', 0):.2f} after.", "",
+             "| robot | function | n_instructions | n_nodes | ns | of the peer's | target |",
+             "| --- | --- | ---: | ---: | ---: | ---: | --- |"]
+    for robot, r in results.get("robots", {}).items():
+        entries = r["entries"]
+        fastest_jac = min((e["ns"] for label, e in entries.items() if label.startswith("aggsym jac")), default=None)
+        for label, e in entries.items():
+            ratio = e["ns"] / _base(entries, label)
+            aims = label == "aggsym fd" or (label.startswith("aggsym jac") and e["ns"] == fastest_jac)
+            verdict = ("met" if ratio <= TARGET else "missed") + f" (<= {TARGET:g})" if aims else ""
+            lines.append(f"| {robot} (nq {r['nq']}) | {label} | {e['n_instructions']} | {e['n_nodes']} | "
+                         f"{e['ns']:.1f} | {ratio:.2f} | {verdict} |")
+    lines += ["", "Building the Functions: " + ", ".join(
+        f"{robot} {r['functions_s']} s (generated in {r['generate_s']} s)" for robot, r in
+        results.get("robots", {}).items()) + " (`functions()` with the derivative routines attached)."]
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("robots", nargs="*", default=list(ROBOTS))
     parser.add_argument("--json", type=Path)
     args = parser.parse_args(argv)
-    paths = robot_paths()
-    results = {"load_before": os.getloadavg()[0]}
-    with tempfile.TemporaryDirectory() as tmp:
-        for robot in args.robots:
-            r = results[robot] = measure(robot, paths[robot], Path(tmp) / robot)
-            print(f"{robot} (nq = {r['nq']}): generated in {r['generate_s']} s, functions() in {r['functions_s']} s")
-            peer = r["entries"]
-            for label, e in peer.items():
-                base = peer["peer fd" if "fd" in label else "peer jac (CasADi AD)"]["ns"]
-                print(f"  {label:24s} n_instructions {e['n_instructions']:8d}  n_nodes {e['n_nodes']:8d}  "
-                      f"{e['ns']:10.1f} ns  ({e['ns'] / base:.2f} of the peer's)")
-            sys.stdout.flush()
-    results["load_after"] = os.getloadavg()[0]
-    print(f"load average {results['load_before']:.2f} before, {results['load_after']:.2f} after")
+    results = run(args.robots)
     if args.json:
         args.json.write_text(json.dumps(results, indent=1) + "\n")
     return 0
