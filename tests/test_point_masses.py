@@ -88,3 +88,47 @@ def test_a_constant_turn_near_a_right_angle_keeps_the_small_diagonal_entry():
     double_angle = th.rotated(3, c, s, s * s, s * c).theta[1][1]
     assert abs(direct - want) <= 4 * np.spacing(want)
     assert abs(double_angle - want) > abs(direct - want)
+
+
+@pytest.mark.pinocchio
+def test_the_status_of_forward_dynamics_follows_the_conditioning(tmp_path):
+    """The same point-mass trees on a free-flyer (the base a point mass: A regular at generic configurations, not
+    proved regular everywhere, so forward dynamics has a status; with a fixed base every hinge moves its point mass
+    and A is proved regular, no status): a singular state is reported only where Pinocchio's M has cond >= 1e11 (so never
+    where it is well conditioned), and where none is, forward dynamics agrees with Pinocchio's aba as A's
+    conditioning allows (no false report; tests/test_regularity.py holds the reports at a point-mass head's
+    singular set).  Half the states have one hinge angle scaled towards 0 (by 1e-3 to 1e-11)."""
+    from aggsym.contract import reports_singular_states
+
+    base = "quaternion"
+    counted = {"reported": 0, "regular": 0}
+    for seed in range(8):
+        path = tmp_path / f"tree{seed}.urdf"
+        path.write_text(point_mass_chain(seed))
+        model = aggsym.load(path, floating_base=base)
+        assert reports_singular_states(model) and not reports_singular_states(aggsym.load(path))
+        twin = NumericTwin(model)
+        pm = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+        data = pm.createData()
+        rng = np.random.default_rng(100 + seed)
+        for k in range(8):
+            q = np.round(rng.uniform(-2, 2, model.nq), 5)
+            x = rng.normal(size=4)
+            q[3:7] = x / np.linalg.norm(x)
+            if k % 2:
+                q[-1 - int(rng.integers(5))] *= 10.0 ** -int(rng.integers(3, 12))
+            Q = q  # (Pinocchio's free-flyer q: the same seven entries, then the hinges)
+            P = pin.crba(pm, data, Q)
+            cond = np.linalg.cond(np.triu(P) + np.triu(P, 1).T)
+            qd, tau = rng.normal(size=(2, model.nv))
+            try:
+                with np.errstate(all="ignore"):
+                    qdd = twin.forward_dynamics(q, qd, tau)
+            except np.linalg.LinAlgError:
+                assert cond >= 1e11, cond
+                counted["reported"] += 1
+                continue
+            want = pin.aba(pm, data, Q, qd, tau)
+            assert np.max(np.abs(qdd - want)) <= 1e-13 * cond * np.max(np.abs(want)), cond
+            counted["regular"] += 1
+    assert counted["regular"] > 20, counted
