@@ -2,7 +2,7 @@
 wind on each body's equivalent inertia box, among the passive forces, equal to MuJoCo's qfrc_passive (1e-12) through
 the twin, the generated C and NumPy: dm_control's swimmer and fish and a probe (a free glider with a tilted inertial
 frame, a welded body's own box, a chain with oblique axes, masses over six decades); the medium's runtime
-parameters; the derivatives against central differences; the ellipsoid model left out with a warning."""
+parameters; the derivatives against central differences; a body of the ellipsoid model has no box."""
 from __future__ import annotations
 
 import warnings
@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 import aggsym
-from aggsym.errors import ModelWarning
 from aggsym.twin import NumericTwin
 from helpers import central_differences, generated_code
 
@@ -44,7 +43,7 @@ def test_the_probe_against_mujoco(probe):
     worst = compare(PROBE, model=model, samples=6, seed=2, evaluators=[library, Module(module)])
     assert worst["passive"] <= 1e-12 and max(worst.values()) <= 1e-9, worst
     fluid = manifest["mjcf"]["fluid"]
-    assert fluid["density"] == 1.225 and fluid["viscosity"] == 0.0185 and fluid["ellipsoid_model_left_out"] == []
+    assert fluid["density"] == 1.225 and fluid["viscosity"] == 0.0185 and fluid["ellipsoid_geoms"] == []
     assert {"fluid_density", "fluid_viscosity", "wind_x", "wind_y", "wind_z"} <= {p["name"] for p in
                                                                                 manifest["parameters"]}
 
@@ -106,13 +105,19 @@ def test_the_derivatives_carry_the_drag(tmp_path):
     assert np.max(np.abs(dqd - fqd)) <= 1e-7 * np.max(np.abs(fqd))
 
 
-def test_the_ellipsoid_model_is_left_out_with_a_warning(tmp_path):
+def test_a_body_with_an_ellipsoid_geom_has_no_box(tmp_path):
+    """MuJoCo's mj_fluid: a body some geom of which has fluidshape="ellipsoid" is in the ellipsoid model
+    (tests/test_fluid_ellipsoid.py), not in the inertia box; no warning."""
     path = tmp_path / "wing.xml"
     path.write_text('<mujoco><option density="1.2"/><worldbody><body name="wing"><joint name="j" axis="0 1 0"/>'
                     '<geom type="ellipsoid" size="0.1 0.02 0.005" mass="0.01" fluidshape="ellipsoid"/></body>'
                     '<body name="plate" pos="0.3 0 0"><joint name="k"/><geom type="box" size="0.1 0.05 0.01" '
                     'mass="0.02"/></body></worldbody></mujoco>')
-    with pytest.warns(ModelWarning, match=r"ellipsoid model.*'wing'.*not in the equations"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
         model = aggsym.load(path)
     assert [b.body for b in model.fluid] == ["plate"] and not model.conservative
-    assert model.meta["mjcf"]["fluid"]["ellipsoid_model_left_out"] == ["wing"]
+    assert [e.body for e in model.fluid_ellipsoids] == ["wing"]
+    assert model.meta["mjcf"]["fluid"]["ellipsoid_geoms"] == ["geom0"]
+    worst = compare(path, model=model, samples=3, seed=2)
+    assert worst["passive"] <= 1e-12 and max(worst.values()) <= 1e-11, worst

@@ -1,7 +1,8 @@
 """The passive joint forces on the left side of the equations of motion: the springs of elastic pairs (2.27),
 viscous joint damping (MuJoCo's ``stiffness``/``springref`` and ``damping``), the springs and dampers of fixed
 tendons (:func:`~.joint_space.tendon_forces`) and of spatial tendons through sites
-(:func:`~.spatial_tendons.spatial_tendon_forces`), MuJoCo's inertia-box fluid drag (:func:`~.fluid.fluid_forces`),
+(:func:`~.spatial_tendons.spatial_tendon_forces`), MuJoCo's inertia-box fluid drag (:func:`~.fluid.fluid_forces`)
+and its ellipsoid model (:func:`~.fluid_ellipsoid.ellipsoid_forces`),
 gravity compensation (MuJoCo's ``gravcomp``:
 :func:`~.gravcomp.compensation_forces`, -tau_s) and, on request, Coulomb joint friction (MuJoCo's ``frictionloss``
 taken as ``f sign(q')``; URDF ``<dynamics damping friction>`` under ``--passive include``).
@@ -23,6 +24,7 @@ from __future__ import annotations
 from ..core.program import is_zero
 from .elastic import elastic_forces
 from .fluid import fluid_forces
+from .fluid_ellipsoid import ellipsoid_forces
 from .gravcomp import compensation_forces
 from .joint_space import tendon_forces
 from .spatial_tendons import spatial_tendon_forces
@@ -64,6 +66,8 @@ def left_forces(bound, q, qd) -> list:
         c = _plus(c, compensation_forces(bound, q))
     if bound.model.fluid:
         c = _plus(c, fluid_forces(bound, q, qd))
+    if bound.model.fluid_ellipsoids:
+        c = _plus(c, ellipsoid_forces(bound, q, qd))
     return c
 
 
@@ -77,7 +81,8 @@ def has_passive(model) -> bool:
     """Whether the model has springs, damping, tendon forces, Coulomb friction or gravity compensation: some elastic
     pair, a damping not exactly zero, a tendon with a spring or damper, a friction, a compensated body."""
     return model.has_damping or any(b.pair.elastic for b in model.bodies) or bool(model.tendons) or \
-        bool(model.coulomb) or bool(model.gravcomp) or bool(model.spatial_tendons) or bool(model.fluid)
+        bool(model.coulomb) or bool(model.gravcomp) or bool(model.spatial_tendons) or bool(model.fluid) or \
+        bool(model.fluid_ellipsoids)
 
 
 __all__ = ["coulomb_forces", "damping_forces", "has_passive", "left_forces", "passive_forces"]

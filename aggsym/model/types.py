@@ -380,6 +380,31 @@ class FluidBox:
     box: tuple
 
 
+@dataclass(frozen=True)
+class FluidEllipsoid:
+    """One geom's part of MuJoCo's ellipsoid fluid model (``fluidshape="ellipsoid"``): a geom of a MuJoCo body merged
+    into ``body``, its centre ``centre`` and its axes ``axes`` (3x3, columns in the body's axes, as
+    :class:`FluidBox`'s), its ``semiaxes`` (MuJoCo's ``mju_geomSemiAxes``), the five coefficients of ``fluidcoef``
+    (``blunt``, ``slender`` drag, ``angular`` drag, ``kutta`` and ``magnus`` lift), ``virtual_mass`` and
+    ``virtual_inertia`` (per unit density, about the geom's axes: MuJoCo's ``geom_fluid`` precomputes them) and
+    ``interaction`` (MuJoCo's ``geom_fluid[0]``, 1 for ``fluidshape="ellipsoid"``: a factor of the whole wrench).
+    The medium is ``Model.fluid_medium`` (:mod:`aggsym.mechanics.fluid_ellipsoid`)."""
+
+    body: str
+    geom: str
+    centre: tuple
+    axes: tuple
+    semiaxes: tuple
+    blunt: float
+    slender: float
+    angular: float
+    kutta: float
+    magnus: float
+    virtual_mass: tuple
+    virtual_inertia: tuple
+    interaction: float = 1.0
+
+
 CONSTRAINT_KINDS = {  # block: kind -> the forbidden relative motions, in the reference frame (ch. 4)
     "point": ("o1", "o2", "o3"),
     "weld": COORDINATE_CODES,
@@ -544,7 +569,9 @@ class Model:
     tendons: tuple = ()  # Tendon: fixed tendons with springs or dampers, their forces on the left side
     spatial_tendons: tuple = ()  # SpatialTendon: tendons through sites with springs or dampers (left side)
     fluid: tuple = ()  # FluidBox: the bodies of MuJoCo's inertia-box fluid model (their drag on the left side)
-    fluid_medium: tuple = ()  # (density, viscosity, (wind_x, wind_y, wind_z)) expressions, with ``fluid``
+    fluid_ellipsoids: tuple = ()  # FluidEllipsoid: the geoms of MuJoCo's ellipsoid fluid model (left side)
+    fluid_medium: tuple = ()  # (density, viscosity, (wind_x, wind_y, wind_z)) expressions, with ``fluid`` or
+    # ``fluid_ellipsoids``
     gravcomp: tuple = ()  # (body name, m_s, (h_x, h_y, h_z)): the compensated weight of a body (MuJoCo's gravcomp),
     # a mass and its first moment about the body origin in body axes, lifted against gravity among the passive
     # forces (aggsym.mechanics.gravcomp; expressions); empty: none
@@ -655,7 +682,7 @@ class Model:
         sliding contact (chapter 4) dissipates it, and so does viscous joint damping (``damping``).  The armature's
         rotors keep it (T holds their 1/2 a qd^2)."""
         return (not self.time_dependent and not self.has_friction and not self.has_damping and not self.coulomb
-                and not self.fluid
+                and not self.fluid and not self.fluid_ellipsoids
                 and not any(not (_zero(t.damping) and _zero(t.friction)) for t in self.tendons + self.spatial_tendons))
 
     @property

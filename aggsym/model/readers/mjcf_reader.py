@@ -56,10 +56,11 @@ The mapping
   conservative.  Refused then on a free joint (MuJoCo's friction acts on the world-axes velocity there).
 * Not in the equations, listed in ``model.meta["mjcf"]`` (and the manifest): ``frictionloss`` (unless asked for as
   above), joint and tendon limits (also on the coordinates' limits), contacts, actuators (with their joint and
-  gear), tendons that change nothing but constraints or actuation, inactive equalities, fluid forces
-  (``density``, ``viscosity``: a warning).  Active equalities (:mod:`aggsym.model.readers.mjcf_equalities`): ``connect``
-  and ``weld`` become constraints (``model.constraints``), ``joint`` and fixed-tendon equalities couplings
-  (``model.couplings``) or joint-space constraint rows, each listed in ``meta["mjcf"]["equalities"]``; the others
+  gear), tendons that change nothing but constraints or actuation, inactive equalities.  Fluid forces
+  (``density``, ``viscosity``, ``wind``) are passive forces: MuJoCo's inertia-box model (``Model.fluid``) and its
+  ellipsoid model on the geoms with ``fluidshape="ellipsoid"`` (``Model.fluid_ellipsoids``).  Active equalities
+  (:mod:`aggsym.model.readers.mjcf_equalities`): ``connect`` and ``weld`` become constraints
+  (``model.constraints``), ``joint`` and fixed-tendon equalities couplings (``model.couplings``) or joint-space constraint rows, each listed in ``meta["mjcf"]["equalities"]``; the others
   are refused there by name.  Spatial tendons through sites and pulleys with a stiffness or damping
   (``Model.spatial_tendons``, :mod:`aggsym.mechanics.spatial_tendons`): the same parameters as a fixed tendon's.
   Refused with an error naming them, since they would change the equations: spatial tendons wrapping around geoms
@@ -89,7 +90,8 @@ from ..transforms.frames import default_frames
 from .link_numbers import exact
 from .mjcf_equalities import WRAP_JOINT, with_equalities
 from .mjcf_source import screen
-from ..types import WORLD, Coordinate, FluidBox, JointLimits, Links, Model, Parameter, SpatialTendon, Tendon
+from ..types import (WORLD, Coordinate, FluidBox, FluidEllipsoid, JointLimits, Links, Model, Parameter, SpatialTendon,
+                     Tendon)
 
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3  # mjtJoint
 KINDS = {HINGE: "theta", SLIDE: "o"}
@@ -98,6 +100,7 @@ DISABLE_FRICTIONLOSS, DISABLE_SPRING, DISABLE_DAMPER, DISABLE_GRAVITY = 4, 32, 6
 FRICTIONLOSS_OPTIONS = ("list", "coulomb")
 WORLD_BODY = "worldbody"
 WRAP_PULLEY, WRAP_SPHERE, WRAP_CYLINDER = 2, 4, 5  # mjtWrap (WRAP_JOINT: 1, WRAP_SITE: 3)
+GEOM_SPHERE, GEOM_CAPSULE, GEOM_CYLINDER = 2, 3, 5  # mjtGeom
 EQUALITY_TYPES = {0: "connect", 1: "weld", 2: "joint", 3: "tendon", 4: "flex"}
 CONVENTION = (
     "q is MuJoCo's qpos and qd its qvel entry for entry, except for a free joint J: q holds J_x J_y J_z "
@@ -105,6 +108,16 @@ CONVENTION = (
     "v = R^T v_world, R the body's rotation) and J_wx J_wy J_wz (body axes, as MuJoCo's); a generalized force "
     "on its linear part is R^T f_world, and its acceleration R^T a_world - w x v (a_world: MuJoCo's qacc); and a ball "
     "joint J: q holds J_qx J_qy J_qz J_qw (MuJoCo: qw qx qy qz), qd its J_wx J_wy J_wz as MuJoCo's qvel (body axes)")
+
+
+def _frame_in(place, pos, quat) -> tuple:
+    """(axes, origin) of a frame given in a MuJoCo body (its ``pos``, ``quat``: an inertial frame, a geom's) in the
+    axes of the aggsym body ``place`` puts that MuJoCo body in: the axes' columns, the origin."""
+    w, x, y, z = (float(v) for v in quat)
+    turned = rotation_matrix(place.rotation + (quaternion_rotations(x, y, z, w)
+                                               if (w, x, y, z) != (1.0, 0.0, 0.0, 0.0) else []))
+    origin = add(place.t, turn(place.R, tuple(exact(float(v)) for v in pos)))
+    return tuple(map(tuple, turned)), tuple(origin)
 
 
 def _name(m, mujoco, kind, i: int, prefix: str) -> str:
@@ -152,6 +165,9 @@ class _Reader:
 
     def joint_name(self, j):
         return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_JOINT, j, "joint")
+
+    def geom_name(self, g):
+        return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_GEOM, g, "geom")
 
     def tendon_name(self, t):
         return _name(self.m, self.mj, self.mj.mjtObj.mjOBJ_TENDON, t, "tendon")
@@ -237,13 +253,6 @@ class _Reader:
                 if hasattr(m, field) and np.any(getattr(m, field)[a]):
                     self.fail(f"actuator {name!r}", f"an actuator with {what} (it changes the equations of motion) "
                                                     f"is not supported")
-        ellipsoids = self.ellipsoid_bodies()
-        if (m.opt.density or m.opt.viscosity) and ellipsoids:
-            self.warn("<option>", f"fluid forces of MuJoCo's ellipsoid model (fluidshape=\"ellipsoid\" on the geoms "
-                                  f"of {', '.join(repr(self.body_name(i)) for i in ellipsoids[:5])}"
-                                  f"{', ...' if len(ellipsoids) > 5 else ''}) are not in the equations of motion; "
-                                  f"MuJoCo adds them to qfrc_passive (the inertia-box model of the other bodies is "
-                                  f"in them)")
 
     def ellipsoid_bodies(self) -> list:
         """The bodies MuJoCo gives the ellipsoid fluid model (some geom of theirs has fluidshape="ellipsoid")."""
@@ -252,13 +261,16 @@ class _Reader:
                                                     for j in range(int(m.body_geomnum[i])))]
 
     def fluid(self, tree, names, welded, params) -> tuple:
-        """(the bodies of MuJoCo's inertia-box fluid model as :class:`~aggsym.model.types.FluidBox` es, the medium
-        (density, viscosity, wind)): every moving body of mass >= 1e-15 (MuJoCo's mjMINVAL) that does not use the
-        ellipsoid model, its box as MuJoCo computes it; the runtime parameters ``fluid_density``,
-        ``fluid_viscosity``, ``wind_x wind_y wind_z`` where they are not zero."""
+        """(the bodies of MuJoCo's inertia-box fluid model as :class:`~aggsym.model.types.FluidBox` es, the geoms of
+        its ellipsoid model as :class:`~aggsym.model.types.FluidEllipsoid` s, the medium (density, viscosity,
+        wind)): every moving body of mass >= 1e-15 (MuJoCo's mjMINVAL) whose geoms do not use the ellipsoid model,
+        its box as MuJoCo computes it; on the other moving bodies of that mass, every geom with
+        ``fluidshape="ellipsoid"`` (MuJoCo's ``mj_fluid``: such a body has no box, its other geoms no drag); the
+        runtime parameters ``fluid_density``, ``fluid_viscosity``, ``wind_x wind_y wind_z`` where they are not
+        zero."""
         m = self.m
         if not (m.opt.density > 0 or m.opt.viscosity > 0):
-            return (), ()
+            return (), (), ()
         medium = []
         for name, value in (("fluid_density", float(m.opt.density)), ("fluid_viscosity", float(m.opt.viscosity))):
             if value > 0:
@@ -274,21 +286,42 @@ class _Reader:
             else:
                 wind.append(sp.Integer(0))
         skip = set(self.ellipsoid_bodies())
-        boxes = []
+        boxes, ellipsoids = [], []
         for i in range(1, m.nbody):
             mass = float(m.body_mass[i])
-            if mass < 1e-15 or i in skip or welded[i] or names[i] not in tree.place:
+            if mass < 1e-15 or welded[i] or names[i] not in tree.place:
+                continue
+            place = tree.place[names[i]]
+            if i in skip:
+                for g in range(int(m.body_geomadr[i]), int(m.body_geomadr[i] + m.body_geomnum[i])):
+                    if m.geom_fluid[g][0] != 0:
+                        ellipsoids.append(self.fluid_ellipsoid(g, tree, place))
                 continue
             inertia = [float(x) for x in m.body_inertia[i]]
             box = tuple(math.sqrt(max(1e-15, inertia[j] + inertia[k] - inertia[a]) / mass * 6.0)
                         for a, j, k in ((0, 1, 2), (1, 0, 2), (2, 0, 1)))
-            place = tree.place[names[i]]
-            w, x, y, z = (float(v) for v in m.body_iquat[i])
-            turned = rotation_matrix(place.rotation + (quaternion_rotations(x, y, z, w)
-                                                       if (w, x, y, z) != (1.0, 0.0, 0.0, 0.0) else []))
-            com = add(place.t, turn(place.R, tuple(exact(float(v)) for v in m.body_ipos[i])))
-            boxes.append(FluidBox(tree.rows[place.body]["name"], tuple(com), tuple(map(tuple, turned)), box))
-        return tuple(boxes), (medium[0], medium[1], tuple(wind))
+            turned, com = _frame_in(place, m.body_ipos[i], m.body_iquat[i])
+            boxes.append(FluidBox(tree.rows[place.body]["name"], com, turned, box))
+        return tuple(boxes), tuple(ellipsoids), (medium[0], medium[1], tuple(wind))
+
+    def fluid_ellipsoid(self, g: int, tree, place) -> FluidEllipsoid:
+        """The geom ``g`` of the ellipsoid model, its pose in the aggsym body's axes, its semi-axes as MuJoCo's
+        ``mju_geomSemiAxes`` takes them from its type and size, its coefficients from ``geom_fluid``."""
+        m = self.m
+        size, kind = [float(x) for x in m.geom_size[g]], int(m.geom_type[g])
+        if kind == GEOM_SPHERE:
+            semiaxes = (size[0], size[0], size[0])
+        elif kind == GEOM_CAPSULE:
+            semiaxes = (size[0], size[0], size[1] + size[0])
+        elif kind == GEOM_CYLINDER:
+            semiaxes = (size[0], size[0], size[1])
+        else:
+            semiaxes = (size[0], size[1], size[2])
+        c = [float(x) for x in m.geom_fluid[g]]
+        turned, centre = _frame_in(place, m.geom_pos[g], m.geom_quat[g])
+        return FluidEllipsoid(tree.rows[place.body]["name"], self.geom_name(g), centre, turned, semiaxes,
+                              blunt=c[1], slender=c[2], angular=c[3], kutta=c[4], magnus=c[5],
+                              virtual_mass=tuple(c[6:9]), virtual_inertia=tuple(c[9:12]), interaction=c[0])
 
     # the tree ------------------------------------------------------------------------------------------------
     def read(self) -> Model:
@@ -415,7 +448,7 @@ class _Reader:
         tendons, spatial = self.tendons(params, coordinate_of, springs, dampers, tree, body_links)
         self.tendon_forces = tendons + spatial
         gravcomp = self.gravcomp(tree, names, welded, params)
-        fluid, medium = self.fluid(tree, names, welded, params)
+        fluid, ellipsoids, medium = self.fluid(tree, names, welded, params)
         for axis, value in zip("xyz", gravity):
             params.append(Parameter(f"gravity_{axis}", float(value)))
         seen: dict = {}
@@ -442,7 +475,7 @@ class _Reader:
                       dof_armature=tuple(armature) if any(a != 0 for a in armature) else (),
                       damping=tuple(damping) if any(d != 0 for d in damping) or pending_stiffness else (),
                       tendons=tendons, spatial_tendons=spatial, coulomb=tuple(coulomb) if any(f != 0 for f in coulomb) else (),
-                      gravcomp=gravcomp, fluid=fluid, fluid_medium=medium,
+                      gravcomp=gravcomp, fluid=fluid, fluid_ellipsoids=ellipsoids, fluid_medium=medium,
                       meta={"floating_base": "quaternion" if free_joints else False,
                             "warnings": list(self.warnings),
                             "mjcf": self.summary(free_joints, sites, springs, dampers, flags)})
@@ -681,15 +714,17 @@ class _Reader:
                 + "joint and tendon limits, contacts, inactive equalities "
                 "(active ones are constraints or couplings: equalities), actuators (their forces are tau's to "
                 "give: actuators lists each with its "
-                "transmission target and gear), fluid forces of MuJoCo's ellipsoid model" + (
-                    " (this model has some)" if (m.opt.density or m.opt.viscosity) and self.ellipsoid_bodies()
-                    else "")),
+                "transmission target and gear)"),
             "joints": joints, "actuators": actuators, "tendons": tendons, "inactive_equalities": inactive,
             "sites": list(sites),
-            **({"fluid": {"model": "inertia box (MuJoCo's mj_inertiaBoxFluidModel)",
+            **({"fluid": {"model": "inertia box (MuJoCo's mj_inertiaBoxFluidModel) on each body, ellipsoid "
+                                   "(mj_ellipsoidFluidModel) on each geom of ellipsoid_geoms",
                           "density": float(m.opt.density), "viscosity": float(m.opt.viscosity),
                           "wind": [float(x) for x in m.opt.wind],
-                          "ellipsoid_model_left_out": [self.body_name(i) for i in self.ellipsoid_bodies()]}}
+                          "ellipsoid_geoms": [self.geom_name(g) for i in self.ellipsoid_bodies()
+                                              for g in range(int(m.body_geomadr[i]),
+                                                             int(m.body_geomadr[i] + m.body_geomnum[i]))
+                                              if m.geom_fluid[g][0] != 0]}}
                if m.opt.density or m.opt.viscosity else {}),
             **({"gravcomp": [{"body": self.body_name(i), "gravcomp": float(m.body_gravcomp[i])}
                              for i in range(1, m.nbody) if m.body_gravcomp[i]]} if np.any(m.body_gravcomp) else {}),
