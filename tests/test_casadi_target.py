@@ -195,12 +195,26 @@ def test_casadi_jacobian_takes_the_attached_routines(generated, rng):
     assert rel(got[2], np_module.inertia_inverse(args[0])) <= 1e-13
 
 
-def test_free_flyer_attaches_nothing_and_documents_why(generated):
-    """Quaternion pairs: the derivative routines are in the tangent space (nv columns, q has nq entries), so the
-    dynamics keep CasADi's AD, and the module's docstring says so."""
-    model, _, module, _ = generated("free_flyer")
-    assert model.nq == model.nv + 1 and module.ANALYTIC == {}
+def test_free_flyer_jacobians_along_q_entries(generated, rng):
+    """Quaternion pairs: the derivative routines are in the tangent space (nv columns, q has nq entries); the
+    attached Jacobian along q takes their columns at the hinges' entries and CasADi's AD along the free-flyer's
+    seven: equal to CasADi's AD of the whole graph (analytic=False) to 1e-10 along q, qd and tau, at states with a
+    unit quaternion and with the quaternion's entries perturbed (the graph's derivative, off the unit sphere too)."""
+    model, np_module, module, _ = generated("free_flyer")
+    assert model.nq == model.nv + 1 and set(module.ANALYTIC) == {"inverse_dynamics", "forward_dynamics"}
     assert "tangent space" in module.__doc__
+    for role in ("forward_dynamics", "inverse_dynamics"):
+        got = []
+        for f in (module.functions()[role], module.functions(analytic=False)[role]):
+            symbols = [ca.MX.sym(f.name_in(k), f.sparsity_in(k)) for k in range(f.n_in())]
+            got.append(ca.Function("J", symbols, [ca.jacobian(f(*symbols), x) for x in symbols[:3]]))
+        for scale in (1.0, 1.3):
+            args = random_inputs(model, role, rng) + [perturbed(np_module, rng)]
+            args[0] = np.array(args[0], dtype=float)
+            args[0][3:7] *= scale
+            analytic, plain = evaluate(got[0], args), evaluate(got[1], args)
+            for a, b in zip(analytic, plain):
+                assert a.shape == b.shape and rel(a, b) <= 1e-10, role
 
 
 @pytest.mark.pinocchio

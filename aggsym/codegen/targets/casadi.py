@@ -25,8 +25,9 @@ qdd|tau (d tau / d qdd = A, d qdd / d tau = A^-1), CasADi's AD of the SX graph a
 ``casadi.jacobian`` of an MX expression that calls the Function (``casadi.Opti``, ``nlpsol``) takes the
 generated derivatives; calling a Function on SX symbols inlines its graph, whose Jacobian is CasADi's AD.  With
 quaternion pairs (a free-flyer, ball joints) the derivative routines are in Pinocchio's tangent space (nv
-columns) while the Function's q has nq entries: there nothing is attached and CasADi's AD differentiates along
-q's entries.  Nor where A(q) may be singular on a set of configurations (:mod:`aggsym.contract.singular_states`):
+columns) while the Function's q has nq entries: there the Jacobian along q takes the tangent columns for the
+scalar joints' entries and CasADi's AD of the graph along the quaternion pairs' entries alone (the free-flyer's
+seven: forward AD in seven directions, not nq) (:func:`_q_columns`).  Nothing is attached where A(q) may be singular on a set of configurations (:mod:`aggsym.contract.singular_states`):
 there the routines have a status output, and CasADi's AD differentiates the graph.
 """
 from __future__ import annotations
@@ -135,7 +136,7 @@ def _analytic(model, emitted, e, analytic) -> dict | None:
     """How routine ``e``'s custom Jacobian is made from the derivative routine and the matrix routine (the
     torch target's table of them, :func:`~.torch.analytic_routines`), or None: none attached (quaternion pairs:
     the derivative routines' q is the tangent space's)."""
-    if e.routine.role not in analytic or model.nq != model.nv:
+    if e.routine.role not in analytic:
         return None
     derivative, matrix = analytic[e.routine.role]
     by_role = {x.routine.role: x for x in emitted}
@@ -143,7 +144,25 @@ def _analytic(model, emitted, e, analytic) -> dict | None:
         return None  # (A(q) may be singular on a set: the routines' status outputs; CasADi's AD differentiates them)
     inputs = list(e.inputs)
     return {"derivative": derivative, "matrix": matrix, "derivative_inputs": list(by_role[derivative].inputs),
-            "matrix_inputs": list(by_role[matrix].inputs), "third": inputs[2], "plain": inputs[3:]}
+            "matrix_inputs": list(by_role[matrix].inputs), "third": inputs[2], "plain": inputs[3:],
+            "columns": _q_columns(model)}
+
+
+def _q_columns(model) -> dict | None:
+    """With quaternion pairs (a free-flyer, ball joints): how the Jacobian along q's nq entries is made from the
+    derivative routine's nv tangent-space columns: ``columns``, per entry of q, the text of its column (the
+    tangent column of a scalar joint's entry, ``d_q[:, V]``; for an entry of a quaternion pair, a free-flyer's
+    origin included, CasADi's AD of the graph along those entries alone, ``q_ad[:, k]``), and ``entries``, those
+    entries; None without quaternion pairs (the tangent space is q's)."""
+    if model.nq == model.nv:
+        return None
+    from ...model.tree import Tree
+
+    positions, velocities, entries = Tree.of(model).position_split
+    tangent = dict(zip(positions, velocities))
+    ad = {j: k for k, j in enumerate(entries)}
+    columns = [f"d_q[:, {tangent[j]}]" if j in tangent else f"q_ad[:, {ad[j]}]" for j in range(model.nq)]
+    return {"columns": columns, "entries": list(entries)}
 
 
 class CasadiTarget(Target):
