@@ -1,6 +1,7 @@
 """MJCF equalities (issue 33, item 4): ``connect`` and ``weld`` as loop and weld constraints, linear ``joint`` and
 fixed-tendon equalities as couplings (those that are no coupling become joint-space rows:
-``tests/test_mjcf_tendons.py``), equalities on spatial tendons refused by name.
+``tests/test_mjcf_tendons.py``; on spatial tendons through sites: ``tests/test_mjcf_spatial_equalities.py``),
+equalities on spatial tendons wrapping around a geom refused by name.
 
 MuJoCo's equalities are soft (solref/solimp), so its ``qacc`` is not the reference: the reference is a dense KKT
 solve written here from MuJoCo's own mass matrix (``mj_fullM``, armature included), ``qfrc_bias`` and
@@ -263,13 +264,13 @@ def test_joint_and_tendon_equalities_are_couplings(tmp_path):
 ARM = """<mujoco><worldbody><body name="a"><joint name="j1"/><geom size=".1"/><site name="s1"/>
 <body name="b" pos="0 0 -.3"><joint name="j2"/><joint name="j3" axis="1 0 0"/><geom size=".1"/><site name="s2"/></body></body>
 <body name="c" pos="1 0 0"><joint name="j4" type="ball"/><geom size=".1"/></body>
-<body name="w" pos="0 1 0"><geom size=".1"/></body></worldbody>{after}</mujoco>"""
+<body name="w" pos="0 1 0"><geom name="ball" size=".1"/></body></worldbody>{after}</mujoco>"""
 
 REFUSED = {  # (nonlinear, one-coordinate, three-coordinate, chained, free-joint and mixed equalities are joint-space
     # constraint rows: tests/test_mjcf_tendons.py)
-    "spatial": ('<tendon><spatial name="rope"><site site="s1"/><site site="s2"/></spatial></tendon>'
-                '<equality><tendon name="len" tendon1="rope"/></equality>',
-                ['<tendon name="len">', "'rope' is a spatial tendon"]),
+    "spatial": ('<tendon><spatial name="rope"><site site="s1"/><geom geom="ball"/><site site="s2"/></spatial>'
+                '</tendon><equality><tendon name="len" tendon1="rope"/></equality>',
+                ['<tendon name="len">', "'rope' is a spatial tendon wrapping around a geom"]),
     "on-free": ('<equality><joint name="b" joint1="j4" joint2="j1"/></equality>',
                 ["only HINGE and SLIDE joint allowed in constraint"]),  # (MuJoCo's compiler refuses it)
 }

@@ -128,6 +128,10 @@ def constraints_entry(model) -> dict:
                           "second": [[name, str(x)] for name, x in r.second],
                           "reference": [str(x) for x in r.reference], "polynomial": [str(x) for x in r.polynomial],
                           "free": []})
+            for key, branches in (("first_sites", r.first_sites), ("second_sites", r.second_sites)):
+                if branches:  # a spatial tendon's length: its branches (divisor, sites on bodies)
+                    items[-1][key] = [[str(div), [[body, [str(x) for x in point]] for body, point in sites]]
+                                      for div, sites in branches]
             start += 1
             continue
         items.append({"name": c.name, "body": c.body, "link": c.link or None, "medium": c.medium,
@@ -174,6 +178,12 @@ def constraints_entry(model) -> dict:
                              "ref1) - P(L2 - ref2) with L1 = sum of first's c q, L2 = sum of second's c q, P the "
                              "polynomial y0 + a1 x + ... + a4 x^4 ('polynomial'), J = c1 - P'(x) c2, gamma = -P''(x) "
                              "(c2 qd)^2; lambda the generalized force J^T lambda along it")
+    if any(c.joint_row is not None and (c.joint_row.first_sites or c.joint_row.second_sites)
+           for c in model.constraints):
+        out["spatial_joint_rows"] = ("first_sites/second_sites: L1/L2 is a spatial tendon's length (the sum over "
+                                     "its branches of the distances between consecutive sites, each branch over its "
+                                     "divisor) instead of a linear form; J = dL1/dq - P'(x) dL2/dq, gamma = L1'' - "
+                                     "P''(x) L2'^2 - P'(x) L2'' at qdd = 0")
     return out
 
 

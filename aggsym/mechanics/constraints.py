@@ -30,9 +30,11 @@ where P is at q = 0); rotational rows the rotation vector (log map) of ``Q = B R
 vee(Q - Q^T)/2`` with theta = atan2(|vee|, (tr Q - 1)/2), evaluated as ``(theta + eps)/(|vee| + eps)`` (exact in
 doubles at theta = 0 and everywhere else, no branch).
 
-A joint-space row (``Constraint.joint_row``: an MJCF joint or fixed-tendon equality) is one row whose phi, J and
-gamma are those of a polynomial relation of linear forms of the coordinates (:mod:`aggsym.mechanics.joint_space`);
-it has no point, axes, slip or friction, and enters G and the constrained dynamics like any other row.
+A joint-space row (``Constraint.joint_row``: an MJCF joint or tendon equality) is one row whose phi, J and
+gamma are those of a polynomial relation of linear forms of the coordinates (:mod:`aggsym.mechanics.joint_space`)
+or of spatial tendons' lengths (:class:`~aggsym.mechanics.spatial_tendons.SpatialLength`, an MJCF equality on a
+``<spatial>`` tendon, bound to these kinematics here); it has no point, axes, slip or friction, and enters G and
+the constrained dynamics like any other row.
 
 A prescribed motion of the world-side frame (``motion:``, Prop. 4.5-4.8) makes the world a moving medium with
 known pose, velocity and acceleration (:class:`MovingFrame`): J is unchanged, the rows' relative velocity is
@@ -58,6 +60,7 @@ from .group import Motion, rotation
 from .joint_space import BoundJointRow, bind_joint_row, places
 from .kinematics import TreeKinematics, point_motion, point_rows, world_poses
 from .linalg import EYE3, add, cross, dot, ldl_factor, mm, mtv, mul, mv, scale, sub, transpose
+from .spatial_tendons import SpatialLength
 from .transvective import apply_T_transpose_tree, apply_T_tree, articulated_factors, transvected_forces
 
 EPS = 1e-30  # the log map's guard at theta = 0: (theta + EPS) / (|s| + EPS) is theta/sin(theta) (relative error
@@ -156,6 +159,8 @@ class ConstraintKinematics:
         self.bound, self.kin, self.rest = bound, kin, rest
         self.items = bind_constraints(bound)
         self.poses = world_poses(kin)
+        self.items = [c.on(lambda branches: SpatialLength(bound, kin, branches, self.poses))
+                      if isinstance(c, BoundJointRow) else c for c in self.items]  # (spatial lengths: these poses)
         self.P, self.B, self.discs = [], [], []
         for c in self.items:
             if isinstance(c, BoundJointRow):

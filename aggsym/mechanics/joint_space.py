@@ -10,6 +10,13 @@ Joint-space row (one constraint row; ``x = L2 - ref2``, P the polynomial y0 + a1
 
     phi = (L1 - ref1) - P(x),   J = c1 - P'(x) c2,   gamma = J' qd = -P''(x) (c2 . qd)^2
 
+A length is any object with ``value(q)``, ``rate(qd)``, ``add_to(row, factor)`` (its Jacobian row times factor added
+to a row) and ``curvature(qd)`` (d^2 L/dt^2 at qdd = 0): a :class:`LinearForm` (curvature 0), or a spatial tendon's
+:class:`~aggsym.mechanics.spatial_tendons.SpatialLength` (an MJCF tendon equality on a ``<spatial>`` tendon; bound to
+the kinematics by :meth:`BoundJointRow.on`).  In general ``phi'' = L1'' - P''(x) L2'^2 - P'(x) L2''``, so::
+
+    J = dL1/dq - P'(x) dL2/dq,   gamma = L1''_0 - P''(x) (L2')^2 - P'(x) L2''_0     (''_0: at qdd = 0)
+
 Tendon spring, damper and (on request) Coulomb friction (force along the tendon on the right side, ``lower <=
 upper`` its dead band)::
 
@@ -20,7 +27,7 @@ lower = upper, is the linear ``-k (L - lower)``); its energy ``1/2 k (min(L - lo
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..core.program import is_zero
 from .linalg import mul
@@ -57,6 +64,10 @@ class LinearForm:
             acc = acc + mul(c, qd[i])
         return acc
 
+    def curvature(self, qd):
+        """d^2 L/dt^2 at qdd = 0: 0 (L is linear in q)."""
+        return 0
+
     def add_to(self, row: list, factor=1) -> list:
         """row + factor c (a list of n scalars, a new list)."""
         out = list(row)
@@ -72,13 +83,20 @@ def linear_form(bound, terms, where: dict | None = None) -> LinearForm:
     return LinearForm(tuple((*where[name], bound.scalar(c)) for name, c in terms))
 
 
+@dataclass(frozen=True)
+class Sites:
+    """A spatial tendon's length before the kinematics are known: its branches (``SpatialTendon.branches``)."""
+
+    branches: tuple
+
+
 @dataclass
 class BoundJointRow:
     """A joint-space constraint row bound to a backend (see the module's text); ``rows``, ``free``, ``law``,
     ``frame`` as a point constraint's, so that the constrained dynamics treat it as one row without friction."""
 
-    first: LinearForm
-    second: LinearForm | None
+    first: object  # a length (the module's text): LinearForm, Sites until bound by on(), SpatialLength
+    second: object
     ref1: object
     ref2: object
     poly: tuple  # (y0, a1, a2, a3, a4) scalars
@@ -89,6 +107,14 @@ class BoundJointRow:
     frame: object = None
     coefficient: object = None
     normal: int | None = None
+
+    def on(self, make) -> "BoundJointRow":
+        """This row with its spatial lengths (:class:`Sites`) bound: ``make(branches)`` the length (itself when it
+        has none)."""
+        if not isinstance(self.first, Sites) and not isinstance(self.second, Sites):
+            return self
+        first, second = (make(f.branches) if isinstance(f, Sites) else f for f in (self.first, self.second))
+        return replace(self, first=first, second=second)
 
     def _x(self, q):
         return self.second.value(q) - self.ref2
@@ -113,10 +139,16 @@ class BoundJointRow:
         return row
 
     def bias(self, q, qd):
-        """gamma = -P''(x) (c2 . qd)^2."""
+        """gamma = L1''_0 - P''(x) L2'^2 - P'(x) L2''_0 (fixed tendons: -P''(x) (c2 . qd)^2)."""
+        out = self.first.curvature(qd)
+        if self.second is None:
+            return out
+        curved = self.second.curvature(qd)
+        if not is_zero(curved):
+            out = out - mul(self.derivative(q), curved)
         a = self.poly
-        if self.second is None or all(is_zero(c) for c in a[2:]):
-            return 0
+        if all(is_zero(c) for c in a[2:]):
+            return out
         x = self._x(q)
         second = 0
         for k, c in ((2, a[2]), (3, a[3]), (4, a[4])):
@@ -124,7 +156,7 @@ class BoundJointRow:
                 term = k * (k - 1) * c
                 second = second + (term if k == 2 else mul(term, x if k == 3 else x * x))
         r = self.second.rate(qd)
-        return -(second * (r * r))
+        return -(second * (r * r)) if is_zero(out) else out - second * (r * r)
 
     def residual(self, q):
         """phi = (L1 - ref1) - P(x)."""
@@ -144,8 +176,10 @@ class BoundJointRow:
 def bind_joint_row(bound, row, where: dict | None = None) -> BoundJointRow:
     """A :class:`~aggsym.model.types.JointRow` bound to ``bound``'s backend."""
     where = places(bound) if where is None else where
-    second = linear_form(bound, row.second, where) if row.second else None
-    return BoundJointRow(linear_form(bound, row.first, where), second, bound.scalar(row.reference[0]),
+    first = Sites(row.first_sites) if row.first_sites else linear_form(bound, row.first, where)
+    second = (Sites(row.second_sites) if row.second_sites else
+              linear_form(bound, row.second, where) if row.second else None)
+    return BoundJointRow(first, second, bound.scalar(row.reference[0]),
                          bound.scalar(row.reference[1]), tuple(bound.scalar(a) for a in row.polynomial),
                          bound.tree.nv)
 
@@ -203,5 +237,5 @@ def tendon_energy(bound, q):
     return spring_energy(bound, bound.model.tendons, lambda t: linear_form(bound, t.terms, where).value(q))
 
 
-__all__ = ["BoundJointRow", "LinearForm", "bind_joint_row", "linear_form", "places", "spring_energy", "tendon_energy",
+__all__ = ["BoundJointRow", "LinearForm", "Sites", "bind_joint_row", "linear_form", "places", "spring_energy", "tendon_energy",
            "tendon_forces"]

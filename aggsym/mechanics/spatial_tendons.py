@@ -20,15 +20,15 @@ from __future__ import annotations
 from ..core.program import is_zero
 from ..model.types import WORLD
 from .joint_space import _stretch, spring_energy
-from .kinematics import ZERO6, TreeKinematics, generalized, world_poses
+from .kinematics import ZERO6, TreeKinematics, generalized, point_motion, point_rows, world_poses
 from .linalg import add, cross, dot, mtv, mul, mv, scale, sub
 
 
-def _branches(bound, kin, tendon, poses):
+def _branches(bound, kin, branches, poses):
     """Per branch (1/divisor, [(body index or None, r, world position p)])."""
     index = {name: k for k, name in enumerate(bound.tree.names)}
     out = []
-    for divisor, sites in tendon.branches:
+    for divisor, sites in branches:
         placed = []
         for body, point in sites:
             r = tuple(bound.scalar(x) for x in point)
@@ -41,10 +41,10 @@ def _branches(bound, kin, tendon, poses):
     return out
 
 
-def _segments(bound, kin, tendon, poses):
+def _segments(bound, kin, branches, poses):
     """Per straight piece between consecutive sites: (1/divisor, site a, site b, |b - a|, the unit vector u)."""
     out = []
-    for inverse, placed in _branches(bound, kin, tendon, poses):
+    for inverse, placed in _branches(bound, kin, branches, poses):
         for a, b in zip(placed, placed[1:]):
             d = sub(b[2], a[2])
             length = bound.backend.call("sqrt", dot(d, d))
@@ -65,7 +65,7 @@ def tendon_length(bound, kin, tendon, poses=None):
     """L(q) (the module's text)."""
     poses = world_poses(kin) if poses is None else poses
     acc = 0
-    for inverse, _, _, length, _ in _segments(bound, kin, tendon, poses):
+    for inverse, _, _, length, _ in _segments(bound, kin, tendon.branches, poses):
         acc = acc + mul(inverse, length)
     return acc
 
@@ -93,7 +93,7 @@ def spatial_tendon_forces(bound, q, qd) -> list:
     V = None
     Y = [ZERO6] * len(bound.tree)
     for tendon in bound.model.spatial_tendons:
-        segments = _segments(bound, kin, tendon, poses)
+        segments = _segments(bound, kin, tendon.branches, poses)
         L = 0
         for inverse, _, _, length, _ in segments:
             L = L + mul(inverse, length)
@@ -120,6 +120,83 @@ def spatial_tendon_forces(bound, q, qd) -> list:
     return generalized(kin, kin.backward(Y))
 
 
+class SpatialLength:
+    """A spatial tendon's length as a length of :mod:`~aggsym.mechanics.joint_space` (a joint-space constraint row
+    on it: an MJCF tendon equality), at the configuration of ``kin``: ``value`` L(q), ``rate`` L', ``add_to`` its
+    Jacobian row dL/dq over the velocities (``sum (1/d_b) u^T (J_b - J_a)``, J_a a site's rows of
+    :func:`~aggsym.mechanics.kinematics.point_rows` in world axes), ``curvature`` d^2 L/dt^2 at qdd = 0: per
+    segment, with d = p_b - p_a, u = d/|d|, dv = p'_b - p'_a and da the sites' relative classical acceleration at
+    qdd = 0 (:func:`~aggsym.mechanics.kinematics.point_motion` of the quasi-accelerations X = S'^T qd, as a point
+    constraint's gamma), ``(1/d_b) (u . da + (|dv|^2 - (u . dv)^2)/|d|)``.  ``q`` and ``qd`` are those ``kin``
+    was built at and is asked for (the arguments only keep the interface of a linear form)."""
+
+    def __init__(self, bound, kin, branches, poses=None):
+        self.bound, self.kin = bound, kin
+        self.poses = world_poses(kin) if poses is None else poses
+        self.segments = _segments(bound, kin, branches, self.poses)
+        self._motion = None  # (qd, V, X) of the last rate asked
+
+    def value(self, q=None):
+        acc = 0
+        for inverse, _, _, length, _ in self.segments:
+            acc = acc + mul(inverse, length)
+        return acc
+
+    def _velocities(self, qd):
+        if self._motion is None or self._motion[0] is not qd:
+            V = self.kin.velocities(qd)
+            self._motion = (qd, V, None)
+        return self._motion[1]
+
+    def _products(self, qd):
+        V = self._velocities(qd)
+        if self._motion[2] is None:
+            self._motion = (qd, V, self.kin.velocity_products(qd, V))
+        return V, self._motion[2]
+
+    def rate(self, qd):
+        V = self._velocities(qd)
+        acc = 0
+        for inverse, a, b, _, u in self.segments:
+            acc = acc + mul(inverse, dot(u, sub(_site_velocity(self.poses, V, b), _site_velocity(self.poses, V, a))))
+        return acc
+
+    def add_to(self, row: list, factor=1) -> list:
+        """row + factor dL/dq (a new list of n scalars)."""
+        out = list(row)
+        for inverse, a, b, _, u in self.segments:
+            weight = scale(inverse if (type(factor) is int and factor == 1) else mul(factor, inverse), u)
+            for site, sign in ((b, 1), (a, -1)):
+                k, _, p = site
+                if k is None:
+                    continue
+                lin = point_rows(self.kin, self.poses, k, p)[:3]
+                for i in range(len(out)):
+                    term = 0
+                    for w, r in zip(weight, lin):
+                        if not is_zero(r[i]):
+                            term = term + mul(w, r[i])
+                    if not is_zero(term):
+                        out[i] = (term if sign > 0 else -term) if is_zero(out[i]) else (
+                            out[i] + term if sign > 0 else out[i] - term)
+        return out
+
+    def curvature(self, qd):
+        V, X = self._products(qd)
+        acc = 0
+        for inverse, a, b, length, u in self.segments:
+            motion = []
+            for site in (a, b):
+                k, r, _ = site
+                motion.append(((0, 0, 0), (0, 0, 0)) if k is None else
+                              point_motion(self.poses[k].c, V[k], X[k], r)[:2])
+            dv, da = sub(motion[1][0], motion[0][0]), sub(motion[1][1], motion[0][1])
+            along = dot(u, dv)
+            term = dot(u, da) + (dot(dv, dv) - along * along) / length
+            acc = acc + mul(inverse, term)
+        return acc
+
+
 def spatial_tendon_energy(bound, kin):
     """1/2 k s^2 summed over the spatial tendons' springs."""
     if not bound.model.spatial_tendons:
@@ -128,4 +205,4 @@ def spatial_tendon_energy(bound, kin):
     return spring_energy(bound, bound.model.spatial_tendons, lambda t: tendon_length(bound, kin, t, poses))
 
 
-__all__ = ["spatial_tendon_energy", "spatial_tendon_forces", "tendon_length"]
+__all__ = ["SpatialLength", "spatial_tendon_energy", "spatial_tendon_forces", "tendon_length"]

@@ -305,16 +305,29 @@ class JointRow:
 
     (``polynomial`` = (y0, a1, a2, a3, a4); without ``second`` x is 0 and phi = L1 - ref1 - y0).  Its Jacobian row
     is ``c1 - P'(x) c2``, its bias ``gamma = -P''(x) (c2 . qd)^2``; the multiplier is the generalized force
-    ``J^T lambda`` it adds along the row."""
+    ``J^T lambda`` it adds along the row.
+
+    Either length may instead be a spatial tendon's (an MJCF tendon equality on a ``<spatial>`` tendon through sites
+    and pulleys): ``first_sites`` / ``second_sites`` its branches as :class:`SpatialTendon`'s (then ``first`` /
+    ``second`` is empty); its length L(q), Jacobian row dL/dq and rate term (``d^2 L/dt^2`` at qdd = 0) are
+    :class:`~aggsym.mechanics.spatial_tendons.SpatialLength`'s, and gamma = L1'' - P''(x) L2'^2 - P'(x) L2''."""
 
     first: tuple  # ((coordinate name, coefficient expression), ...)
     second: tuple = ()
     reference: tuple = (0, 0)  # (ref1, ref2) expressions
     polynomial: tuple = (0, 0, 0, 0, 0)  # (y0, a1, a2, a3, a4) expressions
+    first_sites: tuple = ()  # a spatial tendon's branches ((divisor, ((body, (x, y, z)), ...)), ...), or ()
+    second_sites: tuple = ()
+
+    @property
+    def has_second(self) -> bool:
+        return bool(self.second or self.second_sites)
 
     @property
     def linear(self) -> bool:
-        """Whether phi is linear in q (a2 = a3 = a4 = 0): then J is constant and gamma is 0."""
+        """Whether phi is linear in q (a2 = a3 = a4 = 0, no spatial tendon): then J is constant and gamma is 0."""
+        if self.first_sites or self.second_sites:
+            return False
         return all(as_expr(a) == 0 for a in self.polynomial[2:]) or not self.second
 
 

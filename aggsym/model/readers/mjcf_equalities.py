@@ -31,8 +31,15 @@ MuJoCo's conventions (checked against its ``efc_pos``: the residual rows it stab
   residual above exactly, its Jacobian and rate term from :mod:`aggsym.mechanics.joint_space`), beside the
   connect and weld constraints, in the constrained dynamics of chapter 4; a row in which no coordinate appears
   constrains nothing (a warning, listed as left out).
+* ``tendon`` on a spatial tendon (tendon1 and/or tendon2 ``<spatial>`` through sites and pulleys, no wrapping
+  geom): always a joint-space row with the same residual, L the tendon's length (sum over its branches of the
+  distances between consecutive sites over the branch's divisor, the path the MJCF reader's ``spatial_path`` reads for
+  the passive forces; L_0 MuJoCo's ``tendon_length0``), ``JointRow.first_sites`` / ``second_sites`` its branches;
+  J = dL1/dq - P'(x) dL2/dq and gamma = L1'' - P''(x) L2'^2 - P'(x) L2'' at qdd = 0
+  (:class:`~aggsym.mechanics.spatial_tendons.SpatialLength`).  Never a coupling.
 
-Refused with an error naming the equality: an equality on a spatial tendon, on a flex, on a free or ball joint.
+Refused with an error naming the equality: an equality on a spatial tendon wrapping around a geom, on a flex, on a
+free or ball joint.
 """
 from __future__ import annotations
 
@@ -45,7 +52,15 @@ from .link_numbers import exact
 from ..types import JOINT_ROW, WORLD, CONSTRAINT_KINDS, Constraint, Coupling, JointRow
 
 CONNECT, WELD, JOINT, TENDON, FLEX = 0, 1, 2, 3, 4  # mjtEq
-WRAP_JOINT = 1  # mjtWrap
+WRAP_JOINT, WRAP_PULLEY, WRAP_SITE = 1, 2, 3  # mjtWrap
+
+
+@dataclasses.dataclass(frozen=True)
+class Spatial:
+    """A spatial tendon's length in an equality: its name and branches (``SpatialTendon.branches``)."""
+
+    name: str
+    branches: tuple
 SCALAR_JOINTS = (2, 3)  # slide, hinge
 
 
@@ -111,7 +126,7 @@ class Equalities:
                 items.append((e, kind, where, self.forms(e, kind, where)))
             else:
                 self.reader.fail(where, f"an active {kind} equality is not supported (connect, weld, joint and "
-                                        f"fixed-tendon equalities are)")
+                                        f"tendon equalities are)")
         couplings = []
         if items and self.couplings_possible(items, constraints):
             couplings = [self.coupling(e, kind, f) for e, kind, _, f in items]
@@ -180,15 +195,20 @@ class Equalities:
                                     f"tendon equality on it is not supported")
         return self.reader.joint_name(j)
 
-    def tendon_row(self, t: int, where: str) -> dict:
-        """{MuJoCo joint id: coefficient}: the fixed tendon t's length L = sum coef q (MuJoCo's qpos)."""
+    def tendon_row(self, t: int, where: str):
+        """{MuJoCo joint id: coefficient}: the fixed tendon t's length L = sum coef q (MuJoCo's qpos); a spatial
+        tendon through sites and pulleys: its :class:`Spatial` path."""
         m = self.m
         name = self.reader.tendon_name(t)
+        wraps = range(int(m.tendon_adr[t]), int(m.tendon_adr[t]) + int(m.tendon_num[t]))
+        if any(int(m.wrap_type[w]) != WRAP_JOINT for w in wraps):
+            if any(int(m.wrap_type[w]) not in (WRAP_SITE, WRAP_PULLEY) for w in wraps):
+                self.reader.fail(where, f"tendon {name!r} is a spatial tendon wrapping around a geom; an equality on "
+                                        f"it is not supported (fixed tendons and spatial ones through sites and "
+                                        f"pulleys are)")
+            return Spatial(name, self.reader.spatial_paths(t))
         row: dict = {}
-        for w in range(int(m.tendon_adr[t]), int(m.tendon_adr[t]) + int(m.tendon_num[t])):
-            if int(m.wrap_type[w]) != WRAP_JOINT:
-                self.reader.fail(where, f"tendon {name!r} is a spatial tendon (it wraps sites or geoms); an equality "
-                                        f"on it is not supported (fixed tendons are)")
+        for w in wraps:
             j = int(m.wrap_objid[w])
             self.scalar_joint(j, where)
             row[j] = row.get(j, 0.0) + float(m.wrap_prm[w])
@@ -229,6 +249,8 @@ class Equalities:
     def as_coupling(self, f: dict):
         """The equality as a coupling (follower, master, multiplier, offset), or None when it is not one coordinate
         following another (a nonlinear polynomial, or a row on one coordinate or more than two)."""
+        if isinstance(f["first"], Spatial) or isinstance(f["second"], Spatial):
+            return None
         if f["second"] is not None and any(f["poly"][2:]):
             return None
         row, constant = self.combined(f)
@@ -264,13 +286,17 @@ class Equalities:
         """The equality as a joint-space constraint row (kind ``joint``), or None (with a warning) when no
         coordinate appears in it."""
         def terms(form):
+            if isinstance(form, Spatial):
+                return ()
             return tuple((self.coordinate_of[self.reader.joint_name(j)], exact(c)) for j, c in sorted(form.items())
                          if c != 0)
 
         first = terms(f["first"])
         second = terms(f["second"]) if f["second"] is not None else ()
-        poly = f["poly"] if second else (f["poly"][0], 0.0, 0.0, 0.0, 0.0)
-        if not second or not any(poly[2:]):  # linear: the combined row decides whether it constrains anything
+        sites = tuple(g.branches if isinstance(g, Spatial) else () for g in (f["first"], f["second"]))
+        spatial = isinstance(f["first"], Spatial) or isinstance(f["second"], Spatial)
+        poly = f["poly"] if second or sites[1] else (f["poly"][0], 0.0, 0.0, 0.0, 0.0)
+        if not spatial and (not second or not any(poly[2:])):  # linear: the combined row decides
             row, _ = self.combined(f)
             if not row:
                 why = "no coordinate appears in its row (its coefficients cancel): it constrains no motion"
@@ -278,13 +304,19 @@ class Equalities:
                 self.note(e, {"equality": self.name(e), "type": kind, "became": f"nothing ({why})"})
                 return None
         row = JointRow(first=first, second=second, reference=(exact(f["ref1"]), exact(f["ref2"])),
-                       polynomial=tuple(exact(a) for a in poly))
+                       polynomial=tuple(exact(a) for a in poly), first_sites=sites[0], second_sites=sites[1])
         constraint = Constraint(name=self.reader.ids_constraint(self.name(e)), body="", point=(), rows=(JOINT_ROW,),
                                 kind="joint", source=str(self.reader.file), path=where, joint_row=row)
-        shown = " + ".join(f"{float(c)!r} {name}" for name, c in first)
+
+        def shown_of(form, named):
+            if isinstance(form, Spatial):
+                return f"length of spatial tendon {form.name!r}"
+            return " + ".join(f"{float(c)!r} {name}" for name, c in named)
+
+        shown = shown_of(f["first"], first)
         became = f"constraint {constraint.name!r} (joint-space row: ({shown}) - {f['ref1']!r}"
-        if second:
-            shown2 = " + ".join(f"{float(c)!r} {name}" for name, c in second)
+        if second or sites[1]:
+            shown2 = shown_of(f["second"], second)
             became += f" - P(({shown2}) - {f['ref2']!r}), P with polycoef {' '.join(repr(a) for a in poly)})"
         else:
             became += f" - {poly[0]!r} = 0)"

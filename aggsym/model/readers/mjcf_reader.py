@@ -447,6 +447,7 @@ class _Reader:
         sites = self.sites(tree, names, welded, needs_world, body_links)
         tendons, spatial = self.tendons(params, coordinate_of, springs, dampers, tree, body_links)
         self.tendon_forces = tendons + spatial
+        self.spatial_paths = lambda t: self.spatial_path(t, tree, body_links)  # (for equalities on spatial tendons)
         gravcomp = self.gravcomp(tree, names, welded, params)
         fluid, ellipsoids, medium = self.fluid(tree, names, welded, params)
         for axis, value in zip("xyz", gravity):
