@@ -30,32 +30,53 @@ def _cyclic(i: int) -> tuple:
     return (i + 1) % 3, (i + 2) % 3
 
 
+class Medium:
+    """What the fluid models share at one state: the density ``rho``, viscosity ``beta`` and wind of
+    ``model.fluid_medium`` as scalars, the kinematics and body velocities, and the wrenches ``Y`` on the bodies (the
+    left side's) that :meth:`act` collects; :meth:`forces` is their generalized force."""
+
+    def __init__(self, bound, q, qd):
+        density, viscosity, wind = bound.model.fluid_medium
+        self.rho, self.beta = bound.scalar(density), bound.scalar(viscosity)
+        self.wind = tuple(bound.scalar(x) for x in wind)
+        self.kin = TreeKinematics(bound, q)  # (on the symbolic backend the same nodes as the routine's kinematics)
+        self.V = self.kin.velocities(qd)
+        self.poses = world_poses(self.kin) if any(not is_zero(x) for x in self.wind) else None
+        self.index = {name: k for k, name in enumerate(bound.tree.names)}
+        self.Y = [ZERO6] * len(bound.tree)
+
+    def velocity(self, k, r, c) -> tuple:
+        """(v, w) of the frame at ``r`` with axes ``c`` (in body k's), in those axes: v less the wind."""
+        v_k, w_k = self.V[k][:3], self.V[k][3:]
+        v = mtv(c, add(v_k, cross(w_k, r)))
+        if self.poses is not None:
+            v = add(v, neg(mtv(c, mtv(self.poses[k].c, self.wind))))
+        return v, mtv(c, w_k)
+
+    def act(self, k, r, c, force, torque) -> None:
+        """The medium's force and torque at that frame (its axes) added to body k, as the left side's wrench."""
+        f, g = mv(c, force), mv(c, torque)
+        self.Y[k] = add(self.Y[k], neg(f) + neg(add(g, cross(r, f))))
+
+    def forces(self) -> list:
+        return generalized(self.kin, self.kin.backward(self.Y))
+
+
 def fluid_forces(bound, q, qd) -> list:
     """Minus the generalized force of the medium's drag on every body of ``model.fluid`` (n scalars, the left
     side's)."""
     model = bound.model
-    n = bound.tree.nv
     if not model.fluid:
-        return [0] * n
-    density, viscosity, wind = model.fluid_medium
-    rho, beta = bound.scalar(density), bound.scalar(viscosity)
-    wind = tuple(bound.scalar(x) for x in wind)
-    kin = TreeKinematics(bound, q)  # (on the symbolic backend the same nodes as the routine's own kinematics)
-    V = kin.velocities(qd)
-    poses = world_poses(kin) if any(not is_zero(x) for x in wind) else None
-    index = {name: k for k, name in enumerate(bound.tree.names)}
+        return [0] * bound.tree.nv
+    medium = Medium(bound, q, qd)
+    rho, beta = medium.rho, medium.beta
     abs_ = lambda x: bound.backend.call("abs", x)  # noqa: E731
-    Y = [ZERO6] * len(bound.tree)
     for part in model.fluid:
-        k = index[part.body]
+        k = medium.index[part.body]
         r = tuple(bound.scalar(x) for x in part.com)
         c = tuple(tuple(bound.scalar(x) for x in row) for row in part.axes)
         b = [float(x) for x in part.box]
-        v_k, w_k = V[k][:3], V[k][3:]
-        v = mtv(c, add(v_k, cross(w_k, r)))
-        if poses is not None:
-            v = add(v, neg(mtv(c, mtv(poses[k].c, wind))))
-        w = mtv(c, w_k)
+        v, w = medium.velocity(k, r, c)
         diameter = (b[0] + b[1] + b[2]) / 3.0
         force, torque = [0, 0, 0], [0, 0, 0]
         for i in range(3):
@@ -65,9 +86,8 @@ def fluid_forces(bound, q, qd) -> list:
             force[i] = mul(linear, v[i]) - mul(mul(0.5 * b[j] * b[l], rho), mul(abs_(v[i]), v[i]))
             fourth = b[j] * b[j] * b[j] * b[j] + b[l] * b[l] * b[l] * b[l]
             torque[i] = mul(angular, w[i]) - mul(mul(b[i] * fourth / 64.0, rho), mul(abs_(w[i]), w[i]))
-        f, g = mv(c, force), mv(c, torque)
-        Y[k] = add(Y[k], neg(f) + neg(add(g, cross(r, f))))  # (the left side's: minus the medium's wrench)
-    return generalized(kin, kin.backward(Y))
+        medium.act(k, r, c, force, torque)
+    return medium.forces()
 
 
-__all__ = ["fluid_forces"]
+__all__ = ["Medium", "fluid_forces"]

@@ -44,8 +44,8 @@ from __future__ import annotations
 import math
 
 from ..core.program import is_zero
-from .kinematics import ZERO6, TreeKinematics, generalized, world_poses
-from .linalg import add, cross, dot, mtv, mul, mv, neg, scale
+from .fluid import Medium
+from .linalg import add, cross, dot, mul, neg, scale
 
 MINVAL = 1e-15  # MuJoCo's mjMINVAL
 FLOOR = 1e-300  # the least argument of a square root here: sqrt(0) has no derivative (its rule's 1/(2 sqrt x) is inf)
@@ -134,30 +134,16 @@ def ellipsoid_forces(bound, q, qd) -> list:
     """Minus the generalized force of the medium on every geom of ``model.fluid_ellipsoids`` (n scalars, the left
     side's)."""
     model = bound.model
-    n = bound.tree.nv
     if not model.fluid_ellipsoids:
-        return [0] * n
-    density, viscosity, wind = model.fluid_medium
-    rho, beta = bound.scalar(density), bound.scalar(viscosity)
-    wind = tuple(bound.scalar(x) for x in wind)
-    kin = TreeKinematics(bound, q)  # (on the symbolic backend the same nodes as the routine's own kinematics)
-    V = kin.velocities(qd)
-    poses = world_poses(kin) if any(not is_zero(x) for x in wind) else None
-    index = {name: k for k, name in enumerate(bound.tree.names)}
-    Y = [ZERO6] * len(bound.tree)
+        return [0] * bound.tree.nv
+    medium = Medium(bound, q, qd)
     for part in model.fluid_ellipsoids:
-        k = index[part.body]
+        k = medium.index[part.body]
         r = tuple(bound.scalar(x) for x in part.centre)
         c = tuple(tuple(bound.scalar(x) for x in row) for row in part.axes)
-        v_k, w_k = V[k][:3], V[k][3:]
-        v = mtv(c, add(v_k, cross(w_k, r)))
-        if poses is not None:
-            v = add(v, neg(mtv(c, mtv(poses[k].c, wind))))
-        w = mtv(c, w_k)
-        force, torque = _medium_wrench(bound, part, v, w, rho, beta)
-        f, g = mv(c, force), mv(c, torque)
-        Y[k] = add(Y[k], neg(f) + neg(add(g, cross(r, f))))  # (the left side's: minus the medium's wrench)
-    return generalized(kin, kin.backward(Y))
+        v, w = medium.velocity(k, r, c)
+        medium.act(k, r, c, *_medium_wrench(bound, part, v, w, medium.rho, medium.beta))
+    return medium.forces()
 
 
 __all__ = ["ellipsoid_forces"]
