@@ -74,9 +74,10 @@ def _defaults(model) -> dict:
 
 
 def _number(x, values) -> float:
-    import sympy as sp
+    """A model's number or expression at the parameters' ``values`` (never text: :func:`~aggsym.core.backend.as_expr`)."""
+    from ..core.backend import as_expr
 
-    return float(sp.sympify(x).subs(values)) if not isinstance(x, (int, float)) else float(x)
+    return float(x) if isinstance(x, (int, float)) else float(as_expr(x).subs(values))
 
 
 def spatial_inertia(body, values):
