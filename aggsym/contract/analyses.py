@@ -68,7 +68,7 @@ def regressor_problem(model) -> str | None:
     """Why tau = Y pi does not hold for a model (the regressor is then omitted), or None."""
     if model.tendons or model.spatial_tendons:
         return "the tendons' springs and dampers act in tau and are not inertial parameters"
-    if model.fluid or model.fluid_ellipsoids:
+    if model.has_fluid:
         return "the fluid's drag acts in tau and is not linear in the inertial parameters"
     if model.gravcomp:
         return "gravity compensation (gravcomp) lifts a fraction of some bodies' weight; it is not in the regressor"

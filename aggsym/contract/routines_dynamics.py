@@ -181,8 +181,7 @@ register(Routine("passive_forces", ("q", "qd", "p"), (Output("tau_p", nq_vector)
                  "generalized force on the right side (MuJoCo's qfrc_passive, without F): A qdd + b + g = tau + "
                  "tau_p",
                  applies=lambda model: bool(model.damping or model.tendons or model.coulomb or model.gravcomp
-                                            or model.spatial_tendons or model.fluid
-                                            or model.fluid_ellipsoids),
+                                            or model.spatial_tendons or model.has_fluid),
                  frame_free=True))
 register(Routine("forward_dynamics", ("q", "qd", "tau", "p"), (Output("qdd", nq_vector),),
                  lambda bound, kin, x: (transvective.forward_dynamics(

@@ -81,8 +81,7 @@ def has_passive(model) -> bool:
     """Whether the model has springs, damping, tendon forces, Coulomb friction or gravity compensation: some elastic
     pair, a damping not exactly zero, a tendon with a spring or damper, a friction, a compensated body."""
     return model.has_damping or any(b.pair.elastic for b in model.bodies) or bool(model.tendons) or \
-        bool(model.coulomb) or bool(model.gravcomp) or bool(model.spatial_tendons) or bool(model.fluid) or \
-        bool(model.fluid_ellipsoids)
+        bool(model.coulomb) or bool(model.gravcomp) or bool(model.spatial_tendons) or model.has_fluid
 
 
 __all__ = ["coulomb_forces", "damping_forces", "has_passive", "left_forces", "passive_forces"]

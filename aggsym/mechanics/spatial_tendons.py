@@ -166,9 +166,8 @@ class SpatialLength:
         out = list(row)
         for inverse, a, b, _, u in self.segments:
             weight = scale(inverse if (type(factor) is int and factor == 1) else mul(factor, inverse), u)
-            for site, sign in ((b, 1), (a, -1)):
-                k, _, p = site
-                if k is None:
+            for (k, _, p), sign in ((b, 1), (a, -1)):
+                if k is None:  # (a site on the world)
                     continue
                 lin = point_rows(self.kin, self.poses, k, p)[:3]
                 for i in range(len(out)):
@@ -176,9 +175,12 @@ class SpatialLength:
                     for w, r in zip(weight, lin):
                         if not is_zero(r[i]):
                             term = term + mul(w, r[i])
-                    if not is_zero(term):
-                        out[i] = (term if sign > 0 else -term) if is_zero(out[i]) else (
-                            out[i] + term if sign > 0 else out[i] - term)
+                    if is_zero(term):
+                        continue
+                    if is_zero(out[i]):
+                        out[i] = term if sign > 0 else -term
+                    else:
+                        out[i] = out[i] + term if sign > 0 else out[i] - term
         return out
 
     def curvature(self, qd):

@@ -320,10 +320,6 @@ class JointRow:
     second_sites: tuple = ()
 
     @property
-    def has_second(self) -> bool:
-        return bool(self.second or self.second_sites)
-
-    @property
     def linear(self) -> bool:
         """Whether phi is linear in q (a2 = a3 = a4 = 0, no spatial tendon): then J is constant and gamma is 0."""
         if self.first_sites or self.second_sites:
@@ -689,13 +685,18 @@ class Model:
         return tuple(out)
 
     @property
+    def has_fluid(self) -> bool:
+        """Whether a fluid model acts (MuJoCo's inertia box on some body, its ellipsoid model on some geom)."""
+        return bool(self.fluid or self.fluid_ellipsoids)
+
+    @property
     def conservative(self) -> bool:
         """True when tau = 0 conserves T + U: no prescribed motion (a prescribed spin injects energy); elastic
         pairs and added masses keep it (U holds 1/2 q^T C q, T the medium's 1/2 V^T Lambda V); friction on a
         sliding contact (chapter 4) dissipates it, and so does viscous joint damping (``damping``).  The armature's
         rotors keep it (T holds their 1/2 a qd^2)."""
         return (not self.time_dependent and not self.has_friction and not self.has_damping and not self.coulomb
-                and not self.fluid and not self.fluid_ellipsoids
+                and not self.has_fluid
                 and not any(not (_zero(t.damping) and _zero(t.friction)) for t in self.tendons + self.spatial_tendons))
 
     @property

@@ -189,7 +189,7 @@ def compare(path, model=None, samples: int = 3, seed: int = 0, internal: bool = 
     model = load(path) if model is None else model
     twin = NumericTwin(model)
     internal = [NumericTwin(inner) for inner in routine_models(model)[1:]] if internal else []
-    m = mujoco_model(path, fluid=bool(model.fluid or model.fluid_ellipsoids))
+    m = mujoco_model(path, fluid=model.has_fluid)
     data = mujoco.MjData(m)
     rng = np.random.default_rng(seed)
     worst = {"A": 0.0, "d": 0.0, "qdd": 0.0, "passive": 0.0}
@@ -264,8 +264,8 @@ def compare_constrained(path, model=None, samples: int = 3, seed: int = 0, step:
 
     model = load(path) if model is None else model
     twin = NumericTwin(model)
-    free = mujoco_model(path, fluid=bool(model.fluid or model.fluid_ellipsoids))
-    m = equality_model(path, fluid=bool(model.fluid or model.fluid_ellipsoids))
+    free = mujoco_model(path, fluid=model.has_fluid)
+    m = equality_model(path, fluid=model.has_fluid)
     d_free, d_eq = mujoco.MjData(free), mujoco.MjData(m)
     rng = np.random.default_rng(seed)
     worst = {"A": 0.0, "J": 0.0, "qdd": 0.0, "lambda": 0.0}

@@ -53,6 +53,7 @@ from ..types import JOINT_ROW, WORLD, CONSTRAINT_KINDS, Constraint, Coupling, Jo
 
 CONNECT, WELD, JOINT, TENDON, FLEX = 0, 1, 2, 3, 4  # mjtEq
 WRAP_JOINT, WRAP_PULLEY, WRAP_SITE = 1, 2, 3  # mjtWrap
+SCALAR_JOINTS = (2, 3)  # slide, hinge
 
 
 @dataclasses.dataclass(frozen=True)
@@ -61,7 +62,6 @@ class Spatial:
 
     name: str
     branches: tuple
-SCALAR_JOINTS = (2, 3)  # slide, hinge
 
 
 def _quat_matrix(w, x, y, z) -> np.ndarray:

@@ -72,8 +72,7 @@ def eligible(model: Model) -> bool:
     gravity compensation (its weights are per body, and grouping moves mass between bodies) and no spatial tendons
     (their sites are points in the bodies' frames) and no fluid model (its boxes are the bodies' own)."""
     if not model.link_table.from_file or model.constraints or model.support or model.couplings or model.gravcomp \
-            or model.spatial_tendons or model.fluid \
-            or model.fluid_ellipsoids:
+            or model.spatial_tendons or model.has_fluid:
         return False
     for k, b in enumerate(model.bodies):
         if b.pair.prescribed or b.added_mass is not None or b.pair.ball:
