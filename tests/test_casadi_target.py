@@ -356,3 +356,30 @@ def test_shared_reciprocals_stay_one_division(name, generated):
         codes = [f.instruction_id(k) for k in range(f.n_instructions())]
         divisions = sum(c in (ca.OP_DIV, ca.OP_INV) for c in codes)
         assert 0 < divisions <= ops[role]["div"], (role, divisions, ops[role]["div"])
+
+
+def test_routines_with_a_status_carry_the_derivative_routines_too(tmp_path, rng):
+    """A point-mass head (A(q) singular where the neck pitch is 0: forward dynamics has a status output): the
+    attached Jacobian is the derivative routines' (and A^-1 along tau) to rounding, CasADi's AD agrees to 1e-10, and
+    the status output's Jacobian is zero."""
+    from test_regularity import head_urdf
+
+    path = tmp_path / "head.urdf"
+    path.write_text(head_urdf())
+    model = select_routines(aggsym.load(path), DERIVATIVES.split(","))
+    write(generate(model, targets="numpy,casadi,manifest"), tmp_path / "out")
+    np_module = import_module(tmp_path / "out" / "head.py")
+    module = import_module(tmp_path / "out" / "head_casadi.py")
+    assert "forward_dynamics" in module.STATUS and module.ANALYTIC["forward_dynamics"] == "forward_dynamics_derivatives"
+    f, plain = module.functions()["forward_dynamics"], module.functions(analytic=False)["forward_dynamics"]
+    q, qd, tau = rng.uniform(0.2, 1.2, 3), rng.normal(size=3), rng.normal(size=3)
+    d_q, d_qd = np_module.forward_dynamics_derivatives(q, qd, tau)
+    for g, tol in ((f, 1e-13), (plain, 1e-10)):
+        symbols = [ca.MX.sym(g.name_in(k), g.sparsity_in(k)) for k in range(g.n_in())]
+        qdd, status = g(*symbols)
+        J = ca.Function("J", symbols, [ca.jacobian(qdd, x) for x in symbols[:3]]
+                        + [ca.jacobian(status, x) for x in symbols[:3]])
+        got = evaluate(J, [q, qd, tau, module.PARAMETERS])
+        for a, b in zip(got, (d_q, d_qd, np_module.inertia_inverse(q))):
+            assert rel(a, b) <= tol
+        assert all(not np.any(s) for s in got[3:])

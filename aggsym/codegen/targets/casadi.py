@@ -27,8 +27,9 @@ generated derivatives; calling a Function on SX symbols inlines its graph, whose
 quaternion pairs (a free-flyer, ball joints) the derivative routines are in Pinocchio's tangent space (nv
 columns) while the Function's q has nq entries: there the Jacobian along q takes the tangent columns for the
 scalar joints' entries and CasADi's AD of the graph along the quaternion pairs' entries alone (the free-flyer's
-seven: forward AD in seven directions, not nq) (:func:`_q_columns`).  Nothing is attached where A(q) may be singular on a set of configurations (:mod:`aggsym.contract.singular_states`):
-there the routines have a status output, and CasADi's AD differentiates the graph.
+seven: forward AD in seven directions, not nq) (:func:`_q_columns`).  Where A(q) may be singular on a set of
+configurations (:mod:`aggsym.contract.singular_states`) the routines have a status output too, whose Jacobian
+(a piecewise constant) is zero.
 """
 from __future__ import annotations
 
@@ -140,12 +141,14 @@ def _analytic(model, emitted, e, analytic) -> dict | None:
         return None
     derivative, matrix = analytic[e.routine.role]
     by_role = {x.routine.role: x for x in emitted}
-    if any(by_role[r].routine.status is not None for r in (e.routine.role, derivative, matrix)):
-        return None  # (A(q) may be singular on a set: the routines' status outputs; CasADi's AD differentiates them)
     inputs = list(e.inputs)
     return {"derivative": derivative, "matrix": matrix, "derivative_inputs": list(by_role[derivative].inputs),
             "matrix_inputs": list(by_role[matrix].inputs), "third": inputs[2], "plain": inputs[3:],
-            "columns": _q_columns(model)}
+            "columns": _q_columns(model),
+            # (A(q) may be singular on a set: the routines' status outputs, after their matrices; a status is
+            # piecewise constant, its Jacobian zero)
+            "statuses": [by_role[r].routine.status is not None for r in (derivative, matrix)],
+            "lengths": [input_length(model, i, e.routine) for i in inputs]}
 
 
 def _q_columns(model) -> dict | None:
