@@ -178,6 +178,42 @@ def test_torch_on_the_kernels(tree, rng):
     assert _relative(compiled(*map(T, (q, qd, tau))), npm.forward_dynamics(q, qd, tau)) < 1e-13
 
 
+def test_torch_kernel_outputs_reuse_no_block_still_held(tree, rng):
+    """Large outputs come from the module's pool of blocks: a block is handed out again only once nothing holds it
+    (the tensor, a view of it, autograd's saved tensors), so earlier results never change; a call with no derivative
+    asked skips the autograd.Function, one under torch.func.jvp (no batch) still takes its derivatives."""
+    folder, npm, jm, tm, torch = tree
+    n = 1 + tm._POOLED // (8 * tm.NV * tm.NV)  # states whose A(q) is a pooled block
+    T = lambda x: torch.tensor(x, dtype=torch.float64)  # noqa: E731
+    qs = [_state(rng, tm.NQ, tm.NV, (n,))[0] for _ in range(4)]
+    first = tm.inertia(T(qs[0]))
+    view = tm.inertia(T(qs[1]))[5:, 1:3]  # the tensor dropped, a view of it kept
+    q2 = T(qs[2]).requires_grad_()
+    w = tm.inertia(q2)
+    loss = (w * w).sum()  # autograd keeps w
+    del w
+    held = {first.data_ptr(), view.untyped_storage().data_ptr()}
+    again = tm.inertia(T(qs[3]))
+    assert again.data_ptr() not in held
+    assert _relative(first, npm.inertia(qs[0])) < 1e-13
+    assert _relative(view, npm.inertia(qs[1])[5:, 1:3]) < 1e-13
+    loss.backward()
+    grad = q2.grad.clone()
+    q2.grad = None
+    w = tm.inertia(q2)
+    (w * w).sum().backward()
+    assert torch.equal(q2.grad, grad)
+    before = again.data_ptr()
+    del again
+    assert tm.inertia(T(qs[3])).data_ptr() == before  # the freed block serves the next call of its size
+    q, qd, tau = _state(rng, tm.NQ, tm.NV)
+    e = np.zeros(tm.NV)
+    e[-1] = 1.0
+    tangent = torch.func.jvp(lambda v: tm.forward_dynamics(T(q), v, T(tau)), (T(qd),), (T(e),))[1]
+    cd = central_differences(lambda v: npm.forward_dynamics(q, v, tau), qd)
+    assert _relative(tangent.numpy(), cd[:, -1]) < 1e-6
+
+
 @pytest.mark.pinocchio
 @pytest.mark.slow
 def test_kernel_jacobians_of_a_robot_equal_pinocchio(tmp_path, rng):
