@@ -19,8 +19,9 @@ free-flyer's dynamics, whose origin is never read).  The Function keeps the matr
 makes for the later passes through the same graph (a Jacobian row by row).
 
 With the kernels target (:mod:`.kernels`: ``--targets c,torch``) each routine's private function calls, on CPU
-tensors of float32 or float64, its batch kernel as a ``torch.library`` custom op (fake implementation, vmap rule)
-inside an ``autograd.Function`` whose derivatives are a vjp and a jvp of the traced straight line; the analytic
+tensors of float32 or float64, its batch kernel as an operator of the module's ``torch.library.Library`` (fake
+implementation, vmap rule) inside an ``autograd.Function`` whose derivatives are a vjp and a jvp of the traced
+straight line (skipped where no derivative can be asked), its large outputs in a pool of reused blocks; the analytic
 Functions above then run on the derivative routines' kernels (and the quaternion columns' kernel).
 
 A routine with a status (a singular system: constrained forward dynamics, the support problems) cannot raise
@@ -247,7 +248,6 @@ class TorchTarget(Target):
                 "analytic": wired,
                 "lengths": [(i, input_length(model, i, e.routine)) for i in e.inputs if i not in SCALAR_INPUTS],
                 "kernel_shapes": [tuple(o.shape(model)) for o in e.routine.written],
-                "in_lengths": {i: input_length(model, i, e.routine) for i in e.inputs},
                 "written_index": [k for k, o in enumerate(e.routine.outputs) if not o.returned],
             })
         kernels = kernels_context(job)
