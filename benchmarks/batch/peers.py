@@ -64,9 +64,12 @@ ENTRIES = {
                                "as aggsym JAX kernels, the batch split across every core (AGGSYM_THREADS)"),
     "aggsym_torch_kernels": ("aggsym PyTorch kernels", "torch", ROUTINES,
                              "the module generated with --targets c,torch: every routine its batch kernel (a "
-                             "torch.library custom op, one thread); torch.autograd.grad through forward_dynamics "
+                             "torch.library operator, one thread); torch.autograd.grad through forward_dynamics "
                              "(its autograd.Function on the derivative routines' kernels), one reverse pass per "
                              "output"),
+    "aggsym_torch_kernels_func": ("aggsym PyTorch kernels, torch.func", "torch", ("jac",),
+                                  "as aggsym PyTorch kernels, the Jacobian by torch.func.vmap(torch.func.jacrev(...)) "
+                                  "over the states: one backward call for all the cotangents"),
     "c_loop": ("one-state C loop", "numpy", ROUTINES,
                "the generated one-state C (NAME.c, -O2, portable flags) called state by state in a C loop (ctypes "
                "calls the loop once per batch); the Jacobian by NAME_forward_dynamics_derivatives"),
@@ -183,6 +186,21 @@ def torch_jacobian(fd_batched, floating: bool, nv: int):
         return torch.stack(rows, -2)
 
     return jac
+
+
+def torch_func_jacobian(fd, floating: bool, nv: int):
+    """The batched tangent-space Jacobian [da/dq, da/dv] by torch.func: vmap over the states of jacrev of one
+    state's forward dynamics (the cotangents of all outputs in one backward call)."""
+    import torch
+
+    def one(q, v, tau):
+        def f(delta, vel):
+            return fd(retract(torch, q, delta, floating), vel, tau)
+
+        jq, jv = torch.func.jacrev(f, argnums=(0, 1))(torch.zeros(nv, dtype=q.dtype), v)
+        return torch.cat([jq, jv], -1)
+
+    return torch.func.vmap(one)
 
 
 # ------------------------------------------------------------------------------------------------ the entries
@@ -330,14 +348,15 @@ def build_aggsym_jax(robot, which):
     return _jax_built(routines)
 
 
-def build_aggsym_torch(robot, kernels: bool = False):
+def build_aggsym_torch(robot, kernels: bool = False, functional: bool = False):
     import torch
 
     torch.set_num_threads(1)
     folder = Path(robot["gen_kernels" if kernels else "gen"])
     mod = load_module(folder / f"{robot['module']}_torch.py", f"{robot['module']}_torch" + ("_k" if kernels else ""))
+    jacobian = torch_func_jacobian if functional else torch_jacobian
     return _torch_built({"fd": mod.forward_dynamics, "A": mod.inertia, "id": mod.inverse_dynamics,
-                         "jac": torch_jacobian(mod.forward_dynamics, robot["floating"], robot["nv"])})
+                         "jac": jacobian(mod.forward_dynamics, robot["floating"], robot["nv"])})
 
 
 def _adam_state(xp, q, floating):

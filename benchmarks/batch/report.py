@@ -258,12 +258,15 @@ def kernel_targets(data) -> list:
                 rows.append(_vs(data, robot, routine, big, "aggsym_jax_kernels", traced(robot, "aggsym_jax_project"),
                                 4))
         for routine in data.get("config", {}).get("routines", []):
-            jx, th = (_at(data, e, robot, routine, big) for e in ("aggsym_jax_kernels", "aggsym_torch_kernels"))
-            rows.append((f"{robot} {ROUTINE_TITLES[routine]}, B = {big}: PyTorch kernels within 1.5× of JAX kernels",
-                         "—" if jx is None or th is None else f"{th / jx:.2f}× ({_us(th)} vs {_us(jx)} µs)",
-                         None if jx is None or th is None else th <= 1.5 * jx))
+            for torch_entry in ("aggsym_torch_kernels",) + (("aggsym_torch_kernels_func",) if routine == "jac" else ()):
+                jx, th = (_at(data, e, robot, routine, big) for e in ("aggsym_jax_kernels", torch_entry))
+                rows.append((f"{robot} {ROUTINE_TITLES[routine]}, B = {big}: {_label_of(data, torch_entry)} within "
+                             f"1.5× of JAX kernels",
+                             "—" if jx is None or th is None else f"{th / jx:.2f}× ({_us(th)} vs {_us(jx)} µs)",
+                             None if jx is None or th is None else th <= 1.5 * jx))
             rows.append(_vs(data, robot, routine, big, "aggsym_torch_kernels", "adam_torch", 30))
-            for entry in ("aggsym_jax_kernels", "aggsym_jax_kernels_rev", "aggsym_torch_kernels"):
+            for entry in ("aggsym_jax_kernels", "aggsym_jax_kernels_rev", "aggsym_torch_kernels",
+                          "aggsym_torch_kernels_func"):
                 r = _timed(data, entry, robot, routine)
                 if r is None:
                     continue

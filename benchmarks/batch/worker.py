@@ -50,8 +50,9 @@ def build(entry: str, robot: dict):
                                                     "aggsym_jax_kernels": "kernels",
                                                     "aggsym_jax_kernels_all": "kernels",
                                                     "aggsym_jax_kernels_rev": "kernels_rev"}[entry])
-    if entry in ("aggsym_torch", "aggsym_torch_kernels"):
-        return batch_peers.build_aggsym_torch(robot, kernels=entry == "aggsym_torch_kernels")
+    if entry in ("aggsym_torch", "aggsym_torch_kernels", "aggsym_torch_kernels_func"):
+        return batch_peers.build_aggsym_torch(robot, kernels=entry != "aggsym_torch",
+                                              functional=entry == "aggsym_torch_kernels_func")
     if entry == "c_loop":
         return batch_peers.build_c_loop(robot)
     if entry.startswith("pinocchio_parallel"):
