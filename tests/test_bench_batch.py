@@ -118,6 +118,21 @@ def test_a_run_on_one_robot_keeps_the_other_robots_rows():
     assert merged["config"]["sizes"] == [1, 8, 64, 4096]
     assert all(r.get("earlier_run") for r in merged["rows"] if r["robot"] == "talos")
     assert "aggsym JAX (an earlier run)" in batch_report.markdown(merged)
+    assert "another host" not in batch_report.markdown(merged)
+
+
+def test_rows_kept_from_a_run_on_another_host_say_so():
+    """A kept row carries its run's host; the report names the other host, so that a ratio between the runs is
+    not taken for one machine's."""
+    earlier = dict(fake_results(), host="Host A")
+    now = dict(fake_results(), host="Host B")
+    now["rows"] = [r for r in now["rows"] if r["robot"] == "panda"]
+    merged = batch.keep_earlier(now, earlier)
+    assert {r["host"] for r in merged["rows"] if r.get("earlier_run")} == {"Host A"}
+    text = batch_report.markdown(merged)
+    assert "measured on another host (Host A)" in text
+    again = batch.keep_earlier(dict(fake_results(), host="Host C", rows=[]), merged)  # (a kept row keeps its host)
+    assert {r["host"] for r in again["rows"]} == {"Host A", "Host B"}
 
 
 @pytest.mark.parametrize("key", ["entry", "routine"])
@@ -249,7 +264,8 @@ def test_the_kernels_targets_from_fake_results():
     module and adam; met and missed as the times say; the build from the robot's generation."""
     data = fake_results()
     speed = {"aggsym_jax_kernels": 0.1, "aggsym_jax_kernels_rev": 0.1, "aggsym_jax_kernels_all": 0.06,
-             "aggsym_torch_kernels": 0.12, "c_loop": 0.3, "pinocchio_parallel": 3.0, "pinocchio_parallel_all": 1.6}
+             "aggsym_torch_kernels": 0.12, "aggsym_torch_kernels_func": 0.2, "c_loop": 0.3,
+             "pinocchio_parallel": 3.0, "pinocchio_parallel_all": 1.6}
     for robot in ("panda", "talos"):
         for routine in batch_peers.ROUTINES:
             for entry, us in speed.items():
@@ -262,6 +278,8 @@ def test_the_kernels_targets_from_fake_results():
     assert rows["panda forward dynamics, B = 4096: aggsym JAX kernels ≤ 0.4× the one-state C loop per state"][1] is True
     assert rows["talos: the kernels' build (double, float, the XLA binding) ≤ 120 s"] == ("99 s, peak 545 MiB", True)
     assert rows["panda: the kernels' build (double, float, the XLA binding) ≤ 120 s"][1] is None  # not measured
+    assert rows["talos Jacobian of forward dynamics w.r.t. (q, v), B = 4096: aggsym PyTorch kernels, torch.func "
+                "within 1.5× of JAX kernels"][1] is False
     assert "Targets of issue 51 (the batch kernels)" in batch_report.markdown(data)
     for r in data["rows"]:
         if r["entry"] == "aggsym_jax_kernels":

@@ -367,7 +367,8 @@ def keep_earlier(data: dict, earlier: dict) -> dict:
     routine) it did not run, each marked ``earlier_run`` (the report says so); the batch sizes and routines are the
     union of both runs'."""
     ran = {(r["robot"], r["entry"], r["routine"]) for r in data["rows"]}
-    rows = [dict(r, earlier_run=True) for r in earlier.get("rows", [])
+    host = earlier.get("host")
+    rows = [dict(r, earlier_run=True, host=r.get("host", host)) for r in earlier.get("rows", [])
             if (r["robot"], r["entry"], r["routine"]) not in ran]
     for label, robot in data.get("robots", {}).items():  # (a run that reused the generated modules keeps their builds)
         before = earlier.get("robots", {}).get(label, {}).get("generation", {})

@@ -105,6 +105,17 @@ def timing_rows(data, robot, routine) -> list:
     return out
 
 
+def _earlier_hosts(data) -> str:
+    """What the report says of the rows kept from earlier runs on other hosts (their ratios to this run's rows
+    compare two machines)."""
+    hosts = sorted({r["host"] for r in data.get("rows", []) if r.get("earlier_run") and r.get("host")
+                    and r["host"] != data.get("host")})
+    if not hosts:
+        return ""
+    return ("  The rows marked *an earlier run* were measured on another host (" + "; ".join(hosts) + "): a ratio "
+            "or target between one of them and a row of this run compares two machines.")
+
+
 def _header(data) -> list:
     return ["entry"] + [f"B = {b}" for b in _sizes(data)] + ["first call at its largest B, s", "peak MiB"]
 
@@ -352,7 +363,8 @@ def markdown(data) -> str:
              f"{env.get('load_average_start')} → {env.get('load_average_end')}.  Settings: B = "
              f"{', '.join(_sizes(data))}, {cfg.get('repeats')} interleaved samples per B of ≥ "
              f"{cfg.get('sample_seconds')} s, {cfg.get('rounds')} round(s); float64 on the CPU; each "
-             "(entry, robot, routine) in its own process (`python -m benchmarks.batch`, in `.venv-batch`).", "",
+             "(entry, robot, routine) in its own process (`python -m benchmarks.batch`, in `.venv-batch`)."
+             + _earlier_hosts(data), "",
              "Versions: " + ", ".join(f"{k} {v}" for k, v in env.get("peer_versions", {}).items()) + "."
              + project_versions(data), "",
              "Robots: " + "; ".join(f"{k} (nq = {v['nq']}, nv = {v['nv']}"
