@@ -340,3 +340,29 @@ def test_a_certified_model_has_no_status(tmp_path):
     assert "mass_matrix" not in manifest
     assert all(manifest["signatures"][role]["returns"] == "void" for role in ("forward_dynamics", "inertia_inverse"))
     assert "void solid_head_forward_dynamics(" in files["solid_head.h"]
+
+
+def test_pytorch_forward_dynamics_is_nan_at_the_heads_singular_states_with_and_without_gradients(head, tmp_path):
+    """The traced PyTorch module (no kernels) with the derivative routines: forward dynamics holds NaN at the
+    states where A(q) is singular whether or not a gradient is asked (the analytic autograd.Function as the plain
+    call), and the NumPy module's values elsewhere."""
+    import torch
+    from aggsym.codegen.generate import generate, write
+    from aggsym.contract import select_routines
+
+    model = select_routines(aggsym.load(head), ["default", "inverse_dynamics_derivatives",
+                                                 "forward_dynamics_derivatives"])
+    write(generate(model, targets="numpy,torch"), tmp_path)
+    npm = import_module(tmp_path / "head.py")
+    tm = import_module(tmp_path / "head_torch.py")
+    pitch = [c.name for c in model.coordinates].index("neck_pitch")
+    rng = np.random.default_rng(3)
+    q = rng.uniform(-1.5, 1.5, (3, model.nq)).round(5)
+    q[1, pitch] = 3e-7  # (near the singular set: a finite but meaningless q'' without the status)
+    qd, tau = rng.normal(size=(2, 3, model.nv))
+    for grad in (False, True):
+        x = torch.tensor(q, requires_grad=grad)
+        out = tm.forward_dynamics(x, torch.tensor(qd), torch.tensor(tau)).detach().numpy()
+        assert np.isnan(out[1]).all() and not np.isnan(out[[0, 2]]).any(), grad
+        for k in (0, 2):
+            assert relative_error(out[k], npm.forward_dynamics(q[k], qd[k], tau[k])) < 1e-13
