@@ -214,6 +214,33 @@ def test_torch_kernel_outputs_reuse_no_block_still_held(tree, rng):
     assert _relative(tangent.numpy(), cd[:, -1]) < 1e-6
 
 
+def test_torch_forward_mode_levels_on_the_kernels(tree, rng):
+    """torch.autograd.forward_ad (a dual level, no torch.func transform): the derivatives along qd (the analytic
+    Function), along p (the traced routine, by two reverse passes: torch.func.jvp cannot open a second level) and
+    of a routine without derivative routines (its kernel's jvp) equal central differences."""
+    import torch.autograd.forward_ad as fwAD
+
+    folder, npm, jm, tm, torch = tree
+    T = lambda x: torch.tensor(x, dtype=torch.float64)  # noqa: E731
+    q, qd, tau = _state(rng, tm.NQ, tm.NV)
+    P = np.asarray(npm.PARAMETERS)
+    dqd, dp = rng.normal(size=tm.NV), rng.normal(size=P.size) * np.maximum(np.abs(P), 1e-3)
+    h = 1e-6
+
+    def along(f, x, dx):
+        return (np.asarray(f(x + h * dx)) - np.asarray(f(x - h * dx))) / (2 * h)
+
+    with fwAD.dual_level():
+        out = tm.forward_dynamics(T(q), fwAD.make_dual(T(qd), T(dqd)), T(tau))
+        by_qd = fwAD.unpack_dual(out).tangent
+        out = tm.forward_dynamics(T(q), T(qd), T(tau), fwAD.make_dual(T(P), T(dp)))
+        by_p = fwAD.unpack_dual(out).tangent
+        energy = fwAD.unpack_dual(tm.kinetic_energy(T(q), fwAD.make_dual(T(qd), T(dqd)))).tangent
+    assert _relative(by_qd.numpy(), along(lambda v: npm.forward_dynamics(q, v, tau), qd, dqd)) < 1e-6
+    assert _relative(by_p.numpy(), along(lambda v: npm.forward_dynamics(q, qd, tau, v), P, dp)) < 1e-6
+    assert _relative(energy.numpy(), along(lambda v: npm.kinetic_energy(q, v), qd, dqd)) < 1e-6
+
+
 @pytest.mark.pinocchio
 @pytest.mark.slow
 def test_kernel_jacobians_of_a_robot_equal_pinocchio(tmp_path, rng):
