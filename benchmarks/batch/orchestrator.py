@@ -153,10 +153,13 @@ def prepare_robot(label: str, cfg) -> dict:
 
 def build_kernels(robot: dict) -> dict:
     """The batch kernels of the kernels' generation built once (the first import of its JAX module, in the project's
-    venv: the C in double and float and the XLA binding), timed; the workers load them from the cache."""
+    venv: the C in double and float and the XLA binding), timed from an empty cache (an earlier run's is removed:
+    the same sources would load it in seconds); the workers load them from the cache."""
+    import shutil
     import time
 
     folder, module = robot["gen_kernels"], robot["module"]
+    shutil.rmtree(Path(folder) / f"{module}_kernels_build", ignore_errors=True)
     script = f"import sys; sys.path.insert(0, {folder!r}); import {module}_jax, {module}_torch"
     log(f"building the batch kernels of {robot['label']} ...")
     t0 = time.perf_counter()
