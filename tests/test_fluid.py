@@ -8,17 +8,15 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-import numpy as np
+import mujoco
 import pytest
 
 import aggsym
-from aggsym.twin import NumericTwin
-from helpers import central_differences, generated_code
+from benchmarks.mjcf.mujoco_reference import Module, compare
+from fluid_support import chain_of, derivative_errors, medium_at_runtime
+from helpers import generated_code
 
-mujoco = pytest.importorskip("mujoco")
 pytestmark = pytest.mark.mujoco
-
-from benchmarks.mjcf.mujoco_reference import Module, compare, mujoco_model, states, to_aggsym  # noqa: E402
 
 PROBE = Path(__file__).resolve().parent.parent / "benchmarks" / "mjcf" / "probes" / "fluid_inertia_box.xml"
 SUITE = Path(mujoco.__file__).resolve().parent.parent / "dm_control" / "suite"
@@ -68,41 +66,15 @@ def test_the_fruit_fly_against_mujoco():
 
 def test_the_medium_is_a_runtime_parameter(probe):
     model, _, module, _ = probe
-    names = [p.name for p in model.parameters]
-    m = mujoco_model(PROBE, fluid=True)
-    p = np.array(module.PARAMETERS, dtype=float)
-    m.opt.density, p[names.index("fluid_density")] = 1000.0, 1000.0
-    m.opt.viscosity, p[names.index("fluid_viscosity")] = 1.3e-3, 1.3e-3
-    m.opt.wind[:] = [-2.0, 0.5, 1.0]
-    for axis, value in zip("xyz", m.opt.wind):
-        p[names.index(f"wind_{axis}")] = value
-    data = mujoco.MjData(m)
-    rng = np.random.default_rng(9)
-    for _ in range(3):
-        qpos, qvel, force = states(m, rng)
-        data.qpos[:], data.qvel[:] = qpos, qvel
-        mujoco.mj_forward(m, data)
-        q, qd, _, J, _ = to_aggsym(m, qpos, qvel, force)
-        ref = J.T @ data.qfrc_passive
-        assert np.max(np.abs(module.passive_forces(q, qd, p) - ref)) <= 1e-12 * max(1.0, np.max(np.abs(ref)))
+    for error, scale in medium_at_runtime(PROBE, model, module):
+        assert error <= 1e-12 * max(1.0, scale)
 
 
 def test_the_derivatives_carry_the_drag(tmp_path):
     """d qdd/d(q, qd) of the chain (the probe's free glider taken away: q is qpos) against central differences."""
-    text = PROBE.read_text()
-    start, end = text.index('    <body name="glider"'), text.index('    <body name="arm"')
     path = tmp_path / "chain.xml"
-    path.write_text(text[:start] + text[end:])
-    model = load(path, routines=["all"])
-    twin = NumericTwin(model)
-    rng = np.random.default_rng(1)
-    n = model.nv
-    q, qd, tau = rng.normal(size=(3, n))
-    dq, dqd = (np.asarray(a).reshape(n, n) for a in twin.call("forward_dynamics_derivatives", q, qd, tau))
-    fq = central_differences(lambda y: np.asarray(twin.call("forward_dynamics", y, qd, tau)), q).reshape(n, n)
-    fqd = central_differences(lambda y: np.asarray(twin.call("forward_dynamics", q, y, tau)), qd).reshape(n, n)
-    assert np.max(np.abs(dq - fq)) <= 1e-7 * np.max(np.abs(fq))
-    assert np.max(np.abs(dqd - fqd)) <= 1e-7 * np.max(np.abs(fqd))
+    path.write_text(chain_of(PROBE))
+    assert max(derivative_errors(load(path, routines=["all"]))) <= 1e-7
 
 
 def test_a_body_with_an_ellipsoid_geom_has_no_box(tmp_path):

@@ -10,17 +10,16 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
+import mujoco
 import numpy as np
 import pytest
 
 import aggsym
-from aggsym.twin import NumericTwin
-from helpers import central_differences, generated_code
+from benchmarks.mjcf.mujoco_reference import Module, compare, mujoco_model, states, to_aggsym
+from fluid_support import chain_of, derivative_errors, medium_at_runtime
+from helpers import generated_code
 
-mujoco = pytest.importorskip("mujoco")
 pytestmark = pytest.mark.mujoco
-
-from benchmarks.mjcf.mujoco_reference import Module, compare, mujoco_model, states, to_aggsym  # noqa: E402
 
 PROBES = Path(__file__).resolve().parent.parent / "benchmarks" / "mjcf" / "probes"
 PROBE = PROBES / "fluid_ellipsoid.xml"
@@ -91,23 +90,8 @@ def test_geoms_at_rest_and_below_the_guards(probe):
 
 def test_the_medium_is_a_runtime_parameter(probe):
     model, _, module, _ = probe
-    names = [p.name for p in model.parameters]
-    m = mujoco_model(PROBE, fluid=True)
-    p = np.array(module.PARAMETERS, dtype=float)
-    m.opt.density, p[names.index("fluid_density")] = 1000.0, 1000.0
-    m.opt.viscosity, p[names.index("fluid_viscosity")] = 1.3e-3, 1.3e-3
-    m.opt.wind[:] = [-2.0, 0.5, 1.0]
-    for axis, value in zip("xyz", m.opt.wind):
-        p[names.index(f"wind_{axis}")] = value
-    data = mujoco.MjData(m)
-    rng = np.random.default_rng(9)
-    for _ in range(3):
-        qpos, qvel, force = states(m, rng)
-        data.qpos[:], data.qvel[:] = qpos, qvel
-        mujoco.mj_forward(m, data)
-        q, qd, _, J, _ = to_aggsym(m, qpos, qvel, force)
-        ref = J.T @ data.qfrc_passive
-        assert np.max(np.abs(module.passive_forces(q, qd, p) - ref)) <= 1e-12 * np.max(np.abs(ref))
+    for error, scale in medium_at_runtime(PROBE, model, module):
+        assert error <= 1e-12 * scale
 
 
 def test_both_fluid_models_in_one_model(tmp_path):
@@ -132,21 +116,13 @@ def test_the_derivatives_carry_the_medium(tmp_path):
     with no wind (every geom at v = w = 0): finite there (the square roots' floor), and equal to those of the
     medium without density (every term of rho is at least quadratic in the velocities: its derivative is 0 at rest;
     central differences would err by O(h) on |v| v there)."""
-    text = PROBE.read_text()
-    start, end = text.index('    <body name="glider"'), text.index('    <body name="arm"')
-    chain = text[:start] + text[end:]
+    chain = chain_of(PROBE)
     path = tmp_path / "chain.xml"
     path.write_text(chain)
     model = load(path, routines=["all"])
-    twin = NumericTwin(model)
-    rng = np.random.default_rng(1)
+    assert max(derivative_errors(model)) <= 1e-7
     n = model.nv
-    q, qd, tau = rng.normal(size=(3, n))
-    dq, dqd = (np.asarray(a).reshape(n, n) for a in twin.call("forward_dynamics_derivatives", q, qd, tau))
-    fq = central_differences(lambda y: np.asarray(twin.call("forward_dynamics", y, qd, tau)), q).reshape(n, n)
-    fqd = central_differences(lambda y: np.asarray(twin.call("forward_dynamics", q, y, tau)), qd).reshape(n, n)
-    assert np.max(np.abs(dq - fq)) <= 1e-7 * np.max(np.abs(fq))
-    assert np.max(np.abs(dqd - fqd)) <= 1e-7 * np.max(np.abs(fqd))
+    q, _, tau = np.random.default_rng(1).normal(size=(3, n))  # (the state derivative_errors takes)
 
     path.write_text(chain.replace('wind="0.4 -0.25 0.13"', ""))
     model = load(path, routines=["all"])
