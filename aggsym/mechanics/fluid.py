@@ -43,7 +43,14 @@ class Medium:
         self.V = self.kin.velocities(qd)
         self.poses = world_poses(self.kin) if any(not is_zero(x) for x in self.wind) else None
         self.index = {name: k for k, name in enumerate(bound.tree.names)}
+        self.scalar = bound.scalar
         self.Y = [ZERO6] * len(bound.tree)
+
+    def frame(self, body, origin, axes) -> tuple:
+        """(k, r, c): the index of ``body`` and a frame of it given by its ``origin`` and ``axes`` (the model's
+        numbers) as the program's scalars."""
+        return (self.index[body], tuple(self.scalar(x) for x in origin),
+                tuple(tuple(self.scalar(x) for x in row) for row in axes))
 
     def velocity(self, k, r, c) -> tuple:
         """(v, w) of the frame at ``r`` with axes ``c`` (in body k's), in those axes: v less the wind."""
@@ -72,9 +79,7 @@ def fluid_forces(bound, q, qd) -> list:
     rho, beta = medium.rho, medium.beta
     abs_ = lambda x: bound.backend.call("abs", x)  # noqa: E731
     for part in model.fluid:
-        k = medium.index[part.body]
-        r = tuple(bound.scalar(x) for x in part.com)
-        c = tuple(tuple(bound.scalar(x) for x in row) for row in part.axes)
+        k, r, c = medium.frame(part.body, part.com, part.axes)
         b = [float(x) for x in part.box]
         v, w = medium.velocity(k, r, c)
         diameter = (b[0] + b[1] + b[2]) / 3.0

@@ -138,9 +138,7 @@ def ellipsoid_forces(bound, q, qd) -> list:
         return [0] * bound.tree.nv
     medium = Medium(bound, q, qd)
     for part in model.fluid_ellipsoids:
-        k = medium.index[part.body]
-        r = tuple(bound.scalar(x) for x in part.centre)
-        c = tuple(tuple(bound.scalar(x) for x in row) for row in part.axes)
+        k, r, c = medium.frame(part.body, part.centre, part.axes)
         v, w = medium.velocity(k, r, c)
         medium.act(k, r, c, *_medium_wrench(bound, part, v, w, medium.rho, medium.beta))
     return medium.forces()
