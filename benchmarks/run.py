@@ -47,6 +47,7 @@ load average are recorded beside Pinocchio's absolute times.
 """
 from __future__ import annotations
 
+import importlib
 import os
 import sys
 import time
@@ -379,8 +380,6 @@ def section_extras(sections) -> dict:
         out["scaling"] = _load("scaling")
     for name, module in (("trig", "runtime.trig"), ("split", "generation.compile_split")):
         if name in sections:
-            import importlib
-
             out[name] = importlib.import_module(f".{module}", __package__).run()
             _save(name, out[name])
         else:
@@ -392,29 +391,24 @@ def section_extras(sections) -> dict:
         _save("python_call", out["python_call"])
     else:
         out["python_call"] = _load("python_call")
-    if "casadi" in sections:
-        from .runtime import casadi_target
-
-        try:
-            out["casadi_target"] = casadi_target.run(log=log)
-        except Exception as exc:  # reported, not fatal
-            out["casadi_target"] = {"error": f"{exc.__class__.__name__}: {exc}"}
-            log(f"casadi section failed: {out['casadi_target']['error']}")
-        _save("casadi_target", out["casadi_target"])
-    else:
-        out["casadi_target"] = _load("casadi_target")
-    if "constrained_derivatives" in sections:
-        from .runtime import constrained_derivatives
-
-        try:
-            out["constrained_derivatives"] = constrained_derivatives.run(log=log)
-        except Exception as exc:  # reported, not fatal
-            out["constrained_derivatives"] = {"error": f"{exc.__class__.__name__}: {exc}"}
-            log(f"constrained_derivatives section failed: {out['constrained_derivatives']['error']}")
-        _save("constrained_derivatives", out["constrained_derivatives"])
-    else:
-        out["constrained_derivatives"] = _load("constrained_derivatives")
+    for section, key, module in (("casadi", "casadi_target", "casadi_target"),
+                                 ("constrained_derivatives", "constrained_derivatives", "constrained_derivatives")):
+        if section in sections:
+            out[key] = _reported(section, lambda m=module: importlib.import_module(f".runtime.{m}", __package__)
+                                 .run(log=log))
+            _save(key, out[key])
+        else:
+            out[key] = _load(key)
     return out
+
+
+def _reported(section: str, run) -> dict:
+    """``run()``'s result, or {"error": ...} when it raises (reported in its section, not fatal)."""
+    try:
+        return run()
+    except Exception as exc:  # reported, not fatal
+        log(f"{section} section failed: {exc.__class__.__name__}: {exc}")
+        return {"error": f"{exc.__class__.__name__}: {exc}"}
 
 
 SECTION_FILES = ("generation", "kane", "opcounts", "runtime", "inputs", "opsn", "scaling", "trig", "split", "batch",
