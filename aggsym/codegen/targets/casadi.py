@@ -135,8 +135,8 @@ def numpy_shape(output, model) -> tuple:
 
 def _analytic(model, emitted, e, analytic) -> dict | None:
     """How routine ``e``'s custom Jacobian is made from the derivative routine and the matrix routine (the
-    torch target's table of them, :func:`~.torch.analytic_routines`), or None: none attached (quaternion pairs:
-    the derivative routines' q is the tangent space's)."""
+    torch target's table of them, :func:`~.torch.analytic_routines`), or None where it has none (along q with
+    quaternion pairs: :func:`_q_columns`)."""
     if e.routine.role not in analytic:
         return None
     derivative, matrix = analytic[e.routine.role]
